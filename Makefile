@@ -1,0 +1,38 @@
+# Set-up and entry points. `make demo` and `make test` work on a fresh machine:
+# they create .venv, install posture_id with its pinned CPU torch, then run.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: demo test test-fast lint bench clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	# torch first, pinned, so that nothing later resolves a CUDA build from the registry.
+	$(BIN)/pip install --quiet "torch==2.13.0"
+	$(BIN)/pip install --quiet -e ".[dev]"
+	@if $(BIN)/pip list 2>/dev/null | grep -qi '^nvidia-'; then \
+	  echo "error: CUDA packages were installed on a CPU set-up; see README" >&2; exit 1; fi
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/posture-id body urdf/tip_default.urdf
+	$(BIN)/posture-id simulate --out demo/trial.csv --plot demo/trial.png
+	@echo "demo: wrote demo/trial.csv and demo/trial.png"
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -m "not slow"
+
+lint: $(STAMP)
+	$(BIN)/ruff check posture_id tests benchmarks
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/simulation.py
+
+clean:
+	rm -rf $(VENV) demo

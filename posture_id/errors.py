@@ -1,0 +1,42 @@
+"""User-facing errors.
+
+Every error a user can cause (a bad URDF, parameter file, tilt profile or recording) is
+raised as a :class:`PostureIdError` whose message is one line naming the file, the field
+and the problem. The command line prints that line and exits with status 2, never a
+traceback.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "PostureIdError",
+    "BodyError",
+    "ParameterError",
+    "StimulusError",
+    "RecordingError",
+    "SimulationError",
+]
+
+
+class PostureIdError(Exception):
+    """Base class of every error caused by user input."""
+
+
+class BodyError(PostureIdError):
+    """The URDF does not describe a valid sagittal chain."""
+
+
+class ParameterError(PostureIdError):
+    """A DEC parameter set or its JSON file is invalid."""
+
+
+class StimulusError(PostureIdError):
+    """A tilt profile (array or CSV) is invalid."""
+
+
+class RecordingError(PostureIdError):
+    """A sway recording (CSV) is invalid."""
+
+
+class SimulationError(PostureIdError):
+    """A simulation request is inconsistent (options, shapes)."""

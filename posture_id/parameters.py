@@ -1,0 +1,243 @@
+"""DEC controller parameters: defaults (MODEL §3), normalisation and the JSON format.
+
+JSON format (SI units), one object per module named by its URDF joint::
+
+    {"ankle": {"kp": 465.975, "ki": 11.649, "kd": 116.49, "delay_s": 0.1,
+               "controls": "com"}, ...}
+
+``"controls"`` is ``"com"`` for class C = +1 (COM in space) and ``"joint"`` for C = −1
+(joint angle). ``"kpas"`` and ``"bpas"`` (passive stiffness and damping) are optional and
+default to the body's defaults.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.errors import ParameterError
+
+__all__ = [
+    "ModuleParameters",
+    "DecParameters",
+    "PAPER_TABLE",
+    "PAPER_MGH",
+    "DEFAULT_CLASSES",
+    "default_parameters",
+    "normalise",
+    "denormalise",
+]
+
+#: MODEL §3 (paper Table 1), columns ankle, knee, hip. Kp is m·g·h of the default body.
+PAPER_MGH = {"ankle": 465.975, "knee": 245.25, "hip": 73.575}
+PAPER_TABLE = {
+    "ankle": {"kd": 116.49, "ki": 11.649, "kpas": 232.5, "bpas": 145.0, "delay_s": 0.100},
+    "knee": {"kd": 18.394, "ki": 6.1312, "kpas": 61.25, "bpas": 11.25, "delay_s": 0.070},
+    "hip": {"kd": 18.394, "ki": 1.8394, "kpas": 36.5, "bpas": 11.25, "delay_s": 0.121},
+}
+#: Default class per column **[decision]**: lowest +1 (COM), middle −1 (joint), top +1.
+DEFAULT_CLASSES = {"ankle": "com", "knee": "joint", "hip": "com"}
+_CONTROLS = {"com": 1, "joint": -1}
+_REQUIRED = ("kp", "ki", "kd", "delay_s", "controls")
+_OPTIONAL = ("kpas", "bpas")
+
+
+@dataclass(frozen=True)
+class ModuleParameters:
+    """Parameters of one DEC module (SI units).
+
+    Attributes:
+        kp: N·m/rad, proportional gain. ki: N·m/(rad·s), integral gain.
+        kd: N·m·s/rad, derivative gain. delay_s: s, lumped delay Δ of the servo term.
+        controls: ``"com"`` (C = +1, COM-above angle in space) or ``"joint"`` (C = −1).
+        kpas: N·m/rad, passive stiffness. bpas: N·m·s/rad, passive damping.
+    """
+
+    kp: float
+    ki: float
+    kd: float
+    delay_s: float
+    controls: str
+    kpas: float
+    bpas: float
+
+    @property
+    def sign(self) -> int:
+        """Class C: +1 controls the COM in space, −1 the joint angle."""
+        return _CONTROLS[self.controls]
+
+
+@dataclass(frozen=True)
+class DecParameters:
+    """Parameters of every module of a body, keyed by URDF joint name, support upward."""
+
+    modules: dict[str, ModuleParameters]
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        return tuple(self.modules)
+
+    def __getitem__(self, joint: str) -> ModuleParameters:
+        return self.modules[joint]
+
+    def array(self, name: str) -> np.ndarray:
+        """(N,) values of one field (``"kp"``, ``"delay_s"``, ``"sign"`` ...), support upward."""
+        return np.array([getattr(m, name) for m in self.modules.values()], dtype=float)
+
+    def replace(self, joint: str, **changes) -> DecParameters:
+        """A copy with some fields of one module changed (validated)."""
+        mods = dict(self.modules)
+        mods[joint] = replace(mods[joint], **changes)
+        _validate_module(mods[joint], f"module '{joint}'")
+        return DecParameters(mods)
+
+    def to_dict(self) -> dict:
+        return {j: asdict(m) for j, m in self.modules.items()}
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """JSON text; written atomically to ``path`` when given."""
+        text = json.dumps(self.to_dict(), indent=2) + "\n"
+        if path is not None:
+            from posture_id.io_utils import atomic_write_text
+
+            atomic_write_text(Path(path), text)
+        return text
+
+    @classmethod
+    def from_dict(cls, data: Mapping, body, source: str = "parameters") -> DecParameters:
+        """Validate a mapping against a body; missing passive terms take the defaults.
+
+        Raises:
+            ParameterError: naming ``source``, the module, the field and the problem.
+        """
+        if not isinstance(data, Mapping):
+            raise ParameterError(f"{source}: expected a JSON object keyed by joint name")
+        defaults = default_parameters(body)
+        expected = body.joint_names
+        for joint in expected:
+            if joint not in data:
+                raise ParameterError(
+                    f"{source}: module '{joint}' is missing (body joints: {', '.join(expected)})"
+                )
+        for joint in data:
+            if joint not in expected:
+                raise ParameterError(
+                    f"{source}: module '{joint}' is not a joint of body '{body.name}' "
+                    f"(body joints: {', '.join(expected)})"
+                )
+        mods = {}
+        for joint in expected:
+            entry = data[joint]
+            where = f"{source}: module '{joint}'"
+            if not isinstance(entry, Mapping):
+                raise ParameterError(f"{where}: expected an object with {', '.join(_REQUIRED)}")
+            for key in entry:
+                if key not in _REQUIRED + _OPTIONAL:
+                    raise ParameterError(
+                        f"{where}: unknown field '{key}' (allowed: "
+                        f"{', '.join(_REQUIRED + _OPTIONAL)})"
+                    )
+            for key in _REQUIRED:
+                if key not in entry:
+                    raise ParameterError(f"{where}: field '{key}' is missing")
+            values = {}
+            for key in ("kp", "ki", "kd", "delay_s", *_OPTIONAL):
+                if key not in entry:
+                    values[key] = getattr(defaults[joint], key)
+                    continue
+                value = entry[key]
+                if isinstance(value, bool) or not isinstance(value, int | float):
+                    raise ParameterError(f"{where}: field '{key}' must be a number, got {value!r}")
+                values[key] = float(value)
+            module = ModuleParameters(controls=entry["controls"], **values)
+            _validate_module(module, where)
+            mods[joint] = module
+        return cls(mods)
+
+    @classmethod
+    def from_json(cls, path: str | Path, body) -> DecParameters:
+        """Read and validate a parameter JSON file for ``body``."""
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise ParameterError(f"{path}: no such parameter file") from None
+        except json.JSONDecodeError as exc:
+            raise ParameterError(f"{path}: not valid JSON ({exc})") from None
+        return cls.from_dict(data, body, source=str(path))
+
+
+def _validate_module(m: ModuleParameters, where: str) -> None:
+    if m.controls not in _CONTROLS:
+        raise ParameterError(
+            f"{where}: field 'controls' must be \"com\" or \"joint\", got {m.controls!r}"
+        )
+    for key in ("kp", "ki", "kd", "delay_s", "kpas", "bpas"):
+        value = getattr(m, key)
+        if not math.isfinite(value):
+            raise ParameterError(f"{where}: field '{key}' is not finite ({value})")
+        if value < 0:
+            raise ParameterError(f"{where}: field '{key}' is negative ({value})")
+
+
+def _column(index: int, n: int) -> str:
+    """MODEL §3 column of module ``index`` of ``n``: lowest ankle, top hip, others knee."""
+    if index == 0:
+        return "ankle"
+    if index == n - 1:
+        return "hip"
+    return "knee"
+
+
+def default_parameters(body) -> DecParameters:
+    """MODEL §3 defaults for ``body``: the paper's ratios to m·g·h times this body's m·g·h.
+
+    The ratios are taken from the table (value / default-body m·g·h) so the default body
+    gets the table exactly; delays keep the column's seconds; classes per column.
+    """
+    n = body.n_segments
+    mods = {}
+    for i, (joint, mgh) in enumerate(zip(body.joint_names, body.mgh)):
+        col = _column(i, n)
+        scale = float(mgh) / PAPER_MGH[col]
+        row = PAPER_TABLE[col]
+        mods[joint] = ModuleParameters(
+            kp=float(mgh),
+            ki=row["ki"] * scale,
+            kd=row["kd"] * scale,
+            delay_s=row["delay_s"],
+            controls=DEFAULT_CLASSES[col],
+            kpas=row["kpas"] * scale,
+            bpas=row["bpas"] * scale,
+        )
+    return DecParameters(mods)
+
+
+#: Order of a module's normalised target (MODEL §3): [K̃p, K̃i, K̃d, Δ̃, C].
+TARGET_FIELDS = ("kp", "ki", "kd", "delay_s")
+
+
+def normalise(params: DecParameters, defaults: DecParameters) -> np.ndarray:
+    """(N, 5) targets [K̃p, K̃i, K̃d, Δ̃, C] with p̃ = (p − p_default)/p_default."""
+    rows = []
+    for joint, m in params.modules.items():
+        d = defaults[joint]
+        rows.append(
+            [(getattr(m, f) - getattr(d, f)) / getattr(d, f) for f in TARGET_FIELDS] + [m.sign]
+        )
+    return np.asarray(rows, dtype=float)
+
+
+def denormalise(targets: np.ndarray, defaults: DecParameters) -> DecParameters:
+    """Inverse of :func:`normalise`; the class is read by its sign (≥ 0 → COM)."""
+    targets = np.asarray(targets, dtype=float)
+    mods = {}
+    for row, (joint, d) in zip(targets, defaults.modules.items()):
+        values = {f: getattr(d, f) * (1.0 + row[k]) for k, f in enumerate(TARGET_FIELDS)}
+        mods[joint] = replace(d, controls="com" if row[4] >= 0 else "joint", **values)
+    return DecParameters(mods)

@@ -1,4 +1,4 @@
-"""Compiled planar-chain dynamics and the batched DEC simulation loop (numba).
+"""Compiled planar-chain dynamics and the DEC controller, batched over trials (numba).
 
 Equations of motion in segment-in-space angles θ (N,) (derivation in docs/model.md):
 
@@ -11,165 +11,400 @@ with the body's constant coupling D (N, N) and gravity levers S (N,) (see
 
 Time stepping (MODEL §2 **[decision]**): step dt, controller from the state at the start
 of the step, semi-implicit Euler (velocities first, then angles).
+
+Layout. Trials run in blocks of :data:`LANES`; every per-trial quantity is a *row* of
+LANES values in one flat work array ``w`` (rows listed in :class:`Rows`), parameters are
+rows of ``par``, the delay buffers rows of ``buf``. The number of segments N is fixed when
+:func:`kernels` compiles the functions for it, so loops over segments unroll, every row
+offset is a constant and the loops over lanes vectorise (AVX2/AVX-512). Elementary
+functions come from :mod:`posture_id.fastmath` for the same reason. Delay-buffer reads
+(a different delay per lane) happen in a short scalar phase.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numba import njit
 
-from posture_id.dec import dec_torques
+from posture_id.fastmath import atan2_poly, cos_poly, sin_poly
 
-__all__ = ["chain_kinematics", "chain_acceleration", "simulate_batch_kernel"]
+__all__ = ["LANES", "Rows", "ParRows", "Kernels", "kernels", "buffer_length"]
 
-
-@njit(cache=True)
-def chain_kinematics(theta, omega, s_re, s_im, cos_t, sin_t, alpha_s, alpha_s_dot, tg, tg_dot,
-                     lever_im):
-    """Fill COM-above angles and gravity terms from the segment angles.
-
-    Args:
-        theta, omega: (N,) rad, rad/s.
-        s_re, s_im: (N,) gravity levers S (kg·m), real and imaginary parts.
-        cos_t, sin_t: (N,) outputs, cos θ and sin θ.
-        alpha_s, alpha_s_dot: (N,) outputs, α_i,S (rad) and its rate (rad/s).
-        tg, tg_dot: (N,) outputs, sin α_i,S and its rate (1/s).
-        lever_im: (N,) output, Im(e^{iθ_j} S_j) (kg·m); G_j = −g·lever_im_j.
-    """
-    n = theta.shape[0]
-    for j in range(n):
-        cos_t[j] = math.cos(theta[j])
-        sin_t[j] = math.sin(theta[j])
-    v_re = 0.0
-    v_im = 0.0
-    vd_re = 0.0
-    vd_im = 0.0
-    for i in range(n - 1, -1, -1):
-        e_re = cos_t[i] * s_re[i] - sin_t[i] * s_im[i]
-        e_im = sin_t[i] * s_re[i] + cos_t[i] * s_im[i]
-        lever_im[i] = e_im
-        v_re += e_re
-        v_im += e_im
-        vd_re -= omega[i] * e_im
-        vd_im += omega[i] * e_re
-        r2 = v_re * v_re + v_im * v_im
-        inv_r = 1.0 / math.sqrt(r2)
-        rate = (vd_im * v_re - vd_re * v_im) / r2
-        alpha_s[i] = math.atan2(v_im, v_re)
-        alpha_s_dot[i] = rate
-        tg[i] = v_im * inv_r
-        tg_dot[i] = v_re * inv_r * rate
+#: Trials per block: the SIMD width the lane loops are written for.
+LANES = 16
 
 
-@njit(cache=True)
-def chain_acceleration(cos_t, sin_t, omega, d_re, d_im, inertia, gravity, lever_im, tau,
-                       mass, acc):
-    """θ̈ (N,) rad/s² from the state and joint torques ``tau`` (N,) N·m.
-
-    ``mass`` (N, N) is scratch; ``acc`` (N,) receives the result. Solves M θ̈ = Q − c − G by
-    an in-place Cholesky factorisation (M is symmetric positive definite).
-    """
-    n = omega.shape[0]
-    for j in range(n):
-        rhs = tau[j] + gravity * lever_im[j]
-        if j + 1 < n:
-            rhs -= tau[j + 1]
-        for k in range(n):
-            e_re = cos_t[j] * cos_t[k] + sin_t[j] * sin_t[k]
-            e_im = sin_t[j] * cos_t[k] - cos_t[j] * sin_t[k]
-            mass[j, k] = d_re[j, k] * e_re - d_im[j, k] * e_im
-            rhs -= omega[k] * omega[k] * (d_re[j, k] * e_im + d_im[j, k] * e_re)
-        mass[j, j] += inertia[j]
-        acc[j] = rhs
-    # Cholesky: mass = L Lᵀ, L stored in the lower triangle
-    for j in range(n):
-        s = mass[j, j]
-        for k in range(j):
-            s -= mass[j, k] * mass[j, k]
-        mass[j, j] = math.sqrt(s)
-        for i in range(j + 1, n):
-            s = mass[i, j]
-            for k in range(j):
-                s -= mass[i, k] * mass[j, k]
-            mass[i, j] = s / mass[j, j]
-    for i in range(n):
-        s = acc[i]
-        for k in range(i):
-            s -= mass[i, k] * acc[k]
-        acc[i] = s / mass[i, i]
-    for i in range(n - 1, -1, -1):
-        s = acc[i]
-        for k in range(i + 1, n):
-            s -= mass[k, i] * acc[k]
-        acc[i] = s / mass[i, i]
+def buffer_length(max_delay_steps: float) -> int:
+    """Power-of-two ring-buffer length holding every servo command a delay of
+    ``max_delay_steps`` steps reads (the current one included)."""
+    need = int(math.floor(max_delay_steps)) + 2
+    return 1 << (need - 1).bit_length()
 
 
-@njit(cache=True)
-def _simulate_trial(d_re, d_im, inertia, s_re, s_im, gravity, tilt, tilt_vel, n_steps, dt,
-                    sample_every, sway_limit, deadband_rad_s, kp, ki, kd, delay_steps, sign,
-                    kpas, bpas, buffer_len, out_theta, out_alpha):
-    """Run one trial; fill ``out_theta``/``out_alpha`` (S, N); return the abort step or −1."""
-    n = s_re.shape[0]
-    theta = np.zeros(n)
-    omega = np.zeros(n)
-    cos_t = np.empty(n)
-    sin_t = np.empty(n)
-    alpha_s = np.empty(n)
-    alpha_s_dot = np.empty(n)
-    tg = np.empty(n)
-    tg_dot = np.empty(n)
-    lever_im = np.empty(n)
-    tau = np.empty(n)
-    acc = np.empty(n)
-    mass = np.empty((n, n))
-    integral = np.zeros(n)
-    estimate = np.zeros(1)
-    buffer = np.zeros((n, buffer_len))
-    for step in range(n_steps + 1):
-        chain_kinematics(theta, omega, s_re, s_im, cos_t, sin_t, alpha_s, alpha_s_dot, tg,
-                         tg_dot, lever_im)
-        fallen = False
-        for j in range(n):
-            if not abs(theta[j]) <= sway_limit:
-                fallen = True
-        if fallen:
-            first = (step + sample_every - 1) // sample_every
-            out_theta[first:, :] = np.nan
-            out_alpha[first:, :] = np.nan
-            return step
-        if step % sample_every == 0:
-            k = step // sample_every
-            for j in range(n):
-                out_theta[k, j] = theta[j]
-                out_alpha[k, j] = alpha_s[j]
-        if step == n_steps:
-            break
-        dec_torques(step, dt, theta, omega, tilt[step], tilt_vel[step], alpha_s, alpha_s_dot,
-                    tg, tg_dot, kp, ki, kd, delay_steps, sign, kpas, bpas, deadband_rad_s,
-                    integral, estimate, buffer, tau)
-        chain_acceleration(cos_t, sin_t, omega, d_re, d_im, inertia, gravity, lever_im, tau,
-                           mass, acc)
-        for j in range(n):
-            omega[j] += dt * acc[j]
-            theta[j] += dt * omega[j]
-    return -1
+@dataclass(frozen=True)
+class Rows:
+    """Row offsets of the work array ``w`` (each row holds LANES values) for N segments."""
+
+    n: int
+
+    @property
+    def theta(self) -> int:  # θ_j, rad
+        return 0
+
+    @property
+    def omega(self) -> int:  # θ̇_j, rad/s
+        return self.n
+
+    @property
+    def integral(self) -> int:  # ∫ε_j dt, rad·s
+        return 2 * self.n
+
+    @property
+    def alpha(self) -> int:  # α_j,S, rad
+        return 3 * self.n
+
+    @property
+    def alpha_dot(self) -> int:
+        return 4 * self.n
+
+    @property
+    def tg(self) -> int:  # T_g,j = sin α_j,S
+        return 5 * self.n
+
+    @property
+    def tg_dot(self) -> int:
+        return 6 * self.n
+
+    @property
+    def cos(self) -> int:
+        return 7 * self.n
+
+    @property
+    def sin(self) -> int:
+        return 8 * self.n
+
+    @property
+    def lever(self) -> int:  # Im(e^{iθ_j} S_j), kg·m
+        return 9 * self.n
+
+    @property
+    def tau(self) -> int:  # joint torque, N·m
+        return 10 * self.n
+
+    @property
+    def servo(self) -> int:  # undelayed PID command
+        return 11 * self.n
+
+    @property
+    def q(self) -> int:  # joint angle
+        return 12 * self.n
+
+    @property
+    def qd(self) -> int:
+        return 13 * self.n
+
+    @property
+    def acc(self) -> int:  # θ̈_j
+        return 14 * self.n
+
+    @property
+    def mass(self) -> int:  # M (N×N rows), Cholesky factor in place
+        return 15 * self.n
+
+    @property
+    def estimate(self) -> int:  # α̂_FS, rad
+        return 15 * self.n + self.n * self.n
+
+    @property
+    def estimate_rate(self) -> int:
+        return self.estimate + 1
+
+    @property
+    def inside(self) -> int:  # 1.0 while every |θ_j| ≤ sway limit
+        return self.estimate + 2
+
+    @property
+    def vsum(self) -> int:  # 4 rows: running COM-above sum (re, im) and its rate
+        return self.estimate + 3
+
+    @property
+    def count(self) -> int:
+        return self.estimate + 7
 
 
-@njit(cache=True, nogil=True)
-def simulate_batch_kernel(d_re, d_im, inertia, s_re, s_im, gravity, tilt, tilt_vel, n_steps,
-                          dt, sample_every, sway_limit, deadband_rad_s, kp, ki, kd,
-                          delay_steps, sign, kpas, bpas, buffer_len, out_theta, out_alpha,
-                          abort_step, start, stop):
-    """Simulate trials ``start..stop-1`` of a batch, releasing the GIL (threads run chunks).
+@dataclass(frozen=True)
+class ParRows:
+    """Row offsets of the parameter array ``par`` for N modules."""
 
-    Parameter arrays are (B, N); outputs ``out_theta``/``out_alpha`` are (B, S, N) rad and
-    ``abort_step`` (B,) int64 (−1 for a trial that stayed within ``sway_limit`` rad).
-    """
-    for b in range(start, stop):
-        abort_step[b] = _simulate_trial(
-            d_re, d_im, inertia, s_re, s_im, gravity, tilt, tilt_vel, n_steps, dt,
-            sample_every, sway_limit, deadband_rad_s, kp[b], ki[b], kd[b], delay_steps[b],
-            sign[b], kpas[b], bpas[b], buffer_len, out_theta[b], out_alpha[b],
-        )
+    n: int
+
+    kp = property(lambda self: 0)
+    ki = property(lambda self: self.n)
+    kd = property(lambda self: 2 * self.n)
+    sign = property(lambda self: 3 * self.n)  # class C: +1 COM in space, −1 joint
+    kpas = property(lambda self: 4 * self.n)
+    bpas = property(lambda self: 5 * self.n)
+    delay = property(lambda self: 6 * self.n)  # Δ/dt, steps (fractional)
+    delay_ceil = property(lambda self: 7 * self.n)  # ⌈Δ/dt⌉
+    delay_frac = property(lambda self: 8 * self.n)  # ⌈Δ/dt⌉ − Δ/dt
+    count = property(lambda self: 9 * self.n)
+
+
+@dataclass(frozen=True)
+class Kernels:
+    """The compiled functions for one N (see :func:`kernels`)."""
+
+    n: int
+    rows: Rows
+    par_rows: ParRows
+    kinematics: object
+    dec_torques: object
+    dynamics: object
+    simulate_block: object
+
+
+@lru_cache(maxsize=None)
+def kernels(n: int) -> Kernels:
+    """Compile (or load from numba's cache) the simulation functions for N segments."""
+    return _build(n)
+
+
+def _build(N: int) -> Kernels:  # noqa: C901, N803 - one closure per compiled function
+    L = LANES
+    R = Rows(N)
+    P = ParRows(N)
+    TH, OM, INT, AL, ALD = R.theta, R.omega, R.integral, R.alpha, R.alpha_dot
+    TG, TGD, COS, SIN, LEV = R.tg, R.tg_dot, R.cos, R.sin, R.lever
+    TAU, SERVO, Q, QD, ACC, MASS = R.tau, R.servo, R.q, R.qd, R.acc, R.mass
+    EST, ESTR, INSIDE, VSUM = R.estimate, R.estimate_rate, R.inside, R.vsum
+    KP, KI, KD, SIGN, KPAS, BPAS = P.kp, P.ki, P.kd, P.sign, P.kpas, P.bpas
+    DLY, DCEIL, DFRAC = P.delay, P.delay_ceil, P.delay_frac
+
+    @njit(cache=True, error_model="numpy")
+    def kinematics(w, s_re, s_im, sway_limit):
+        """COM-above angles, gravity terms and the sway-limit flag from θ, θ̇ (all lanes).
+
+        s_re, s_im: (N,) gravity levers S (kg·m); sway_limit: rad.
+        """
+        # segments from the top down, lanes innermost; running sums in rows VSUM..VSUM+3
+        for lane in range(L):
+            w[(VSUM + 0) * L + lane] = 0.0
+            w[(VSUM + 1) * L + lane] = 0.0
+            w[(VSUM + 2) * L + lane] = 0.0
+            w[(VSUM + 3) * L + lane] = 0.0
+            w[INSIDE * L + lane] = 1.0
+        for top_down in range(N):
+            i = N - 1 - top_down
+            sr = s_re[i]
+            si = s_im[i]
+            for lane in range(L):
+                th = w[(TH + i) * L + lane]
+                c = cos_poly(th)
+                s = sin_poly(th)
+                w[(COS + i) * L + lane] = c
+                w[(SIN + i) * L + lane] = s
+                e_re = c * sr - s * si
+                e_im = s * sr + c * si
+                w[(LEV + i) * L + lane] = e_im
+                om = w[(OM + i) * L + lane]
+                v_re = w[(VSUM + 0) * L + lane] + e_re
+                v_im = w[(VSUM + 1) * L + lane] + e_im
+                vd_re = w[(VSUM + 2) * L + lane] - om * e_im
+                vd_im = w[(VSUM + 3) * L + lane] + om * e_re
+                w[(VSUM + 0) * L + lane] = v_re
+                w[(VSUM + 1) * L + lane] = v_im
+                w[(VSUM + 2) * L + lane] = vd_re
+                w[(VSUM + 3) * L + lane] = vd_im
+                r2 = v_re * v_re + v_im * v_im
+                inv_r = 1.0 / math.sqrt(r2)
+                rate = (vd_im * v_re - vd_re * v_im) / r2
+                w[(AL + i) * L + lane] = atan2_poly(v_im, v_re)
+                w[(ALD + i) * L + lane] = rate
+                w[(TG + i) * L + lane] = v_im * inv_r
+                w[(TGD + i) * L + lane] = v_re * inv_r * rate
+                if not abs(th) <= sway_limit:
+                    w[INSIDE * L + lane] = 0.0
+
+    @njit(cache=True, error_model="numpy")
+    def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
+        """DEC joint torques at step n (MODEL §2) into the τ rows; advances ∫ε, α̂_FS and
+        the delay buffers. tilt, tilt_vel: α_FS (rad) and rate at t = n·dt.
+
+        buf: (N·B·L,) ring buffers of B (a power of two) servo commands per module.
+        """
+        n_buf = buf.shape[0] // (N * L)
+        mask = n_buf - 1
+        # phase 1 (vectorised): servo command, integral and tilt-estimate updates
+        for lane in range(L):
+            ankle_rate = w[OM * L + lane] - tilt_vel  # proprioceptive q̇_1
+            v = w[OM * L + lane] - ankle_rate  # vestibular θ̇_1 − q̇_1
+            est_rate = max(v - deadband_rad_s, 0.0) + min(v + deadband_rad_s, 0.0)
+            beta = w[EST * L + lane]
+            beta_rate = est_rate
+            below = tilt
+            below_rate = tilt_vel
+            for i in range(N):
+                th = w[(TH + i) * L + lane]
+                om = w[(OM + i) * L + lane]
+                q = th - below
+                qd = om - below_rate
+                com = par[(SIGN + i) * L + lane] > 0.0
+                x = w[(AL + i) * L + lane] - below + beta if com else q
+                xd = w[(ALD + i) * L + lane] - below_rate + beta_rate if com else qd
+                integ = w[(INT + i) * L + lane]
+                w[(SERVO + i) * L + lane] = (
+                    par[(KP + i) * L + lane] * x
+                    + par[(KD + i) * L + lane] * xd
+                    + par[(KI + i) * L + lane] * integ
+                )
+                w[(INT + i) * L + lane] = integ + dt * x
+                w[(Q + i) * L + lane] = q
+                w[(QD + i) * L + lane] = qd
+                beta += q
+                beta_rate += qd
+                below = th
+                below_rate = om
+            w[ESTR * L + lane] = est_rate
+            w[EST * L + lane] += dt * est_rate
+        # phase 2 (scalar): store the command, read it back Δ later, interpolated
+        slot = n & mask
+        for i in range(N):
+            for lane in range(L):
+                row = (i * n_buf) * L + lane
+                buf[row + slot * L] = w[(SERVO + i) * L + lane]
+                if n < par[(DLY + i) * L + lane]:
+                    delayed = 0.0
+                else:
+                    k = n - int(par[(DCEIL + i) * L + lane])
+                    u0 = buf[row + (k & mask) * L]
+                    u1 = buf[row + ((k + 1) & mask) * L]
+                    delayed = u0 + par[(DFRAC + i) * L + lane] * (u1 - u0)
+                w[(TAU + i) * L + lane] = delayed
+        # phase 3 (vectorised): τ = −servo(t − Δ) − PD on T_g (undelayed) − passive
+        for lane in range(L):
+            for i in range(N):
+                kp = par[(KP + i) * L + lane]
+                kd = par[(KD + i) * L + lane]
+                w[(TAU + i) * L + lane] = (
+                    -w[(TAU + i) * L + lane]
+                    - kp * w[(TG + i) * L + lane]
+                    - kd * w[(TGD + i) * L + lane]
+                    - par[(KPAS + i) * L + lane] * w[(Q + i) * L + lane]
+                    - par[(BPAS + i) * L + lane] * w[(QD + i) * L + lane]
+                )
+
+    @njit(cache=True, error_model="numpy")
+    def dynamics(w, d_re, d_im, inertia, gravity, dt):
+        """θ̈ from M θ̈ = Q − c − G (Cholesky), then one semi-implicit Euler step.
+
+        d_re, d_im: (N, N) coupling D (kg·m²); inertia: (N,) kg·m²; gravity: m/s²; dt: s.
+        """
+        for lane in range(L):
+            for j in range(N):
+                rhs = w[(TAU + j) * L + lane] + gravity * w[(LEV + j) * L + lane]
+                if j + 1 < N:
+                    rhs -= w[(TAU + j + 1) * L + lane]
+                w[(ACC + j) * L + lane] = rhs
+                w[(MASS + j * N + j) * L + lane] = d_re[j, j] + inertia[j]
+            for j in range(N):
+                cj = w[(COS + j) * L + lane]
+                sj = w[(SIN + j) * L + lane]
+                oj = w[(OM + j) * L + lane]
+                for k in range(j):
+                    ck = w[(COS + k) * L + lane]
+                    sk = w[(SIN + k) * L + lane]
+                    ok = w[(OM + k) * L + lane]
+                    e_re = cj * ck + sj * sk
+                    e_im = sj * ck - cj * sk
+                    w[(MASS + j * N + k) * L + lane] = d_re[j, k] * e_re - d_im[j, k] * e_im
+                    cor = d_re[j, k] * e_im + d_im[j, k] * e_re
+                    w[(ACC + j) * L + lane] -= ok * ok * cor
+                    w[(ACC + k) * L + lane] += oj * oj * cor
+            # Cholesky M = L Lᵀ (lower triangle), forward and back substitution
+            for j in range(N):
+                s = w[(MASS + j * N + j) * L + lane]
+                for k in range(j):
+                    s -= w[(MASS + j * N + k) * L + lane] ** 2
+                djj = math.sqrt(s)
+                w[(MASS + j * N + j) * L + lane] = djj
+                for i in range(j + 1, N):
+                    s = w[(MASS + i * N + j) * L + lane]
+                    for k in range(j):
+                        s -= w[(MASS + i * N + k) * L + lane] * w[(MASS + j * N + k) * L + lane]
+                    w[(MASS + i * N + j) * L + lane] = s / djj
+            for i in range(N):
+                s = w[(ACC + i) * L + lane]
+                for k in range(i):
+                    s -= w[(MASS + i * N + k) * L + lane] * w[(ACC + k) * L + lane]
+                w[(ACC + i) * L + lane] = s / w[(MASS + i * N + i) * L + lane]
+            for i in range(N - 1, -1, -1):
+                s = w[(ACC + i) * L + lane]
+                for k in range(i + 1, N):
+                    s -= w[(MASS + k * N + i) * L + lane] * w[(ACC + k) * L + lane]
+                w[(ACC + i) * L + lane] = s / w[(MASS + i * N + i) * L + lane]
+            for j in range(N):
+                om = w[(OM + j) * L + lane] + dt * w[(ACC + j) * L + lane]
+                w[(OM + j) * L + lane] = om
+                w[(TH + j) * L + lane] += dt * om
+
+    @njit(cache=True, nogil=True, error_model="numpy")
+    def simulate_block(w, par, buf, d_re, d_im, inertia, s_re, s_im, gravity, tilt, tilt_vel,
+                       n_steps, dt, sample_every, sway_limit, deadband_rad_s, out_theta,
+                       out_alpha, abort_step, first, count):
+        """Simulate trials ``first .. first+count−1`` of a batch as one block of L lanes.
+
+        w, par, buf: the block's work, parameter and buffer arrays (lanes ≥ count are
+        padding). tilt, tilt_vel: (n_steps + 1,) α_FS (rad) and rate on the step grid.
+        out_theta, out_alpha: (B, S, N) θ and α_S at every ``sample_every``-th step (rad),
+        NaN from an abort on. abort_step: (B,) int64, the step of the abort or −1.
+        Releases the GIL: blocks run in parallel threads.
+        """
+        alive = np.zeros(L, dtype=np.bool_)
+        alive[:count] = True
+        n_alive = count
+        for lane in range(count):
+            abort_step[first + lane] = -1
+        for step in range(n_steps + 1):
+            kinematics(w, s_re, s_im, sway_limit)
+            parked = False
+            for lane in range(L):
+                if w[INSIDE * L + lane] > 0.0:
+                    continue
+                if alive[lane]:
+                    alive[lane] = False
+                    n_alive -= 1
+                    if lane < count:
+                        k0 = (step + sample_every - 1) // sample_every
+                        abort_step[first + lane] = step
+                        out_theta[first + lane, k0:] = np.nan
+                        out_alpha[first + lane, k0:] = np.nan
+                # a lane past the limit is parked upright at rest: its numbers stay benign
+                parked = True
+                w[EST * L + lane] = 0.0
+                for j in range(N):
+                    w[(TH + j) * L + lane] = 0.0
+                    w[(OM + j) * L + lane] = 0.0
+                    w[(INT + j) * L + lane] = 0.0
+                for p in range(lane, buf.shape[0], L):
+                    buf[p] = 0.0
+            if n_alive == 0:
+                return
+            if parked:
+                kinematics(w, s_re, s_im, sway_limit)
+            if step % sample_every == 0:
+                k = step // sample_every
+                for lane in range(count):
+                    if alive[lane]:
+                        for j in range(N):
+                            out_theta[first + lane, k, j] = w[(TH + j) * L + lane]
+                            out_alpha[first + lane, k, j] = w[(AL + j) * L + lane]
+            if step == n_steps:
+                return
+            dec_torques(step, w, par, buf, tilt[step], tilt_vel[step], dt, deadband_rad_s)
+            dynamics(w, d_re, d_im, inertia, gravity, dt)
+
+    return Kernels(N, R, P, kinematics, dec_torques, dynamics, simulate_block)

@@ -31,6 +31,7 @@ __all__ = [
     "default_parameters",
     "normalise",
     "denormalise",
+    "ParameterArrays",
 ]
 
 #: MODEL §3 (paper Table 1), columns ankle, knee, hip. Kp is m·g·h of the default body.
@@ -88,6 +89,10 @@ class DecParameters:
     def array(self, name: str) -> np.ndarray:
         """(N,) values of one field (``"kp"``, ``"delay_s"``, ``"sign"`` ...), support upward."""
         return np.array([getattr(m, name) for m in self.modules.values()], dtype=float)
+
+    def arrays(self):
+        """This parameter set as a one-trial :class:`ParameterArrays` (1, N)."""
+        return ParameterArrays.from_parameters([self])
 
     def replace(self, joint: str, **changes) -> DecParameters:
         """A copy with some fields of one module changed (validated)."""
@@ -241,3 +246,64 @@ def denormalise(targets: np.ndarray, defaults: DecParameters) -> DecParameters:
         values = {f: getattr(d, f) * (1.0 + row[k]) for k, f in enumerate(TARGET_FIELDS)}
         mods[joint] = replace(d, controls="com" if row[4] >= 0 else "joint", **values)
     return DecParameters(mods)
+
+
+@dataclass(frozen=True)
+class ParameterArrays:
+    """Parameters of B trials as arrays, each (B, N), support upward (SI units).
+
+    ``sign`` holds the class C (+1 COM in space, −1 joint angle).
+    """
+
+    kp: np.ndarray
+    ki: np.ndarray
+    kd: np.ndarray
+    delay_s: np.ndarray
+    sign: np.ndarray
+    kpas: np.ndarray
+    bpas: np.ndarray
+
+    FIELDS = ("kp", "ki", "kd", "delay_s", "sign", "kpas", "bpas")
+
+    def __post_init__(self) -> None:
+        shape = np.shape(self.kp)
+        for name in self.FIELDS:
+            arr = np.ascontiguousarray(getattr(self, name), dtype=float)
+            if arr.ndim != 2 or arr.shape != shape:
+                raise ParameterError(
+                    f"parameter array '{name}' has shape {arr.shape}, expected {shape} (B, N)"
+                )
+            if not np.all(np.isfinite(arr)):
+                raise ParameterError(f"parameter array '{name}' holds NaN or infinite values")
+            if name == "sign":
+                if not np.all(np.abs(arr) == 1.0):
+                    raise ParameterError("parameter array 'sign' must hold only +1 and -1")
+            elif np.any(arr < 0):
+                b, i = np.argwhere(arr < 0)[0]
+                raise ParameterError(
+                    f"parameter array '{name}': trial {b}, module {i} is negative ({arr[b, i]})"
+                )
+            object.__setattr__(self, name, arr)
+
+    @property
+    def n_trials(self) -> int:
+        return self.kp.shape[0]
+
+    @classmethod
+    def from_parameters(cls, params: list[DecParameters]) -> ParameterArrays:
+        """Stack per-trial parameter sets (all for the same body)."""
+        if not params:
+            raise ParameterError("no parameter sets given")
+        return cls(**{f: np.stack([p.array(f) for p in params]) for f in cls.FIELDS})
+
+    def trial(self, b: int, joints: tuple[str, ...]) -> DecParameters:
+        """Trial ``b`` as a :class:`DecParameters` keyed by ``joints``."""
+        mods = {}
+        for i, joint in enumerate(joints):
+            mods[joint] = ModuleParameters(
+                kp=float(self.kp[b, i]), ki=float(self.ki[b, i]), kd=float(self.kd[b, i]),
+                delay_s=float(self.delay_s[b, i]),
+                controls="com" if self.sign[b, i] > 0 else "joint",
+                kpas=float(self.kpas[b, i]), bpas=float(self.bpas[b, i]),
+            )
+        return DecParameters(mods)

@@ -35,7 +35,7 @@ from posture_id.fastmath import atan2_poly, cos_poly, sin_poly
 __all__ = ["LANES", "Rows", "ParRows", "Kernels", "kernels", "buffer_length"]
 
 #: Trials per block: the SIMD width the lane loops are written for.
-LANES = 16
+LANES = 32
 
 
 def buffer_length(max_delay_steps: float) -> int:
@@ -219,9 +219,8 @@ def _build(N: int) -> Kernels:  # noqa: C901, N803 - one closure per compiled fu
                 w[(VSUM + 1) * L + lane] = v_im
                 w[(VSUM + 2) * L + lane] = vd_re
                 w[(VSUM + 3) * L + lane] = vd_im
-                r2 = v_re * v_re + v_im * v_im
-                inv_r = 1.0 / math.sqrt(r2)
-                rate = (vd_im * v_re - vd_re * v_im) / r2
+                inv_r = 1.0 / math.sqrt(v_re * v_re + v_im * v_im)
+                rate = (vd_im * v_re - vd_re * v_im) * (inv_r * inv_r)
                 w[(AL + i) * L + lane] = atan2_poly(v_im, v_re)
                 w[(ALD + i) * L + lane] = rate
                 w[(TG + i) * L + lane] = v_im * inv_r

@@ -1,0 +1,155 @@
+"""Command line: ``posture-id body ...`` and ``posture-id simulate ...``.
+
+Every user error is printed as one line ``posture-id: error: ...`` (exit status 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from posture_id.errors import PostureIdError
+
+__all__ = ["main"]
+
+
+def _body_table(body) -> str:
+    """Human-readable summary of a body and its default parameters."""
+    params = body.default_parameters()
+    lines = [
+        f"body '{body.name}' from {body.urdf_path}: {body.n_segments} segments, "
+        f"{body.total_mass:.3f} kg, g = {body.gravity:g} m/s²",
+        "",
+        f"{'segment':<10}{'joint':<10}{'mass kg':>9}{'length m':>10}{'COM m':>8}"
+        f"{'I kg·m²':>10}",
+    ]
+    for s in body.segments:
+        lines.append(
+            f"{s.name:<10}{s.joint:<10}{s.mass:>9.3f}{s.length:>10.4f}"
+            f"{(s.com[0] ** 2 + s.com[1] ** 2) ** 0.5:>8.4f}{s.inertia:>10.4f}"
+        )
+    lines += [
+        "",
+        f"{'module':<10}{'m·g·h':>10}{'Kp':>10}{'Ki':>9}{'Kd':>9}{'Δ s':>7}"
+        f"{'Kpas':>9}{'Bpas':>9}  controls",
+    ]
+    for joint, mgh in zip(body.joint_names, body.mgh):
+        m = params[joint]
+        lines.append(
+            f"{joint:<10}{mgh:>10.3f}{m.kp:>10.3f}{m.ki:>9.4f}{m.kd:>9.3f}{m.delay_s:>7.3f}"
+            f"{m.kpas:>9.3f}{m.bpas:>9.3f}  {m.controls}"
+        )
+    return "\n".join(lines)
+
+
+def _cmd_body(args: argparse.Namespace) -> int:
+    from posture_id.anthropometry import default_tip_segments, winter_segments, write_chain_urdf
+    from posture_id.body import DEFAULT_URDF, load_body
+
+    if args.height is not None or args.mass is not None or args.default_tip:
+        if args.out is None:
+            raise PostureIdError("--out is required to write a body URDF")
+        if args.default_tip:
+            segments, name = default_tip_segments(), "tip_default"
+        else:
+            if args.height is None or args.mass is None:
+                raise PostureIdError("--height and --mass go together")
+            segments = winter_segments(args.height, args.mass, args.segments)
+            name = f"winter_{args.height:g}m_{args.mass:g}kg_{args.segments}seg"
+        path = write_chain_urdf(args.out, name, segments)
+        print(f"wrote {path}", file=sys.stderr)
+        urdf = path
+    else:
+        urdf = args.urdf or DEFAULT_URDF
+    body = load_body(urdf)
+    if args.json:
+        print(json.dumps(body.describe(), indent=2))
+    else:
+        print(_body_table(body))
+    return 0
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from posture_id.body import DEFAULT_URDF, load_body
+    from posture_id.parameters import DecParameters
+    from posture_id.simulation import SimulationOptions, simulate
+    from posture_id.stimulus import prts, tilt_from_csv
+
+    body = load_body(args.body or DEFAULT_URDF)
+    params = DecParameters.from_json(args.params, body) if args.params else None
+    if args.tilt:
+        stimulus = tilt_from_csv(args.tilt)
+    else:
+        stimulus = prts(amplitude_deg=args.amplitude_deg, cycles=args.cycles, states=args.states)
+    options = SimulationOptions(
+        sway_limit_deg=args.sway_limit_deg, deadband_rad_s=args.deadband_rad_s
+    )
+    result = simulate(body, params, stimulus, options)
+    result.to_csv(args.out)
+    print(f"wrote {args.out} ({len(result.time)} samples at {options.sample_rate_hz:g} Hz)",
+          file=sys.stderr)
+    if args.plot:
+        result.plot(args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    if not result.stable:
+        print(
+            f"posture-id: warning: the body left the ±{options.sway_limit_deg:g}° sway limit "
+            f"at t = {result.abort_time:.3f} s; the recording stops there",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="posture-id",
+        description="Identify DEC posture-control parameters from body sway.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    body = sub.add_parser("body", help="describe a body (URDF) or write one")
+    body.add_argument("urdf", nargs="?", type=Path, help="URDF file (default: the TIP)")
+    body.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    body.add_argument("--height", type=float, help="write a Winter body: height, m")
+    body.add_argument("--mass", type=float, help="write a Winter body: mass, kg")
+    body.add_argument("--segments", type=int, default=3, choices=(1, 2, 3),
+                      help="Winter body: 3 shank+thigh+trunk, 2 leg+trunk, 1 whole body")
+    body.add_argument("--default-tip", action="store_true",
+                      help="write the default triple inverted pendulum of MODEL §1")
+    body.add_argument("--out", type=Path, help="where to write the generated URDF")
+    body.set_defaults(func=_cmd_body)
+
+    sim = sub.add_parser("simulate", help="simulate a DEC-controlled body on the tilting platform")
+    sim.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    sim.add_argument("--params", type=Path, help="parameter JSON (default: the body's defaults)")
+    sim.add_argument("--amplitude-deg", type=float, default=1.0,
+                     help="PRTS peak-to-peak tilt, degrees (default 1)")
+    sim.add_argument("--cycles", type=int, default=2, help="PRTS cycles (default 2)")
+    sim.add_argument("--states", type=int, default=242, choices=(242, 80),
+                     help="PRTS length (default 242 states, 60.5 s a cycle)")
+    sim.add_argument("--tilt", type=Path, help="tilt CSV (time_s,tilt_deg) instead of the PRTS")
+    sim.add_argument("--sway-limit-deg", type=float, default=6.0,
+                     help="abort when a segment leaves ±this angle (default 6)")
+    sim.add_argument("--deadband-rad-s", type=float, default=0.0003,
+                     help="tilt-estimator dead-band θ, rad/s (default 0.0003)")
+    sim.add_argument("--out", type=Path, required=True, help="recording CSV to write")
+    sim.add_argument("--plot", type=Path, help="plot of tilt and sway to write (PNG)")
+    sim.set_defaults(func=_cmd_simulate)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except PostureIdError as exc:
+        print(f"posture-id: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

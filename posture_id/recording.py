@@ -1,0 +1,117 @@
+"""Sway recordings as CSV: ``time_s,tilt_deg,<segment>_deg,...`` (degrees at the edge).
+
+Segments are named by their URDF links (``shank,thigh,trunk`` for the default body);
+angles are segment angles in space, positive = forward lean (MODEL §1).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.errors import RecordingError
+from posture_id.io_utils import atomic_write_text
+
+__all__ = ["Recording"]
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Recorded or simulated sway.
+
+    Attributes:
+        time: (S,) s, from 0. tilt: (S,) rad, platform tilt α_FS.
+        theta: (S, N) rad, segment angles in space. segments: (N,) link names.
+    """
+
+    time: np.ndarray
+    tilt: np.ndarray
+    theta: np.ndarray
+    segments: tuple[str, ...]
+
+    @property
+    def sample_rate_hz(self) -> float:
+        """Hz, from the median sample interval."""
+        return float(1.0 / np.median(np.diff(self.time)))
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write atomically. Rows after the first NaN (an aborted trial) are left out."""
+        valid = np.all(np.isfinite(self.theta), axis=1)
+        last = len(valid) if valid.all() else int(np.argmin(valid))
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        writer.writerow(["time_s", "tilt_deg", *(f"{s}_deg" for s in self.segments)])
+        deg_tilt = np.degrees(self.tilt)
+        deg = np.degrees(self.theta)
+        for k in range(last):
+            writer.writerow(
+                [f"{self.time[k]:.6f}", f"{deg_tilt[k]:.12g}", *(f"{x:.12g}" for x in deg[k])]
+            )
+        return atomic_write_text(Path(path), out.getvalue())
+
+    @classmethod
+    def from_csv(cls, path: str | Path, segments: tuple[str, ...] | None = None) -> Recording:
+        """Read a recording; with ``segments`` given, its columns must match them in order.
+
+        Raises:
+            RecordingError: naming the file, the line or column, and the problem.
+        """
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except FileNotFoundError:
+            raise RecordingError(f"{path}: no such recording") from None
+        rows = [r for r in csv.reader(io.StringIO(text)) if r]
+        if not rows:
+            raise RecordingError(f"{path}: empty file")
+        header = [h.strip() for h in rows[0]]
+        if header[:2] != ["time_s", "tilt_deg"]:
+            raise RecordingError(
+                f"{path}: header must start with 'time_s,tilt_deg', got '{','.join(header[:2])}'"
+            )
+        names = []
+        for col in header[2:]:
+            if not col.endswith("_deg") or len(col) <= 4:
+                raise RecordingError(f"{path}: column '{col}' is not '<segment>_deg'")
+            names.append(col[:-4])
+        if not names:
+            raise RecordingError(f"{path}: no segment columns after time_s,tilt_deg")
+        if segments is not None and tuple(names) != tuple(segments):
+            raise RecordingError(
+                f"{path}: segment columns {','.join(names)} do not match the body's "
+                f"segments {','.join(segments)}"
+            )
+        values = np.empty((len(rows) - 1, len(header)))
+        for n, row in enumerate(rows[1:]):
+            if len(row) != len(header):
+                raise RecordingError(
+                    f"{path}: line {n + 2}: {len(row)} fields, header has {len(header)}"
+                )
+            for c, cell in enumerate(row):
+                try:
+                    x = float(cell)
+                except ValueError:
+                    raise RecordingError(
+                        f"{path}: line {n + 2}, column '{header[c]}': not a number ({cell!r})"
+                    ) from None
+                if not math.isfinite(x):
+                    raise RecordingError(
+                        f"{path}: line {n + 2}, column '{header[c]}': {cell} is not a finite number"
+                    )
+                values[n, c] = x
+        if len(values) < 2:
+            raise RecordingError(f"{path}: fewer than two samples")
+        if np.any(np.diff(values[:, 0]) <= 0):
+            bad = int(np.argmax(np.diff(values[:, 0]) <= 0)) + 3
+            raise RecordingError(f"{path}: line {bad}: time_s does not increase")
+        return cls(
+            time=values[:, 0] - values[0, 0],
+            tilt=np.radians(values[:, 1]),
+            theta=np.radians(values[:, 2:]),
+            segments=tuple(names),
+        )

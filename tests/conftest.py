@@ -1,0 +1,65 @@
+"""Shared fixtures: bodies (default TIP, Winter 3- and 2-segment) and seeding."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from posture_id.anthropometry import winter_segments, write_chain_urdf
+from posture_id.body import load_body
+
+DATA = Path(__file__).parent / "data"
+
+
+@pytest.fixture(autouse=True)
+def _seed():
+    np.random.seed(0)
+
+
+@pytest.fixture(scope="session")
+def tip():
+    return load_body()
+
+
+@pytest.fixture(scope="session")
+def winter(tmp_path_factory):
+    path = tmp_path_factory.mktemp("bodies") / "winter3.urdf"
+    write_chain_urdf(path, "winter3", winter_segments(1.80, 80.0, 3))
+    return load_body(path)
+
+
+@pytest.fixture(scope="session")
+def winter2(tmp_path_factory):
+    path = tmp_path_factory.mktemp("bodies") / "winter2.urdf"
+    write_chain_urdf(path, "winter2", winter_segments(1.80, 80.0, 2))
+    return load_body(path)
+
+
+@pytest.fixture(scope="session")
+def winter1(tmp_path_factory):
+    path = tmp_path_factory.mktemp("bodies") / "winter1.urdf"
+    write_chain_urdf(path, "winter1", winter_segments(1.80, 80.0, 1))
+    return load_body(path)
+
+
+@pytest.fixture(params=["tip", "winter", "winter2"])
+def any_body(request):
+    """The default TIP, a Winter 3-segment and a Winter 2-segment body."""
+    return request.getfixturevalue(request.param)
+
+
+def random_parameters(body, rng, spread=0.3):
+    """Parameters around the body's defaults (classes random), as DecParameters."""
+    from posture_id.parameters import DecParameters, ModuleParameters
+
+    defaults = body.default_parameters()
+    mods = {}
+    for joint, d in defaults.modules.items():
+        f = np.abs(1.0 + spread * rng.standard_normal(4))
+        mods[joint] = ModuleParameters(
+            kp=d.kp * f[0], ki=d.ki * f[1], kd=d.kd * f[2], delay_s=d.delay_s * f[3],
+            controls=str(rng.choice(["com", "joint"])), kpas=d.kpas, bpas=d.bpas,
+        )
+    return DecParameters(mods)

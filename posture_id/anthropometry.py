@@ -74,7 +74,8 @@ def _merge(parts: list[SegmentSpec], link: str, joint: str) -> SegmentSpec:
         moment += p.mass * (base + p.com)
         base += p.length
     com = moment / mass
-    inertia = sum(p.inertia + p.mass * (c - com) ** 2 for p, c in zip(parts, coms))
+    pairs = zip(parts, coms, strict=True)
+    inertia = sum(p.inertia + p.mass * (c - com) ** 2 for p, c in pairs)
     return SegmentSpec(link, joint, base, mass, com, inertia)
 
 

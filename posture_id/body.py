@@ -242,7 +242,7 @@ class Body:
                     "mgh_Nm_per_rad": float(v),
                 }
                 for j, ma, h, v in zip(
-                    self.joint_names, self.mass_above, self.com_height_above, self.mgh
+                    self.joint_names, self.mass_above, self.com_height_above, self.mgh, strict=True
                 )
             ],
             "default_parameters": self.default_parameters().to_dict(),
@@ -285,7 +285,8 @@ def load_body(path: str | Path = DEFAULT_URDF) -> Body:
                 "must be revolute (fixed joints are merged)"
             )
         if model.parents[j] != j - 1:
-            parent = "the support" if model.parents[j] == 0 else f"'{model.names[model.parents[j]]}'"
+            up_joint = model.parents[j]
+            parent = "the support" if up_joint == 0 else f"'{model.names[up_joint]}'"
             raise BodyError(
                 f"{path}: joint '{model.names[j]}' branches off {parent} instead of following "
                 f"'{model.names[j - 1]}': the body must be a single serial chain, not a tree"

@@ -35,7 +35,7 @@ def _body_table(body) -> str:
         f"{'module':<10}{'m·g·h':>10}{'Kp':>10}{'Ki':>9}{'Kd':>9}{'Δ s':>7}"
         f"{'Kpas':>9}{'Bpas':>9}  controls",
     ]
-    for joint, mgh in zip(body.joint_names, body.mgh):
+    for joint, mgh in zip(body.joint_names, body.mgh, strict=True):
         m = params[joint]
         lines.append(
             f"{joint:<10}{mgh:>10.3f}{m.kp:>10.3f}{m.ki:>9.4f}{m.kd:>9.3f}{m.delay_s:>7.3f}"

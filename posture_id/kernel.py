@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numba import njit
@@ -167,7 +167,7 @@ class Kernels:
     simulate_block: object
 
 
-@lru_cache(maxsize=None)
+@cache
 def kernels(n: int) -> Kernels:
     """Compile (or load from numba's cache) the simulation functions for N segments."""
     return _build(n)

@@ -207,7 +207,7 @@ def default_parameters(body) -> DecParameters:
     """
     n = body.n_segments
     mods = {}
-    for i, (joint, mgh) in enumerate(zip(body.joint_names, body.mgh)):
+    for i, (joint, mgh) in enumerate(zip(body.joint_names, body.mgh, strict=True)):
         col = _column(i, n)
         scale = float(mgh) / PAPER_MGH[col]
         row = PAPER_TABLE[col]
@@ -242,7 +242,7 @@ def denormalise(targets: np.ndarray, defaults: DecParameters) -> DecParameters:
     """Inverse of :func:`normalise`; the class is read by its sign (≥ 0 → COM)."""
     targets = np.asarray(targets, dtype=float)
     mods = {}
-    for row, (joint, d) in zip(targets, defaults.modules.items()):
+    for row, (joint, d) in zip(targets, defaults.modules.items(), strict=True):
         values = {f: getattr(d, f) * (1.0 + row[k]) for k, f in enumerate(TARGET_FIELDS)}
         mods[joint] = replace(d, controls="com" if row[4] >= 0 else "joint", **values)
     return DecParameters(mods)

@@ -82,7 +82,7 @@ def prts_symbols(states: int = 242) -> np.ndarray:
     reg = list(start)
     out = np.empty(states, dtype=np.int8)
     for k in range(states):
-        x = sum(f * r for f, r in zip(feedback, reg)) % 3
+        x = sum(f * r for f, r in zip(feedback, reg, strict=True)) % 3
         out[k] = -1 if x == 2 else x
         reg = [x, *reg[:-1]]
     return out

@@ -1,0 +1,99 @@
+"""Command line: body description, URDF generation, simulation, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from posture_id.body import load_body
+from posture_id.cli import main
+from posture_id.recording import Recording
+
+
+def test_body_table_and_json(capsys):
+    assert main(["body"]) == 0
+    out = capsys.readouterr().out
+    assert "465.975" in out and "245.250" in out and "73.575" in out
+    assert main(["body", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [m["joint"] for m in data["modules"]] == ["ankle", "knee", "hip"]
+    assert data["default_parameters"]["hip"]["delay_s"] == 0.121
+
+
+def test_body_writes_winter_urdf(tmp_path, capsys):
+    out = tmp_path / "subject.urdf"
+    assert main(["body", "--height", "1.8", "--mass", "80", "--segments", "2",
+                 "--out", str(out)]) == 0
+    body = load_body(out)
+    assert body.segment_names == ("leg", "trunk")
+    np.testing.assert_allclose(body.mgh, [770.0, 172.7], atol=0.5)
+
+
+def test_simulate_writes_recording_and_plot(tmp_path, tip):
+    csv, png = tmp_path / "trial.csv", tmp_path / "trial.png"
+    params = tmp_path / "p.json"
+    tip.default_parameters().replace("knee", controls="com").to_json(params)
+    assert main(["simulate", "--params", str(params), "--amplitude-deg", "2", "--cycles", "1",
+                 "--out", str(csv), "--plot", str(png)]) == 0
+    rec = Recording.from_csv(csv, tip.segment_names)
+    assert rec.theta.shape == (3026, 3)
+    assert rec.sample_rate_hz == pytest.approx(50.0)
+    assert np.degrees(np.ptp(rec.tilt)) == pytest.approx(2.0, rel=1e-9)
+    assert png.stat().st_size > 10_000
+
+
+def test_simulate_reports_an_abort(tmp_path, tip, capsys):
+    d = tip.default_parameters()
+    params = tmp_path / "weak.json"
+    d.replace("ankle", kp=0.1 * d["ankle"].kp, ki=0.0, kpas=0.3 * d["ankle"].kpas).to_json(params)
+    csv = tmp_path / "trial.csv"
+    assert main(["simulate", "--params", str(params), "--out", str(csv)]) == 1
+    assert "left the ±6° sway limit" in capsys.readouterr().err
+    rec = Recording.from_csv(csv)
+    assert rec.time[-1] < 121
+
+
+def _write_params(tmp_path, tip, mutate):
+    data = tip.default_parameters().to_dict()
+    mutate(data)
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    "make_args, fragment",
+    [
+        (lambda tmp, tip: ["body", str(tmp / "none.urdf")], "no such URDF"),
+        (lambda tmp, tip: ["simulate", "--params",
+                           str(_write_params(tmp, tip, lambda d: d.pop("hip"))),
+                           "--out", str(tmp / "x.csv")], "module 'hip' is missing"),
+        (lambda tmp, tip: ["simulate", "--params",
+                           str(_write_params(tmp, tip,
+                                             lambda d: d["knee"].__setitem__("delay_s", -1))),
+                           "--out", str(tmp / "x.csv")], "field 'delay_s' is negative"),
+    ],
+)
+def test_errors_are_one_line(tmp_path, tip, capsys, make_args, fragment):
+    assert main(make_args(tmp_path, tip)) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("posture-id: error: ")
+    assert fragment in err
+
+
+def test_console_script_prints_no_traceback(tmp_path):
+    tilt = tmp_path / "tilt.csv"
+    tilt.write_text("time_s,tilt_deg\n0,0\n1,NaN\n2,0\n")
+    proc = subprocess.run(
+        [sys.executable, "-m", "posture_id.cli", "simulate", "--tilt", str(tilt),
+         "--out", str(tmp_path / "x.csv")],
+        capture_output=True, text=True, check=False,
+    )
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    assert proc.stderr.strip().count("\n") == 0
+    assert str(tilt) in proc.stderr and "line 3" in proc.stderr

@@ -16,7 +16,7 @@ import math
 
 from numba import njit
 
-__all__ = ["sin_poly", "cos_poly", "atan2_poly", "POLY_MAX_ANGLE"]
+__all__ = ["sin_poly", "cos_poly", "atan2_poly", "atan2_poly_r", "POLY_MAX_ANGLE"]
 
 #: Largest |x| (rad) for which sin_poly/cos_poly are accurate to ~1e-16.
 POLY_MAX_ANGLE = math.pi / 4
@@ -55,13 +55,20 @@ def cos_poly(x: float) -> float:
 
 @njit(cache=True, inline="always", error_model="numpy")
 def atan2_poly(y: float, x: float) -> float:
-    """atan2(y, x) for x ≥ 0, by three half-angle steps and a series.
+    """atan2(y, x) for x ≥ 0; see :func:`atan2_poly_r`."""
+    return atan2_poly_r(y, x, math.sqrt(x * x + y * y))
 
-    atan2(y, x) = 2·atan2(y, x + r), r = √(x² + y²); after three steps |t| = |y/x| ≤
-    tan(π/16) and the series of atan to t²¹ is below 1e-17.
+
+@njit(cache=True, inline="always", error_model="numpy")
+def atan2_poly_r(y: float, x: float, r: float) -> float:
+    """atan2(y, x) for x ≥ 0 given r = √(x² + y²), by three half-angle steps and a series.
+
+    atan2(y, x) = 2·atan2(y, x + r); after three steps |t| = |y/x| ≤ tan(π/16) and the
+    series of atan to t²¹ is below 1e-17. Passing r saves a square root when the caller
+    has it already.
     """
     y2 = y * y
-    x = x + math.sqrt(x * x + y2)
+    x = x + r
     x = x + math.sqrt(x * x + y2)
     x = x + math.sqrt(x * x + y2)
     t = y / x

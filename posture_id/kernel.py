@@ -30,7 +30,7 @@ from functools import cache
 import numpy as np
 from numba import njit
 
-from posture_id.fastmath import atan2_poly, cos_poly, sin_poly
+from posture_id.fastmath import atan2_poly_r, cos_poly, sin_poly
 
 __all__ = ["LANES", "Rows", "ParRows", "Kernels", "kernels", "buffer_length"]
 
@@ -219,9 +219,10 @@ def _build(N: int) -> Kernels:  # noqa: C901, N803 - one closure per compiled fu
                 w[(VSUM + 1) * L + lane] = v_im
                 w[(VSUM + 2) * L + lane] = vd_re
                 w[(VSUM + 3) * L + lane] = vd_im
-                inv_r = 1.0 / math.sqrt(v_re * v_re + v_im * v_im)
+                r = math.sqrt(v_re * v_re + v_im * v_im)
+                inv_r = 1.0 / r
                 rate = (vd_im * v_re - vd_re * v_im) * (inv_r * inv_r)
-                w[(AL + i) * L + lane] = atan2_poly(v_im, v_re)
+                w[(AL + i) * L + lane] = atan2_poly_r(v_im, v_re, r)
                 w[(ALD + i) * L + lane] = rate
                 w[(TG + i) * L + lane] = v_im * inv_r
                 w[(TGD + i) * L + lane] = v_re * inv_r * rate
@@ -269,20 +270,21 @@ def _build(N: int) -> Kernels:  # noqa: C901, N803 - one closure per compiled fu
                 below_rate = om
             w[ESTR * L + lane] = est_rate
             w[EST * L + lane] += dt * est_rate
-        # phase 2 (scalar): store the command, read it back Δ later, interpolated
+        # phase 2: store the command (contiguous, vectorised) ...
         slot = n & mask
         for i in range(N):
+            row = i * n_buf + slot
             for lane in range(L):
-                row = (i * n_buf) * L + lane
-                buf[row + slot * L] = w[(SERVO + i) * L + lane]
-                if n < par[(DLY + i) * L + lane]:
-                    delayed = 0.0
-                else:
-                    k = n - int(par[(DCEIL + i) * L + lane])
-                    u0 = buf[row + (k & mask) * L]
-                    u1 = buf[row + ((k + 1) & mask) * L]
-                    delayed = u0 + par[(DFRAC + i) * L + lane] * (u1 - u0)
-                w[(TAU + i) * L + lane] = delayed
+                buf[row * L + lane] = w[(SERVO + i) * L + lane]
+        # ... and read it back Δ later, interpolated (scalar: one gather per lane)
+        for i in range(N):
+            base = i * n_buf * L
+            for lane in range(L):
+                k = n - int(par[(DCEIL + i) * L + lane])
+                u0 = buf[base + (k & mask) * L + lane]
+                u1 = buf[base + ((k + 1) & mask) * L + lane]
+                delayed = u0 + par[(DFRAC + i) * L + lane] * (u1 - u0)
+                w[(TAU + i) * L + lane] = delayed if n >= par[(DLY + i) * L + lane] else 0.0
         # phase 3 (vectorised): τ = −servo(t − Δ) − PD on T_g (undelayed) − passive
         for lane in range(L):
             for i in range(N):

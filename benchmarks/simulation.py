@@ -2,7 +2,7 @@
 
 Run:  .venv/bin/python benchmarks/simulation.py [--trials 2048] [--workers 2]
 
-Measures, in one run on this machine:
+Measures, in one run on this machine (medians of --repeats runs):
   1. compiled batch: 121 s TIP trials per second (default parameters, and MODEL §5
      random parameters, about half of which fall and are aborted);
   2. the Pinocchio reference path (``pinocchio.aba`` every 2 ms step) on one such trial;
@@ -29,16 +29,22 @@ from posture_id.sampling import sample_parameters
 from posture_id.simulation import SimulationOptions, simulate, simulate_batch
 
 
-def timed(fn):
-    start = time.perf_counter()
-    out = fn()
-    return out, time.perf_counter() - start
+def timed(fn, repeats: int = 1):
+    """(result, median wall time in s) over ``repeats`` calls."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - start)
+    return out, float(np.median(times))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=2048)
     parser.add_argument("--workers", type=int, default=os.cpu_count())
+    parser.add_argument("--repeats", type=int, default=3,
+                        help="timings are the median of this many runs")
     parser.add_argument("--out", type=Path,
                         default=Path(__file__).parent / "results" / "simulation.json")
     args = parser.parse_args()
@@ -48,9 +54,11 @@ def main() -> None:
     simulate(body)  # compile or load the kernel
 
     defaults = ParameterArrays.from_parameters([body.default_parameters()] * args.trials)
-    batch_default, t_default = timed(lambda: simulate_batch(body, defaults, options=options))
+    batch_default, t_default = timed(
+        lambda: simulate_batch(body, defaults, options=options), args.repeats)
     random_params = sample_parameters(body, args.trials, np.random.default_rng(0))
-    batch_random, t_random = timed(lambda: simulate_batch(body, random_params, options=options))
+    batch_random, t_random = timed(
+        lambda: simulate_batch(body, random_params, options=options), args.repeats)
 
     reference, t_reference = timed(lambda: simulate_reference(body))
     fast_one = batch_default.trial(0)
@@ -62,6 +70,7 @@ def main() -> None:
         "package_version": __version__,
         "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores",
         "workers": args.workers,
+        "repeats": args.repeats,
         "trials": args.trials,
         "trial_seconds": 121.0,
         "compiled_default_trials_per_s": rate_default,

@@ -231,7 +231,6 @@ def simulate_batch(
     inertia = np.ascontiguousarray(body.inertias)
     delay = options.delay_steps(params.delay_s)
     delay_ceil = np.ceil(delay)
-    n_buf = buffer_length(float(delay.max()) if delay.size else 0.0)
     pr = k.par_rows
     per_trial = {
         pr.kp: params.kp, pr.ki: params.ki, pr.kd: params.kd, pr.sign: params.sign,
@@ -250,6 +249,7 @@ def simulate_batch(
         for row, values in per_trial.items():
             par[row : row + n] = _lane_rows(values, first, count)
         w = np.zeros(k.rows.count * LANES)
+        n_buf = buffer_length(float(delay[first : first + count].max()))
         buf = np.zeros(n * n_buf * LANES)
         k.simulate_block(
             w, par.ravel(), buf, d_re, d_im, inertia, s_re, s_im, body.gravity, tilt,

@@ -184,7 +184,7 @@ def _build(N: int) -> Kernels:  # noqa: C901, N803 - one closure per compiled fu
     KP, KI, KD, SIGN, KPAS, BPAS = P.kp, P.ki, P.kd, P.sign, P.kpas, P.bpas
     DLY, DCEIL, DFRAC = P.delay, P.delay_ceil, P.delay_frac
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", inline="always")
     def kinematics(w, s_re, s_im, sway_limit):
         """COM-above angles, gravity terms and the sway-limit flag from θ, θ̇ (all lanes).
 
@@ -229,7 +229,7 @@ def _build(N: int) -> Kernels:  # noqa: C901, N803 - one closure per compiled fu
                 if not abs(th) <= sway_limit:
                     w[INSIDE * L + lane] = 0.0
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", inline="always")
     def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
         """DEC joint torques at step n (MODEL §2) into the τ rows; advances ∫ε, α̂_FS and
         the delay buffers. tilt, tilt_vel: α_FS (rad) and rate at t = n·dt.
@@ -298,7 +298,7 @@ def _build(N: int) -> Kernels:  # noqa: C901, N803 - one closure per compiled fu
                     - par[(BPAS + i) * L + lane] * w[(QD + i) * L + lane]
                 )
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", inline="always")
     def dynamics(w, d_re, d_im, inertia, gravity, dt):
         """θ̈ from M θ̈ = Q − c − G (Cholesky), then one semi-implicit Euler step.
 

@@ -20,9 +20,14 @@ import math
 import numpy as np
 
 from posture_id.body import Body
-from posture_id.kernel import LANES, buffer_length, kernels
+from posture_id.kernel import LANES, kernels
 from posture_id.parameters import DecParameters
-from posture_id.simulation import SimulationOptions, SimulationResult, _check_joints
+from posture_id.simulation import (
+    SimulationOptions,
+    SimulationResult,
+    _check_joints,
+    block_arrays,
+)
 from posture_id.stimulus import TiltProfile, prts
 
 __all__ = ["simulate_reference", "com_above_angles"]
@@ -77,22 +82,12 @@ def simulate_reference(
     model = body.model
     data = model.createData()
     k = kernels(n)
-    rows, pr = k.rows, k.par_rows
+    rows = k.rows
     n_steps = options.n_steps(stimulus)
     every = options.sample_every
     tilt, tilt_vel = stimulus.on_grid(options.dt, n_steps)
-    delay = options.delay_steps(params.array("delay_s"))
-    par = np.zeros((pr.count, LANES))
-    for row, values in (
-        (pr.kp, params.array("kp")), (pr.ki, params.array("ki")), (pr.kd, params.array("kd")),
-        (pr.sign, params.array("sign")), (pr.kpas, params.array("kpas")),
-        (pr.bpas, params.array("bpas")), (pr.delay, delay), (pr.delay_ceil, np.ceil(delay)),
-        (pr.delay_frac, np.ceil(delay) - delay),
-    ):
-        par[row : row + n] = values[:, None]
-    par = par.ravel()
+    par, buf = block_arrays(k, params.arrays(), options, 0, 1)
     w = np.zeros(rows.count * LANES)
-    buf = np.zeros(n * buffer_length(float(delay.max())) * LANES)
     limit = math.radians(options.sway_limit_deg)
 
     q = np.zeros(n)

@@ -194,6 +194,32 @@ def _lane_rows(values: np.ndarray, first: int, count: int) -> np.ndarray:
     return block.T
 
 
+def block_arrays(k, params: ParameterArrays, options: SimulationOptions, first: int,
+                 count: int) -> tuple[np.ndarray, np.ndarray]:
+    """The flat parameter rows and zeroed delay buffers of one block of the kernel ``k``.
+
+    Delays become Δ/dt steps (snapped to whole steps within 1e-9), with their ceiling and
+    the interpolation weight the kernel reads; the buffers are sized for the block's
+    longest delay.
+    """
+    n = params.kp.shape[1]
+    pr = k.par_rows
+    delay = options.delay_steps(params.delay_s[first : first + count])
+    delay_ceil = np.ceil(delay)
+    rows = {
+        pr.kp: params.kp[first : first + count], pr.ki: params.ki[first : first + count],
+        pr.kd: params.kd[first : first + count], pr.sign: params.sign[first : first + count],
+        pr.kpas: params.kpas[first : first + count],
+        pr.bpas: params.bpas[first : first + count],
+        pr.delay: delay, pr.delay_ceil: delay_ceil, pr.delay_frac: delay_ceil - delay,
+    }
+    par = np.empty((pr.count, LANES))
+    for row, values in rows.items():
+        par[row : row + n] = _lane_rows(values, 0, count)
+    buf = np.zeros(n * buffer_length(float(delay.max())) * LANES)
+    return par.ravel(), buf
+
+
 def simulate_batch(
     body: Body,
     params: ParameterArrays,
@@ -229,14 +255,6 @@ def simulate_batch(
     s_re = np.ascontiguousarray(body.gravity_lever.real)
     s_im = np.ascontiguousarray(body.gravity_lever.imag)
     inertia = np.ascontiguousarray(body.inertias)
-    delay = options.delay_steps(params.delay_s)
-    delay_ceil = np.ceil(delay)
-    pr = k.par_rows
-    per_trial = {
-        pr.kp: params.kp, pr.ki: params.ki, pr.kd: params.kd, pr.sign: params.sign,
-        pr.kpas: params.kpas, pr.bpas: params.bpas, pr.delay: delay,
-        pr.delay_ceil: delay_ceil, pr.delay_frac: delay_ceil - delay,
-    }
     n_trials = params.n_trials
     out_theta = np.empty((n_trials, n_samples, n))
     out_alpha = np.empty((n_trials, n_samples, n))
@@ -245,14 +263,10 @@ def simulate_batch(
 
     def run_block(first: int) -> int:
         count = min(LANES, n_trials - first)
-        par = np.empty((pr.count, LANES))
-        for row, values in per_trial.items():
-            par[row : row + n] = _lane_rows(values, first, count)
+        par, buf = block_arrays(k, params, options, first, count)
         w = np.zeros(k.rows.count * LANES)
-        n_buf = buffer_length(float(delay[first : first + count].max()))
-        buf = np.zeros(n * n_buf * LANES)
         k.simulate_block(
-            w, par.ravel(), buf, d_re, d_im, inertia, s_re, s_im, body.gravity, tilt,
+            w, par, buf, d_re, d_im, inertia, s_re, s_im, body.gravity, tilt,
             tilt_vel, n_steps, options.dt, every, limit, options.deadband_rad_s, out_theta,
             out_alpha, abort_step, first, count,
         )

@@ -1,22 +1,19 @@
 """Bodies written as URDF: the default TIP (MODEL §1) and Winter's anthropometric tables.
 
-The chain is written upright along +z, joints about +y (so a positive angle is a forward
-lean towards +x), rooted at a ``foot`` link that stands on the platform. The top segment
-gets a massless ``<name>_end`` frame so that its length can be read back.
+Segments are straight, stacked upright along +z with their COMs on their axes; they are
+written by :mod:`posture_id.urdf_writer` (joints about +y, rooted at a ``foot`` link).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 from posture_id.errors import BodyError
-from posture_id.io_utils import atomic_write_text
+from posture_id.urdf_writer import LinkSpec
 
 __all__ = [
     "SegmentSpec",
-    "chain_urdf",
-    "write_chain_urdf",
+    "straight_links",
     "default_tip_segments",
     "winter_segments",
     "WINTER",
@@ -113,48 +110,18 @@ def winter_segments(height_m: float, mass_kg: float, n_segments: int = 3) -> lis
 
 
 
-def chain_urdf(name: str, segments: list[SegmentSpec]) -> str:
-    """URDF text of a foot-rooted planar chain of straight segments (see module doc)."""
-    lines = ['<?xml version="1.0"?>', f'<robot name="{name}">', '  <link name="foot"/>']
-    parent = "foot"
-    offset = 0.0
+def straight_links(segments: list[SegmentSpec]) -> list[LinkSpec]:
+    """Straight segments stacked upright along z, as :class:`LinkSpec` for the writer."""
+    links = []
+    below = 0.0
     for seg in segments:
         i = seg.inertia
-        lines += [
-            f'  <joint name="{seg.joint}" type="revolute">',
-            f'    <parent link="{parent}"/>',
-            f'    <child link="{seg.link}"/>',
-            f'    <origin xyz="0 0 {offset!r}" rpy="0 0 0"/>',
-            '    <axis xyz="0 1 0"/>',
-            '    <limit lower="-1.57" upper="1.57" effort="10000" velocity="10"/>',
-            "  </joint>",
-            f'  <link name="{seg.link}">',
-            "    <inertial>",
-            f'      <origin xyz="0 0 {seg.com!r}" rpy="0 0 0"/>',
-            f'      <mass value="{seg.mass!r}"/>',
-            f'      <inertia ixx="{i!r}" ixy="0" ixz="0" iyy="{i!r}" iyz="0" izz="0"/>',
-            "    </inertial>",
-            "    <visual>",
-            f'      <origin xyz="0 0 {seg.length / 2!r}" rpy="0 0 0"/>',
-            f'      <geometry><cylinder radius="0.04" length="{seg.length!r}"/></geometry>',
-            "    </visual>",
-            "  </link>",
-        ]
-        parent = seg.link
-        offset = seg.length
-    top = segments[-1]
-    lines += [
-        f'  <joint name="{top.link}_end_joint" type="fixed">',
-        f'    <parent link="{top.link}"/>',
-        f'    <child link="{top.link}_end"/>',
-        f'    <origin xyz="0 0 {top.length!r}" rpy="0 0 0"/>',
-        "  </joint>",
-        f'  <link name="{top.link}_end"/>',
-        "</robot>",
-    ]
-    return "\n".join(lines) + "\n"
-
-
-def write_chain_urdf(path: str | Path, name: str, segments: list[SegmentSpec]) -> Path:
-    """Write :func:`chain_urdf` atomically to ``path``."""
-    return atomic_write_text(Path(path), chain_urdf(name, segments))
+        links.append(
+            LinkSpec(
+                link=seg.link, joint=seg.joint, origin=(0.0, 0.0, below), mass=seg.mass,
+                com=(0.0, 0.0, seg.com), inertia=((i, 0.0, 0.0), (0.0, i, 0.0), (0.0, 0.0, 0.0)),
+                end=(0.0, 0.0, seg.length),
+            )
+        )
+        below = seg.length
+    return links

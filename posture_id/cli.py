@@ -45,8 +45,9 @@ def _body_table(body) -> str:
 
 
 def _cmd_body(args: argparse.Namespace) -> int:
-    from posture_id.anthropometry import default_tip_segments, winter_segments, write_chain_urdf
+    from posture_id.anthropometry import default_tip_segments, straight_links, winter_segments
     from posture_id.body import DEFAULT_URDF, load_body
+    from posture_id.urdf_writer import write_chain_urdf
 
     if args.height is not None or args.mass is not None or args.default_tip:
         if args.out is None:
@@ -58,7 +59,7 @@ def _cmd_body(args: argparse.Namespace) -> int:
                 raise PostureIdError("--height and --mass go together")
             segments = winter_segments(args.height, args.mass, args.segments)
             name = f"winter_{args.height:g}m_{args.mass:g}kg_{args.segments}seg"
-        path = write_chain_urdf(args.out, name, segments)
+        path = write_chain_urdf(args.out, name, straight_links(segments))
         print(f"wrote {path}", file=sys.stderr)
         urdf = path
     else:

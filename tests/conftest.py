@@ -7,8 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from posture_id.anthropometry import winter_segments, write_chain_urdf
+from posture_id.anthropometry import straight_links, winter_segments
 from posture_id.body import load_body
+from posture_id.urdf_writer import write_chain_urdf
 
 DATA = Path(__file__).parent / "data"
 
@@ -26,21 +27,21 @@ def tip():
 @pytest.fixture(scope="session")
 def winter(tmp_path_factory):
     path = tmp_path_factory.mktemp("bodies") / "winter3.urdf"
-    write_chain_urdf(path, "winter3", winter_segments(1.80, 80.0, 3))
+    write_chain_urdf(path, "winter3", straight_links(winter_segments(1.80, 80.0, 3)))
     return load_body(path)
 
 
 @pytest.fixture(scope="session")
 def winter2(tmp_path_factory):
     path = tmp_path_factory.mktemp("bodies") / "winter2.urdf"
-    write_chain_urdf(path, "winter2", winter_segments(1.80, 80.0, 2))
+    write_chain_urdf(path, "winter2", straight_links(winter_segments(1.80, 80.0, 2)))
     return load_body(path)
 
 
 @pytest.fixture(scope="session")
 def winter1(tmp_path_factory):
     path = tmp_path_factory.mktemp("bodies") / "winter1.urdf"
-    write_chain_urdf(path, "winter1", winter_segments(1.80, 80.0, 1))
+    write_chain_urdf(path, "winter1", straight_links(winter_segments(1.80, 80.0, 1)))
     return load_body(path)
 
 

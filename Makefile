@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-fast lint bench clean
+.PHONY: demo test test-fast lint bench bodies clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +30,10 @@ test-fast: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check posture_id tests benchmarks
+
+bodies: $(STAMP)
+	for r in talos g1 human; do $(BIN)/posture-id body --from-robot $$r --out urdf/$${r}_tip.urdf > /dev/null; done
+	$(BIN)/posture-id body --default-tip --out urdf/tip_default.urdf > /dev/null
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/simulation.py

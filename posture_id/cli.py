@@ -49,9 +49,34 @@ def _cmd_body(args: argparse.Namespace) -> int:
     from posture_id.body import DEFAULT_URDF, load_body
     from posture_id.urdf_writer import write_chain_urdf
 
-    if args.height is not None or args.mass is not None or args.default_tip:
-        if args.out is None:
-            raise PostureIdError("--out is required to write a body URDF")
+    writing = [args.height is not None or args.mass is not None, args.default_tip,
+               args.from_robot is not None, args.lump is not None]
+    if sum(writing) > 1:
+        raise PostureIdError(
+            "choose one of --height/--mass, --default-tip, --from-robot and --lump"
+        )
+    if any(writing) and args.out is None:
+        raise PostureIdError("--out is required to write a body URDF")
+    if args.from_robot is not None or args.lump is not None:
+        from posture_id.lumping import lump_robot, preset_body
+
+        if args.from_robot is not None:
+            lumped = preset_body(args.from_robot, args.segments)
+        else:
+            for flag in ("ankle_joints", "hip_joints"):
+                if getattr(args, flag) is None:
+                    raise PostureIdError(f"--lump needs --{flag.replace('_', '-')} LEFT RIGHT")
+            srdf = (args.srdf, args.posture) if args.srdf is not None else None
+            if (args.srdf is None) != (args.posture is None):
+                raise PostureIdError("--srdf and --posture go together")
+            lumped = lump_robot(
+                args.lump, ankle=tuple(args.ankle_joints), hip=tuple(args.hip_joints),
+                knee=tuple(args.knee_joints) if args.knee_joints else None, srdf=srdf,
+                segments=args.segments,
+            )
+        urdf = lumped.write(args.out)
+        print(f"wrote {urdf} ({lumped.source})", file=sys.stderr)
+    elif any(writing):
         if args.default_tip:
             segments, name = default_tip_segments(), "tip_default"
         else:
@@ -117,9 +142,21 @@ def build_parser() -> argparse.ArgumentParser:
     body.add_argument("--height", type=float, help="write a Winter body: height, m")
     body.add_argument("--mass", type=float, help="write a Winter body: mass, kg")
     body.add_argument("--segments", type=int, default=3, choices=(1, 2, 3),
-                      help="Winter body: 3 shank+thigh+trunk, 2 leg+trunk, 1 whole body")
+                      help="written body: 3 shank+thigh+trunk, 2 leg+trunk, 1 whole body")
     body.add_argument("--default-tip", action="store_true",
                       help="write the default triple inverted pendulum of MODEL §1")
+    body.add_argument("--from-robot", choices=("talos", "g1", "human"),
+                      help="lump a humanoid shipped by example-robot-data")
+    body.add_argument("--lump", type=Path, metavar="URDF",
+                      help="lump a whole-body URDF (floating base, two legs) into a chain")
+    body.add_argument("--ankle-joints", nargs=2, metavar=("LEFT", "RIGHT"),
+                      help="--lump: ankle pitch joints")
+    body.add_argument("--knee-joints", nargs=2, metavar=("LEFT", "RIGHT"),
+                      help="--lump: knee joints (needed for 3 segments)")
+    body.add_argument("--hip-joints", nargs=2, metavar=("LEFT", "RIGHT"),
+                      help="--lump: hip pitch joints")
+    body.add_argument("--srdf", type=Path, help="--lump: SRDF holding the reference posture")
+    body.add_argument("--posture", help="--lump: name of the posture in the SRDF")
     body.add_argument("--out", type=Path, help="where to write the generated URDF")
     body.set_defaults(func=_cmd_body)
 

@@ -33,6 +33,15 @@ def test_body_writes_winter_urdf(tmp_path, capsys):
     np.testing.assert_allclose(body.mgh, [770.0, 172.7], atol=0.5)
 
 
+def test_body_from_robot(tmp_path, capsys):
+    out = tmp_path / "talos.urdf"
+    assert main(["body", "--from-robot", "talos", "--segments", "2", "--out", str(out)]) == 0
+    assert "half_sitting" in capsys.readouterr().err
+    assert load_body(out).segment_names == ("leg", "trunk")
+    assert main(["body", "--from-robot", "g1", "--height", "1.8", "--out", str(out)]) == 2
+    assert "choose one of" in capsys.readouterr().err
+
+
 def test_simulate_writes_recording_and_plot(tmp_path, tip):
     csv, png = tmp_path / "trial.csv", tmp_path / "trial.png"
     params = tmp_path / "p.json"

@@ -129,6 +129,73 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_dataset_generate(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from posture_id.body import DEFAULT_URDF
+    from posture_id.dataset import DatasetConfig, generate_dataset
+
+    config = DatasetConfig(
+        trials=args.trials, body=str(args.body or DEFAULT_URDF), seed=args.seed,
+        shard_size=args.shard_size, amplitude_deg=args.amplitude_deg, cycles=args.cycles,
+        sway_limit_deg=args.sway_limit_deg,
+    )
+    bar = tqdm(total=config.trials, unit="trial", desc="kept trials", file=sys.stderr,
+               disable=args.quiet)
+
+    def progress(done: int, total: int) -> None:
+        bar.update(done - bar.n)
+
+    try:
+        data = generate_dataset(config, args.out, workers=args.workers,
+                                scheduler=args.scheduler, progress=progress)
+    finally:
+        bar.close()
+    print(_dataset_summary(data), file=sys.stderr)
+    return 0
+
+
+def _dataset_summary(data) -> str:
+    m = data.manifest
+    c = m["counts"]
+    s = m["split"]
+    return (
+        f"{data.path}: {c['used']} trials used ({c['kept']} kept of {c['simulated']} simulated, "
+        f"{c['rejection_rate']:.1%} rejected) in {len(m['shards'])} shards; body "
+        f"{m['body']['name']} ({m['body']['n_segments']} segments); split by trial: "
+        + ", ".join(f"{k} {s[k]['trials']} trials = {s[k]['modular_samples']} modular samples"
+                    for k in ("train", "validation", "test"))
+    )
+
+
+def _cmd_dataset_info(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from posture_id.dataset import Dataset
+    from posture_id.plotting import plot_dataset_overview, plot_images
+
+    data = Dataset.open(args.dir, verify=not args.no_verify)
+    print(_dataset_summary(data))
+    kp, sway, kept = [], [], []
+    sample = None
+    for arrays in data.iter_shards():
+        kp.append(arrays["targets"][:, :, 0])
+        sway.append(arrays["max_sway_deg"])
+        kept.append(arrays["kept"])
+        if sample is None and len(arrays["targets"]):
+            sample = (arrays["modular"][0], arrays["monolithic"][0])
+    joints = data.manifest["body"]["joints"]
+    limit = data.manifest["options"]["sway_limit_deg"]
+    figures = args.figures or Path(args.dir)
+    overview = figures / "dataset_overview.png"
+    plot_dataset_overview(np.concatenate(kp), joints, np.concatenate(sway),
+                          np.concatenate(kept), limit, path=overview)
+    images = figures / "dataset_images.png"
+    plot_images(sample[0], sample[1], joints, path=images)
+    print(f"wrote {overview} and {images}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="posture-id",
@@ -176,6 +243,29 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", type=Path, required=True, help="recording CSV to write")
     sim.add_argument("--plot", type=Path, help="plot of tilt and sway to write (PNG)")
     sim.set_defaults(func=_cmd_simulate)
+
+    data = sub.add_parser("dataset", help="training data: generate a data set, describe one")
+    dsub = data.add_subparsers(dest="dataset_command", required=True)
+    gen = dsub.add_parser("generate", help="simulate random trials into a data-set directory")
+    gen.add_argument("--trials", type=int, required=True, help="kept (stable) trials wanted")
+    gen.add_argument("--out", type=Path, required=True, help="data-set directory")
+    gen.add_argument("--workers", type=int, help="local threads (default: all cores)")
+    gen.add_argument("--scheduler", help="Dask distributed scheduler address (tcp://host:port)")
+    gen.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    gen.add_argument("--seed", type=int, default=0, help="root seed (default 0)")
+    gen.add_argument("--shard-size", type=int, default=256,
+                     help="simulated trials per shard (default 256)")
+    gen.add_argument("--amplitude-deg", type=float, default=1.0, help="PRTS peak-to-peak, °")
+    gen.add_argument("--cycles", type=int, default=2, help="PRTS cycles (default 2)")
+    gen.add_argument("--sway-limit-deg", type=float, default=6.0,
+                     help="reject trials leaving ±this angle (default 6)")
+    gen.add_argument("--quiet", action="store_true", help="no progress bar")
+    gen.set_defaults(func=_cmd_dataset_generate)
+    info = dsub.add_parser("info", help="counts, rejection rate, splits, Fig. 2 and images")
+    info.add_argument("dir", type=Path)
+    info.add_argument("--figures", type=Path, help="where to write the PNGs (default: DIR)")
+    info.add_argument("--no-verify", action="store_true", help="skip the shard SHA-256 check")
+    info.set_defaults(func=_cmd_dataset_info)
     return parser
 
 

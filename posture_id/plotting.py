@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_trial"]
+__all__ = ["plot_trial", "plot_dataset_overview", "plot_images"]
 
 
 def _pyplot():
@@ -46,9 +46,79 @@ def plot_trial(result, path: str | Path | None = None, title: str | None = None)
         ax.grid(alpha=0.3)
     fig.suptitle(title or getattr(result, "description", ""))
     fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_dataset_overview(kp_normalised: np.ndarray, joints, max_sway_deg: np.ndarray,
+                          kept: np.ndarray, limit_deg: float, path=None):
+    """The paper's Fig. 2 analogue.
+
+    Args:
+        kp_normalised: (K, N) K̃p of the kept trials.
+        joints: (N,) module names.
+        max_sway_deg: (S,) largest |segment angle| of every simulated trial, degrees.
+        kept: (S,) bool. limit_deg: sway limit; rejected trials fill the last bin.
+    """
+    plt = _pyplot()
+    fig, (ax_kp, ax_sway) = plt.subplots(1, 2, figsize=(11, 4))
+    bins = np.linspace(-1.0, max(2.5, float(np.nanmax(kp_normalised))), 50)
+    for i, joint in enumerate(joints):
+        ax_kp.hist(kp_normalised[:, i], bins=bins, histtype="step", lw=1.2, label=joint)
+    ax_kp.set_xlabel("normalised Kp, (Kp − Kp₀)/Kp₀")
+    ax_kp.set_ylabel("kept trials")
+    ax_kp.legend()
+    ax_kp.set_title("Kp of the stable simulations")
+    width = limit_deg / 24
+    edges = np.arange(0, limit_deg + 1e-9, width)
+    counts, _ = np.histogram(np.clip(max_sway_deg[kept], 0, limit_deg), bins=edges)
+    ax_sway.bar(edges[:-1], counts, width=width, align="edge", color="C0", label="kept")
+    ax_sway.bar([limit_deg], [int((~kept).sum())], width=width, align="edge", color="C3",
+                label=f"aborted at {limit_deg:g}°")
+    ax_sway.set_xlabel("maximum segment sway (°)")
+    ax_sway.set_ylabel("simulations")
+    ax_sway.legend()
+    ax_sway.set_title(f"{int((~kept).sum())} of {len(kept)} aborted")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_images(modular: np.ndarray, monolithic: np.ndarray, joints, path=None):
+    """One trial's modular images (N rows × 3 channels) and monolithic channels."""
+    plt = _pyplot()
+    n = modular.shape[0]
+    cols = max(3, monolithic.shape[0])
+    fig, axes = plt.subplots(n + 1, cols, figsize=(2.2 * cols, 2.2 * (n + 1)), squeeze=False)
+    names = ["log|S| above", "log|S| below", "phase difference"]
+
+    def shown(image: np.ndarray, phase: bool) -> np.ndarray:
+        return image if phase else np.log10(image + 1e-12)
+
+    for i in range(n):
+        for c in range(cols):
+            ax = axes[i, c]
+            ax.axis("off")
+            if c < 3:
+                ax.imshow(shown(modular[i, c], c == 2), origin="lower", aspect="auto",
+                          cmap="twilight" if c == 2 else "viridis")
+                ax.set_title(f"{joints[i]}: {names[c]}", fontsize=8)
+    for c in range(cols):
+        ax = axes[n, c]
+        ax.axis("off")
+        if c < monolithic.shape[0]:
+            ax.imshow(shown(monolithic[c], c >= n), origin="lower", aspect="auto",
+                      cmap="twilight" if c >= n else "viridis")
+            ax.set_title(f"monolithic channel {c}", fontsize=8)
+    fig.suptitle("spectrogram images (frequency 0–10 Hz up, time right; magnitudes log10)")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def _save(fig, path) -> None:
     if path is not None:
         from posture_id.io_utils import atomic_write
 
         path = Path(path)
-        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=120, format=path.suffix[1:] or "png"))
-    return fig
+        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format=path.suffix[1:] or "png"))

@@ -445,27 +445,39 @@ def generate_dataset(
 
 
 class _local_runner:  # noqa: N801 - used like a function
-    """Make shards in local threads (the kernel and the FFTs release the GIL)."""
+    """Make shards in local threads (the kernel and the FFTs release the GIL).
+
+    At most two shards per worker are in flight, and a shard's arrays are dropped as soon
+    as they are written, so memory stays bounded whatever the size of the set.
+    """
 
     def __init__(self, workers: int | None, config: DatasetConfig, body: Body) -> None:
-        self.pool = ThreadPoolExecutor(max_workers=workers or os.cpu_count() or 1)
+        self.workers = workers or os.cpu_count() or 1
+        self.pool = ThreadPoolExecutor(max_workers=self.workers)
         self.config = config
         self.body = body
 
     def __call__(self, ks: list[int]):
-        futures = {self.pool.submit(make_shard, self.config, k, self.body): k for k in ks}
-        pending = set(futures)
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+        todo = list(reversed(ks))
+        in_flight: dict = {}
+        while todo or in_flight:
+            while todo and len(in_flight) < 2 * self.workers:
+                k = todo.pop()
+                in_flight[self.pool.submit(make_shard, self.config, k, self.body)] = k
+            done, _ = wait(in_flight, return_when=FIRST_COMPLETED)
             for fut in done:
-                yield futures[fut], fut.result()
+                k = in_flight.pop(fut)
+                yield k, fut.result()
 
     def close(self) -> None:
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
 class _dask_runner:  # noqa: N801 - used like a function
-    """Make shards as tasks on a Dask distributed cluster; results are written here."""
+    """Make shards as tasks on a Dask distributed cluster; results are written here.
+
+    Up to two shards per cluster thread are in flight; each is released once written.
+    """
 
     def __init__(self, address: str, config: DatasetConfig) -> None:
         self.urdf_text = Path(config.body).read_text()
@@ -483,12 +495,22 @@ class _dask_runner:  # noqa: N801 - used like a function
     def __call__(self, ks: list[int]):
         from distributed import as_completed
 
-        futures = {
-            self.client.submit(_make_shard_remote, self.config, k, self.urdf_text, pure=False): k
-            for k in ks
-        }
-        for fut in as_completed(list(futures)):
-            yield futures[fut], fut.result()
+        slots = max(2 * sum(self.client.nthreads().values()), 1)
+        todo = list(reversed(ks))
+        in_flight: dict = {}
+        queue = as_completed()
+        while todo or in_flight:
+            while todo and len(in_flight) < slots:
+                k = todo.pop()
+                fut = self.client.submit(_make_shard_remote, self.config, k, self.urdf_text,
+                                         pure=False)
+                in_flight[fut] = k
+                queue.add(fut)
+            fut = next(queue)
+            k = in_flight.pop(fut)
+            arrays = fut.result()
+            fut.release()
+            yield k, arrays
 
     def close(self) -> None:
         self.client.close()

@@ -1,0 +1,67 @@
+"""CasADi model: symbolic dynamics against Pinocchio, symbolic rollout against the fast
+simulator."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin
+from conftest import random_parameters
+
+from posture_id.simulation import SimulationOptions, simulate
+from posture_id.stimulus import prts
+from posture_id.symbolic import (
+    SymbolicModel,
+    buffer_sizes,
+    chain_dynamics,
+    delay_weights,
+    rollout_function,
+    rollout_steps,
+    step_inputs,
+)
+
+
+def test_symbolic_dynamics_match_pinocchio(any_body):
+    body = any_body
+    n = body.n_segments
+    f = chain_dynamics(body)
+    rng = np.random.default_rng(2)
+    lower = np.tril(np.ones((n, n)))
+    model, data = body.model, body.model.createData()
+    for _ in range(20):
+        q = rng.uniform(-0.4, 0.4, n)
+        v = rng.uniform(-2, 2, n)
+        tau = rng.uniform(-300, 300, n)
+        acc, mass, grav = (np.array(x) for x in f(lower @ q, lower @ v, tau))
+        m_pin = pin.crba(model, data, q)
+        m_pin = np.triu(m_pin) + np.triu(m_pin, 1).T
+        np.testing.assert_allclose(lower.T @ mass @ lower, m_pin, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(lower.T @ grav.ravel(),
+                                   pin.computeGeneralizedGravity(model, data, q),
+                                   rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(acc.ravel(), lower @ pin.aba(model, data, q, v, tau),
+                                   rtol=1e-9, atol=1e-9)
+
+
+def test_symbolic_rollout_equals_fast_simulator(any_body):
+    body = any_body
+    params = random_parameters(body, np.random.default_rng(5))
+    options = SimulationOptions()
+    stim = prts(amplitude_deg=2.0)  # the full 121 s trial
+    fast = simulate(body, params, stim, options)
+    n_steps = options.n_steps(stim)
+    n_samples = n_steps // options.sample_every + 1
+    delay = options.delay_steps(params.array("delay_s"))
+    sizes = buffer_sizes(delay + 3)
+    model = SymbolicModel(body, tuple(sizes), options.dt, options.deadband_rad_s)
+    rollout = rollout_function(model, n_samples, options.sample_every)
+    tilt, tilt_vel = stim.on_grid(options.dt, n_steps)
+    u = step_inputs(tilt, tilt_vel, rollout_steps(n_samples, options.sample_every))
+    p = np.concatenate([params.array(f) for f in ("kp", "ki", "kd")]
+                       + [delay, params.array("sign"), params.array("kpas"),
+                          params.array("bpas")])
+    d = ca.SX.sym("d", body.n_segments)
+    weights = ca.Function("w", [d], [delay_weights(d, sizes)])(delay)
+    theta = np.array(rollout(u, p, weights)).T
+    assert np.abs(fast.theta).max() > 1e-3
+    np.testing.assert_allclose(theta, fast.theta, rtol=0, atol=1e-8)

@@ -145,7 +145,7 @@ class ParRows:
     kp = property(lambda self: 0)
     ki = property(lambda self: self.n)
     kd = property(lambda self: 2 * self.n)
-    sign = property(lambda self: 3 * self.n)  # class C: +1 COM in space, −1 joint
+    sign = property(lambda self: 3 * self.n)  # class C: +1 COM in space, −1 joint (or between)
     kpas = property(lambda self: 4 * self.n)
     bpas = property(lambda self: 5 * self.n)
     delay = property(lambda self: 6 * self.n)  # Δ/dt, steps (fractional)
@@ -252,9 +252,11 @@ def _build(N: int) -> Kernels:  # noqa: C901, N803 - one closure per compiled fu
                 om = w[(OM + i) * L + lane]
                 q = th - below
                 qd = om - below_rate
-                com = par[(SIGN + i) * L + lane] > 0.0
-                x = w[(AL + i) * L + lane] - below + beta if com else q
-                xd = w[(ALD + i) * L + lane] - below_rate + beta_rate if com else qd
+                # class C = ±1 selects COM in space or joint angle; a value between
+                # (the fit's relaxed class) mixes them linearly
+                mix = 0.5 + 0.5 * par[(SIGN + i) * L + lane]
+                x = mix * (w[(AL + i) * L + lane] - below + beta) + (1.0 - mix) * q
+                xd = mix * (w[(ALD + i) * L + lane] - below_rate + beta_rate) + (1.0 - mix) * qd
                 integ = w[(INT + i) * L + lane]
                 w[(SERVO + i) * L + lane] = (
                     par[(KP + i) * L + lane] * x

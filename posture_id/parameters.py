@@ -252,7 +252,9 @@ def denormalise(targets: np.ndarray, defaults: DecParameters) -> DecParameters:
 class ParameterArrays:
     """Parameters of B trials as arrays, each (B, N), support upward (SI units).
 
-    ``sign`` holds the class C (+1 COM in space, −1 joint angle).
+    ``sign`` holds the class C (+1 COM in space, −1 joint angle). A value strictly between
+    is the least-squares fit's relaxed class: the controlled variable is then
+    (1 + C)/2 · x_COM + (1 − C)/2 · x_joint.
     """
 
     kp: np.ndarray
@@ -276,8 +278,8 @@ class ParameterArrays:
             if not np.all(np.isfinite(arr)):
                 raise ParameterError(f"parameter array '{name}' holds NaN or infinite values")
             if name == "sign":
-                if not np.all(np.abs(arr) == 1.0):
-                    raise ParameterError("parameter array 'sign' must hold only +1 and -1")
+                if not np.all(np.abs(arr) <= 1.0):
+                    raise ParameterError("parameter array 'sign' must lie in [-1, 1]")
             elif np.any(arr < 0):
                 b, i = np.argwhere(arr < 0)[0]
                 raise ParameterError(

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_trial", "plot_dataset_overview", "plot_images"]
+__all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit"]
 
 
 def _pyplot():
@@ -122,3 +122,24 @@ def _save(fig, path) -> None:
 
         path = Path(path)
         atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format=path.suffix[1:] or "png"))
+
+
+def plot_fit(result, path=None):
+    """Recorded (grey) versus fitted (colour) sway per segment, degrees."""
+    plt = _pyplot()
+    n = len(result.segments)
+    fig, axes = plt.subplots(n, 1, sharex=True, figsize=(10, 2.2 * n + 0.8), squeeze=False)
+    for j, name in enumerate(result.segments):
+        ax = axes[j, 0]
+        ax.plot(result.time, np.degrees(result.recorded[:, j]), color="0.6", lw=1.4,
+                label="recorded")
+        ax.plot(result.time, np.degrees(result.fitted[:, j]), color=f"C{j}", lw=0.8,
+                label="fitted")
+        ax.set_ylabel(f"{name} (°)")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1, 0].set_xlabel("time (s)")
+    fig.suptitle(f"DEC fit: RMS {result.rms_deg:.4f}°, classes {'/'.join(result.classes)}")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

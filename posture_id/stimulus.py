@@ -22,6 +22,7 @@ __all__ = [
     "prts",
     "tilt_from_array",
     "tilt_from_csv",
+    "recognise_prts",
     "PRTS_REGISTERS",
 ]
 
@@ -116,6 +117,36 @@ def prts(
         angles=steps * scale,
         description=f"PRTS {states} states x{int(cycles)}, {amplitude_deg:g} deg p-p",
     )
+
+
+def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
+                   tolerance: float = 1e-6) -> TiltProfile | None:
+    """The PRTS a sampled tilt follows, or None.
+
+    Recordings sample the tilt at 50 Hz, which misses the PRTS corners at odd multiples of
+    0.25 s; when the samples are a PRTS (242 or 80 states, any amplitude and sign, within
+    ``tolerance`` of its peak-to-peak), the exact profile is returned instead, extended to
+    whole cycles covering the recording.
+    """
+    t = np.asarray(times_s, dtype=float)
+    a = np.asarray(tilt_rad, dtype=float)
+    for states in (242, 80):
+        cycle = states * PRTS_STATE_S
+        if t[-1] < cycle - 1e-9:
+            continue
+        first = t <= cycle + 1e-9
+        ptp = float(np.ptp(a[first]))
+        if ptp == 0.0:
+            return None
+        cycles = int(math.ceil(t[-1] / cycle - 1e-9))
+        for sign in (1.0, -1.0):
+            candidate = prts(math.degrees(ptp), cycles, states)
+            if np.max(np.abs(sign * candidate.angle(t) - a)) <= tolerance * ptp:
+                if sign < 0:
+                    candidate = TiltProfile(candidate.times, -candidate.angles,
+                                            candidate.description + " (negated)")
+                return candidate
+    return None
 
 
 def tilt_from_array(times_s, angles_rad, description: str = "array") -> TiltProfile:

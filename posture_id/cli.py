@@ -196,6 +196,57 @@ def _cmd_dataset_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_fit(args: argparse.Namespace) -> int:
+    from posture_id.body import DEFAULT_URDF, load_body
+    from posture_id.parameters import DecParameters
+    from posture_id.recording import Recording
+
+    body = load_body(args.body or DEFAULT_URDF)
+    recording = Recording.from_csv(args.recording, body.segment_names)
+    init = DecParameters.from_json(args.init, body) if args.init else None
+    from posture_id.fit import FitOptions, fit_recording
+
+    options = FitOptions(classes=args.classes, compile="never" if args.no_compile else "auto")
+
+    def progress(message: str) -> None:
+        print(f"posture-id fit: {message}", file=sys.stderr, flush=True)
+
+    result = fit_recording(recording, body, init, options, progress=progress,
+                           source=str(args.recording))
+    result.to_json(args.out)
+    print(f"wrote {args.out}", file=sys.stderr)
+    if args.plot:
+        result.plot(args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
+    print(_fit_table(result))
+    return 0 if result.converged else 1
+
+
+def _fit_table(result) -> str:
+    lines = [
+        f"{'module':<8}{'Kp':>11}{'Ki':>11}{'Kd':>11}{'Δ s':>11}  controls   (± standard error; "
+        "* poorly determined)"
+    ]
+    for i, joint in enumerate(result.joints):
+        m = result.parameters[joint]
+        cells = []
+        for k, (value, width, digits) in enumerate(
+            ((m.kp, 11, 2), (m.ki, 11, 3), (m.kd, 11, 3), (m.delay_s, 11, 4))
+        ):
+            flag = "*" if result.poorly_determined[i, k] else " "
+            cells.append(f"{value:>{width - 1}.{digits}f}{flag}")
+        lines.append(f"{joint:<8}{''.join(cells)}  {m.controls}")
+        errs = "".join(f"{'±' + format(e, '.' + str(d) + 'g'):>{w}}" for e, w, d in
+                       zip(result.standard_errors[i], (11, 11, 11, 11), (3, 3, 3, 3),
+                           strict=True))
+        lines.append(f"{'':<8}{errs}")
+    status = "converged" if result.converged else "NOT converged"
+    lines.append(f"{status} in {result.iterations} iterations, {result.wall_time_s:.1f} s, "
+                 f"residual RMS {result.rms_deg:.5f}° ({result.backend})")
+    lines += [f"note: {n}" for n in result.notices]
+    return "\n".join(lines)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="posture-id",
@@ -243,6 +294,18 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", type=Path, required=True, help="recording CSV to write")
     sim.add_argument("--plot", type=Path, help="plot of tilt and sway to write (PNG)")
     sim.set_defaults(func=_cmd_simulate)
+
+    fit = sub.add_parser("fit", help="identify DEC parameters from a recording (least squares)")
+    fit.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
+    fit.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    fit.add_argument("--init", type=Path, help="initial guess, parameter JSON (e.g. the CNN's)")
+    fit.add_argument("--out", type=Path, required=True, help="fit result JSON to write")
+    fit.add_argument("--plot", type=Path, help="recorded versus fitted sway (PNG)")
+    fit.add_argument("--classes", choices=("relaxed", "exhaustive", "fixed"), default="relaxed",
+                     help="how to find the classes (default: relaxed, then polished)")
+    fit.add_argument("--no-compile", action="store_true",
+                     help="run CasADi in its virtual machine (no C compiler)")
+    fit.set_defaults(func=_cmd_fit)
 
     data = sub.add_parser("dataset", help="training data: generate a data set, describe one")
     dsub = data.add_subparsers(dest="dataset_command", required=True)

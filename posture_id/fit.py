@@ -67,7 +67,7 @@ class FitOptions:
 
     Attributes:
         classes: "relaxed", "exhaustive" or "fixed".
-        gain_bounds: bounds of K̃p, K̃i, K̃d (normalised: −0.9 = 10 % of the default).
+        gain_bounds: bounds of K̃p, K̃i, K̃d (normalised: −1 = zero, 3 = 4× the default).
         delay_bounds: bounds of Δ̃ (the upper one sizes the delay buffers).
         max_iterations: Jacobian evaluations per stage at most.
         tolerance: relative tolerance on cost, step and gradient (scipy's ftol/xtol/gtol).
@@ -84,8 +84,8 @@ class FitOptions:
     """
 
     classes: str = "relaxed"
-    gain_bounds: tuple[float, float] = (-0.9, 3.0)
-    delay_bounds: tuple[float, float] = (-0.9, 1.5)
+    gain_bounds: tuple[float, float] = (-1.0, 3.0)
+    delay_bounds: tuple[float, float] = (-1.0, 1.5)
     max_iterations: int = 60
     tolerance: float = 1e-10
     smooth_deadband_rad_s: float = 1e-5

@@ -1,0 +1,110 @@
+"""Least-squares identification (CasADi): recovery from noise-free and noisy recordings,
+result object, command line, bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from posture_id.cli import main
+from posture_id.errors import RecordingError
+from posture_id.fit import FitOptions, fit_recording, prepare_recording
+from posture_id.recording import Recording
+from posture_id.sampling import sample_parameters
+from posture_id.simulation import SimulationOptions, simulate
+
+pytestmark = pytest.mark.slow
+
+
+def _stable_trial(body, seed):
+    rng = np.random.default_rng(seed)
+    while True:
+        truth = sample_parameters(body, 1, rng).trial(0, body.joint_names)
+        result = simulate(body, truth)
+        if result.stable:
+            return truth, result, rng
+
+
+def _check_recovery(fitted, truth, tolerance):
+    assert fitted.classes == tuple(truth[j].controls for j in truth.joints)
+    for k, field in enumerate(("kp", "ki", "kd", "delay_s")):
+        error = np.abs(fitted.parameters.array(field) / truth.array(field) - 1)
+        ok = (error <= tolerance) | fitted.poorly_determined[:, k]
+        assert ok.all(), (field, error, fitted.standard_errors[:, k])
+
+
+@pytest.fixture(scope="module")
+def noise_free(tip, tmp_path_factory):
+    """A noise-free 121 s recording from random parameters, fitted by the command line."""
+    truth, result, _ = _stable_trial(tip, seed=11)
+    folder = tmp_path_factory.mktemp("fit")
+    result.to_csv(folder / "rec.csv")
+    code = main(["fit", str(folder / "rec.csv"), "--out", str(folder / "fit.json"),
+                 "--plot", str(folder / "fit.png")])
+    return truth, folder, code
+
+
+def test_noise_free_fit_recovers_the_truth(noise_free, tip):
+    truth, folder, code = noise_free
+    assert code == 0
+    data = json.loads((folder / "fit.json").read_text())
+    assert data["status"]["converged"]
+    assert data["status"]["rms_deg"] < 1e-6
+    for joint in tip.joint_names:
+        assert data["parameters"][joint]["controls"] == truth[joint].controls
+        for field in ("kp", "ki", "kd", "delay_s"):
+            fitted = data["parameters"][joint][field]
+            flagged = field in data["poorly_determined"][joint]
+            assert flagged or abs(fitted / getattr(truth[joint], field) - 1) <= 0.02
+    assert (folder / "fit.png").stat().st_size > 10_000
+
+
+def test_noisy_fit_within_ten_percent_or_flagged(tip):
+    truth, result, rng = _stable_trial(tip, seed=12)
+    noisy = result.theta + np.radians(0.01) * rng.standard_normal(result.theta.shape)
+    fitted = fit_recording(Recording(result.time, result.tilt, noisy, result.segments), tip)
+    assert fitted.converged
+    assert 0.008 < fitted.rms_deg < 0.012  # the fit reaches the noise, not below
+    _check_recovery(fitted, truth, 0.10)
+    data = fitted.to_dict()
+    assert set(data["standard_errors"]) == set(tip.joint_names)
+    assert json.loads(fitted.to_json()) == json.loads(json.dumps(data))
+
+
+def test_short_recording_is_refused(tip):
+    result = simulate(tip, stimulus=None, options=SimulationOptions())
+    short = Recording(result.time[:1500], result.tilt[:1500], result.theta[:1500],
+                      result.segments)
+    with pytest.raises(RecordingError, match="shorter than one PRTS cycle"):
+        fit_recording(short, tip, source="short.csv")
+
+
+def test_segment_mismatch_is_refused(tip, winter2):
+    result = simulate(tip)
+    rec = Recording(result.time, result.tilt, result.theta, result.segments)
+    with pytest.raises(RecordingError, match="do not match the body's segments leg,trunk"):
+        fit_recording(rec, winter2)
+
+
+def test_other_rates_are_resampled_with_a_notice(tip):
+    fine = simulate(tip, options=SimulationOptions(sample_rate_hz=100.0))
+    rec = Recording(fine.time, fine.tilt, fine.theta, fine.segments)
+    resampled, notices = prepare_recording(rec, "rec100.csv", FitOptions())
+    assert "resampled from 100 Hz to 50 Hz" in notices[0]
+    at50 = simulate(tip)
+    np.testing.assert_allclose(resampled.time, at50.time)
+    np.testing.assert_allclose(resampled.theta, at50.theta, atol=1e-15)
+
+
+def test_cli_errors_are_one_line(tmp_path, tip, capsys):
+    result = simulate(tip)
+    path = tmp_path / "nan.csv"
+    result.to_csv(path)
+    lines = path.read_text().splitlines()
+    lines[100] = lines[100].rsplit(",", 1)[0] + ",nan"
+    path.write_text("\n".join(lines) + "\n")
+    assert main(["fit", str(path), "--out", str(tmp_path / "f.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "line 101, column 'trunk_deg'" in err

@@ -280,7 +280,9 @@ def _problem(body: Body, n_samples: int, options: FitOptions, notify=None) -> _P
     """The compiled problem, built once per (body, length, options) in a process."""
     key = (body, n_samples, options)
     if key not in _PROBLEMS:
-        _PROBLEMS.clear()  # one at a time: each holds compiled code and a thread pool
+        for old in _PROBLEMS.values():  # one at a time: each holds compiled code and threads
+            old.pool.shutdown(wait=False)
+        _PROBLEMS.clear()
         _PROBLEMS[key] = _Problem(body, n_samples, options, notify)
     return _PROBLEMS[key]
 

@@ -69,7 +69,9 @@ class FitOptions:
         classes: "relaxed", "exhaustive" or "fixed".
         gain_bounds: bounds of K̃p, K̃i, K̃d (normalised: −1 = zero, 3 = 4× the default).
         delay_bounds: bounds of Δ̃ (the upper one sizes the delay buffers).
-        max_iterations: Jacobian evaluations per stage at most.
+        max_iterations: residual evaluations per stage at most.
+        polish_iterations: the same for the exact polish after a warm start (it needs a
+            few when the warm start has converged; more cannot rescue one that has not).
         tolerance: relative tolerance on cost, step and gradient (scipy's ftol/xtol/gtol).
         smooth_deadband_rad_s: softplus width of the smoothed dead-band.
         noise_floor_deg: least σ assumed for standard errors (sensor resolution).
@@ -87,6 +89,7 @@ class FitOptions:
     gain_bounds: tuple[float, float] = (-1.0, 3.0)
     delay_bounds: tuple[float, float] = (-1.0, 1.5)
     max_iterations: int = 60
+    polish_iterations: int = 20
     tolerance: float = 1e-10
     smooth_deadband_rad_s: float = 1e-5
     noise_floor_deg: float = 0.001
@@ -343,9 +346,9 @@ def fit_recording(
                        lambda q, free: problem.jacobian(q, u, free), measured)
     warm = _SimulatorEvaluator(body, stim, options, measured, n_samples)
 
-    def stage(name, evaluator, q0, free, lower, upper, tolerance):
+    def stage(name, evaluator, q0, free, lower, upper, tolerance, limit=options.max_iterations):
         result = _least_squares(name, evaluator, q0, free, lower, upper, tolerance,
-                                options.max_iterations, counts, say)
+                                limit, counts, say)
         stages.append(result)
         return result
 
@@ -373,7 +376,8 @@ def fit_recording(
                                     continuous, lo_z, hi_z, tol))
         start_q = min(candidates, key=lambda s: s["cost"])["q"]
     best = stage("polish (exact derivatives)", exact, start_q, continuous, lo_z, hi_z,
-                 options.tolerance)
+                 options.tolerance,
+                 options.polish_iterations if options.warm_start else options.max_iterations)
 
     q = best["q"]
     normalised = np.column_stack([q[: 4 * n].reshape(4, n).T, q[4 * n :]])

@@ -186,11 +186,10 @@ class BatchResult:
         )
 
 
-def _lane_rows(values: np.ndarray, first: int, count: int) -> np.ndarray:
-    """(B, N) values of trials first..first+count−1 → (N, LANES), padding with the first."""
-    block = values[first : first + count]
-    if count < LANES:
-        block = np.concatenate([block, np.repeat(block[:1], LANES - count, axis=0)])
+def _lane_rows(block: np.ndarray) -> np.ndarray:
+    """(count, N) values of a block's trials → (N, LANES), padded with the first trial."""
+    if len(block) < LANES:
+        block = np.concatenate([block, np.repeat(block[:1], LANES - len(block), axis=0)])
     return block.T
 
 
@@ -204,18 +203,18 @@ def block_arrays(k, params: ParameterArrays, options: SimulationOptions, first: 
     """
     n = params.kp.shape[1]
     pr = k.par_rows
-    delay = options.delay_steps(params.delay_s[first : first + count])
+    trials = slice(first, first + count)
+    delay = options.delay_steps(params.delay_s[trials])
     delay_ceil = np.ceil(delay)
     rows = {
-        pr.kp: params.kp[first : first + count], pr.ki: params.ki[first : first + count],
-        pr.kd: params.kd[first : first + count], pr.sign: params.sign[first : first + count],
-        pr.kpas: params.kpas[first : first + count],
-        pr.bpas: params.bpas[first : first + count],
-        pr.delay: delay, pr.delay_ceil: delay_ceil, pr.delay_frac: delay_ceil - delay,
+        pr.kp: params.kp[trials], pr.ki: params.ki[trials], pr.kd: params.kd[trials],
+        pr.sign: params.sign[trials], pr.kpas: params.kpas[trials],
+        pr.bpas: params.bpas[trials], pr.delay: delay, pr.delay_ceil: delay_ceil,
+        pr.delay_frac: delay_ceil - delay,
     }
     par = np.empty((pr.count, LANES))
     for row, values in rows.items():
-        par[row : row + n] = _lane_rows(values, 0, count)
+        par[row : row + n] = _lane_rows(values)
     buf = np.zeros(n * buffer_length(float(delay.max())) * LANES)
     return par.ravel(), buf
 

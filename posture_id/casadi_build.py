@@ -59,10 +59,17 @@ def compile_functions(name: str, key: bytes, build: Callable[[], list[ca.Functio
         names = names_file.read_text().split()
         return [ca.external(n, str(library)) for n in names], "compiled (cached)"
     functions = build()
+    try:
+        library.parent.mkdir(parents=True, exist_ok=True)
+        probe = library.parent / f".probe-{os.getpid()}"
+        probe.touch()
+        probe.unlink()
+    except OSError:  # an unwritable cache: compile into a private folder for this process
+        library = Path(tempfile.mkdtemp(prefix="posture_id_casadi_")) / library.name
+        names_file = library.with_suffix(".names")
     if notify is not None:
         notify(f"compiling the CasADi model with {Path(compiler).name} "
                f"(once; cached in {library.parent})")
-    library.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         gen = ca.CodeGenerator(f"{name}.c")
         for f in functions:

@@ -8,6 +8,12 @@ Public API (see docs/):
 - simulation: :func:`simulate`, :func:`simulate_batch`, :class:`SimulationOptions`,
   :func:`simulate_reference` (Pinocchio, slow)
 - recordings: :class:`Recording`
+- real bodies: :func:`lump_robot`, :func:`preset_body`
+- training data: :func:`generate_dataset`, :class:`DatasetConfig`, :class:`Dataset`
+- least squares (CasADi): :func:`fit_recording`, :class:`FitOptions`, :class:`FitResult`
+
+The last three groups (and :func:`simulate_reference`) load on first use, so that
+``import posture_id`` does not import CasADi, Dask or Pinocchio's slow path.
 """
 
 from posture_id.body import DEFAULT_URDF, Body, load_body
@@ -44,12 +50,33 @@ __all__ = [
     "prts",
     "tilt_from_array",
     "tilt_from_csv",
+    "lump_robot",
+    "preset_body",
+    "generate_dataset",
+    "DatasetConfig",
+    "Dataset",
+    "fit_recording",
+    "FitOptions",
+    "FitResult",
     "__version__",
 ]
 
+_LAZY = {
+    "simulate_reference": "posture_id.reference",
+    "lump_robot": "posture_id.lumping",
+    "preset_body": "posture_id.lumping",
+    "generate_dataset": "posture_id.dataset",
+    "DatasetConfig": "posture_id.dataset",
+    "Dataset": "posture_id.dataset",
+    "fit_recording": "posture_id.fit",
+    "FitOptions": "posture_id.fit",
+    "FitResult": "posture_id.fit",
+}
 
-def simulate_reference(*args, **kwargs):
-    """Pinocchio reference simulation; see :func:`posture_id.reference.simulate_reference`."""
-    from posture_id.reference import simulate_reference as _ref
 
-    return _ref(*args, **kwargs)
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'posture_id' has no attribute '{name}'")

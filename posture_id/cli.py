@@ -206,7 +206,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     init = DecParameters.from_json(args.init, body) if args.init else None
     from posture_id.fit import FitOptions, fit_recording
 
-    options = FitOptions(classes=args.classes, compile="never" if args.no_compile else "auto")
+    options = FitOptions(classes=args.classes, starts=args.starts,
+                         compile="never" if args.no_compile else "auto")
 
     def progress(message: str) -> None:
         print(f"posture-id fit: {message}", file=sys.stderr, flush=True)
@@ -303,6 +304,9 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--plot", type=Path, help="recorded versus fitted sway (PNG)")
     fit.add_argument("--classes", choices=("relaxed", "exhaustive", "fixed"), default="relaxed",
                      help="how to find the classes (default: relaxed, then polished)")
+    fit.add_argument("--starts", type=int, default=1,
+                     help="relaxed fits from the guess and from STARTS−1 prior draws; "
+                          "the best is polished (guards against local minima)")
     fit.add_argument("--no-compile", action="store_true",
                      help="run CasADi in its virtual machine (no C compiler)")
     fit.set_defaults(func=_cmd_fit)

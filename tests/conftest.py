@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from posture_id.anthropometry import straight_links, winter_segments
 from posture_id.body import load_body
 from posture_id.urdf_writer import write_chain_urdf
-
-DATA = Path(__file__).parent / "data"
 
 
 @pytest.fixture(autouse=True)

@@ -38,7 +38,7 @@ from posture_id.body import Body, load_body
 from posture_id.errors import PostureIdError
 from posture_id.features import modular_images, monolithic_images, stft
 from posture_id.io_utils import atomic_write, atomic_write_text
-from posture_id.parameters import ParameterArrays
+from posture_id.parameters import ParameterArrays, normalise_arrays
 from posture_id.sampling import SIGMA, sample_parameters
 from posture_id.simulation import SimulationOptions, simulate_batch
 from posture_id.stimulus import prts
@@ -144,13 +144,7 @@ def make_shard(config: DatasetConfig, k: int, body: Body | None = None) -> dict[
     theta = batch.theta[kept]
     spectra = stft(np.moveaxis(theta, 1, 2))  # (K, N, 51, 51)
     tilt_spectrum = stft(batch.tilt)
-    defaults = body.default_parameters()
-    default_row = {f: defaults.array(f) for f in ("kp", "ki", "kd", "delay_s")}
-    targets = np.stack(
-        [(getattr(params, f)[kept] - default_row[f]) / default_row[f]
-         for f in ("kp", "ki", "kd", "delay_s")] + [params.sign[kept]],
-        axis=-1,
-    )
+    targets = normalise_arrays(params, body.default_parameters())[kept]
     out = {f: getattr(params, f) for f in _PARAM_FIELDS}
     out.update(
         abort_time=batch.abort_time,

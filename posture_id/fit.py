@@ -463,22 +463,17 @@ class _SimulatorEvaluator(_Evaluator):
             sway_limit_deg=MAX_SWAY_LIMIT_DEG, workers=1)
         self.n = body.n_segments
         self.n_samples = n_samples
-        defaults = body.default_parameters()
-        self.base = {f: defaults.array(f) for f in ("kp", "ki", "kd", "delay_s", "kpas",
-                                                     "bpas")}
+        self.defaults = body.default_parameters()
         self.limit = math.radians(MAX_SWAY_LIMIT_DEG)
         self.measured = measured
 
     def _simulate_many(self, qs: np.ndarray) -> np.ndarray:
-        from posture_id.parameters import ParameterArrays
+        from posture_id.parameters import denormalise_arrays
         from posture_id.simulation import simulate_batch
 
-        n, b = self.n, len(qs)
-        z = {f: qs[:, k * n : (k + 1) * n] for k, f in enumerate(("kp", "ki", "kd", "delay_s"))}
-        params = ParameterArrays(
-            **{f: self.base[f] * (1 + z[f]) for f in z}, sign=qs[:, 4 * n : 5 * n],
-            kpas=np.broadcast_to(self.base["kpas"], (b, n)),
-            bpas=np.broadcast_to(self.base["bpas"], (b, n)))
+        # q is field-major (K̃p of every module, then K̃i, …, then the classes)
+        targets = qs.reshape(len(qs), 5, self.n).transpose(0, 2, 1)
+        params = denormalise_arrays(targets, self.defaults)
         batch = simulate_batch(self.body, params, self.stimulus, self.sim_options)
         # a trial that falls is held at the limit: a large, finite residual
         theta = batch.theta[:, : self.n_samples]

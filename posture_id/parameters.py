@@ -32,6 +32,8 @@ __all__ = [
     "normalise",
     "denormalise",
     "ParameterArrays",
+    "normalise_arrays",
+    "denormalise_arrays",
 ]
 
 #: MODEL §3 (paper Table 1), columns ankle, knee, hip. Kp is m·g·h of the default body.
@@ -229,23 +231,37 @@ TARGET_FIELDS = ("kp", "ki", "kd", "delay_s")
 
 def normalise(params: DecParameters, defaults: DecParameters) -> np.ndarray:
     """(N, 5) targets [K̃p, K̃i, K̃d, Δ̃, C] with p̃ = (p − p_default)/p_default."""
-    rows = []
-    for joint, m in params.modules.items():
-        d = defaults[joint]
-        rows.append(
-            [(getattr(m, f) - getattr(d, f)) / getattr(d, f) for f in TARGET_FIELDS] + [m.sign]
-        )
-    return np.asarray(rows, dtype=float)
+    return normalise_arrays(params.arrays(), defaults)[0]
 
 
 def denormalise(targets: np.ndarray, defaults: DecParameters) -> DecParameters:
     """Inverse of :func:`normalise`; the class is read by its sign (≥ 0 → COM)."""
+    targets = np.array(targets, dtype=float)
+    targets[:, 4] = np.where(targets[:, 4] >= 0, 1.0, -1.0)
+    return denormalise_arrays(targets[None], defaults).trial(0, defaults.joints)
+
+
+def normalise_arrays(params: ParameterArrays, defaults: DecParameters) -> np.ndarray:
+    """(B, N, 5) targets [K̃p, K̃i, K̃d, Δ̃, C] of B trials (MODEL §3)."""
+    columns = []
+    for field in TARGET_FIELDS:
+        base = defaults.array(field)
+        columns.append((getattr(params, field) - base) / base)
+    return np.stack([*columns, params.sign], axis=-1)
+
+
+def denormalise_arrays(targets: np.ndarray, defaults: DecParameters) -> ParameterArrays:
+    """(B, N, 5) targets → parameter arrays; passive terms at the defaults, the class
+    column kept as it is (±1, or a relaxed value in between)."""
     targets = np.asarray(targets, dtype=float)
-    mods = {}
-    for row, (joint, d) in zip(targets, defaults.modules.items(), strict=True):
-        values = {f: getattr(d, f) * (1.0 + row[k]) for k, f in enumerate(TARGET_FIELDS)}
-        mods[joint] = replace(d, controls="com" if row[4] >= 0 else "joint", **values)
-    return DecParameters(mods)
+    shape = targets.shape[:2]
+    values = {f: defaults.array(f) * (1.0 + targets[..., k])
+              for k, f in enumerate(TARGET_FIELDS)}
+    return ParameterArrays(
+        **values, sign=targets[..., 4],
+        kpas=np.broadcast_to(defaults.array("kpas"), shape),
+        bpas=np.broadcast_to(defaults.array("bpas"), shape),
+    )
 
 
 @dataclass(frozen=True)
@@ -305,7 +321,7 @@ class ParameterArrays:
             mods[joint] = ModuleParameters(
                 kp=float(self.kp[b, i]), ki=float(self.ki[b, i]), kd=float(self.kd[b, i]),
                 delay_s=float(self.delay_s[b, i]),
-                controls="com" if self.sign[b, i] > 0 else "joint",
+                controls="com" if self.sign[b, i] >= 0 else "joint",
                 kpas=float(self.kpas[b, i]), bpas=float(self.bpas[b, i]),
             )
         return DecParameters(mods)

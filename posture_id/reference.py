@@ -125,9 +125,10 @@ def simulate_reference(
         v = v + options.dt * np.asarray(acc)
         q = q + options.dt * v
 
+    sample_time, sample_tilt = options.sampled(tilt)
     return SimulationResult(
-        time=np.arange(n_samples) * (every * options.dt),
-        tilt=tilt[::every].copy(),
+        time=sample_time,
+        tilt=sample_tilt,
         theta=theta_out,
         alpha=alpha_out,
         abort_time=abort_time,

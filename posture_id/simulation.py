@@ -97,6 +97,11 @@ class SimulationOptions:
             )
         return n
 
+    def sampled(self, tilt_grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Sample times (S,) s and the tilt (S,) rad at them, from the tilt on the step grid."""
+        tilt = tilt_grid[:: self.sample_every].copy()
+        return np.arange(len(tilt)) * (self.sample_every * self.dt), tilt
+
     def delay_steps(self, delay_s: np.ndarray) -> np.ndarray:
         """Δ/dt, snapped to the nearest integer when within 1e-9 of it (float noise)."""
         steps = np.asarray(delay_s, dtype=float) / self.dt
@@ -282,9 +287,10 @@ def simulate_batch(
         with ThreadPoolExecutor(max_workers=workers) as pool:
             list(pool.map(run_block, firsts))
     abort_time = np.where(abort_step >= 0, abort_step * options.dt, np.nan)
+    sample_time, sample_tilt = options.sampled(tilt)
     return BatchResult(
-        time=np.arange(n_samples) * (every * options.dt),
-        tilt=tilt[::every].copy(),
+        time=sample_time,
+        tilt=sample_tilt,
         theta=out_theta,
         alpha=out_alpha,
         abort_time=abort_time,

@@ -139,13 +139,13 @@ def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
         if ptp == 0.0:
             return None
         cycles = int(math.ceil(t[-1] / cycle - 1e-9))
-        for sign in (1.0, -1.0):
-            candidate = prts(math.degrees(ptp), cycles, states)
-            if np.max(np.abs(sign * candidate.angle(t) - a)) <= tolerance * ptp:
-                if sign < 0:
-                    candidate = TiltProfile(candidate.times, -candidate.angles,
-                                            candidate.description + " (negated)")
-                return candidate
+        candidate = prts(math.degrees(ptp), cycles, states)
+        sampled = candidate.angle(t)
+        if np.max(np.abs(sampled - a)) <= tolerance * ptp:
+            return candidate
+        if np.max(np.abs(-sampled - a)) <= tolerance * ptp:
+            return TiltProfile(candidate.times, -candidate.angles,
+                               candidate.description + " (negated)")
     return None
 
 

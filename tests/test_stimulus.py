@@ -91,3 +91,16 @@ def test_tilt_csv_round_trip_and_errors(tmp_path):
 def test_tilt_from_array_rejects_nan():
     with pytest.raises(StimulusError, match="not a finite number"):
         tilt_from_array([0, 1, 2], [0, np.nan, 0])
+
+
+def test_recognise_prts_from_50hz_samples():
+    from posture_id.stimulus import recognise_prts
+
+    t = np.arange(6051) * 0.02
+    stim = prts(amplitude_deg=1.5)
+    found = recognise_prts(t, stim.angle(t))
+    assert found is not None
+    np.testing.assert_allclose(found.angles, stim.angles, rtol=1e-9, atol=1e-15)
+    negated = recognise_prts(t, -stim.angle(t))
+    np.testing.assert_allclose(negated.angles, -stim.angles, rtol=1e-9, atol=1e-15)
+    assert recognise_prts(t, np.sin(t)) is None

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from posture_id.body import DEFAULT_URDF, load_body
+from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.dec.parameters import default_parameters
 
 URDF = Path(__file__).resolve().parents[1] / "urdf"
 BODIES = [
@@ -22,8 +23,8 @@ BODIES = [
 def main() -> None:
     import tempfile
 
-    from posture_id.anthropometry import straight_links, winter_segments
-    from posture_id.urdf_writer import write_chain_urdf
+    from posture_id.bodies.anthropometry import straight_links, winter_segments
+    from posture_id.bodies.urdf_writer import write_chain_urdf
 
     print("| body | mass kg | module | m·g·h N·m/rad | Kp | Ki | Kd | Δ s | Kpas | Bpas | class |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
@@ -33,7 +34,7 @@ def main() -> None:
                 path = write_chain_urdf(Path(tmp) / "winter.urdf", "winter",
                                         straight_links(winter_segments(1.80, 80.0, 3)))
             body = load_body(path)
-            params = body.default_parameters()
+            params = default_parameters(body)
             for i, (joint, mgh) in enumerate(zip(body.joint_names, body.mgh, strict=True)):
                 m = params[joint]
                 head = f"| {label} | {body.total_mass:.1f} " if i == 0 else "| | "

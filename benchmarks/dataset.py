@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from posture_id.io_utils import atomic_write_text
+from posture_id.fileio import atomic_write_text
 
 
 def run(trials: int, workdir: Path) -> dict:

@@ -25,11 +25,11 @@ from pathlib import Path
 import numpy as np
 
 from posture_id import load_body, simulate
-from posture_id.fit import FitOptions, _problem, fit_recording
-from posture_id.io_utils import atomic_write_text
-from posture_id.parameters import DecParameters, normalise
+from posture_id.dec.parameters import DecParameters, default_parameters, normalise
+from posture_id.dec.prior import sample_parameters
+from posture_id.fileio import atomic_write_text
+from posture_id.fitting import ExhaustiveClasses, FitOptions, FitProblem, fit_recording
 from posture_id.recording import Recording
-from posture_id.sampling import sample_parameters
 
 FIELDS = ("kp", "ki", "kd", "delay_s")
 
@@ -57,7 +57,7 @@ def perturbed(truth: DecParameters, rng) -> DecParameters:
 
 
 def summarise(fit, truth, body) -> dict:
-    defaults = body.default_parameters()
+    defaults = default_parameters(body)
     t_norm = normalise(truth, defaults)
     rel = np.column_stack([fit.parameters.array(f) / truth.array(f) - 1 for f in FIELDS])
     return {
@@ -82,13 +82,14 @@ def main() -> None:
     args = parser.parse_args()
     body = load_body()
     data, rng = recordings(body, args.recordings, args.seed)
-    _problem(body, len(data[0][1].time), FitOptions(), print)  # compile or load
-    _problem(body, len(data[0][1].time), FitOptions(classes="exhaustive"), print)
+    exhaustive = FitOptions(classes=ExhaustiveClasses())
+    # compile or load; the exhaustive fit shares the problem (same compiled code)
+    problem = FitProblem.get(body, len(data[0][1].time), FitOptions(), print)
     rows = {"defaults": [], "truth_30pct": [], "exhaustive": []}
     for i, (truth, rec) in enumerate(data):
         for start, init in (("defaults", None), ("truth_30pct", perturbed(truth, rng))):
             t0 = time.perf_counter()
-            fit = fit_recording(rec, body, init)
+            fit = fit_recording(rec, body, init, problem=problem)
             row = summarise(fit, truth, body)
             rows[start].append(row)
             print(f"recording {i} from {start:<11}: {time.perf_counter() - t0:5.1f} s, "
@@ -96,7 +97,7 @@ def main() -> None:
                   f"max rel. error of determined parameters "
                   f"{np.max(np.where(fit.poorly_determined, 0, np.abs(row['rel_error']))):.2e}")
         if i < args.exhaustive:
-            fit = fit_recording(rec, body, None, FitOptions(classes="exhaustive"))
+            fit = fit_recording(rec, body, None, exhaustive, problem=problem)
             row = summarise(fit, truth, body)
             rows["exhaustive"].append(row)
             print(f"recording {i} exhaustive  : {fit.wall_time_s:5.1f} s, classes "

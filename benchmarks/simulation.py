@@ -22,11 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from posture_id import __version__, load_body
-from posture_id.io_utils import atomic_write_text
-from posture_id.parameters import ParameterArrays
-from posture_id.reference import simulate_reference
-from posture_id.sampling import sample_parameters
+from posture_id.dec.parameters import ParameterArrays, default_parameters
+from posture_id.dec.prior import sample_parameters
+from posture_id.fileio import atomic_write_text
 from posture_id.simulation import SimulationOptions, simulate, simulate_batch
+from posture_id.simulation.reference import simulate_reference
 
 
 def timed(fn, repeats: int = 1):
@@ -53,7 +53,7 @@ def main() -> None:
     options = SimulationOptions(workers=args.workers)
     simulate(body)  # compile or load the kernel
 
-    defaults = ParameterArrays.from_parameters([body.default_parameters()] * args.trials)
+    defaults = ParameterArrays.from_parameters([default_parameters(body)] * args.trials)
     batch_default, t_default = timed(
         lambda: simulate_batch(body, defaults, options=options), args.repeats)
     random_params = sample_parameters(body, args.trials, np.random.default_rng(0))

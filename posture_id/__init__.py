@@ -1,35 +1,46 @@
 """posture_id: identify DEC posture-control parameters from body sway on a tilting support.
 
-Public API (see docs/):
+The public API; each name lives in the package of its stage (see docs/development.md):
 
-- bodies: :func:`load_body`, :class:`Body`, :data:`DEFAULT_URDF`
-- parameters: :class:`DecParameters`, :class:`ModuleParameters`, :class:`ParameterArrays`
-- stimulus: :func:`prts`, :func:`tilt_from_array`, :func:`tilt_from_csv`
-- simulation: :func:`simulate`, :func:`simulate_batch`, :class:`SimulationOptions`,
-  :func:`simulate_reference` (Pinocchio, slow)
-- recordings: :class:`Recording`
-- real bodies: :func:`lump_robot`, :func:`preset_body`
-- training data: :func:`generate_dataset`, :class:`DatasetConfig`, :class:`Dataset`
-- least squares (CasADi): :func:`fit_recording`, :class:`FitOptions`, :class:`FitResult`
+- :mod:`posture_id.bodies`: :func:`load_body`, :class:`Body`, :data:`DEFAULT_URDF`,
+  :func:`lump_robot`, :func:`preset_body`
+- :mod:`posture_id.dec`: :class:`DecParameters`, :class:`ModuleParameters`,
+  :class:`ParameterArrays`, :func:`default_parameters`, :func:`sample_parameters`
+- :mod:`posture_id.simulation`: :func:`prts`, :func:`tilt_from_array`,
+  :func:`tilt_from_csv`, :func:`simulate`, :func:`simulate_batch`,
+  :class:`SimulationOptions`, :func:`simulate_reference` (Pinocchio, slow)
+- :class:`Recording` (recordings as CSV)
+- :mod:`posture_id.datasets`: :func:`generate_dataset`, :class:`DatasetConfig`,
+  :class:`Dataset`
+- :mod:`posture_id.fitting` (CasADi): :func:`fit_recording`, :class:`FitOptions`,
+  :class:`FitProblem`, :class:`FitResult`
 
-The last three groups (and :func:`simulate_reference`) load on first use, so that
-``import posture_id`` does not import CasADi, Dask or Pinocchio's slow path.
+The last two groups, the lumping and the reference path load on first use, so that
+``import posture_id`` does not import CasADi, Dask or example-robot-data.
 """
 
-from posture_id.body import DEFAULT_URDF, Body, load_body
+from posture_id._version import __version__
+from posture_id.bodies import DEFAULT_URDF, Body, load_body
+from posture_id.dec import (
+    DecParameters,
+    ModuleParameters,
+    ParameterArrays,
+    default_parameters,
+    sample_parameters,
+)
 from posture_id.errors import PostureIdError
-from posture_id.parameters import DecParameters, ModuleParameters, ParameterArrays
 from posture_id.recording import Recording
 from posture_id.simulation import (
     BatchResult,
     SimulationOptions,
     SimulationResult,
+    TiltProfile,
+    prts,
     simulate,
     simulate_batch,
+    tilt_from_array,
+    tilt_from_csv,
 )
-from posture_id.stimulus import TiltProfile, prts, tilt_from_array, tilt_from_csv
-
-__version__ = "0.1.0"
 
 __all__ = [
     "DEFAULT_URDF",
@@ -39,6 +50,8 @@ __all__ = [
     "DecParameters",
     "ModuleParameters",
     "ParameterArrays",
+    "default_parameters",
+    "sample_parameters",
     "Recording",
     "BatchResult",
     "SimulationOptions",
@@ -57,20 +70,22 @@ __all__ = [
     "Dataset",
     "fit_recording",
     "FitOptions",
+    "FitProblem",
     "FitResult",
     "__version__",
 ]
 
 _LAZY = {
-    "simulate_reference": "posture_id.reference",
-    "lump_robot": "posture_id.lumping",
-    "preset_body": "posture_id.lumping",
-    "generate_dataset": "posture_id.dataset",
-    "DatasetConfig": "posture_id.dataset",
-    "Dataset": "posture_id.dataset",
-    "fit_recording": "posture_id.fit",
-    "FitOptions": "posture_id.fit",
-    "FitResult": "posture_id.fit",
+    "simulate_reference": "posture_id.simulation.reference",
+    "lump_robot": "posture_id.bodies.lumping",
+    "preset_body": "posture_id.bodies.lumping",
+    "generate_dataset": "posture_id.datasets",
+    "DatasetConfig": "posture_id.datasets",
+    "Dataset": "posture_id.datasets",
+    "fit_recording": "posture_id.fitting",
+    "FitOptions": "posture_id.fitting",
+    "FitProblem": "posture_id.fitting",
+    "FitResult": "posture_id.fitting",
 }
 
 

@@ -1,4 +1,11 @@
-"""Plots (matplotlib, imported lazily, file output with the Agg backend)."""
+"""Plots: the only module that imports matplotlib (a layer contract enforces it).
+
+Figures are built as :class:`matplotlib.figure.Figure` objects, never through pyplot's
+global state, so a plot neither switches the user's backend (Jupyter, Qt) nor keeps
+figures alive after it returns. Every function returns the figure, writes it atomically
+when given ``path``, and draws into the caller's axes when given ``ax`` (an array of axes
+shaped like the figure's own layout).
+"""
 
 from __future__ import annotations
 
@@ -6,29 +13,33 @@ from pathlib import Path
 
 import numpy as np
 
+from posture_id.fileio import atomic_write
+
 __all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit"]
 
 
-def _pyplot():
-    import matplotlib
+def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
+    """(figure, axes as an (nrows, ncols) array): the caller's axes, or a new figure."""
+    if ax is not None:
+        axes = np.asarray(ax, dtype=object).reshape(nrows, ncols)
+        return axes[0, 0].figure, axes
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    fig = Figure(figsize=figsize)
+    axes = fig.subplots(nrows, ncols, squeeze=False, **kwargs)
+    return fig, axes
 
-    return plt
 
-
-def plot_trial(result, path: str | Path | None = None, title: str | None = None):
+def plot_trial(result, path: str | Path | None = None, title: str | None = None, ax=None):
     """Tilt (top) and segment sway with the body COM sway α_BS (bottom), in degrees.
 
     Args:
-        result: a :class:`~posture_id.simulation.SimulationResult` (or anything with
+        result: a :class:`~posture_id.simulation.batch.SimulationResult` (or anything with
             ``time``, ``tilt``, ``theta``, ``alpha``, ``segments``, ``abort_time``).
         path: PNG/PDF file to write (atomically); the figure is returned either way.
     """
-    plt = _pyplot()
-    fig, (ax_tilt, ax_sway) = plt.subplots(2, 1, sharex=True, figsize=(10, 6),
-                                           gridspec_kw={"height_ratios": [1, 2]})
+    fig, axes = _axes(ax, 2, 1, (10, 6), sharex=True, gridspec_kw={"height_ratios": [1, 2]})
+    ax_tilt, ax_sway = axes[:, 0]
     ax_tilt.plot(result.time, np.degrees(result.tilt), color="0.3", lw=1)
     ax_tilt.set_ylabel("platform tilt (°)")
     for j, name in enumerate(result.segments):
@@ -51,7 +62,7 @@ def plot_trial(result, path: str | Path | None = None, title: str | None = None)
 
 
 def plot_dataset_overview(kp_normalised: np.ndarray, joints, max_sway_deg: np.ndarray,
-                          kept: np.ndarray, limit_deg: float, path=None):
+                          kept: np.ndarray, limit_deg: float, path=None, ax=None):
     """The paper's Fig. 2 analogue.
 
     Args:
@@ -60,8 +71,8 @@ def plot_dataset_overview(kp_normalised: np.ndarray, joints, max_sway_deg: np.nd
         max_sway_deg: (S,) largest |segment angle| of every simulated trial, degrees.
         kept: (S,) bool. limit_deg: sway limit; rejected trials fill the last bin.
     """
-    plt = _pyplot()
-    fig, (ax_kp, ax_sway) = plt.subplots(1, 2, figsize=(11, 4))
+    fig, axes = _axes(ax, 1, 2, (11, 4))
+    ax_kp, ax_sway = axes[0]
     bins = np.linspace(-1.0, max(2.5, float(np.nanmax(kp_normalised))), 50)
     for i, joint in enumerate(joints):
         ax_kp.hist(kp_normalised[:, i], bins=bins, histtype="step", lw=1.2, label=joint)
@@ -84,12 +95,11 @@ def plot_dataset_overview(kp_normalised: np.ndarray, joints, max_sway_deg: np.nd
     return fig
 
 
-def plot_images(modular: np.ndarray, monolithic: np.ndarray, joints, path=None):
+def plot_images(modular: np.ndarray, monolithic: np.ndarray, joints, path=None, ax=None):
     """One trial's modular images (N rows × 3 channels) and monolithic channels."""
-    plt = _pyplot()
     n = modular.shape[0]
     cols = max(3, monolithic.shape[0])
-    fig, axes = plt.subplots(n + 1, cols, figsize=(2.2 * cols, 2.2 * (n + 1)), squeeze=False)
+    fig, axes = _axes(ax, n + 1, cols, (2.2 * cols, 2.2 * (n + 1)))
     names = ["log|S| above", "log|S| below", "phase difference"]
 
     def shown(image: np.ndarray, phase: bool) -> np.ndarray:
@@ -118,17 +128,14 @@ def plot_images(modular: np.ndarray, monolithic: np.ndarray, joints, path=None):
 
 def _save(fig, path) -> None:
     if path is not None:
-        from posture_id.io_utils import atomic_write
-
         path = Path(path)
         atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format=path.suffix[1:] or "png"))
 
 
-def plot_fit(result, path=None):
+def plot_fit(result, path=None, ax=None):
     """Recorded (grey) versus fitted (colour) sway per segment, degrees."""
-    plt = _pyplot()
     n = len(result.segments)
-    fig, axes = plt.subplots(n, 1, sharex=True, figsize=(10, 2.2 * n + 0.8), squeeze=False)
+    fig, axes = _axes(ax, n, 1, (10, 2.2 * n + 0.8), sharex=True)
     for j, name in enumerate(result.segments):
         ax = axes[j, 0]
         ax.plot(result.time, np.degrees(result.recorded[:, j]), color="0.6", lw=1.4,

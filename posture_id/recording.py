@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from posture_id.errors import RecordingError
-from posture_id.io_utils import atomic_write_text
+from posture_id.fileio import atomic_write_text, read_numeric_csv
 
 __all__ = ["Recording"]
 
@@ -62,14 +61,7 @@ class Recording:
             RecordingError: naming the file, the line or column, and the problem.
         """
         path = Path(path)
-        try:
-            text = path.read_text()
-        except FileNotFoundError:
-            raise RecordingError(f"{path}: no such recording") from None
-        rows = [r for r in csv.reader(io.StringIO(text)) if r]
-        if not rows:
-            raise RecordingError(f"{path}: empty file")
-        header = [h.strip() for h in rows[0]]
+        header, values = read_numeric_csv(path, RecordingError, "recording")
         if header[:2] != ["time_s", "tilt_deg"]:
             raise RecordingError(
                 f"{path}: header must start with 'time_s,tilt_deg', got '{','.join(header[:2])}'"
@@ -86,24 +78,6 @@ class Recording:
                 f"{path}: segment columns {','.join(names)} do not match the body's "
                 f"segments {','.join(segments)}"
             )
-        values = np.empty((len(rows) - 1, len(header)))
-        for n, row in enumerate(rows[1:]):
-            if len(row) != len(header):
-                raise RecordingError(
-                    f"{path}: line {n + 2}: {len(row)} fields, header has {len(header)}"
-                )
-            for c, cell in enumerate(row):
-                try:
-                    x = float(cell)
-                except ValueError:
-                    raise RecordingError(
-                        f"{path}: line {n + 2}, column '{header[c]}': not a number ({cell!r})"
-                    ) from None
-                if not math.isfinite(x):
-                    raise RecordingError(
-                        f"{path}: line {n + 2}, column '{header[c]}': {cell} is not a finite number"
-                    )
-                values[n, c] = x
         if len(values) < 2:
             raise RecordingError(f"{path}: fewer than two samples")
         if np.any(np.diff(values[:, 0]) <= 0):

@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from posture_id.anthropometry import straight_links, winter_segments
-from posture_id.body import load_body
-from posture_id.urdf_writer import write_chain_urdf
+from posture_id.bodies.anthropometry import straight_links, winter_segments
+from posture_id.bodies.body import load_body
+from posture_id.bodies.urdf_writer import write_chain_urdf
+from posture_id.dec.parameters import default_parameters
 
 
 @pytest.fixture(autouse=True)
@@ -49,9 +50,9 @@ def any_body(request):
 
 def random_parameters(body, rng, spread=0.3):
     """Parameters around the body's defaults (classes random), as DecParameters."""
-    from posture_id.parameters import DecParameters, ModuleParameters
+    from posture_id.dec.parameters import DecParameters, ModuleParameters
 
-    defaults = body.default_parameters()
+    defaults = default_parameters(body)
     mods = {}
     for joint, d in defaults.modules.items():
         f = np.abs(1.0 + spread * rng.standard_normal(4))

@@ -6,11 +6,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from posture_id.anthropometry import default_tip_segments, straight_links
-from posture_id.body import DEFAULT_URDF, load_body
+from posture_id.bodies.anthropometry import default_tip_segments, straight_links
+from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.bodies.urdf_writer import chain_urdf
 from posture_id.errors import BodyError
-from posture_id.kernel import LANES, kernels
-from posture_id.urdf_writer import chain_urdf
+from posture_id.simulation.kernel import LANES, kernels
 
 
 def test_default_body_mgh_matches_paper(tip):

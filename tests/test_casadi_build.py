@@ -5,7 +5,8 @@ from __future__ import annotations
 import casadi as ca
 import pytest
 
-from posture_id.casadi_build import compile_functions
+from posture_id.fitting.build import compile_functions
+from posture_id.fitting.options import Compilation
 
 
 def _square():
@@ -17,7 +18,7 @@ def test_compile_then_load_from_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("POSTURE_ID_CACHE", str(tmp_path))
     messages = []
     (f,), backend = compile_functions("t", b"key", _square, notify=messages.append)
-    assert backend == "compiled" and float(f(3)) == 9.0 and messages
+    assert str(backend) == "compiled" and float(f(3)) == 9.0 and messages
     built = []
 
     def build():
@@ -25,24 +26,24 @@ def test_compile_then_load_from_cache(tmp_path, monkeypatch):
         return _square()
 
     (g,), backend = compile_functions("t", b"key", build)
-    assert backend == "compiled (cached)" and float(g(4)) == 16.0
+    assert str(backend) == "compiled (cached)" and float(g(4)) == 16.0
     assert not built  # a cached library needs no symbolic build
     (_,), backend = compile_functions("t", b"other key", _square)
-    assert backend == "compiled"
+    assert str(backend) == "compiled"
 
 
 def test_virtual_machine_fallbacks(tmp_path, monkeypatch):
-    (f,), backend = compile_functions("t", b"key", _square, mode="never")
-    assert backend.startswith("vm") and float(f(2)) == 4.0
+    (f,), backend = compile_functions("t", b"key", _square, mode=Compilation.NEVER)
+    assert str(backend).startswith("vm") and float(f(2)) == 4.0
     monkeypatch.setenv("POSTURE_ID_CACHE", str(tmp_path))
     monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
     (f,), backend = compile_functions("t", b"key2", _square)
-    assert backend.startswith("vm: compilation failed") and float(f(5)) == 25.0
+    assert str(backend).startswith("vm: compilation failed") and float(f(5)) == 25.0
     with pytest.raises(OSError):
-        compile_functions("t", b"key3", _square, mode="always")
+        compile_functions("t", b"key3", _square, mode=Compilation.ALWAYS)
 
 
 def test_unwritable_cache_compiles_privately(monkeypatch):
     monkeypatch.setenv("POSTURE_ID_CACHE", "/proc/not-writable")
     (f,), backend = compile_functions("t", b"key", _square)
-    assert backend == "compiled" and float(f(6)) == 36.0
+    assert str(backend) == "compiled" and float(f(6)) == 36.0

@@ -9,8 +9,9 @@ import sys
 import numpy as np
 import pytest
 
-from posture_id.body import load_body
+from posture_id.bodies.body import load_body
 from posture_id.cli import main
+from posture_id.dec.parameters import default_parameters
 from posture_id.recording import Recording
 
 
@@ -39,13 +40,13 @@ def test_body_from_robot(tmp_path, capsys):
     assert "half_sitting" in capsys.readouterr().err
     assert load_body(out).segment_names == ("leg", "trunk")
     assert main(["body", "--from-robot", "g1", "--height", "1.8", "--out", str(out)]) == 2
-    assert "choose one of" in capsys.readouterr().err
+    assert "not allowed with argument" in capsys.readouterr().err
 
 
 def test_simulate_writes_recording_and_plot(tmp_path, tip):
     csv, png = tmp_path / "trial.csv", tmp_path / "trial.png"
     params = tmp_path / "p.json"
-    tip.default_parameters().replace("knee", controls="com").to_json(params)
+    default_parameters(tip).replace("knee", controls="com").to_json(params)
     assert main(["simulate", "--params", str(params), "--amplitude-deg", "2", "--cycles", "1",
                  "--out", str(csv), "--plot", str(png)]) == 0
     rec = Recording.from_csv(csv, tip.segment_names)
@@ -56,7 +57,7 @@ def test_simulate_writes_recording_and_plot(tmp_path, tip):
 
 
 def test_simulate_reports_an_abort(tmp_path, tip, capsys):
-    d = tip.default_parameters()
+    d = default_parameters(tip)
     params = tmp_path / "weak.json"
     d.replace("ankle", kp=0.1 * d["ankle"].kp, ki=0.0, kpas=0.3 * d["ankle"].kpas).to_json(params)
     csv = tmp_path / "trial.csv"
@@ -67,7 +68,7 @@ def test_simulate_reports_an_abort(tmp_path, tip, capsys):
 
 
 def _write_params(tmp_path, tip, mutate):
-    data = tip.default_parameters().to_dict()
+    data = default_parameters(tip).to_dict()
     mutate(data)
     path = tmp_path / "p.json"
     path.write_text(json.dumps(data))

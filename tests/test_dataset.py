@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from posture_id.body import DEFAULT_URDF
+from posture_id.bodies.body import DEFAULT_URDF
 from posture_id.cli import main
-from posture_id.dataset import Dataset, DatasetConfig, DatasetError, generate_dataset
+from posture_id.datasets.generation import Dataset, DatasetConfig, DatasetError, generate_dataset
 
 
 def _config(body=DEFAULT_URDF, **kw) -> DatasetConfig:
@@ -64,9 +64,9 @@ def test_kill_and_resume_gives_the_same_bytes(reference_set, tmp_path):
     out = tmp_path / "resumed"
     calls = []
 
-    def die_after_first_shard(done, total):
-        calls.append(done)
-        if done > 0:
+    def die_after_first_shard(update):
+        calls.append(update.done)
+        if update.done > 0:
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):

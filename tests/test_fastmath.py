@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from posture_id.fastmath import POLY_MAX_ANGLE, atan2_poly, cos_poly, sin_poly
+from posture_id.simulation.fastmath import POLY_MAX_ANGLE, atan2_poly, cos_poly, sin_poly
 
 
 @njit

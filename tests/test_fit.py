@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from posture_id.cli import main
+from posture_id.dec.prior import sample_parameters
 from posture_id.errors import RecordingError
-from posture_id.fit import FitOptions, fit_recording, prepare_recording
+from posture_id.fitting import FitOptions, fit_recording, prepare_recording
 from posture_id.recording import Recording
-from posture_id.sampling import sample_parameters
 from posture_id.simulation import SimulationOptions, simulate
 
 pytestmark = pytest.mark.slow

@@ -6,9 +6,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from posture_id.body import load_body
+from posture_id.bodies.body import load_body
+from posture_id.bodies.lumping import PRESETS, lump_robot, preset_body, robots_dir
 from posture_id.errors import BodyError
-from posture_id.lumping import PRESETS, lump_robot, preset_body, robots_dir
 from posture_id.simulation import simulate
 
 

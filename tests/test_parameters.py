@@ -7,18 +7,19 @@ import json
 import numpy as np
 import pytest
 
-from posture_id.errors import ParameterError
-from posture_id.parameters import (
+from posture_id.dec.parameters import (
     PAPER_TABLE,
     DecParameters,
     ParameterArrays,
+    default_parameters,
     denormalise,
     normalise,
 )
+from posture_id.errors import ParameterError
 
 
 def test_default_body_gets_the_paper_table_exactly(tip):
-    p = tip.default_parameters()
+    p = default_parameters(tip)
     for joint in ("ankle", "knee", "hip"):
         for key, value in PAPER_TABLE[joint].items():
             assert getattr(p[joint], key) == pytest.approx(value, rel=1e-12), (joint, key)
@@ -27,20 +28,20 @@ def test_default_body_gets_the_paper_table_exactly(tip):
 
 
 def test_defaults_scale_with_mgh_and_use_columns(winter, winter2, winter1):
-    p3 = winter.default_parameters()
+    p3 = default_parameters(winter)
     np.testing.assert_allclose(p3.array("kp"), winter.mgh)
     assert p3["knee"].kd / p3["knee"].kp == pytest.approx(18.394 / 245.25)
-    p2 = winter2.default_parameters()  # ankle and hip columns
+    p2 = default_parameters(winter2)  # ankle and hip columns
     assert p2.joints == ("ankle", "hip")
     assert p2["hip"].kd / p2["hip"].kp == pytest.approx(18.394 / 73.575)
     assert p2["hip"].delay_s == 0.121 and p2["hip"].controls == "com"
-    p1 = winter1.default_parameters()  # ankle column
+    p1 = default_parameters(winter1)  # ankle column
     assert p1["ankle"].kd / p1["ankle"].kp == pytest.approx(116.49 / 465.975)
     assert p1["ankle"].delay_s == 0.100
 
 
 def test_json_round_trip(tip, tmp_path):
-    p = tip.default_parameters().replace("knee", kp=200.0, controls="com")
+    p = default_parameters(tip).replace("knee", kp=200.0, controls="com")
     path = tmp_path / "p.json"
     p.to_json(path)
     data = json.loads(path.read_text())
@@ -53,11 +54,11 @@ def test_passive_terms_are_optional(tip):
     data = {j: {"kp": 1.0, "ki": 0.1, "kd": 0.5, "delay_s": 0.1, "controls": "joint"}
             for j in tip.joint_names}
     p = DecParameters.from_dict(data, tip)
-    assert p["hip"].kpas == tip.default_parameters()["hip"].kpas
+    assert p["hip"].kpas == default_parameters(tip)["hip"].kpas
 
 
 def _valid(tip):
-    return tip.default_parameters().to_dict()
+    return default_parameters(tip).to_dict()
 
 
 @pytest.mark.parametrize(
@@ -93,7 +94,7 @@ def test_unreadable_json(tip, tmp_path):
 
 
 def test_normalise_round_trip(tip):
-    d = tip.default_parameters()
+    d = default_parameters(tip)
     p = d.replace("ankle", kp=d["ankle"].kp * 1.5, delay_s=0.05).replace("knee", controls="com")
     t = normalise(p, d)
     assert t.shape == (3, 5)
@@ -107,7 +108,7 @@ def test_normalise_round_trip(tip):
 
 
 def test_parameter_arrays_validate_and_round_trip(tip):
-    d = tip.default_parameters()
+    d = default_parameters(tip)
     arrays = ParameterArrays.from_parameters([d, d.replace("hip", kd=1.0)])
     assert arrays.n_trials == 2
     assert arrays.trial(1, tip.joint_names)["hip"].kd == 1.0

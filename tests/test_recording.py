@@ -7,8 +7,7 @@ import pytest
 
 from posture_id.errors import RecordingError
 from posture_id.recording import Recording
-from posture_id.simulation import simulate
-from posture_id.stimulus import prts
+from posture_id.simulation import prts, simulate
 
 
 def test_round_trip(tmp_path, tip):

@@ -7,11 +7,10 @@ import numpy as np
 import pytest
 from conftest import random_parameters
 
+from posture_id.dec.parameters import ParameterArrays, default_parameters
 from posture_id.errors import SimulationError
-from posture_id.parameters import ParameterArrays
-from posture_id.reference import simulate_reference
-from posture_id.simulation import SimulationOptions, simulate, simulate_batch
-from posture_id.stimulus import TiltProfile, prts
+from posture_id.simulation import SimulationOptions, TiltProfile, prts, simulate, simulate_batch
+from posture_id.simulation.reference import simulate_reference
 
 
 def _first_seconds(stim: TiltProfile, seconds: float, gain: float = 1.0) -> TiltProfile:
@@ -22,7 +21,7 @@ def _first_seconds(stim: TiltProfile, seconds: float, gain: float = 1.0) -> Tilt
 @pytest.mark.parametrize("seed", [0, 1])
 def test_compiled_matches_pinocchio_reference_over_5s(any_body, seed):
     rng = np.random.default_rng(seed)
-    params = any_body.default_parameters() if seed == 0 else random_parameters(any_body, rng)
+    params = default_parameters(any_body) if seed == 0 else random_parameters(any_body, rng)
     stim = _first_seconds(prts(amplitude_deg=4.0), 5.0)
     fast = simulate(any_body, params, stim)
     ref = simulate_reference(any_body, params, stim)
@@ -66,8 +65,8 @@ def test_batch_equals_single_trials_and_is_worker_independent(tip):
     rng = np.random.default_rng(3)
     sets = [random_parameters(tip, rng, spread=0.5) for _ in range(37)]  # > one block
     arrays = ParameterArrays.from_parameters(sets)
-    one = simulate_batch(tip, arrays, options=SimulationOptions(workers=1))
-    two = simulate_batch(tip, arrays, options=SimulationOptions(workers=2))
+    one = simulate_batch(tip, arrays, workers=1)
+    two = simulate_batch(tip, arrays, workers=2)
     np.testing.assert_array_equal(one.theta, two.theta)
     np.testing.assert_array_equal(one.abort_time, two.abort_time)
     for b in (0, 17, 36):
@@ -77,7 +76,7 @@ def test_batch_equals_single_trials_and_is_worker_independent(tip):
 
 
 def test_unstable_trial_is_aborted_and_reported(tip):
-    d = tip.default_parameters()
+    d = default_parameters(tip)
     weak = d.replace("ankle", kp=0.1 * d["ankle"].kp, ki=0.0, kpas=0.3 * d["ankle"].kpas)
     batch = simulate_batch(tip, ParameterArrays.from_parameters([d, weak, d]))
     assert list(batch.stable) == [True, False, True]
@@ -95,7 +94,7 @@ def test_unstable_trial_is_aborted_and_reported(tip):
 
 
 def test_sway_limit_is_configurable(tip):
-    d = tip.default_parameters()
+    d = default_parameters(tip)
     weak = d.replace("ankle", kp=0.1 * d["ankle"].kp, ki=0.0, kpas=0.3 * d["ankle"].kpas)
     at6 = simulate(tip, weak)
     at3 = simulate(tip, weak, options=SimulationOptions(sway_limit_deg=3.0))
@@ -103,7 +102,7 @@ def test_sway_limit_is_configurable(tip):
 
 
 def test_delay_is_interpolated_not_rounded(tip):
-    d = tip.default_parameters()
+    d = default_parameters(tip)
     runs = {
         delay: simulate(tip, d.replace("hip", delay_s=delay)).theta[:, 2]
         for delay in (0.120, 0.121, 0.122)
@@ -118,7 +117,7 @@ def test_delay_is_interpolated_not_rounded(tip):
 
 def test_servo_is_silent_before_the_delay(tip):
     """With no passive, no gravity PD and a pure step tilt, nothing acts before Δ."""
-    d = tip.default_parameters()
+    d = default_parameters(tip)
     p = d
     for j in tip.joint_names:
         p = p.replace(j, delay_s=0.5, kpas=0.0, bpas=0.0)
@@ -139,5 +138,5 @@ def test_bad_options_and_shapes(tip):
     with pytest.raises(SimulationError, match="whole number of samples"):
         simulate(tip, stimulus=TiltProfile(np.array([0.0, 1.01]), np.zeros(2)))
     with pytest.raises(SimulationError, match="modules"):
-        arrays = ParameterArrays.from_parameters([tip.default_parameters()])
+        arrays = ParameterArrays.from_parameters([default_parameters(tip)])
         simulate_batch(tip, ParameterArrays(**{k: v[:, :2] for k, v in arrays.__dict__.items()}))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from posture_id.errors import StimulusError
-from posture_id.stimulus import prts, prts_symbols, tilt_from_array, tilt_from_csv
+from posture_id.simulation.stimulus import prts, prts_symbols, tilt_from_array, tilt_from_csv
 
 
 def test_first_symbols_match_model():
@@ -94,7 +94,7 @@ def test_tilt_from_array_rejects_nan():
 
 
 def test_recognise_prts_from_50hz_samples():
-    from posture_id.stimulus import recognise_prts
+    from posture_id.simulation.stimulus import recognise_prts
 
     t = np.arange(6051) * 0.02
     stim = prts(amplitude_deg=1.5)

@@ -8,9 +8,7 @@ import numpy as np
 import pinocchio as pin
 from conftest import random_parameters
 
-from posture_id.simulation import SimulationOptions, simulate
-from posture_id.stimulus import prts
-from posture_id.symbolic import (
+from posture_id.fitting.symbolic import (
     SymbolicModel,
     buffer_sizes,
     chain_dynamics,
@@ -19,6 +17,7 @@ from posture_id.symbolic import (
     rollout_steps,
     step_inputs,
 )
+from posture_id.simulation import SimulationOptions, prts, simulate
 
 
 def test_symbolic_dynamics_match_pinocchio(any_body):

@@ -1,0 +1,318 @@
+"""Whole-body URDF → the sagittal, foot-rooted chain posture_id simulates.
+
+A humanoid's or a person's URDF has a floating base at the pelvis, two legs, arms and a
+head. Given the joints that act as ankle, knee and hip pitch on both legs and a reference
+posture, :func:`lump_robot` groups the model's links (Pinocchio bodies) into
+
+- the support: everything beyond the ankle pitch joints (both feet);
+- shank: between ankle and knee joints, both legs together;
+- thigh: between knee and hip joints, both legs together;
+- trunk: everything else (pelvis, torso, arms, head, hip yaw/roll links above the hip
+  pitch joints);
+
+(2 segments: leg = shank + thigh, the knee locked; 1 segment: all above the ankles), and
+writes each group's mass, COM and inertia tensor, computed by Pinocchio at the reference
+posture, as one link of a planar chain. The lumped joints sit at the midpoint of the left
+and right joints. The sagittal plane is the world x–z plane of the reference posture:
+x forward, z up (gravity −z), the pitch axis y.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.bodies.urdf_writer import LinkSpec, chain_urdf
+from posture_id.errors import BodyError
+from posture_id.fileio import atomic_write_text
+
+__all__ = ["RobotPreset", "PRESETS", "robots_dir", "lump_robot", "LumpedBody", "preset_body"]
+
+_PITCH_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class RobotPreset:
+    """A humanoid shipped by example-robot-data and how to read its sagittal chain.
+
+    Attributes:
+        urdf: path below the example-robot-data ``robots`` folder.
+        ankle, knee, hip: (left, right) names of the pitch joints.
+        srdf: optional (path below ``robots``, configuration name) of the reference posture;
+            the neutral configuration otherwise.
+        base_rpy: roll, pitch, yaw (rad) of the floating base in the reference posture
+            (turns a model drawn y-up to z-up).
+    """
+
+    urdf: str
+    ankle: tuple[str, str]
+    knee: tuple[str, str]
+    hip: tuple[str, str]
+    srdf: tuple[str, str] | None = None
+    base_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    note: str = ""
+
+
+PRESETS: dict[str, RobotPreset] = {
+    "talos": RobotPreset(
+        urdf="talos_data/robots/talos_reduced.urdf",
+        ankle=("leg_left_5_joint", "leg_right_5_joint"),
+        knee=("leg_left_4_joint", "leg_right_4_joint"),
+        hip=("leg_left_3_joint", "leg_right_3_joint"),
+        srdf=("talos_data/srdf/talos.srdf", "half_sitting"),
+        note="PAL Robotics TALOS, standing in its 'half_sitting' configuration",
+    ),
+    "g1": RobotPreset(
+        urdf="g1_description/urdf/g1_29dof_rev_1_0.urdf",
+        ankle=("left_ankle_pitch_joint", "right_ankle_pitch_joint"),
+        knee=("left_knee_joint", "right_knee_joint"),
+        hip=("left_hip_pitch_joint", "right_hip_pitch_joint"),
+        note="Unitree G1 (29 DoF), zero configuration",
+    ),
+    "human": RobotPreset(
+        urdf="human_description/robots/human.urdf",
+        ankle=("left_ankle_Z", "right_ankle_Z"),
+        knee=("left_knee_Z", "right_knee_Z"),
+        hip=("left_hip_Z", "right_hip_Z"),
+        base_rpy=(np.pi / 2, 0.0, 0.0),
+        note="example-robot-data human model (drawn y-up, turned z-up), zero configuration",
+    ),
+}
+
+
+def robots_dir() -> Path:
+    """The ``robots`` folder of example-robot-data (it ships files, no Python module)."""
+    from importlib import metadata
+
+    try:
+        dist = metadata.distribution("example-robot-data")
+    except metadata.PackageNotFoundError:
+        raise BodyError(
+            "example-robot-data is not installed (pip install example-robot-data)"
+        ) from None
+    path = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
+    if not path.is_dir():
+        raise BodyError(f"example-robot-data has no robots folder at {path}")
+    return path
+
+
+@dataclass(frozen=True)
+class LumpedBody:
+    """The lumped chain and where it came from.
+
+    Attributes:
+        name: robot name. links: segments, support upward. foot: (mass, com, inertia) of
+        the support. joints: (3,) world positions of the lumped joints (m).
+        source: a line saying which model and posture it was lumped from.
+    """
+
+    name: str
+    links: list[LinkSpec]
+    foot: tuple
+    joint_points: np.ndarray = field(repr=False)
+    source: str = ""
+
+    def urdf(self) -> str:
+        return chain_urdf(self.name, self.links, foot=self.foot, comment=self.source)
+
+    def write(self, path: str | Path) -> Path:
+        """Write the lumped URDF atomically."""
+        return atomic_write_text(Path(path), self.urdf())
+
+
+def _joint_id(model, name: str, role: str, urdf: Path) -> int:
+    if model.existJointName(name):
+        return model.getJointId(name)
+    close = difflib.get_close_matches(name, list(model.names), n=3)
+    hint = f" (did you mean {', '.join(close)}?)" if close else ""
+    raise BodyError(f"{urdf}: {role} joint '{name}' is not in the model{hint}")
+
+
+def _group_inertia(model, data, ids) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass (kg), COM (3,) m and inertia tensor about the COM (3, 3) kg·m², world axes."""
+    mass = 0.0
+    first = np.zeros(3)
+    parts = []
+    for j in ids:
+        inertia = model.inertias[j]
+        if inertia.mass == 0.0:
+            continue
+        placement = data.oMi[j]
+        rot = np.asarray(placement.rotation)
+        com = np.asarray(placement.act(np.asarray(inertia.lever)))
+        parts.append((inertia.mass, com, rot @ np.asarray(inertia.inertia) @ rot.T))
+        mass += inertia.mass
+        first += inertia.mass * com
+    if mass == 0.0:
+        raise BodyError("a lumped segment has no mass: check the joint names")
+    com = first / mass
+    tensor = np.zeros((3, 3))
+    for m, c, inertia in parts:
+        d = c - com
+        tensor += inertia + m * (float(d @ d) * np.eye(3) - np.outer(d, d))
+    return mass, com, tensor
+
+
+def lump_robot(
+    urdf: str | Path,
+    ankle: tuple[str, str],
+    hip: tuple[str, str],
+    knee: tuple[str, str] | None = None,
+    posture: np.ndarray | None = None,
+    srdf: tuple[str | Path, str] | None = None,
+    base_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    segments: int = 3,
+    name: str | None = None,
+) -> LumpedBody:
+    """Lump a whole-body URDF (floating base) into a 1-, 2- or 3-segment sagittal chain.
+
+    Args:
+        urdf: the whole-body URDF.
+        ankle, knee, hip: (left, right) pitch-joint names; ``knee`` is needed for 3 segments.
+        posture: (nq,) configuration of the model with a free-flyer base (position,
+            quaternion x y z w, joints); default neutral, or ``srdf``.
+        srdf: (SRDF file, configuration name) to read the posture from.
+        base_rpy: base orientation applied on top of the posture (rad).
+        segments: 3 (shank, thigh, trunk), 2 (leg, trunk: knee locked) or 1 (body).
+    """
+    import pinocchio as pin
+
+    urdf = Path(urdf)
+    if not urdf.is_file():
+        raise BodyError(f"{urdf}: no such URDF file")
+    if segments not in (1, 2, 3):
+        raise BodyError(f"segments must be 1, 2 or 3, got {segments}")
+    if segments == 3 and knee is None:
+        raise BodyError("a 3-segment body needs the knee joints")
+    try:
+        model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
+    except Exception as exc:
+        raise BodyError(f"{urdf}: cannot be read as URDF ({' '.join(str(exc).split())})") from None
+    q = pin.neutral(model)
+    label = "zero configuration"
+    if srdf is not None:
+        srdf_path, config = Path(srdf[0]), srdf[1]
+        try:
+            pin.loadReferenceConfigurations(model, str(srdf_path), False)
+        except Exception as exc:
+            raise BodyError(f"{srdf_path}: cannot read reference configurations ({exc})") from None
+        if config not in model.referenceConfigurations:
+            known = ", ".join(model.referenceConfigurations.keys())
+            raise BodyError(f"{srdf_path}: no configuration '{config}' (has: {known})")
+        q = np.array(model.referenceConfigurations[config])
+        label = f"'{config}' from {srdf_path.name}"
+    if posture is not None:
+        posture = np.asarray(posture, dtype=float)
+        if posture.shape != (model.nq,):
+            raise BodyError(
+                f"{urdf}: posture has {posture.size} values; this model with a free-flyer "
+                f"base needs nq = {model.nq} (x y z, quaternion x y z w, {model.nq - 7} joints)"
+            )
+        q = posture.copy()
+        label = "given posture"
+    if any(base_rpy):
+        rot = pin.rpy.rpyToMatrix(*base_rpy) @ pin.Quaternion(q[6], *q[3:6]).matrix()
+        quat = pin.Quaternion(rot)
+        q[3:7] = [quat.x, quat.y, quat.z, quat.w]
+
+    data = model.createData()
+    pin.forwardKinematics(model, data, q)
+    pin.computeJointJacobians(model, data, q)
+    lateral = np.array([0.0, 1.0, 0.0])
+    roles = {"ankle": ankle, "hip": hip}
+    if knee is not None:
+        roles["knee"] = knee
+    ids: dict[str, tuple[int, int]] = {}
+    for role, pair in roles.items():
+        if len(pair) != 2:
+            raise BodyError(f"{urdf}: give two {role} joints (left, right), got {pair}")
+        ids[role] = tuple(_joint_id(model, n, role, urdf) for n in pair)  # type: ignore[assignment]
+        for joint_name, j in zip(pair, ids[role], strict=True):
+            if model.joints[j].nv != 1:
+                raise BodyError(f"{urdf}: {role} joint '{joint_name}' is not a revolute joint")
+            jac = np.asarray(pin.getJointJacobian(model, data, j, pin.ReferenceFrame.WORLD))
+            axis = jac[3:, model.joints[j].idx_v]
+            if abs(abs(float(axis @ lateral)) - 1.0) > _PITCH_TOL:
+                raise BodyError(
+                    f"{urdf}: {role} joint '{joint_name}' does not pitch: its axis "
+                    f"({', '.join(f'{a:.3g}' for a in axis)}) is not the lateral axis y "
+                    f"in the {label}"
+                )
+    subtree = {j: set(model.subtrees[j]) for pair in ids.values() for j in pair}
+    for side in (0, 1):
+        chain = [ids["hip"][side], *([ids["knee"][side]] if knee else []), ids["ankle"][side]]
+        for upper, lower in zip(chain, chain[1:], strict=False):
+            if lower not in subtree[upper] or lower == upper:
+                raise BodyError(
+                    f"{urdf}: joint '{model.names[lower]}' is not below '{model.names[upper]}' "
+                    "on the same leg: check the order ankle, knee, hip and left, right"
+                )
+
+    def both(role: str) -> set[int]:
+        return subtree[ids[role][0]] | subtree[ids[role][1]]
+
+    everything = set(range(model.njoints))
+    feet = both("ankle")
+    if segments == 3:
+        groups = [
+            ("shank", "ankle", both("knee") - feet),
+            ("thigh", "knee", both("hip") - both("knee")),
+            ("trunk", "hip", everything - both("hip")),
+        ]
+    elif segments == 2:
+        groups = [("leg", "ankle", both("hip") - feet), ("trunk", "hip", everything - both("hip"))]
+    else:
+        groups = [("body", "ankle", everything - feet)]
+
+    def midpoint(role: str) -> np.ndarray:
+        left, right = ids[role]
+        return (data.oMi[left].translation + data.oMi[right].translation) / 2.0
+
+    points = [midpoint(role) for _, role, _ in groups]
+    ankle_point = points[0]
+    links = []
+    for k, (link, role, members) in enumerate(groups):
+        mass, com, tensor = _group_inertia(model, data, sorted(members))
+        origin = points[k] - (points[k - 1] if k else ankle_point)
+        if k + 1 < len(groups):
+            end = points[k + 1] - points[k]
+        else:
+            tops = [data.oMi[j].translation for j in members]
+            top = max(tops, key=lambda p: p[2])
+            end = top - points[k]
+            if end[2] <= com[2] - points[k][2]:
+                end = 2.0 * (com - points[k])
+        links.append(
+            LinkSpec(
+                link=link, joint=role, origin=tuple(origin), mass=mass,
+                com=tuple(com - points[k]), inertia=tuple(map(tuple, tensor)), end=tuple(end),
+            )
+        )
+    foot_mass, foot_com, foot_tensor = _group_inertia(model, data, sorted(feet))
+    robot = name or model.name
+    return LumpedBody(
+        name=f"{robot}_{segments}seg",
+        links=links,
+        foot=(foot_mass, tuple(foot_com - ankle_point), foot_tensor),
+        joint_points=np.array(points),
+        source=(
+            f"lumped by posture-id from {urdf.name} at the {label}: {segments} segments, "
+            f"joints {', '.join(f'{r}={p[0]}/{p[1]}' for r, p in roles.items())}"
+        ),
+    )
+
+
+def preset_body(name: str, segments: int = 3) -> LumpedBody:
+    """Lump one of :data:`PRESETS` (``talos``, ``g1``, ``human``)."""
+    if name not in PRESETS:
+        raise BodyError(f"unknown robot '{name}' (presets: {', '.join(PRESETS)})")
+    preset = PRESETS[name]
+    root = robots_dir()
+    srdf = (root / preset.srdf[0], preset.srdf[1]) if preset.srdf else None
+    return lump_robot(
+        root / preset.urdf, ankle=preset.ankle, knee=preset.knee if segments == 3 else None,
+        hip=preset.hip, srdf=srdf, base_rpy=preset.base_rpy, segments=segments, name=name,
+    )

@@ -1,0 +1,41 @@
+"""Command line: ``posture-id body | simulate | fit | dataset``, one module per command.
+
+Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
+a traceback: argument errors by :class:`~.arguments.Parser`, input errors as
+:class:`~posture_id.errors.PostureIdError`.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from posture_id.cli import body, dataset, fit, simulate
+from posture_id.cli.arguments import Parser
+from posture_id.errors import PostureIdError
+
+__all__ = ["main", "build_parser"]
+
+
+def build_parser() -> Parser:
+    parser = Parser(prog="posture-id",
+                    description="Identify DEC posture-control parameters from body sway.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
+    for command in (body, simulate, fit, dataset):
+        command.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one command; returns the exit status (2 for any user error)."""
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as stop:  # --help (0) or an argument error (2), already printed
+        return stop.code if isinstance(stop.code, int) else 0
+    try:
+        return args.func(args)
+    except PostureIdError as exc:
+        print(f"posture-id: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # `posture-id body | head`: the reader left, nothing to say
+        sys.stderr.close()
+        return 0

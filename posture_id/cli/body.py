@@ -1,0 +1,104 @@
+"""``posture-id body``: describe a body (URDF), or write one (Winter, default TIP, lumped)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from posture_id.bodies.anthropometry import (
+    default_tip_segments,
+    straight_links,
+    winter_segments,
+)
+from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.bodies.lumping import PRESETS, lump_robot, preset_body
+from posture_id.bodies.urdf_writer import write_chain_urdf
+from posture_id.cli.arguments import positive_float, say
+from posture_id.dec.parameters import default_parameters
+from posture_id.errors import PostureIdError
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub) -> None:
+    body = sub.add_parser("body", help="describe a body (URDF) or write one")
+    body.add_argument("urdf", nargs="?", type=Path, help="URDF file (default: the TIP)")
+    body.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    mode = body.add_mutually_exclusive_group()
+    mode.add_argument("--height", type=positive_float,
+                      help="write a Winter body: height, m (with --mass)")
+    mode.add_argument("--default-tip", action="store_true",
+                      help="write the default triple inverted pendulum of MODEL §1")
+    mode.add_argument("--from-robot", choices=sorted(PRESETS),
+                      help="lump a humanoid shipped by example-robot-data")
+    mode.add_argument("--lump", type=Path, metavar="URDF",
+                      help="lump a whole-body URDF (floating base, two legs) into a chain")
+    body.add_argument("--mass", type=positive_float, help="write a Winter body: mass, kg")
+    body.add_argument("--segments", type=int, default=3, choices=(1, 2, 3),
+                      help="written body: 3 shank+thigh+trunk, 2 leg+trunk, 1 whole body")
+    body.add_argument("--ankle-joints", nargs=2, metavar=("LEFT", "RIGHT"),
+                      help="--lump: ankle pitch joints")
+    body.add_argument("--knee-joints", nargs=2, metavar=("LEFT", "RIGHT"),
+                      help="--lump: knee joints (needed for 3 segments)")
+    body.add_argument("--hip-joints", nargs=2, metavar=("LEFT", "RIGHT"),
+                      help="--lump: hip pitch joints")
+    body.add_argument("--srdf", type=Path, help="--lump: SRDF holding the reference posture")
+    body.add_argument("--posture", help="--lump: name of the posture in the SRDF")
+    body.add_argument("--out", type=Path, help="where to write the generated URDF")
+    body.set_defaults(func=run)
+
+
+def _write(args: argparse.Namespace) -> Path | None:
+    """Write the body the flags ask for; its path, or None when only describing."""
+    if args.mass is not None and args.height is None:
+        raise PostureIdError("--mass goes with --height (a Winter body)")
+    writing = args.height is not None or args.default_tip or args.from_robot or args.lump
+    if not writing:
+        return None
+    if args.out is None:
+        raise PostureIdError("--out is required to write a body URDF")
+    if args.urdf is not None:
+        raise PostureIdError("give either a URDF to describe or flags to write one, not both")
+    if args.from_robot:
+        lumped = preset_body(args.from_robot, args.segments)
+    elif args.lump:
+        for flag in ("ankle_joints", "hip_joints"):
+            if getattr(args, flag) is None:
+                raise PostureIdError(f"--lump needs --{flag.replace('_', '-')} LEFT RIGHT")
+        if (args.srdf is None) != (args.posture is None):
+            raise PostureIdError("--srdf and --posture go together")
+        lumped = lump_robot(
+            args.lump, ankle=tuple(args.ankle_joints), hip=tuple(args.hip_joints),
+            knee=tuple(args.knee_joints) if args.knee_joints else None,
+            srdf=(args.srdf, args.posture) if args.srdf is not None else None,
+            segments=args.segments,
+        )
+    else:
+        lumped = None
+    if lumped is not None:
+        path = lumped.write(args.out)
+        say(f"wrote {path} ({lumped.source})")
+        return path
+    if args.default_tip:
+        segments, name = default_tip_segments(), "tip_default"
+    else:
+        if args.mass is None:
+            raise PostureIdError("--height goes with --mass (a Winter body)")
+        segments = winter_segments(args.height, args.mass, args.segments)
+        name = f"winter_{args.height:g}m_{args.mass:g}kg_{args.segments}seg"
+    path = write_chain_urdf(args.out, name, straight_links(segments))
+    say(f"wrote {path}")
+    return path
+
+
+def run(args: argparse.Namespace) -> int:
+    urdf = _write(args) or args.urdf or DEFAULT_URDF
+    body = load_body(urdf)
+    params = default_parameters(body)
+    if args.json:
+        print(json.dumps({**body.to_dict(), "default_parameters": params.to_dict()},
+                         indent=2))
+    else:
+        print(body.summary() + "\n\ndefault parameters (MODEL §3):\n" + params.summary())
+    return 0

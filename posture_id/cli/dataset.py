@@ -1,0 +1,63 @@
+"""``posture-id dataset generate|info``: training data sets."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.bodies.body import DEFAULT_URDF
+from posture_id.cli.arguments import default_of, non_negative_int, positive_int, say
+from posture_id.cli.progress import TerminalProgress
+from posture_id.cli.simulate import add_model_arguments, add_stimulus_arguments, model_options
+from posture_id.datasets.config import DatasetConfig
+from posture_id.datasets.generation import generate_dataset
+from posture_id.datasets.store import Dataset
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub) -> None:
+    data = sub.add_parser("dataset", help="training data: generate a data set, describe one")
+    dsub = data.add_subparsers(dest="dataset_command", required=True)
+    gen = dsub.add_parser("generate", help="simulate random trials into a data-set directory")
+    gen.add_argument("--trials", type=positive_int, required=True,
+                     help="kept (stable) trials wanted")
+    gen.add_argument("--out", type=Path, required=True, help="data-set directory")
+    gen.add_argument("--workers", type=positive_int, help="local threads (default: all cores)")
+    gen.add_argument("--scheduler", help="Dask distributed scheduler address (tcp://host:port)")
+    gen.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    gen.add_argument("--seed", type=non_negative_int, default=default_of(DatasetConfig, "seed"),
+                     help="root seed (default %(default)d)")
+    gen.add_argument("--shard-size", type=positive_int,
+                     default=default_of(DatasetConfig, "shard_size"),
+                     help="simulated trials per shard (default %(default)d)")
+    add_stimulus_arguments(gen)
+    add_model_arguments(gen)
+    gen.add_argument("--quiet", action="store_true", help="no progress bar")
+    gen.set_defaults(func=run_generate)
+    info = dsub.add_parser("info", help="counts, rejection rate, splits, Fig. 2 and images")
+    info.add_argument("dir", type=Path)
+    info.add_argument("--figures", type=Path, help="where to write the PNGs (default: DIR)")
+    info.add_argument("--no-verify", action="store_true", help="skip the shard SHA-256 check")
+    info.set_defaults(func=run_info)
+
+
+def run_generate(args: argparse.Namespace) -> int:
+    config = DatasetConfig(
+        trials=args.trials, body=str(args.body or DEFAULT_URDF), seed=args.seed,
+        shard_size=args.shard_size, amplitude_deg=args.amplitude_deg, cycles=args.cycles,
+        states=args.states, simulation=model_options(args),
+    )
+    with TerminalProgress("kept trials", quiet=args.quiet) as progress:
+        data = generate_dataset(config, args.out, workers=args.workers,
+                                scheduler=args.scheduler, progress=progress)
+    say(data.summary())
+    return 0
+
+
+def run_info(args: argparse.Namespace) -> int:
+    data = Dataset.open(args.dir, verify=not args.no_verify)
+    print(data.summary())
+    overview, images = data.plot(args.figures)
+    print(f"wrote {overview} and {images}")
+    return 0

@@ -1,0 +1,65 @@
+"""``posture-id fit``: identify DEC parameters from a recording by least squares."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.cli.arguments import default_of, non_negative_int, positive_int, say
+from posture_id.cli.progress import TerminalProgress
+from posture_id.dec.parameters import DecParameters
+from posture_id.fitting.least_squares import fit_recording
+from posture_id.fitting.options import (
+    Compilation,
+    ExhaustiveClasses,
+    FitOptions,
+    FixedClasses,
+    RelaxedClasses,
+)
+from posture_id.recording import Recording
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub) -> None:
+    fit = sub.add_parser("fit", help="identify DEC parameters from a recording (least squares)")
+    fit.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
+    fit.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    fit.add_argument("--init", type=Path, help="initial guess, parameter JSON (e.g. the CNN's)")
+    fit.add_argument("--out", type=Path, required=True, help="fit result JSON to write")
+    fit.add_argument("--plot", type=Path, help="recorded versus fitted sway (PNG)")
+    fit.add_argument("--classes", choices=("relaxed", "exhaustive", "fixed"), default="relaxed",
+                     help="how to find the classes (default: relaxed, then polished)")
+    fit.add_argument("--starts", type=positive_int, default=default_of(RelaxedClasses, "starts"),
+                     help="--classes relaxed: fits from the guess and from STARTS−1 prior "
+                          "draws; the best is polished (guards against local minima)")
+    fit.add_argument("--seed", type=non_negative_int, default=default_of(RelaxedClasses, "seed"),
+                     help="--classes relaxed: seed of the prior draws (default %(default)d)")
+    fit.add_argument("--no-compile", action="store_true",
+                     help="run CasADi in its virtual machine (no C compiler)")
+    fit.set_defaults(func=run)
+
+
+def options_from(args: argparse.Namespace) -> FitOptions:
+    classes = {"relaxed": RelaxedClasses(starts=args.starts, seed=args.seed),
+               "exhaustive": ExhaustiveClasses(), "fixed": FixedClasses()}[args.classes]
+    return FitOptions(classes=classes,
+                      compilation=Compilation.NEVER if args.no_compile else Compilation.AUTO)
+
+
+def run(args: argparse.Namespace) -> int:
+    body = load_body(args.body or DEFAULT_URDF)
+    recording = Recording.from_csv(args.recording, body.segment_names)
+    init = DecParameters.from_json(args.init, body) if args.init else None
+    options = options_from(args)
+    with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
+        result = fit_recording(recording, body, init, options, progress=progress,
+                               source=str(args.recording))
+    result.to_json(args.out)
+    say(f"wrote {args.out}")
+    if args.plot:
+        result.plot(args.plot)
+        say(f"wrote {args.plot}")
+    print(result.summary())
+    return 0 if result.converged else 1

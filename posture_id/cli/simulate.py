@@ -1,0 +1,82 @@
+"""``posture-id simulate``: one trial of a DEC-controlled body on the tilting platform."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.cli.arguments import (
+    default_of,
+    non_negative_float,
+    positive_float,
+    positive_int,
+    say,
+)
+from posture_id.dec.parameters import DecParameters
+from posture_id.simulation.batch import simulate
+from posture_id.simulation.options import SimulationOptions
+from posture_id.simulation.stimulus import PRTS_REGISTERS, prts, tilt_from_csv
+
+__all__ = ["add_parser", "run", "add_stimulus_arguments", "add_model_arguments"]
+
+
+def add_stimulus_arguments(parser: argparse.ArgumentParser) -> None:
+    """--amplitude-deg, --cycles, --states with the PRTS defaults."""
+    parser.add_argument("--amplitude-deg", type=positive_float,
+                        default=default_of(prts, "amplitude_deg"),
+                        help="PRTS peak-to-peak tilt, degrees (default %(default)g)")
+    parser.add_argument("--cycles", type=positive_int, default=default_of(prts, "cycles"),
+                        help="PRTS cycles (default %(default)d)")
+    parser.add_argument("--states", type=int, default=default_of(prts, "states"),
+                        choices=sorted(PRTS_REGISTERS, reverse=True),
+                        help="PRTS length (default %(default)d states, 60.5 s a cycle)")
+
+
+def add_model_arguments(parser: argparse.ArgumentParser) -> None:
+    """--sway-limit-deg and --deadband-rad-s with the SimulationOptions defaults."""
+    parser.add_argument("--sway-limit-deg", type=positive_float,
+                        default=default_of(SimulationOptions, "sway_limit_deg"),
+                        help="abort a trial when a segment leaves ±this angle "
+                             "(default %(default)g)")
+    parser.add_argument("--deadband-rad-s", type=non_negative_float,
+                        default=default_of(SimulationOptions, "deadband_rad_s"),
+                        help="tilt-estimator dead-band θ, rad/s (default %(default)g)")
+
+
+def model_options(args: argparse.Namespace) -> SimulationOptions:
+    return SimulationOptions(sway_limit_deg=args.sway_limit_deg,
+                             deadband_rad_s=args.deadband_rad_s)
+
+
+def add_parser(sub) -> None:
+    sim = sub.add_parser("simulate", help="simulate a DEC-controlled body on the tilting platform")
+    sim.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    sim.add_argument("--params", type=Path, help="parameter JSON (default: the body's defaults)")
+    add_stimulus_arguments(sim)
+    sim.add_argument("--tilt", type=Path, help="tilt CSV (time_s,tilt_deg) instead of the PRTS")
+    add_model_arguments(sim)
+    sim.add_argument("--out", type=Path, required=True, help="recording CSV to write")
+    sim.add_argument("--plot", type=Path, help="plot of tilt and sway to write (PNG)")
+    sim.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    body = load_body(args.body or DEFAULT_URDF)
+    params = DecParameters.from_json(args.params, body) if args.params else None
+    if args.tilt:
+        stimulus = tilt_from_csv(args.tilt)
+    else:
+        stimulus = prts(amplitude_deg=args.amplitude_deg, cycles=args.cycles, states=args.states)
+    options = model_options(args)
+    result = simulate(body, params, stimulus, options)
+    result.to_csv(args.out)
+    say(f"wrote {args.out} ({len(result.time)} samples at {options.sample_rate_hz:g} Hz)")
+    if args.plot:
+        result.plot(args.plot)
+        say(f"wrote {args.plot}")
+    if not result.stable:
+        say(f"posture-id: warning: the body left the ±{options.sway_limit_deg:g}° sway limit "
+            f"at t = {result.abort_time:.3f} s; the recording stops there")
+        return 1
+    return 0

@@ -1,0 +1,66 @@
+"""The configuration that determines a data set's content (its identity)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from posture_id.dec.prior import SIGMA
+from posture_id.errors import PostureIdError
+from posture_id.simulation.options import SimulationOptions
+from posture_id.simulation.stimulus import TiltProfile, prts
+
+__all__ = ["DatasetConfig", "DatasetError", "PAPER_SPLIT"]
+
+#: The paper's split of 20 730 modular samples (MODEL §5): train / validation / test.
+PAPER_SPLIT = (14000 / 20730, 3000 / 20730, 3730 / 20730)
+
+
+class DatasetError(PostureIdError):
+    """A data-set directory or request is inconsistent."""
+
+
+@dataclass(frozen=True)
+class DatasetConfig:
+    """Everything that determines a data set's content (its identity).
+
+    Attributes:
+        trials: kept (stable) trials wanted. seed: root seed. shard_size: simulated trials
+        per shard. sigma: σ of the parameter perturbation (MODEL §5). split: fractions of
+        kept trials for train / validation / test (default: the paper's).
+        amplitude_deg, cycles, states: the PRTS. simulation: what is modelled (step,
+        rate, sway limit, dead-band). body: URDF path (its SHA-256 is checked too).
+    """
+
+    trials: int
+    body: str
+    seed: int = 0
+    shard_size: int = 256
+    sigma: float = SIGMA
+    split: tuple[float, float, float] = PAPER_SPLIT
+    amplitude_deg: float = 1.0
+    cycles: int = 2
+    states: int = 242
+    simulation: SimulationOptions = field(default_factory=SimulationOptions)
+
+    def __post_init__(self) -> None:
+        if self.trials < 3:
+            raise DatasetError(f"trials must be ≥ 3 (one per split), got {self.trials}")
+        if self.seed < 0:
+            raise DatasetError(f"seed must be ≥ 0, got {self.seed}")
+        if self.shard_size < 1:
+            raise DatasetError(f"shard_size must be ≥ 1, got {self.shard_size}")
+        if len(self.split) != 3 or abs(sum(self.split) - 1.0) > 1e-9 or min(self.split) < 0:
+            raise DatasetError(f"split must be three fractions summing to 1, got {self.split}")
+        object.__setattr__(self, "split", tuple(float(f) for f in self.split))
+
+    def stimulus(self) -> TiltProfile:
+        return prts(amplitude_deg=self.amplitude_deg, cycles=self.cycles, states=self.states)
+
+    def identity(self) -> dict:
+        """The arguments that must match for a run to resume (the body by path and hash)."""
+        data = asdict(self)
+        data["split"] = list(self.split)
+        data["simulation"] = asdict(self.simulation)
+        data["body"] = str(Path(self.body).resolve())
+        return data

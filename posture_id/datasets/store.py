@@ -1,0 +1,180 @@
+"""A data-set directory on disk: manifest, shards, split and statistics (read and write).
+
+    manifest.json        what made it (body and its hash, stimulus, options, defaults,
+                         sampling, seed, split, counts, package version) and its shards
+    shard-00000.npz ...  simulated trials (nothing pickled), written atomically
+    split.npz            trial indices of the train / validation / test sets
+    stats.npz            standardisation statistics from the training set only
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.datasets.config import DatasetError
+from posture_id.fileio import atomic_write, atomic_write_text, file_sha256
+from posture_id.plotting import plot_dataset_overview, plot_images
+
+__all__ = ["Dataset", "FORMAT", "FORMAT_VERSION", "read_manifest", "write_manifest",
+           "check_shard", "save_npz", "shard_name"]
+
+FORMAT = "posture_id-dataset"
+#: 2: the simulation options are nested under "simulation" in the configuration.
+FORMAT_VERSION = 2
+
+
+@dataclass
+class Dataset:
+    """A data-set directory (read side). Use :meth:`open`."""
+
+    path: Path
+    manifest: dict = field(repr=False)
+
+    @classmethod
+    def open(cls, path: str | Path, verify: bool = True) -> Dataset:
+        """Open a finished data set; with ``verify``, check every shard's SHA-256."""
+        path = Path(path)
+        manifest = read_manifest(path)
+        if manifest is None:
+            raise DatasetError(f"{path}: not a data set (no manifest.json)")
+        if not manifest.get("complete"):
+            raise DatasetError(f"{path}: generation did not finish; run the same command again")
+        data = cls(path, manifest)
+        if verify:
+            data.verify()
+        return data
+
+    def verify(self) -> None:
+        for entry in self.manifest["shards"]:
+            check_shard(self.path, entry)
+
+    @property
+    def shards(self) -> list[dict]:
+        return self.manifest["shards"]
+
+    @property
+    def n_segments(self) -> int:
+        return self.manifest["body"]["n_segments"]
+
+    def load_shard(self, k: int) -> dict[str, np.ndarray]:
+        """Arrays of shard k; the kept-trial arrays cut to the trials the set uses."""
+        entry = self.shards[k]
+        with np.load(self.path / entry["file"], allow_pickle=False) as npz:
+            arrays = {key: npz[key] for key in npz.files}
+        used = entry["used"]
+        for key in ("theta", "alpha_bs", "modular", "monolithic", "targets"):
+            arrays[key] = arrays[key][:used]
+        return arrays
+
+    def iter_shards(self) -> Iterator[dict[str, np.ndarray]]:
+        for k in range(len(self.shards)):
+            yield self.load_shard(k)
+
+    def split(self) -> dict[str, np.ndarray]:
+        """Trial indices (into the kept, used trials in shard order) per set."""
+        with np.load(self.path / "split.npz", allow_pickle=False) as npz:
+            return {key: npz[key] for key in ("train", "validation", "test")}
+
+    def stats(self) -> dict[str, np.ndarray]:
+        with np.load(self.path / "stats.npz", allow_pickle=False) as npz:
+            return {key: npz[key] for key in npz.files}
+
+    def to_dict(self) -> dict:
+        """The manifest (configuration, provenance, counts, split, shards)."""
+        return dict(self.manifest)
+
+    def summary(self) -> str:
+        """One line: trials used, kept and rejected, shards, body and split."""
+        m = self.manifest
+        c = m["counts"]
+        s = m["split"]
+        return (
+            f"{self.path}: {c['used']} trials used ({c['kept']} kept of {c['simulated']} "
+            f"simulated, {c['rejection_rate']:.1%} rejected) in {len(m['shards'])} shards; body "
+            f"{m['body']['name']} ({m['body']['n_segments']} segments); split by trial: "
+            + ", ".join(f"{k} {s[k]['trials']} trials = {s[k]['modular_samples']} modular "
+                        "samples" for k in ("train", "validation", "test"))
+        )
+
+    def overview(self) -> dict[str, np.ndarray]:
+        """What the paper's Fig. 2 shows, gathered over all shards.
+
+        Returns: ``kp_normalised`` (K, N) K̃p of the used trials; ``max_sway_deg`` (S,) and
+        ``kept`` (S,) bool of every simulated trial; ``modular`` (N, 3, 51, 51) and
+        ``monolithic`` (2N−1, 51, 51) images of the first used trial.
+        """
+        kp, sway, kept = [], [], []
+        first: dict[str, np.ndarray] = {}
+        for arrays in self.iter_shards():
+            kp.append(arrays["targets"][:, :, 0])
+            sway.append(arrays["max_sway_deg"])
+            kept.append(arrays["kept"])
+            if not first and len(arrays["targets"]):
+                first = {"modular": arrays["modular"][0], "monolithic": arrays["monolithic"][0]}
+        return {"kp_normalised": np.concatenate(kp), "max_sway_deg": np.concatenate(sway),
+                "kept": np.concatenate(kept), **first}
+
+    def plot(self, folder: str | Path | None = None) -> tuple[Path, Path]:
+        """Write ``dataset_overview.png`` (Fig. 2 analogue) and ``dataset_images.png`` (one
+        trial's images) into ``folder`` (default: the data-set directory)."""
+        folder = Path(folder) if folder is not None else self.path
+        data = self.overview()
+        joints = self.manifest["body"]["joints"]
+        limit = self.manifest["options"]["sway_limit_deg"]
+        overview = folder / "dataset_overview.png"
+        images = folder / "dataset_images.png"
+        plot_dataset_overview(data["kp_normalised"], joints, data["max_sway_deg"],
+                              data["kept"], limit, path=overview)
+        plot_images(data["modular"], data["monolithic"], joints, path=images)
+        return overview, images
+
+
+def read_manifest(path: Path) -> dict | None:
+    file = path / "manifest.json"
+    if not file.exists():
+        return None
+    try:
+        manifest = json.loads(file.read_text())
+    except json.JSONDecodeError as exc:
+        raise DatasetError(f"{file}: not valid JSON ({exc})") from None
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+        raise DatasetError(f"{file}: not a posture_id data-set manifest")
+    if manifest.get("format_version") != FORMAT_VERSION:
+        raise DatasetError(
+            f"{file}: data-set format version {manifest.get('format_version')!r}; this "
+            f"posture_id reads version {FORMAT_VERSION}: generate the set again"
+        )
+    return manifest
+
+
+def check_shard(path: Path, entry: dict) -> None:
+    file = path / entry["file"]
+    if not file.exists():
+        raise DatasetError(f"{file}: shard listed in the manifest is missing")
+    if file_sha256(file) != entry["sha256"]:
+        raise DatasetError(
+            f"{file}: shard is corrupt or truncated (SHA-256 differs from the manifest); "
+            "delete it and run the same command again to regenerate it"
+        )
+
+
+def write_manifest(path: Path, manifest: dict) -> None:
+    atomic_write_text(path / "manifest.json", json.dumps(manifest, indent=2) + "\n")
+
+
+def save_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:
+    atomic_write(path, lambda tmp: _savez_to(tmp, arrays))
+
+
+def _savez_to(tmp: Path, arrays: dict[str, np.ndarray]) -> None:
+    with open(tmp, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def shard_name(k: int) -> str:
+    return f"shard-{k:05d}.npz"

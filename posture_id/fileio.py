@@ -1,0 +1,107 @@
+"""Files: atomic writes (a file is either absent or complete, never half written), SHA-256,
+and the one reader of numeric CSV files."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import math
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["atomic_write", "atomic_write_text", "file_sha256", "read_numeric_csv"]
+
+
+def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
+    """Call ``write(tmp)`` on a temporary file beside ``path``, then rename it over ``path``.
+
+    The parent directory is created if needed. If ``write`` raises, ``path`` is untouched.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        write(tmp_path)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp_path, 0o666 & ~umask)  # mkstemp makes 0600; give the usual mode
+        os.replace(tmp_path, path)
+    finally:
+        if tmp_path.exists():
+            tmp_path.unlink()
+    return path
+
+
+def atomic_write_text(path: Path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically."""
+    return atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+
+
+def file_sha256(path: Path) -> str:
+    """Hex SHA-256 of a file's bytes (read in 4 MiB blocks)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 22), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def read_numeric_csv(path: str | Path, error: type[Exception], what: str
+                     ) -> tuple[list[str], np.ndarray]:
+    """Read a CSV file of numbers with one header line: the one reader for every numeric
+    file posture_id takes (tilt profiles, recordings).
+
+    Rules: UTF-8 (a byte-order mark is ignored); blank lines are skipped; every row has as
+    many fields as the header; every cell is a finite number; at least one data row.
+
+    Args:
+        path: the file. error: the exception class to raise (a ``PostureIdError``).
+        what: what the file should be, for messages ("tilt file", "recording").
+    Returns:
+        (header names stripped of spaces, values (rows, columns) float64).
+    Raises:
+        error: one line naming the file, the line and column, and the problem.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise error(f"{path}: no such {what}") from None
+    except IsADirectoryError:
+        raise error(f"{path}: is a directory, expected a {what} (CSV)") from None
+    except UnicodeDecodeError as exc:
+        raise error(f"{path}: not UTF-8 text (byte {exc.start}); save the {what} as UTF-8 "
+                    "CSV") from None
+    except OSError as exc:
+        raise error(f"{path}: cannot be read ({exc.strerror})") from None
+    numbered = [(n, row) for n, row in enumerate(csv.reader(io.StringIO(text)), start=1) if row]
+    if not numbered:
+        raise error(f"{path}: empty file, expected a {what}")
+    header = [h.strip() for h in numbered[0][1]]
+    values = np.empty((len(numbered) - 1, len(header)))
+    for k, (line, row) in enumerate(numbered[1:]):
+        if len(row) != len(header):
+            raise error(f"{path}: line {line}: {len(row)} fields, the header has {len(header)}")
+        for c, cell in enumerate(row):
+            try:
+                x = float(cell)
+            except ValueError:
+                raise error(
+                    f"{path}: line {line}, column '{header[c]}': not a number ({cell!r})"
+                ) from None
+            if not math.isfinite(x):
+                raise error(
+                    f"{path}: line {line}, column '{header[c]}': {cell.strip()} is not a finite "
+                    "number"
+                )
+            values[k, c] = x
+    if len(values) == 0:
+        raise error(f"{path}: a header and no data rows")
+    return header, values

@@ -1,0 +1,142 @@
+"""Residuals and Jacobians of one fit, and one bounded least-squares stage.
+
+Two evaluators of the same model: :class:`ExactEvaluator` (CasADi, exact forward-mode
+derivatives, smoothed dead-band) and :class:`SimulatorEvaluator` (the fast batch
+simulator with forward differences: a cheap warm start). Residuals are simulated minus
+recorded segment angles in degrees, sample-major (S·N,).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from posture_id.bodies.body import Body
+from posture_id.dec.parameters import DecParameters, denormalise_arrays
+from posture_id.fitting.problem import FitProblem
+from posture_id.fitting.result import StageResult
+from posture_id.fitting.unknowns import targets_from_qs
+from posture_id.progress import Progress, report
+from posture_id.simulation.batch import simulate_batch
+from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG, SimulationOptions
+from posture_id.simulation.stimulus import TiltProfile
+
+__all__ = ["Evaluator", "ExactEvaluator", "SimulatorEvaluator", "run_stage"]
+
+_DEG = 180.0 / math.pi
+
+
+class Evaluator:
+    """Residuals (deg) and Jacobians of simulated minus measured sway (S, N) rad."""
+
+    def __init__(self, measured: np.ndarray) -> None:
+        self.measured = measured
+
+    def simulate(self, q: np.ndarray) -> np.ndarray:  # (S, N) rad
+        raise NotImplementedError
+
+    def residual(self, q: np.ndarray) -> np.ndarray:
+        return (self.simulate(q) - self.measured).ravel() * _DEG
+
+    def jacobian(self, q: np.ndarray, free: list[int], residual: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+
+class ExactEvaluator(Evaluator):
+    """The compiled CasADi problem: exact derivatives."""
+
+    def __init__(self, problem: FitProblem, u: np.ndarray, measured: np.ndarray) -> None:
+        super().__init__(measured)
+        self.problem = problem
+        self.u = u
+
+    def simulate(self, q):
+        return self.problem.simulate(q, self.u)
+
+    def jacobian(self, q, free, residual):
+        return self.problem.jacobian(q, self.u, list(free)) * _DEG
+
+
+class SimulatorEvaluator(Evaluator):
+    """The same model stepped by the fast batch simulator; Jacobians by forward
+    differences, every perturbed parameter set a lane of one batch. Cheap and accurate to
+    ~1e-6: a warm start for the exact stage."""
+
+    STEP = 1e-6
+
+    def __init__(self, body: Body, defaults: DecParameters, stimulus: TiltProfile,
+                 simulation: SimulationOptions, measured: np.ndarray) -> None:
+        super().__init__(measured)
+        self.body = body
+        self.stimulus = stimulus
+        # a trial that falls is held at the limit (a large, finite residual), never aborted
+        # before it: the widest limit the kernel allows
+        self.options = SimulationOptions(
+            dt=simulation.dt, sample_rate_hz=simulation.sample_rate_hz,
+            deadband_rad_s=simulation.deadband_rad_s, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
+        self.n = body.n_segments
+        self.defaults = defaults
+        self.limit = math.radians(MAX_SWAY_LIMIT_DEG)
+
+    def _simulate_many(self, qs: np.ndarray) -> np.ndarray:
+        params = denormalise_arrays(targets_from_qs(qs), self.defaults)
+        batch = simulate_batch(self.body, params, self.stimulus, self.options, workers=1)
+        theta = batch.theta[:, : len(self.measured)]
+        return np.where(np.isnan(theta), self.limit, theta)
+
+    def simulate(self, q):
+        return self._simulate_many(q[None])[0]
+
+    def jacobian(self, q, free, residual):
+        free = np.asarray(free)
+        rows = np.arange(len(free))
+        qs = np.repeat(q[None], len(free), axis=0)
+        qs[rows, free] += self.STEP
+        # a relaxed class at +1 is stepped downwards, inside its bounds
+        over = (qs[rows, free] > 1.0) & (free >= 4 * self.n)
+        qs[rows[over], free[over]] -= 2 * self.STEP
+        steps = np.where(over, -self.STEP, self.STEP)
+        theta = self._simulate_many(qs)
+        r = (theta - self.measured[None]).reshape(len(free), -1) * _DEG
+        return ((r - residual[None]) / steps[:, None]).T
+
+
+def run_stage(name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
+              lower: np.ndarray, upper: np.ndarray, tolerance: float, max_iterations: int,
+              progress: Progress | None = None) -> StageResult:
+    """One bounded trust-region least-squares stage over the ``free`` entries of q (5N,).
+
+    ``lower``/``upper`` are (5N,) bounds; entries not free keep their q0 values.
+    """
+    free = list(free)
+    cache: dict = {}
+    jacobians = [0]
+
+    def full(x):
+        q = q0.copy()
+        q[free] = x
+        return q
+
+    def residual(x):
+        r = evaluator.residual(full(x))
+        cache["x"], cache["r"] = x.copy(), r
+        return r
+
+    def jacobian(x):
+        jacobians[0] += 1
+        r = cache["r"] if np.array_equal(cache.get("x"), x) else residual(x)
+        if jacobians[0] % 5 == 1:
+            report(progress, jacobians[0], None, "iteration",
+                   f"{name}: iteration {jacobians[0]}, RMS "
+                   f"{math.sqrt(float(r @ r) / len(r)):.6f}°")
+        return evaluator.jacobian(full(x), free, r)
+
+    sol = least_squares(residual, np.clip(q0[free], lower[free], upper[free]), jac=jacobian,
+                        bounds=(lower[free], upper[free]), method="trf", x_scale="jac",
+                        ftol=tolerance, xtol=tolerance, gtol=tolerance,
+                        max_nfev=max_iterations)
+    return StageResult(name=name, q=full(sol.x), cost=float(sol.cost), status=int(sol.status),
+                       converged=bool(sol.status > 0), iterations=int(sol.njev),
+                       evaluations=int(sol.nfev), jacobian=sol.jac, residual=sol.fun)

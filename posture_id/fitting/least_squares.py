@@ -1,0 +1,210 @@
+"""Identify DEC parameters from one recording by nonlinear least squares (CasADi).
+
+The iterative baseline the CNN is benchmarked against, and a refiner for the CNN's
+answer. The model is :mod:`posture_id.fitting.symbolic` (the same plant, controller and
+integrator as the fast simulator); the recorded tilt is the stimulus; the residual is
+simulated minus recorded segment angles (degrees) at every sample.
+
+Unknowns per module, scaled to O(1) as in MODEL §3 (p̃ = p/p_default − 1): K̃p, K̃i, K̃d,
+Δ̃ (continuous; the delay is interpolated in the buffer) within bounds; and the class C,
+found by the strategy in ``FitOptions.classes``:
+
+- :class:`~.options.RelaxedClasses` (default): C is relaxed to c ∈ [−1, 1] (the
+  controlled variable is (1+c)/2·x_COM + (1−c)/2·x_joint, exact at ±1) and fitted with the
+  rest; then C = sign(c) and the continuous parameters are refitted with C fixed. One
+  relaxed fit and one polish instead of 2^N fits (``benchmarks/fit.py`` measures its
+  class accuracy);
+- :class:`~.options.ExhaustiveClasses`: every one of the 2^N class combinations is
+  fitted, the best kept;
+- :class:`~.options.FixedClasses`: the classes of the initial guess are kept.
+
+Derivatives are exact (CasADi forward mode), evaluated in parallel threads; the functions
+are compiled to C and cached (:mod:`.build`, :mod:`.problem`). Inside the exact stages
+only, the tilt estimator's dead-band is smoothed (softplus of width
+``smooth_deadband_rad_s``). Standard errors come from the Gauss-Newton approximation
+σ²(JᵀJ)⁻¹ with σ the residual RMS, floored at ``noise_floor_deg``; a parameter whose 95 %
+interval is wider than ±``precision_rel`` of its value is flagged as poorly determined.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+
+import numpy as np
+
+from posture_id.bodies.body import Body
+from posture_id.dec.parameters import (
+    TARGET_FIELDS,
+    DecParameters,
+    denormalise,
+    normalise,
+)
+from posture_id.dec.prior import relative_factors
+from posture_id.errors import RecordingError
+from posture_id.fitting.evaluators import ExactEvaluator, SimulatorEvaluator, run_stage
+from posture_id.fitting.options import (
+    ExhaustiveClasses,
+    FitOptions,
+    RelaxedClasses,
+)
+from posture_id.fitting.prepare import prepare_recording
+from posture_id.fitting.problem import FitProblem
+from posture_id.fitting.result import FitResult, StageResult, class_names
+from posture_id.fitting.symbolic import step_inputs
+from posture_id.fitting.unknowns import q_from_targets, targets_from_q
+from posture_id.progress import Progress, report
+from posture_id.provenance import provenance
+from posture_id.recording import Recording
+from posture_id.simulation.stimulus import recognise_prts, tilt_from_array
+
+__all__ = ["fit_recording"]
+
+
+def fit_recording(
+    recording: Recording,
+    body: Body,
+    init: DecParameters | None = None,
+    options: FitOptions | None = None,
+    progress: Progress | None = None,
+    source: str = "recording",
+    problem: FitProblem | None = None,
+) -> FitResult:
+    """Fit every module's Kp, Ki, Kd, Δ and class to one recording.
+
+    Args:
+        recording: tilt and segment angles in space (segments must be the body's).
+        body: the body. init: initial guess (default: the body's defaults).
+        options: see :class:`~.options.FitOptions`. progress: told each stage's status.
+        source: the recording's name in messages.
+        problem: a :class:`~.problem.FitProblem` to reuse (default: the cached one for
+            this body, recording length and options).
+    """
+    options = options or FitOptions()
+    if tuple(recording.segments) != body.segment_names:
+        raise RecordingError(
+            f"{source}: segment columns {','.join(recording.segments)} do not match the body's "
+            f"segments {','.join(body.segment_names)}"
+        )
+
+    def say(message: str) -> None:
+        report(progress, 0, None, "message", message)
+
+    start = time.perf_counter()
+    recording, notices = prepare_recording(recording, source, options)
+    for notice in notices:
+        say(notice)
+    n = body.n_segments
+    n_samples = len(recording.time)
+    if problem is None:
+        problem = FitProblem.get(body, n_samples, options, notify=say)
+    elif problem.key.n_samples != n_samples or problem.key.body != body:
+        raise ValueError("the given FitProblem was built for another body or recording length")
+    if not problem.backend.compiled:
+        notices.append(f"CasADi runs in its virtual machine ({problem.backend.reason}): slower")
+    stim = recognise_prts(recording.time, recording.tilt)
+    if stim is not None:
+        notices.append(f"{source}: the tilt is a {stim.description}; the exact profile is "
+                       "used (samples miss its corners)")
+    else:
+        stim = tilt_from_array(recording.time, recording.tilt, description=source)
+        notices.append(f"{source}: the tilt is not a PRTS; it is interpolated linearly "
+                       "between samples")
+    sim = options.simulation
+    tilt, tilt_vel = stim.on_grid(sim.dt, problem.n_steps_u)
+    u = step_inputs(tilt, tilt_vel, problem.n_steps_u)
+    measured = recording.theta
+    defaults = problem.defaults
+    guess = q_from_targets(normalise(init or defaults, defaults))
+    lower, upper = _bounds(options, n)
+    guess[: 4 * n] = np.clip(guess[: 4 * n], lower[: 4 * n], upper[: 4 * n])
+    continuous = list(range(4 * n))
+    everything = list(range(5 * n))
+    exact = ExactEvaluator(problem, u, measured)
+    warm = SimulatorEvaluator(body, defaults, stim, sim, measured)
+    first_evaluator, first_tolerance, first_limit = (
+        (warm, options.warm_tolerance, options.max_iterations) if options.warm_start
+        else (exact, options.tolerance, options.max_iterations))
+    stages: list[StageResult] = []
+
+    def stage(name, evaluator, q0, free, tolerance, limit) -> StageResult:
+        result = run_stage(name, evaluator, q0, free, lower, upper, tolerance, limit, progress)
+        stages.append(result)
+        return result
+
+    suffix = " (simulator)" if options.warm_start else ""
+    if isinstance(options.classes, RelaxedClasses):
+        # the guess (classes half-way to their values), then draws of the MODEL §5 prior
+        rng = np.random.default_rng(options.classes.seed)
+        starts = [np.concatenate([guess[: 4 * n], 0.5 * guess[4 * n :]])]
+        for _ in range(options.classes.starts - 1):
+            draw = relative_factors(rng, 4 * n) - 1
+            starts.append(np.concatenate([np.clip(draw, lower[: 4 * n], upper[: 4 * n]),
+                                          np.zeros(n)]))
+        tries = []
+        for k, q0 in enumerate(starts):
+            label = "relaxed classes" + (f", start {k + 1}/{len(starts)}" if k else "")
+            tries.append(stage(label + suffix, first_evaluator, q0, everything,
+                               first_tolerance, first_limit))
+        best_relaxed = min(tries, key=lambda t: t.cost)
+        signs = np.where(best_relaxed.q[4 * n :] >= 0, 1.0, -1.0)
+        say(f"classes from the relaxed fit: {class_names(signs)}")
+        start_q = np.concatenate([np.clip(best_relaxed.q[: 4 * n], lower[: 4 * n],
+                                          upper[: 4 * n]), signs])
+    else:
+        combos = (itertools.product((1.0, -1.0), repeat=n)
+                  if isinstance(options.classes, ExhaustiveClasses) else [guess[4 * n :]])
+        candidates = []
+        for combo in combos:
+            q0 = np.concatenate([guess[: 4 * n], combo])
+            candidates.append(stage(f"classes {class_names(combo)}{suffix}", first_evaluator,
+                                    q0, continuous, first_tolerance, first_limit))
+        start_q = min(candidates, key=lambda s: s.cost).q
+    best = stage("polish (exact derivatives)", exact, start_q, continuous, options.tolerance,
+                 options.polish_iterations if options.warm_start else options.max_iterations)
+
+    normalised = targets_from_q(best.q)
+    params = denormalise(normalised, defaults)
+    se_norm, se_phys, poorly = _standard_errors(best, params, defaults, options, n)
+    fitted = problem.simulate(best.q, u)
+    return FitResult(
+        parameters=params, normalised=normalised, standard_errors=se_phys,
+        standard_errors_normalised=se_norm, poorly_determined=poorly,
+        converged=best.converged, iterations=sum(s.iterations for s in stages),
+        evaluations=sum(s.evaluations for s in stages),
+        wall_time_s=time.perf_counter() - start, cost=best.cost,
+        rms_deg=math.sqrt(2 * best.cost / len(best.residual)), stages=tuple(stages),
+        backend=str(problem.backend), notices=tuple(notices), time=recording.time,
+        recorded=measured, fitted=fitted, segments=body.segment_names,
+        joints=body.joint_names, provenance=provenance(options, body, source=source),
+    )
+
+
+def _standard_errors(best: StageResult, params: DecParameters, defaults: DecParameters,
+                     options: FitOptions, n: int):
+    """Gauss-Newton standard errors (N, 4) normalised and physical, and the flags."""
+    jac = best.jacobian
+    r = best.residual
+    dof = max(len(r) - jac.shape[1], 1)
+    sigma = max(math.sqrt(float(r @ r) / dof), options.noise_floor_deg)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        try:
+            cov = sigma**2 * np.linalg.inv(jac.T @ jac)
+            se_z = np.sqrt(np.clip(np.diag(cov), 0, None))
+        except np.linalg.LinAlgError:
+            se_z = np.full(jac.shape[1], np.inf)
+    se_norm = se_z.reshape(4, n).T
+    default_values = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
+    se_phys = se_norm * default_values
+    values = np.column_stack([params.array(f) for f in TARGET_FIELDS])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        poorly = ~(1.96 * se_phys <= options.precision_rel * np.abs(values))
+    return se_norm, se_phys, poorly
+
+
+def _bounds(options: FitOptions, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(5N,) lower and upper bounds of q: gains, delays, classes in [−1, 1]."""
+    lo = [options.gain_bounds[0]] * 3 * n + [options.delay_bounds[0]] * n + [-1.0] * n
+    hi = [options.gain_bounds[1]] * 3 * n + [options.delay_bounds[1]] * n + [1.0] * n
+    return np.array(lo), np.array(hi)

@@ -1,0 +1,158 @@
+"""Results of a least-squares fit: each stage, and the whole fit with its provenance."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
+from posture_id.fileio import atomic_write_text
+from posture_id.plotting import plot_fit
+
+__all__ = ["StageResult", "FitResult", "class_names"]
+
+
+def class_names(signs) -> str:
+    """"com/joint/com" from class values (≥ 0 is COM in space)."""
+    return "/".join("com" if s >= 0 else "joint" for s in signs)
+
+
+@dataclass(frozen=True)
+class StageResult:
+    """One bounded least-squares stage.
+
+    Attributes:
+        name: what the stage did. q: (5N,) unknowns at its end (see
+            :mod:`posture_id.fitting.unknowns`). cost: ½Σr² (deg²). status: scipy's.
+        converged: met its tolerance. iterations: Jacobian evaluations. evaluations:
+            residual evaluations. jacobian: (S·N, free) at the end (deg per unit).
+        residual: (S·N,) deg.
+    """
+
+    name: str
+    q: np.ndarray = field(repr=False)
+    cost: float
+    status: int
+    converged: bool
+    iterations: int
+    evaluations: int
+    jacobian: np.ndarray = field(repr=False)
+    residual: np.ndarray = field(repr=False)
+
+    @property
+    def classes(self) -> str:
+        n = len(self.q) // 5
+        return class_names(np.sign(self.q[4 * n :]))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "cost": self.cost, "status": self.status,
+                "converged": self.converged, "iterations": self.iterations,
+                "evaluations": self.evaluations, "classes": self.classes}
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """The identified parameters and how the fit went.
+
+    Attributes:
+        parameters: physical units. normalised: (N, 5) [K̃p, K̃i, K̃d, Δ̃, C].
+        standard_errors: (N, 4) SE of Kp, Ki, Kd, Δ in physical units;
+        standard_errors_normalised: (N, 4) the same relative to the defaults.
+        poorly_determined: (N, 4) bool. converged: the last stage met its tolerance.
+        iterations: Jacobian evaluations in all. evaluations: residual evaluations.
+        wall_time_s: s. cost: ½Σr² (deg²). rms_deg: residual RMS.
+        stages: every stage. backend: how CasADi ran. notices: things to know.
+        time (S,) s, recorded and fitted (S, N) rad; segments, joints: names.
+        provenance: package version, options and the body's identity.
+    """
+
+    parameters: DecParameters
+    normalised: np.ndarray
+    standard_errors: np.ndarray
+    standard_errors_normalised: np.ndarray
+    poorly_determined: np.ndarray
+    converged: bool
+    iterations: int
+    evaluations: int
+    wall_time_s: float
+    cost: float
+    rms_deg: float
+    stages: tuple[StageResult, ...]
+    backend: str
+    notices: tuple[str, ...]
+    time: np.ndarray = field(repr=False)
+    recorded: np.ndarray = field(repr=False)
+    fitted: np.ndarray = field(repr=False)
+    segments: tuple[str, ...] = ()
+    joints: tuple[str, ...] = ()
+    provenance: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def classes(self) -> tuple[str, ...]:
+        return tuple(self.parameters[j].controls for j in self.joints)
+
+    def to_dict(self) -> dict:
+        fields = TARGET_FIELDS
+        return {
+            "parameters": self.parameters.to_dict(),
+            "normalised": {j: dict(zip((*fields, "class"), map(float, row), strict=True))
+                           for j, row in zip(self.joints, self.normalised, strict=True)},
+            "standard_errors": {j: dict(zip(fields, map(_finite, row), strict=True))
+                                for j, row in zip(self.joints, self.standard_errors,
+                                                  strict=True)},
+            "poorly_determined": {j: [f for f, bad in zip(fields, row, strict=True) if bad]
+                                  for j, row in zip(self.joints, self.poorly_determined,
+                                                    strict=True)},
+            "status": {
+                "converged": self.converged, "iterations": self.iterations,
+                "evaluations": self.evaluations, "wall_time_s": self.wall_time_s,
+                "cost_deg2": self.cost, "rms_deg": self.rms_deg, "backend": self.backend,
+                "stages": [s.to_dict() for s in self.stages],
+            },
+            "notices": list(self.notices),
+            "provenance": self.provenance,
+        }
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """JSON text (strict: no NaN or Infinity); written atomically to ``path`` if given."""
+        text = json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+        if path is not None:
+            atomic_write_text(Path(path), text)
+        return text
+
+    def summary(self) -> str:
+        """A printable table: values ± standard errors, flags, classes and the outcome."""
+        lines = [
+            f"{'module':<8}{'Kp':>11}{'Ki':>11}{'Kd':>11}{'Δ s':>11}  controls   "
+            "(± standard error; * poorly determined)"
+        ]
+        for i, joint in enumerate(self.joints):
+            m = self.parameters[joint]
+            cells = []
+            for k, (value, digits) in enumerate(
+                ((m.kp, 2), (m.ki, 3), (m.kd, 3), (m.delay_s, 4))
+            ):
+                flag = "*" if self.poorly_determined[i, k] else " "
+                cells.append(f"{value:>10.{digits}f}{flag}")
+            lines.append(f"{joint:<8}{''.join(cells)}  {m.controls}")
+            errs = "".join(f"{'±' + format(e, '.3g'):>11}" for e in self.standard_errors[i])
+            lines.append(f"{'':<8}{errs}")
+        status = "converged" if self.converged else "NOT converged"
+        lines.append(f"{status} in {self.iterations} iterations, {self.wall_time_s:.1f} s, "
+                     f"residual RMS {self.rms_deg:.5f}° ({self.backend})")
+        lines += [f"note: {n}" for n in self.notices]
+        return "\n".join(lines)
+
+    def plot(self, path=None, ax=None):
+        """Recorded versus fitted sway per segment (degrees); saved to ``path`` if given,
+        drawn into ``ax`` (N axes) if given."""
+        return plot_fit(self, path=path, ax=ax)
+
+
+def _finite(x) -> float | None:
+    """A standard error for JSON: None when it is infinite (not determined at all)."""
+    x = float(x)
+    return x if np.isfinite(x) else None

@@ -1,0 +1,239 @@
+"""The plant and the DEC controller in CasADi, built from any :class:`~posture_id.bodies.body.Body`.
+
+The PyPI ``pin`` wheel has no ``pinocchio.casadi``, so the planar chain's dynamics are
+written here from the body's masses, lengths, COMs and inertias, through the same
+constants as the compiled simulator (coupling D and gravity levers S, docs/model.md):
+
+    M_jk = Re(D_jk e^{i(θ_j−θ_k)}) + δ_jk I_j,  c_j = Σ_k θ̇_k² Im(D_jk e^{i(θ_j−θ_k)}),
+    G_j = −g Im(e^{iθ_j} S_j),  M θ̈ = Q − c − G.
+
+:func:`step_function` is one 2 ms step (controller from the state at the start of the
+step, semi-implicit Euler), the same integrator as the fast simulator;
+:func:`rollout_function` rolls it over a trial and returns the 50 Hz samples.
+
+The delay buffer is a shift register of the last P servo commands per module (P covers
+the largest delay allowed); the delayed command is Σ_k w_k u_{n−k} with hat weights
+w_k = max(0, 1 − |Δ/dt − k|), i.e. linear interpolation, continuous in Δ. For the fit the
+class C may be relaxed to c ∈ [−1, 1] (x = (1+c)/2·x_COM + (1−c)/2·x_joint; exact at ±1)
+and the dead-band smoothed (softplus, width ``smooth``).
+
+CasADi is imported only by this module and :mod:`posture_id.fitting.least_squares`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from posture_id.bodies.body import Body
+
+__all__ = ["SymbolicModel", "chain_dynamics", "step_function", "rollout_function",
+           "rollout_steps", "delay_weights", "buffer_sizes", "step_inputs"]
+
+
+def _deadband(v, threshold: float, smooth: float):
+    """f_θ(v); with ``smooth`` > 0 a softplus version, differentiable everywhere."""
+    if smooth <= 0:
+        return ca.fmax(v - threshold, 0) + ca.fmin(v + threshold, 0)
+
+    def softplus(z):
+        return smooth * ca.log1p(ca.exp(z / smooth))
+
+    return softplus(v - threshold) - softplus(-v - threshold)
+
+
+def chain_dynamics(body: Body):
+    """CasADi SX function (θ, θ̇, τ) → (θ̈, M, G): the planar chain in segment angles.
+
+    θ, θ̇, τ: (N,) rad, rad/s, N·m (joint torques). M: (N, N), G: (N,) gravity term.
+    """
+    n = body.n_segments
+    theta = ca.SX.sym("theta", n)
+    omega = ca.SX.sym("omega", n)
+    tau = ca.SX.sym("tau", n)
+    acc, mass, grav = _dynamics_expr(body, theta, omega, tau)
+    return ca.Function("chain_dynamics", [theta, omega, tau], [acc, mass, grav],
+                       ["theta", "omega", "tau"], ["acc", "M", "G"])
+
+
+def _dynamics_expr(body: Body, theta, omega, tau):
+    n = body.n_segments
+    d = body.coupling
+    s = body.gravity_lever
+    g = body.gravity
+    inertia = body.inertias
+    cos = [ca.cos(theta[j]) for j in range(n)]
+    sin = [ca.sin(theta[j]) for j in range(n)]
+    mass = ca.SX.zeros(n, n)
+    rhs = []
+    for j in range(n):
+        lever_im = sin[j] * s[j].real + cos[j] * s[j].imag
+        r = tau[j] + g * lever_im - (tau[j + 1] if j + 1 < n else 0)
+        for k in range(n):
+            e_re = cos[j] * cos[k] + sin[j] * sin[k]
+            e_im = sin[j] * cos[k] - cos[j] * sin[k]
+            mass[j, k] = d[j, k].real * e_re - d[j, k].imag * e_im
+            r -= omega[k] ** 2 * (d[j, k].real * e_im + d[j, k].imag * e_re)
+        mass[j, j] += inertia[j]
+        rhs.append(r)
+    rhs = ca.vertcat(*rhs)
+    grav = ca.vertcat(*[-g * (sin[j] * s[j].real + cos[j] * s[j].imag) for j in range(n)])
+    return ca.solve(mass, rhs), mass, grav
+
+
+def step_inputs(tilt: np.ndarray, tilt_vel: np.ndarray, n_steps: int) -> np.ndarray:
+    """(3, n_steps) rollout input [step index, α_FS, α̇_FS] from the tilt on the step grid
+    (arrays of at least ``n_steps`` values are cut; shorter ones padded with the last
+    angle at rest)."""
+    u = np.zeros((3, n_steps))
+    u[0] = np.arange(n_steps)
+    m = min(n_steps, len(tilt))
+    u[1, :m] = tilt[:m]
+    u[1, m:] = tilt[m - 1]
+    u[2, :m] = tilt_vel[:m]
+    return u
+
+
+def buffer_sizes(max_delay_steps: np.ndarray) -> list[int]:
+    """Shift-register length per module for delays up to ``max_delay_steps`` (N,)."""
+    return [int(math.floor(d)) + 2 for d in max_delay_steps]
+
+
+def delay_weights(delay_steps, sizes: list[int]):
+    """Hat weights (Σ P_i,) of every module's buffer for Δ/dt = ``delay_steps`` (N,)."""
+    parts = []
+    for i, size in enumerate(sizes):
+        k = np.arange(size, dtype=float)
+        parts.append(ca.fmax(0, 1 - ca.fabs(delay_steps[i] - k)))
+    return ca.vertcat(*parts)
+
+
+@dataclass(frozen=True)
+class SymbolicModel:
+    """Sizes and layout of the symbolic step for one body.
+
+    State x = [θ (N), θ̇ (N), ∫ε (N), α̂_FS (1), buffers (Σ P_i)]; step input
+    u = [n, α_FS(t), α̇_FS(t)]; parameters p = [Kp, Ki, Kd, Δ/dt, c, Kpas, Bpas] (7N) and
+    buffer weights w (Σ P_i) from :func:`delay_weights`.
+    """
+
+    body: Body
+    sizes: tuple[int, ...]
+    dt: float
+    deadband_rad_s: float
+    smooth: float = 0.0
+
+    @property
+    def n(self) -> int:
+        return self.body.n_segments
+
+    @property
+    def n_state(self) -> int:
+        return 3 * self.n + 1 + sum(self.sizes)
+
+
+def step_function(model: SymbolicModel) -> ca.Function:
+    """One integration step: (x, u, p, w) → x_next (SX, see :class:`SymbolicModel`)."""
+    n = model.n
+    body = model.body
+    dt = model.dt
+    x = ca.SX.sym("x", model.n_state)
+    u = ca.SX.sym("u", 3)
+    p = ca.SX.sym("p", 7 * n)
+    w = ca.SX.sym("w", sum(model.sizes))
+    theta, omega = x[0:n], x[n : 2 * n]
+    integ, est = x[2 * n : 3 * n], x[3 * n]
+    step_n, tilt, tilt_vel = u[0], u[1], u[2]
+    kp, ki, kd = p[0:n], p[n : 2 * n], p[2 * n : 3 * n]
+    delay, cls = p[3 * n : 4 * n], p[4 * n : 5 * n]
+    kpas, bpas = p[5 * n : 6 * n], p[6 * n : 7 * n]
+
+    # COM-above angles and rates from the running sum V_i = Σ_{j≥i} e^{iθ_j} S_j
+    s = body.gravity_lever
+    alpha, alpha_dot, tg, tg_dot = [None] * n, [None] * n, [None] * n, [None] * n
+    v_re = v_im = vd_re = vd_im = 0
+    for i in range(n - 1, -1, -1):
+        c, sn = ca.cos(theta[i]), ca.sin(theta[i])
+        e_re = c * s[i].real - sn * s[i].imag
+        e_im = sn * s[i].real + c * s[i].imag
+        v_re, v_im = v_re + e_re, v_im + e_im
+        vd_re, vd_im = vd_re - omega[i] * e_im, vd_im + omega[i] * e_re
+        r2 = v_re**2 + v_im**2
+        r = ca.sqrt(r2)
+        alpha[i] = ca.atan2(v_im, v_re)
+        alpha_dot[i] = (vd_im * v_re - vd_re * v_im) / r2
+        tg[i] = v_im / r
+        tg_dot[i] = v_re / r * alpha_dot[i]
+
+    # DEC controller (MODEL §2), as in posture_id.simulation.kernel
+    ankle_rate = omega[0] - tilt_vel
+    est_rate = _deadband(omega[0] - ankle_rate, model.deadband_rad_s, model.smooth)
+    beta, beta_rate = est, est_rate
+    below, below_rate = tilt, tilt_vel
+    tau, integ_next, buffers = [], [], []
+    offset = 3 * n + 1
+    w_offset = 0
+    for i in range(n):
+        q = theta[i] - below
+        qd = omega[i] - below_rate
+        x_com = alpha[i] - below + beta
+        xd_com = alpha_dot[i] - below_rate + beta_rate
+        mix = (1 + cls[i]) / 2
+        xi = mix * x_com + (1 - mix) * q
+        xdi = mix * xd_com + (1 - mix) * qd
+        servo = kp[i] * xi + kd[i] * xdi + ki[i] * integ[i]
+        size = model.sizes[i]
+        old = x[offset : offset + size]
+        buf = ca.vertcat(servo, old[: size - 1])
+        elapsed = ca.if_else(step_n - delay[i] >= -1e-9, 1, 0)
+        delayed = elapsed * ca.dot(w[w_offset : w_offset + size], buf)
+        tau.append(-delayed - kp[i] * tg[i] - kd[i] * tg_dot[i] - kpas[i] * q - bpas[i] * qd)
+        integ_next.append(integ[i] + dt * xi)
+        buffers.append(buf)
+        offset += size
+        w_offset += size
+        beta, beta_rate = beta + q, beta_rate + qd
+        below, below_rate = theta[i], omega[i]
+    acc, _, _ = _dynamics_expr(body, theta, omega, ca.vertcat(*tau))
+    omega_next = omega + dt * acc
+    theta_next = theta + dt * omega_next
+    x_next = ca.vertcat(theta_next, omega_next, *integ_next, est + dt * est_rate, *buffers)
+    return ca.Function("dec_step", [x, u, p, w], [x_next], ["x", "u", "p", "w"], ["x_next"])
+
+
+#: Samples per inner block of the rollout (CasADi builds long mapaccums slowly: nest them).
+_INNER = 100
+
+
+def rollout_steps(n_samples: int, sample_every: int) -> int:
+    """Steps the rollout's input u must hold for ``n_samples`` samples: whole inner
+    blocks, so pad the stimulus past the end (those samples are dropped)."""
+    blocks = -(-(n_samples - 1) // _INNER)
+    return blocks * _INNER * sample_every
+
+
+def rollout_function(model: SymbolicModel, n_samples: int, sample_every: int) -> ca.Function:
+    """(u (3, rollout_steps), p (7N,), w) → θ samples (N, S) at t = 0, every·dt, …
+
+    The step is folded ``sample_every`` times per sample, accumulated over blocks of 100
+    samples, and the blocks accumulated over the trial (CasADi ``fold``/``mapaccum``:
+    loops, not an unrolled graph). u holds [step index, α_FS, α̇_FS] per step.
+    """
+    step = step_function(model)
+    per_sample = step.fold(sample_every)
+    inner = per_sample.mapaccum("block", _INNER)
+    x0 = ca.MX.sym("x0", model.n_state)
+    u_block = ca.MX.sym("u", 3, _INNER * sample_every)
+    p = ca.MX.sym("p", 7 * model.n)
+    w = ca.MX.sym("w", sum(model.sizes))
+    states = inner(x0, u_block, p, w)
+    block = ca.Function("block", [x0, u_block, p, w], [states[:, -1], states[: model.n, :]])
+    blocks = -(-(n_samples - 1) // _INNER)
+    trial = block.mapaccum("trial", blocks, [0], [0])
+    u = ca.MX.sym("u", 3, rollout_steps(n_samples, sample_every))
+    _, theta = trial(ca.DM.zeros(model.n_state), u, p, w)
+    theta = ca.horzcat(ca.DM.zeros(model.n, 1), theta[:, : n_samples - 1])
+    return ca.Function("rollout", [u, p, w], [theta], ["u", "p", "w"], ["theta"])

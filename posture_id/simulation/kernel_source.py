@@ -1,0 +1,257 @@
+"""Source of the compiled simulator for one number of segments N (numba).
+
+Not imported as it is: :func:`posture_id.simulation.kernel.kernels` writes a copy with
+``N`` set (the line marked below) into the cache folder and imports that, so every
+segment loop unrolls, every row offset is a compile-time constant, the lane loops
+vectorise (AVX2/AVX-512), and numba's on-disk cache of the copy makes a new process start
+warm. Equations: :mod:`posture_id.simulation.kernel`; layout:
+:mod:`posture_id.simulation.kernel_layout`.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from posture_id.simulation.fastmath import atan2_poly_r, cos_poly, sin_poly
+from posture_id.simulation.kernel_layout import LANES, ParRows, Rows
+
+N = 3  # SEGMENTS: replaced in every generated copy
+
+L = LANES
+R = Rows(N)
+P = ParRows(N)
+TH, OM, INT, AL, ALD = R.theta, R.omega, R.integral, R.alpha, R.alpha_dot
+TG, TGD, COS, SIN, LEV = R.tg, R.tg_dot, R.cos, R.sin, R.lever
+TAU, SERVO, Q, QD, ACC, MASS = R.tau, R.servo, R.q, R.qd, R.acc, R.mass
+EST, ESTR, INSIDE, VSUM = R.estimate, R.estimate_rate, R.inside, R.vsum
+KP, KI, KD, SIGN, KPAS, BPAS = P.kp, P.ki, P.kd, P.sign, P.kpas, P.bpas
+DLY, DCEIL, DFRAC = P.delay, P.delay_ceil, P.delay_frac
+
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def kinematics(w, s_re, s_im, sway_limit):
+    """COM-above angles, gravity terms and the sway-limit flag from θ, θ̇ (all lanes).
+
+    s_re, s_im: (N,) gravity levers S (kg·m); sway_limit: rad.
+    """
+    # segments from the top down, lanes innermost; running sums in rows VSUM..VSUM+3
+    for lane in range(L):
+        w[(VSUM + 0) * L + lane] = 0.0
+        w[(VSUM + 1) * L + lane] = 0.0
+        w[(VSUM + 2) * L + lane] = 0.0
+        w[(VSUM + 3) * L + lane] = 0.0
+        w[INSIDE * L + lane] = 1.0
+    for top_down in range(N):
+        i = N - 1 - top_down
+        sr = s_re[i]
+        si = s_im[i]
+        for lane in range(L):
+            th = w[(TH + i) * L + lane]
+            c = cos_poly(th)
+            s = sin_poly(th)
+            w[(COS + i) * L + lane] = c
+            w[(SIN + i) * L + lane] = s
+            e_re = c * sr - s * si
+            e_im = s * sr + c * si
+            w[(LEV + i) * L + lane] = e_im
+            om = w[(OM + i) * L + lane]
+            v_re = w[(VSUM + 0) * L + lane] + e_re
+            v_im = w[(VSUM + 1) * L + lane] + e_im
+            vd_re = w[(VSUM + 2) * L + lane] - om * e_im
+            vd_im = w[(VSUM + 3) * L + lane] + om * e_re
+            w[(VSUM + 0) * L + lane] = v_re
+            w[(VSUM + 1) * L + lane] = v_im
+            w[(VSUM + 2) * L + lane] = vd_re
+            w[(VSUM + 3) * L + lane] = vd_im
+            r = math.sqrt(v_re * v_re + v_im * v_im)
+            inv_r = 1.0 / r
+            rate = (vd_im * v_re - vd_re * v_im) * (inv_r * inv_r)
+            w[(AL + i) * L + lane] = atan2_poly_r(v_im, v_re, r)
+            w[(ALD + i) * L + lane] = rate
+            w[(TG + i) * L + lane] = v_im * inv_r
+            w[(TGD + i) * L + lane] = v_re * inv_r * rate
+            if not abs(th) <= sway_limit:
+                w[INSIDE * L + lane] = 0.0
+
+@njit(cache=True, error_model="numpy", inline="always")
+def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
+    """DEC joint torques at step n (MODEL §2) into the τ rows; advances ∫ε, α̂_FS and
+    the delay buffers. tilt, tilt_vel: α_FS (rad) and rate at t = n·dt.
+
+    buf: (N·B·L,) ring buffers of B (a power of two) servo commands per module.
+    """
+    n_buf = buf.shape[0] // (N * L)
+    mask = n_buf - 1
+    # phase 1 (vectorised): servo command, integral and tilt-estimate updates
+    for lane in range(L):
+        ankle_rate = w[OM * L + lane] - tilt_vel  # proprioceptive q̇_1
+        v = w[OM * L + lane] - ankle_rate  # vestibular θ̇_1 − q̇_1
+        est_rate = max(v - deadband_rad_s, 0.0) + min(v + deadband_rad_s, 0.0)
+        beta = w[EST * L + lane]
+        beta_rate = est_rate
+        below = tilt
+        below_rate = tilt_vel
+        for i in range(N):
+            th = w[(TH + i) * L + lane]
+            om = w[(OM + i) * L + lane]
+            q = th - below
+            qd = om - below_rate
+            # class C = ±1 selects COM in space or joint angle; a value between
+            # (the fit's relaxed class) mixes them linearly
+            mix = 0.5 + 0.5 * par[(SIGN + i) * L + lane]
+            x = mix * (w[(AL + i) * L + lane] - below + beta) + (1.0 - mix) * q
+            xd = mix * (w[(ALD + i) * L + lane] - below_rate + beta_rate) + (1.0 - mix) * qd
+            integ = w[(INT + i) * L + lane]
+            w[(SERVO + i) * L + lane] = (
+                par[(KP + i) * L + lane] * x
+                + par[(KD + i) * L + lane] * xd
+                + par[(KI + i) * L + lane] * integ
+            )
+            w[(INT + i) * L + lane] = integ + dt * x
+            w[(Q + i) * L + lane] = q
+            w[(QD + i) * L + lane] = qd
+            beta += q
+            beta_rate += qd
+            below = th
+            below_rate = om
+        w[ESTR * L + lane] = est_rate
+        w[EST * L + lane] += dt * est_rate
+    # phase 2: store the command (contiguous, vectorised) ...
+    slot = n & mask
+    for i in range(N):
+        row = i * n_buf + slot
+        for lane in range(L):
+            buf[row * L + lane] = w[(SERVO + i) * L + lane]
+    # ... and read it back Δ later, interpolated (scalar: one gather per lane)
+    for i in range(N):
+        base = i * n_buf * L
+        for lane in range(L):
+            k = n - int(par[(DCEIL + i) * L + lane])
+            u0 = buf[base + (k & mask) * L + lane]
+            u1 = buf[base + ((k + 1) & mask) * L + lane]
+            delayed = u0 + par[(DFRAC + i) * L + lane] * (u1 - u0)
+            w[(TAU + i) * L + lane] = delayed if n >= par[(DLY + i) * L + lane] else 0.0
+    # phase 3 (vectorised): τ = −servo(t − Δ) − PD on T_g (undelayed) − passive
+    for lane in range(L):
+        for i in range(N):
+            kp = par[(KP + i) * L + lane]
+            kd = par[(KD + i) * L + lane]
+            w[(TAU + i) * L + lane] = (
+                -w[(TAU + i) * L + lane]
+                - kp * w[(TG + i) * L + lane]
+                - kd * w[(TGD + i) * L + lane]
+                - par[(KPAS + i) * L + lane] * w[(Q + i) * L + lane]
+                - par[(BPAS + i) * L + lane] * w[(QD + i) * L + lane]
+            )
+
+@njit(cache=True, error_model="numpy", inline="always")
+def dynamics(w, d_re, d_im, inertia, gravity, dt):
+    """θ̈ from M θ̈ = Q − c − G (Cholesky), then one semi-implicit Euler step.
+
+    d_re, d_im: (N, N) coupling D (kg·m²); inertia: (N,) kg·m²; gravity: m/s²; dt: s.
+    """
+    for lane in range(L):
+        for j in range(N):
+            rhs = w[(TAU + j) * L + lane] + gravity * w[(LEV + j) * L + lane]
+            if j + 1 < N:
+                rhs -= w[(TAU + j + 1) * L + lane]
+            w[(ACC + j) * L + lane] = rhs
+            w[(MASS + j * N + j) * L + lane] = d_re[j, j] + inertia[j]
+        for j in range(N):
+            cj = w[(COS + j) * L + lane]
+            sj = w[(SIN + j) * L + lane]
+            oj = w[(OM + j) * L + lane]
+            for k in range(j):
+                ck = w[(COS + k) * L + lane]
+                sk = w[(SIN + k) * L + lane]
+                ok = w[(OM + k) * L + lane]
+                e_re = cj * ck + sj * sk
+                e_im = sj * ck - cj * sk
+                w[(MASS + j * N + k) * L + lane] = d_re[j, k] * e_re - d_im[j, k] * e_im
+                cor = d_re[j, k] * e_im + d_im[j, k] * e_re
+                w[(ACC + j) * L + lane] -= ok * ok * cor
+                w[(ACC + k) * L + lane] += oj * oj * cor
+        # Cholesky M = L Lᵀ (lower triangle), forward and back substitution
+        for j in range(N):
+            s = w[(MASS + j * N + j) * L + lane]
+            for k in range(j):
+                s -= w[(MASS + j * N + k) * L + lane] ** 2
+            djj = math.sqrt(s)
+            w[(MASS + j * N + j) * L + lane] = djj
+            for i in range(j + 1, N):
+                s = w[(MASS + i * N + j) * L + lane]
+                for k in range(j):
+                    s -= w[(MASS + i * N + k) * L + lane] * w[(MASS + j * N + k) * L + lane]
+                w[(MASS + i * N + j) * L + lane] = s / djj
+        for i in range(N):
+            s = w[(ACC + i) * L + lane]
+            for k in range(i):
+                s -= w[(MASS + i * N + k) * L + lane] * w[(ACC + k) * L + lane]
+            w[(ACC + i) * L + lane] = s / w[(MASS + i * N + i) * L + lane]
+        for i in range(N - 1, -1, -1):
+            s = w[(ACC + i) * L + lane]
+            for k in range(i + 1, N):
+                s -= w[(MASS + k * N + i) * L + lane] * w[(ACC + k) * L + lane]
+            w[(ACC + i) * L + lane] = s / w[(MASS + i * N + i) * L + lane]
+        for j in range(N):
+            om = w[(OM + j) * L + lane] + dt * w[(ACC + j) * L + lane]
+            w[(OM + j) * L + lane] = om
+            w[(TH + j) * L + lane] += dt * om
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def simulate_block(w, par, buf, d_re, d_im, inertia, s_re, s_im, gravity, tilt, tilt_vel,
+                   n_steps, dt, sample_every, sway_limit, deadband_rad_s, out_theta,
+                   out_alpha, abort_step, first, count):
+    """Simulate trials ``first .. first+count−1`` of a batch as one block of L lanes.
+
+    w, par, buf: the block's work, parameter and buffer arrays (lanes ≥ count are
+    padding). tilt, tilt_vel: (n_steps + 1,) α_FS (rad) and rate on the step grid.
+    out_theta, out_alpha: (B, S, N) θ and α_S at every ``sample_every``-th step (rad),
+    NaN from an abort on. abort_step: (B,) int64, the step of the abort or −1.
+    Releases the GIL: blocks run in parallel threads.
+    """
+    alive = np.zeros(L, dtype=np.bool_)
+    alive[:count] = True
+    n_alive = count
+    for lane in range(count):
+        abort_step[first + lane] = -1
+    for step in range(n_steps + 1):
+        kinematics(w, s_re, s_im, sway_limit)
+        parked = False
+        for lane in range(L):
+            if w[INSIDE * L + lane] > 0.0:
+                continue
+            if alive[lane]:
+                alive[lane] = False
+                n_alive -= 1
+                if lane < count:
+                    k0 = (step + sample_every - 1) // sample_every
+                    abort_step[first + lane] = step
+                    out_theta[first + lane, k0:] = np.nan
+                    out_alpha[first + lane, k0:] = np.nan
+            # a lane past the limit is parked upright at rest: its numbers stay benign
+            parked = True
+            w[EST * L + lane] = 0.0
+            for j in range(N):
+                w[(TH + j) * L + lane] = 0.0
+                w[(OM + j) * L + lane] = 0.0
+                w[(INT + j) * L + lane] = 0.0
+            for p in range(lane, buf.shape[0], L):
+                buf[p] = 0.0
+        if n_alive == 0:
+            return
+        if parked:
+            kinematics(w, s_re, s_im, sway_limit)
+        if step % sample_every == 0:
+            k = step // sample_every
+            for lane in range(count):
+                if alive[lane]:
+                    for j in range(N):
+                        out_theta[first + lane, k, j] = w[(TH + j) * L + lane]
+                        out_alpha[first + lane, k, j] = w[(AL + j) * L + lane]
+        if step == n_steps:
+            return
+        dec_torques(step, w, par, buf, tilt[step], tilt_vel[step], dt, deadband_rad_s)
+        dynamics(w, d_re, d_im, inertia, gravity, dt)

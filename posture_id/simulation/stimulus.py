@@ -1,0 +1,184 @@
+"""Support-surface tilt α_FS(t): the PRTS of MODEL §4 and user-given profiles.
+
+Every stimulus is a piecewise-linear tilt angle (a :class:`TiltProfile`): the PRTS is a
+sequence of constant tilt *velocities* held for 0.25 s each, so its position is exactly
+piecewise linear; a user profile (array or CSV) is interpolated linearly between samples.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.errors import StimulusError
+from posture_id.fileio import read_numeric_csv
+
+__all__ = [
+    "TiltProfile",
+    "prts_symbols",
+    "prts",
+    "tilt_from_array",
+    "tilt_from_csv",
+    "recognise_prts",
+    "PRTS_REGISTERS",
+]
+
+#: Shift-register definitions (MODEL §4): states per cycle → (feedback, start register).
+PRTS_REGISTERS = {
+    242: ((0, 0, 1, -1, -1), (0, 0, 0, 0, 1)),
+    80: ((0, 0, -1, 1), (0, 0, 0, 1)),
+}
+#: Duration of one PRTS state, s (Peterka 2002).
+PRTS_STATE_S = 0.25
+
+
+@dataclass(frozen=True)
+class TiltProfile:
+    """Piecewise-linear platform tilt.
+
+    Attributes:
+        times: (K,) s, strictly increasing knot times starting at 0.
+        angles: (K,) rad, tilt at the knots (positive = toes down / forward, MODEL §1).
+        description: a short human-readable origin ("PRTS 242 ×2, 1° p-p", a file name).
+    """
+
+    times: np.ndarray
+    angles: np.ndarray
+    description: str = "tilt"
+
+    @property
+    def duration(self) -> float:
+        """s, time of the last knot."""
+        return float(self.times[-1])
+
+    def angle(self, t: np.ndarray | float) -> np.ndarray:
+        """Tilt at times ``t`` (s) → rad, same shape; held constant after the end."""
+        return np.interp(t, self.times, self.angles)
+
+    def velocity(self, t: np.ndarray | float) -> np.ndarray:
+        """Tilt velocity at ``t`` (s) → rad/s: slope of the interval starting at or before t."""
+        slopes = np.diff(self.angles) / np.diff(self.times)
+        idx = np.searchsorted(self.times, np.asarray(t) + 1e-9, side="right") - 1
+        inside = (idx >= 0) & (idx < len(slopes))
+        return np.where(inside, slopes[np.clip(idx, 0, len(slopes) - 1)], 0.0)
+
+    def on_grid(self, dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """Tilt and tilt velocity at t = n·dt, n = 0..n_steps → two (n_steps + 1,) arrays."""
+        t = np.arange(n_steps + 1) * dt
+        return self.angle(t), self.velocity(t)
+
+
+def prts_symbols(states: int = 242) -> np.ndarray:
+    """One cycle of the ternary sequence, (states,) int8 in {−1, 0, +1} (MODEL §4).
+
+    Each state emits x = (feedback · register) mod 3, read as +1, 0, −1 (2 → −1), then
+    shifts the register right with x entering first.
+    """
+    if states not in PRTS_REGISTERS:
+        raise StimulusError(f"PRTS with {states} states is not defined (use 242 or 80)")
+    feedback, start = PRTS_REGISTERS[states]
+    reg = list(start)
+    out = np.empty(states, dtype=np.int8)
+    for k in range(states):
+        x = sum(f * r for f, r in zip(feedback, reg, strict=True)) % 3
+        out[k] = -1 if x == 2 else x
+        reg = [x, *reg[:-1]]
+    return out
+
+
+def prts(
+    amplitude_deg: float = 1.0,
+    cycles: int = 2,
+    states: int = 242,
+    state_s: float = PRTS_STATE_S,
+) -> TiltProfile:
+    """The PRTS tilt: velocity = the ternary sequence, position scaled to a peak-to-peak.
+
+    Args:
+        amplitude_deg: peak-to-peak tilt over a cycle, degrees (default 1° **[decision]**).
+        cycles: number of cycles (default 2: 121 s for 242 states).
+        states: 242 (5 stages, 60.5 s) or 80 (4 stages, 20 s).
+        state_s: s per state.
+    """
+    if not (math.isfinite(amplitude_deg) and amplitude_deg >= 0):
+        raise StimulusError(f"PRTS amplitude must be a finite angle ≥ 0, got {amplitude_deg}")
+    if int(cycles) != cycles or cycles < 1:
+        raise StimulusError(f"PRTS cycles must be a positive integer, got {cycles}")
+    symbols = np.tile(prts_symbols(states).astype(float), int(cycles))
+    steps = np.concatenate([[0.0], np.cumsum(symbols)])
+    one_cycle = steps[: states + 1]
+    scale = math.radians(amplitude_deg) / float(one_cycle.max() - one_cycle.min())
+    times = np.arange(len(steps)) * state_s
+    return TiltProfile(
+        times=times,
+        angles=steps * scale,
+        description=f"PRTS {states} states x{int(cycles)}, {amplitude_deg:g} deg p-p",
+    )
+
+
+def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
+                   tolerance: float = 1e-6) -> TiltProfile | None:
+    """The PRTS a sampled tilt follows, or None.
+
+    Recordings sample the tilt at 50 Hz, which misses the PRTS corners at odd multiples of
+    0.25 s; when the samples are a PRTS (242 or 80 states, any amplitude and sign, within
+    ``tolerance`` of its peak-to-peak), the exact profile is returned instead, extended to
+    whole cycles covering the recording.
+    """
+    t = np.asarray(times_s, dtype=float)
+    a = np.asarray(tilt_rad, dtype=float)
+    for states in (242, 80):
+        cycle = states * PRTS_STATE_S
+        if t[-1] < cycle - 1e-9:
+            continue
+        first = t <= cycle + 1e-9
+        ptp = float(np.ptp(a[first]))
+        if ptp == 0.0:
+            return None
+        cycles = int(math.ceil(t[-1] / cycle - 1e-9))
+        candidate = prts(math.degrees(ptp), cycles, states)
+        sampled = candidate.angle(t)
+        if np.max(np.abs(sampled - a)) <= tolerance * ptp:
+            return candidate
+        if np.max(np.abs(-sampled - a)) <= tolerance * ptp:
+            return TiltProfile(candidate.times, -candidate.angles,
+                               candidate.description + " (negated)")
+    return None
+
+
+def tilt_from_array(times_s, angles_rad, description: str = "array") -> TiltProfile:
+    """A tilt profile from samples: ``times_s`` (K,) s from 0, ``angles_rad`` (K,) rad."""
+    t = np.asarray(times_s, dtype=float)
+    a = np.asarray(angles_rad, dtype=float)
+    if t.ndim != 1 or a.shape != t.shape or len(t) < 2:
+        raise StimulusError(f"{description}: times and angles must be two 1-D arrays of equal "
+                            f"length ≥ 2 (got {t.shape} and {a.shape})")
+    for name, arr in (("time_s", t), ("tilt", a)):
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            raise StimulusError(
+                f"{description}: row {bad[0] + 1}: {name} is not a finite number ({arr[bad[0]]})"
+            )
+    if abs(t[0]) > 1e-9:
+        raise StimulusError(f"{description}: time_s must start at 0, starts at {t[0]}")
+    step = np.flatnonzero(np.diff(t) <= 0)
+    if step.size:
+        raise StimulusError(
+            f"{description}: row {step[0] + 2}: time_s does not increase ({t[step[0] + 1]})"
+        )
+    return TiltProfile(times=t - t[0], angles=a, description=description)
+
+
+def tilt_from_csv(path: str | Path) -> TiltProfile:
+    """Read a tilt profile CSV with columns ``time_s`` and ``tilt_deg`` (degrees at the
+    edge; other columns, such as a recording's segments, are ignored)."""
+    header, values = read_numeric_csv(path, StimulusError, "tilt file")
+    for col in ("time_s", "tilt_deg"):
+        if col not in header:
+            raise StimulusError(f"{path}: column '{col}' is missing (header: {','.join(header)})")
+    times = values[:, header.index("time_s")]
+    angles = np.radians(values[:, header.index("tilt_deg")])
+    return tilt_from_array(times, angles, description=str(path))

@@ -27,8 +27,8 @@ def test_compiled_matches_pinocchio_reference_over_5s(any_body, seed):
     ref = simulate_reference(any_body, params, stim)
     assert fast.stable and ref.stable
     assert np.abs(fast.theta).max() > 1e-3  # the body actually moved
-    np.testing.assert_allclose(fast.theta, ref.theta, rtol=0, atol=1e-6)
-    np.testing.assert_allclose(fast.alpha, ref.alpha, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(fast.theta, ref.theta, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fast.alpha, ref.alpha, rtol=0, atol=1e-12)
 
 
 def test_step_halving_changes_121s_sway_by_under_2_percent(tip):

@@ -17,7 +17,7 @@ w_k = max(0, 1 − |Δ/dt − k|), i.e. linear interpolation, continuous in Δ. 
 class C may be relaxed to c ∈ [−1, 1] (x = (1+c)/2·x_COM + (1−c)/2·x_joint; exact at ±1)
 and the dead-band smoothed (softplus, width ``smooth``).
 
-CasADi is imported only by this module and :mod:`posture_id.fitting.least_squares`.
+Only the :mod:`posture_id.fitting` package imports CasADi (a layer contract).
 """
 
 from __future__ import annotations
@@ -40,7 +40,8 @@ def _deadband(v, threshold: float, smooth: float):
         return ca.fmax(v - threshold, 0) + ca.fmin(v + threshold, 0)
 
     def softplus(z):
-        return smooth * ca.log1p(ca.exp(z / smooth))
+        # w·log(1 + e^{z/w}) written so that e^{…} never overflows (it did past ~0.4°/s)
+        return ca.fmax(z, 0) + smooth * ca.log1p(ca.exp(-ca.fabs(z) / smooth))
 
     return softplus(v - threshold) - softplus(-v - threshold)
 

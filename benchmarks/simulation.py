@@ -50,15 +50,16 @@ def main() -> None:
     args = parser.parse_args()
 
     body = load_body()
-    options = SimulationOptions(workers=args.workers)
+    options = SimulationOptions()
     simulate(body)  # compile or load the kernel
 
     defaults = ParameterArrays.from_parameters([default_parameters(body)] * args.trials)
     batch_default, t_default = timed(
-        lambda: simulate_batch(body, defaults, options=options), args.repeats)
+        lambda: simulate_batch(body, defaults, options=options, workers=args.workers), args.repeats)
     random_params = sample_parameters(body, args.trials, np.random.default_rng(0))
     batch_random, t_random = timed(
-        lambda: simulate_batch(body, random_params, options=options), args.repeats)
+        lambda: simulate_batch(body, random_params, options=options, workers=args.workers),
+        args.repeats)
 
     reference, t_reference = timed(lambda: simulate_reference(body))
     fast_one = batch_default.trial(0)

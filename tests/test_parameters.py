@@ -68,6 +68,7 @@ def _valid(tip):
         (lambda d: d["hip"].__setitem__("delay_s", -0.1), "field 'delay_s' is negative"),
         (lambda d: d.__setitem__("elbow", d["hip"]), "module 'elbow' is not a joint"),
         (lambda d: d["ankle"].__setitem__("controls", "trunk"), "field 'controls'"),
+        (lambda d: d["ankle"].__setitem__("controls", ["com"]), "field 'controls' must be"),
         (lambda d: d["ankle"].pop("kd"), "field 'kd' is missing"),
         (lambda d: d["ankle"].__setitem__("kp", "high"), "field 'kp' must be a number"),
         (lambda d: d["ankle"].__setitem__("gain", 1), "unknown field 'gain'"),
@@ -118,3 +119,10 @@ def test_parameter_arrays_validate_and_round_trip(tip):
         ParameterArrays(**{**arrays.__dict__, "delay_s": bad})
     with pytest.raises(ParameterError, match="must lie in \\[-1, 1\\]"):
         ParameterArrays(**{**arrays.__dict__, "sign": np.full((2, 3), 1.5)})
+
+
+def test_parameters_are_immutable(tip):
+    p = default_parameters(tip)
+    with pytest.raises(TypeError):
+        p.modules["ankle"] = p.modules["knee"]
+    assert hash(p) == hash(default_parameters(tip))

@@ -1,0 +1,141 @@
+"""Cold start: what a new process pays before it does any work.
+
+Run:  .venv/bin/python benchmarks/cold_start.py [--before REV] [--repeats 3]
+
+With every cache already filled (one warm-up run of each), it measures in fresh child
+processes (medians of ``--repeats``):
+  1. the first simulation in a new process (``simulate`` of one 121 s TIP trial, the
+     call alone; import and URDF loading reported beside it);
+  2. ``posture-id simulate`` of one trial, wall time of the whole command;
+  3. ``posture-id fit`` of a 121 s TIP recording, wall time of the whole command, for
+     this checkout and for revision ``--before`` (default: the last commit before the
+     package layout) checked out into a temporary git worktree and run with the same
+     interpreter, side by side in this one run.
+Writes benchmarks/results/cold_start.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from posture_id import __version__
+from posture_id.fileio import atomic_write_text
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The last commit of the flat layout (before the package layout).
+BEFORE = "cc63128"
+
+FIRST_SIMULATION = """
+import time
+t0 = time.perf_counter()
+from posture_id import load_body, simulate
+body = load_body()
+t1 = time.perf_counter()
+simulate(body)
+t2 = time.perf_counter()
+print(t1 - t0, t2 - t1)
+"""
+#: Runs the command line of whichever posture_id is first on sys.path.
+CLI = "import sys; from posture_id.cli import main; sys.exit(main(sys.argv[1:]))"
+
+
+def wall(cmd: list[str], env: dict | None = None) -> float:
+    start = time.perf_counter()
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    elapsed = time.perf_counter() - start
+    if out.returncode not in (0, 1):
+        raise SystemExit(f"{' '.join(cmd)} failed:\n{out.stderr}")
+    return elapsed
+
+
+def median_wall(cmd: list[str], repeats: int, env: dict | None = None) -> float:
+    wall(cmd, env)  # fill the caches
+    return statistics.median(wall(cmd, env) for _ in range(repeats))
+
+
+def first_simulation(repeats: int) -> tuple[float, float]:
+    cmd = [sys.executable, "-c", FIRST_SIMULATION]
+    subprocess.run(cmd, check=True, capture_output=True)  # fill the kernel cache
+    runs = []
+    for _ in range(repeats):
+        out = subprocess.run(cmd, check=True, capture_output=True, text=True)
+        runs.append(tuple(float(x) for x in out.stdout.split()))
+    return (statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--before", default=BEFORE, help="revision to compare the fit with")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--out", type=Path,
+                        default=Path(__file__).parent / "results" / "cold_start.json")
+    args = parser.parse_args()
+
+    import_s, simulate_s = first_simulation(args.repeats)
+    print(f"first simulation in a new process: {simulate_s:.3f} s "
+          f"(import and URDF load before it: {import_s:.3f} s)")
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        cli = [sys.executable, "-c", CLI]
+        sim_s = median_wall([*cli, "simulate", "--out", str(tmp / "trial.csv")], args.repeats)
+        print(f"posture-id simulate, one 121 s trial: {sim_s:.2f} s wall")
+
+        import numpy as np
+
+        from posture_id import load_body, sample_parameters, simulate
+
+        body = load_body()
+        rng = np.random.default_rng(11)
+        while True:
+            truth = sample_parameters(body, 1, rng).trial(0, body.joint_names)
+            trial = simulate(body, truth)
+            if trial.stable:
+                break
+        recording = tmp / "recording.csv"
+        trial.to_csv(recording)
+        fit_args = ["fit", str(recording), "--out", str(tmp / "fit.json")]
+        after_s = median_wall([*cli, *fit_args], args.repeats)
+        print(f"posture-id fit, 121 s TIP recording, this checkout: {after_s:.1f} s wall")
+
+        worktree = tmp / "before"
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(worktree),
+                        args.before], check=True, capture_output=True)
+        try:
+            env = {**os.environ, "PYTHONPATH": str(worktree)}
+            check = subprocess.run([sys.executable, "-c", "import posture_id; "
+                                    "print(posture_id.__file__)"], env=env,
+                                   capture_output=True, text=True, check=True)
+            assert check.stdout.startswith(str(worktree)), check.stdout
+            before_s = median_wall([*cli, *fit_args], args.repeats, env)
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
+                            str(worktree)], check=True, capture_output=True)
+        print(f"posture-id fit, same recording, {args.before}: {before_s:.1f} s wall "
+              f"(this checkout takes {after_s / before_s:.2f}× as long)")
+
+    results = {
+        "package_version": __version__,
+        "machine": {"processor": platform.processor() or platform.machine(),
+                    "cpus": os.cpu_count(), "python": platform.python_version()},
+        "repeats": args.repeats,
+        "first_simulation_s": simulate_s,
+        "import_and_load_s": import_s,
+        "cli_simulate_wall_s": sim_s,
+        "cli_fit_wall_s": {"this_checkout": after_s, args.before: before_s,
+                           "ratio": after_s / before_s},
+    }
+    atomic_write_text(args.out, json.dumps(results, indent=2) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,31 @@
+"""The compiled simulator is cached on disk: a new process loads it instead of compiling."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+CODE = """
+from posture_id import load_body, simulate
+from posture_id.simulation.kernel import kernels
+simulate(load_body())
+stats = kernels(3).simulate_block.stats
+print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
+"""
+
+
+def _run(cache) -> tuple[int, int]:
+    env = {**os.environ, "POSTURE_ID_CACHE": str(cache)}
+    out = subprocess.run([sys.executable, "-c", CODE], capture_output=True, text=True, env=env)
+    assert out.returncode == 0, out.stderr
+    hits, misses = (int(x) for x in out.stdout.split())
+    return hits, misses
+
+
+def test_second_process_loads_the_compiled_kernel(tmp_path):
+    hits, misses = _run(tmp_path)
+    assert misses >= 1 and hits == 0  # an empty cache: compiled, and saved
+    assert any((tmp_path / "kernels").glob("posture_id_kernel_n3_*.py"))
+    hits, misses = _run(tmp_path)
+    assert hits >= 1 and misses == 0  # a new process: loaded, not compiled

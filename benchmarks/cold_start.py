@@ -7,10 +7,10 @@ processes (medians of ``--repeats``):
   1. the first simulation in a new process (``simulate`` of one 121 s TIP trial, the
      call alone; import and URDF loading reported beside it);
   2. ``posture-id simulate`` of one trial, wall time of the whole command;
-  3. ``posture-id fit`` of a 121 s TIP recording, wall time of the whole command, for
-     this checkout and for revision ``--before`` (default: the last commit before the
-     package layout) checked out into a temporary git worktree and run with the same
-     interpreter, side by side in this one run.
+  3. ``posture-id fit`` of a 121 s TIP recording, wall time of the whole command;
+and 2 and 3 again for revision ``--before`` (default: the last commit before the package
+layout), checked out into a temporary git worktree and run with the same interpreter,
+side by side in this one run.
 Writes benchmarks/results/cold_start.json.
 """
 
@@ -44,8 +44,18 @@ simulate(body)
 t2 = time.perf_counter()
 print(t1 - t0, t2 - t1)
 """
-#: Runs the command line of whichever posture_id is first on sys.path.
+#: Runs the command line of this checkout.
 CLI = "import sys; from posture_id.cli import main; sys.exit(main(sys.argv[1:]))"
+#: Runs the command line of the checkout in $POSTURE_ID_BEFORE: the editable install's
+#: import hook is removed first, so that the older tree's modules are the ones imported.
+CLI_BEFORE = (
+    "import os, sys; "
+    "sys.meta_path[:] = [f for f in sys.meta_path "
+    "if '__editable__' not in getattr(f, '__module__', '')]; "
+    "sys.path.insert(0, os.environ['POSTURE_ID_BEFORE']); "
+    "import posture_id; assert posture_id.__file__.startswith(sys.path[0]), posture_id.__file__; "
+    "from posture_id.cli import main; sys.exit(main(sys.argv[1:]))"
+)
 
 
 def wall(cmd: list[str], env: dict | None = None) -> float:
@@ -110,17 +120,18 @@ def main() -> None:
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(worktree),
                         args.before], check=True, capture_output=True)
         try:
-            env = {**os.environ, "PYTHONPATH": str(worktree)}
-            check = subprocess.run([sys.executable, "-c", "import posture_id; "
-                                    "print(posture_id.__file__)"], env=env,
-                                   capture_output=True, text=True, check=True)
-            assert check.stdout.startswith(str(worktree)), check.stdout
-            before_s = median_wall([*cli, *fit_args], args.repeats, env)
+            env = {**os.environ, "POSTURE_ID_BEFORE": str(worktree)}
+            before_s = median_wall([sys.executable, "-c", CLI_BEFORE, *fit_args],
+                                   args.repeats, env)
+            sim_before_s = median_wall([sys.executable, "-c", CLI_BEFORE, "simulate", "--out",
+                                        str(tmp / "trial_before.csv")], args.repeats, env)
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
                             str(worktree)], check=True, capture_output=True)
         print(f"posture-id fit, same recording, {args.before}: {before_s:.1f} s wall "
               f"(this checkout takes {after_s / before_s:.2f}× as long)")
+        print(f"posture-id simulate, {args.before}: {sim_before_s:.2f} s wall "
+              f"(this checkout takes {sim_s / sim_before_s:.2f}× as long)")
 
     results = {
         "package_version": __version__,
@@ -129,7 +140,8 @@ def main() -> None:
         "repeats": args.repeats,
         "first_simulation_s": simulate_s,
         "import_and_load_s": import_s,
-        "cli_simulate_wall_s": sim_s,
+        "cli_simulate_wall_s": {"this_checkout": sim_s, args.before: sim_before_s,
+                                "ratio": sim_s / sim_before_s},
         "cli_fit_wall_s": {"this_checkout": after_s, args.before: before_s,
                            "ratio": after_s / before_s},
     }

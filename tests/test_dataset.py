@@ -165,3 +165,10 @@ def test_cli_generate_and_info(tmp_path, capsys):
     assert main(["dataset", "generate", "--trials", "5", "--shard-size", "8", "--out",
                  str(out), "--quiet"]) == 2
     assert "other arguments (trials differ" in capsys.readouterr().err
+
+
+def test_features_need_the_rate_they_are_defined_for():
+    from posture_id.simulation import SimulationOptions
+
+    with pytest.raises(DatasetError, match="defined at 50 Hz; the simulation samples at 100 Hz"):
+        _config(simulation=SimulationOptions(sample_rate_hz=100.0))

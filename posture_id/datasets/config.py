@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from posture_id.datasets.features import FS_HZ
 from posture_id.dec.prior import SIGMA
 from posture_id.errors import PostureIdError
 from posture_id.simulation.options import SimulationOptions
@@ -46,6 +47,11 @@ class DatasetConfig:
     def __post_init__(self) -> None:
         if self.trials < 3:
             raise DatasetError(f"trials must be ≥ 3 (one per split), got {self.trials}")
+        if self.simulation.sample_rate_hz != FS_HZ:
+            raise DatasetError(
+                f"the spectrogram features (MODEL §6) are defined at {FS_HZ:g} Hz; the "
+                f"simulation samples at {self.simulation.sample_rate_hz:g} Hz"
+            )
         if self.seed < 0:
             raise DatasetError(f"seed must be ≥ 0, got {self.seed}")
         if self.shard_size < 1:

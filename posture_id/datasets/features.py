@@ -25,6 +25,7 @@ __all__ = [
     "NFFT",
     "N_BINS",
     "N_WINDOWS",
+    "FS_HZ",
     "stft",
     "modular_images",
     "monolithic_images",
@@ -35,6 +36,7 @@ WINDOW = 250
 OVERLAP = 135
 HOP = WINDOW - OVERLAP
 NFFT = 250
+#: Sample rate the features are defined for (MODEL §6, the 5th argument of spectrogram).
 FS_HZ = 50.0
 N_BINS = 51
 N_WINDOWS = 51

@@ -150,3 +150,61 @@ def plot_fit(result, path=None, ax=None):
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_loss_curves(history, path=None, ax=None):
+    """Training and validation loss per epoch (log scale), the best epoch marked.
+
+    Args:
+        history: rows with ``epoch``, ``train_loss``, ``validation_loss``.
+    """
+    fig, axes = _axes(ax, 1, 1, (7, 4))
+    a = axes[0, 0]
+    epochs = [r["epoch"] for r in history]
+    a.plot(epochs, [r["train_loss"] for r in history], "o-", ms=3, label="training")
+    a.plot(epochs, [r["validation_loss"] for r in history], "o-", ms=3, label="validation")
+    if history:
+        best = min(history, key=lambda r: r["validation_loss"])
+        a.axvline(best["epoch"], color="0.5", lw=0.8, ls="--",
+                  label=f"best: epoch {best['epoch']}")
+    a.set_yscale("log")
+    a.set_xlabel("epoch")
+    a.set_ylabel("loss")
+    a.grid(alpha=0.3, which="both")
+    a.legend()
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_parameter_errors(names, mean, spread, path=None, ax=None, title=""):
+    """The paper's Fig. 5: mean absolute error of each normalised parameter with its spread.
+
+    Args:
+        names: (P,) labels. mean, spread: (P,) mean and standard deviation of |error|.
+    """
+    fig, axes = _axes(ax, 1, 1, (max(6, 0.6 * len(names)), 4))
+    a = axes[0, 0]
+    x = np.arange(len(names))
+    a.bar(x, mean, yerr=spread, capsize=3, color="C0", alpha=0.8)
+    a.set_xticks(x, names, rotation=45, ha="right")
+    a.set_ylabel("|error| (normalised units)")
+    a.set_title(title or "absolute error per parameter: mean ± standard deviation")
+    a.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_identification_error(parameter_mse, error, path=None, ax=None, ylabel="", title=""):
+    """The paper's Fig. 6: identification error against the parameter MSE, per trial."""
+    fig, axes = _axes(ax, 1, 1, (6, 4.5))
+    a = axes[0, 0]
+    a.loglog(parameter_mse, error, "o", ms=3, alpha=0.6)
+    a.set_xlabel("parameter MSE (normalised)")
+    a.set_ylabel(ylabel)
+    a.set_title(title)
+    a.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

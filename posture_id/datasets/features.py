@@ -26,6 +26,7 @@ __all__ = [
     "N_BINS",
     "N_WINDOWS",
     "FS_HZ",
+    "FEATURE_DEFINITION",
     "stft",
     "modular_images",
     "monolithic_images",
@@ -40,6 +41,24 @@ NFFT = 250
 FS_HZ = 50.0
 N_BINS = 51
 N_WINDOWS = 51
+
+#: What the images are, written into data-set manifests and model checkpoints; a model is
+#: refused by code whose definition differs.
+FEATURE_DEFINITION = {
+    "version": 1,
+    "stft": f"MATLAB spectrogram(x, {WINDOW}, {OVERLAP}, {NFFT}, {FS_HZ:g}), symmetric "
+            f"Hamming window, first {N_BINS} bins, {N_WINDOWS} windows",
+    "sample_rate_hz": FS_HZ,
+    "window": WINDOW,
+    "overlap": OVERLAP,
+    "nfft": NFFT,
+    "bins": N_BINS,
+    "windows": N_WINDOWS,
+    "modular": "(N, 3, 51, 51): |S_above|, |S_below| (the tilt below the ankle), "
+               "wrapped phase difference",
+    "monolithic": "(2N-1, 51, 51): |S| of each segment, neighbour phase differences",
+    "targets": "(N, 5): kp, ki, kd, delay_s normalised (p - p0)/p0, class C",
+}
 
 
 @lru_cache(maxsize=1)

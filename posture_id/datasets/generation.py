@@ -32,6 +32,7 @@ import numpy as np
 from posture_id._version import __version__
 from posture_id.bodies.body import Body, load_body
 from posture_id.datasets.config import DatasetConfig, DatasetError
+from posture_id.datasets.features import FEATURE_DEFINITION
 from posture_id.datasets.runners import DaskRunner, LocalRunner
 from posture_id.datasets.store import (
     FORMAT,
@@ -106,12 +107,7 @@ def _new_manifest(config: DatasetConfig, body: Body, body_hash: str) -> dict:
             "shard_seeds": "shard k: numpy.random.SeedSequence([seed, 0]).spawn(k + 1)[k]",
             "split_seed": "numpy.random.SeedSequence([seed, 1])",
         },
-        "features": {
-            "stft": "MATLAB spectrogram(x, 250, 135, 250, 50), first 51 bins",
-            "modular": "(N, 3, 51, 51): |S_above|, |S_below|, wrapped phase difference",
-            "monolithic": "(2N-1, 51, 51): |S| of each segment, neighbour phase differences",
-            "targets": "(N, 5): kp, ki, kd, delay_s normalised (p - p0)/p0, class C",
-        },
+        "features": FEATURE_DEFINITION,
         "shards": [],
         "complete": False,
     }

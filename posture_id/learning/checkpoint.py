@@ -1,0 +1,161 @@
+"""Trained models on disk: safetensors weights and a JSON sidecar; nothing is unpickled.
+
+A model directory holds ``model.safetensors`` (the network's weights and the
+standardisation statistics) and ``model.json``::
+
+    format, format_version, package_version
+    architecture      the NetworkConfig
+    features          the feature definition (posture_id.datasets.features)
+    standardisation   target means and standard deviations (images: in the weights file)
+    targets           names, units and how the class is read
+    body, stimulus, simulation   from the training set's manifest (body SHA-256 included)
+    dataset           path and SHA-256 of its manifest
+    training          the TrainingConfig, epochs run, best epoch, losses
+    weights_sha256    of model.safetensors
+
+Loading checks every part and refuses, in one line, a directory that is missing a file,
+a corrupt or truncated weights file, a newer format, another feature definition, or an
+architecture this code does not build.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import torch
+from safetensors import SafetensorError
+from safetensors.torch import load_file, save_file
+
+from posture_id._version import __version__
+from posture_id.datasets.features import FEATURE_DEFINITION
+from posture_id.fileio import atomic_write, atomic_write_text, file_sha256
+from posture_id.learning.config import ClassOutput, Layout, LearningError, NetworkConfig
+from posture_id.learning.network import IdentifierNetwork
+from posture_id.learning.samples import Standardiser
+from posture_id.provenance import jsonable
+
+__all__ = ["FORMAT", "FORMAT_VERSION", "LoadedModel", "save_model", "load_model",
+           "network_config_from_dict", "TARGETS"]
+
+FORMAT = "posture_id-model"
+FORMAT_VERSION = 1
+WEIGHTS = "model.safetensors"
+SIDECAR = "model.json"
+#: The five outputs of a module.
+TARGETS = [
+    {"name": "kp", "unit": "normalised: (Kp - Kp_default) / Kp_default"},
+    {"name": "ki", "unit": "normalised: (Ki - Ki_default) / Ki_default"},
+    {"name": "kd", "unit": "normalised: (Kd - Kd_default) / Kd_default"},
+    {"name": "delay_s", "unit": "normalised: (delay - delay_default) / delay_default"},
+    {"name": "class", "unit": "C: +1 controls the COM in space, -1 the joint angle; read by "
+                              "the sign (a logit when class_output is 'logit')"},
+]
+
+
+def network_config_from_dict(data: dict) -> NetworkConfig:
+    """The inverse of ``jsonable(NetworkConfig)``; errors become :class:`LearningError`."""
+    try:
+        return NetworkConfig(
+            layout=Layout(data["layout"]), in_channels=int(data["in_channels"]),
+            modules=int(data["modules"]), widths=tuple(data["widths"]),
+            head=tuple(data["head"]), class_output=ClassOutput(data["class_output"]),
+            image_size=int(data["image_size"]),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise LearningError(f"architecture is not one this code builds ({exc})") from None
+
+
+@dataclass(frozen=True)
+class LoadedModel:
+    """A model ready to predict.
+
+    Attributes:
+        path: its directory. network: in eval mode. config: its architecture.
+        standardiser: the training statistics. sidecar: the parsed model.json.
+    """
+
+    path: Path
+    network: IdentifierNetwork
+    config: NetworkConfig
+    standardiser: Standardiser
+    sidecar: dict
+
+
+def save_model(folder: str | Path, network: IdentifierNetwork, standardiser: Standardiser,
+               sidecar: dict) -> Path:
+    """Write ``model.safetensors`` then ``model.json`` (both atomically) into ``folder``.
+
+    ``sidecar`` holds what only the caller knows (body, stimulus, data set, training); the
+    format, version, architecture, features and targets are added here.
+    """
+    folder = Path(folder)
+    tensors = {f"network.{k}": v.detach().contiguous()
+               for k, v in network.state_dict().items()}
+    tensors.update({k: v.float() if v.dtype == torch.float64 else v
+                    for k, v in standardiser.to_tensors().items()})
+    atomic_write(folder / WEIGHTS, lambda tmp: save_file(tensors, str(tmp)))
+    data = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "package_version": __version__,
+        "architecture": jsonable(network.config),
+        "features": FEATURE_DEFINITION,
+        "targets": TARGETS,
+        "standardisation": {"target_mean": standardiser.target_mean.tolist(),
+                            "target_std": standardiser.target_std.tolist(),
+                            "images": "tensors standardiser.image_mean/_std in the weights"},
+        **sidecar,
+        "weights_sha256": file_sha256(folder / WEIGHTS),
+    }
+    atomic_write_text(folder / SIDECAR, json.dumps(jsonable(data), indent=2) + "\n")
+    return folder
+
+
+def load_model(folder: str | Path) -> LoadedModel:
+    """Load and check a model directory (see the module doc); never unpickles."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise LearningError(f"{folder}: no such model directory")
+    sidecar_path, weights_path = folder / SIDECAR, folder / WEIGHTS
+    for path in (sidecar_path, weights_path):
+        if not path.is_file():
+            raise LearningError(f"{path}: missing; a model directory holds {SIDECAR} and "
+                                f"{WEIGHTS}")
+    try:
+        sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise LearningError(f"{sidecar_path}: not valid JSON ({exc})") from None
+    if not isinstance(sidecar, dict) or sidecar.get("format") != FORMAT:
+        raise LearningError(f"{sidecar_path}: not a posture_id model (format is not '{FORMAT}')")
+    version = sidecar.get("format_version")
+    if not isinstance(version, int) or version > FORMAT_VERSION:
+        raise LearningError(f"{sidecar_path}: model format version {version!r} is newer than "
+                            f"this posture_id reads ({FORMAT_VERSION}); upgrade posture_id")
+    if sidecar.get("features") != FEATURE_DEFINITION:
+        raise LearningError(f"{sidecar_path}: the model was trained on another feature "
+                            "definition than this code computes; retrain it")
+    if file_sha256(weights_path) != sidecar.get("weights_sha256"):
+        raise LearningError(f"{weights_path}: corrupt or truncated (SHA-256 differs from "
+                            f"{SIDECAR})")
+    config = network_config_from_dict(sidecar.get("architecture") or {})
+    try:
+        tensors = load_file(str(weights_path))
+    except (SafetensorError, OSError, ValueError) as exc:
+        raise LearningError(f"{weights_path}: not a readable safetensors file ({exc})") from None
+    network = IdentifierNetwork(config)
+    weights = {k[len("network."):]: v for k, v in tensors.items() if k.startswith("network.")}
+    try:
+        network.load_state_dict(weights, strict=True)
+    except RuntimeError as exc:
+        first = str(exc).splitlines()[1].strip() if "\n" in str(exc) else str(exc)
+        raise LearningError(f"{weights_path}: the weights do not fit the architecture in "
+                            f"{SIDECAR} ({first})") from None
+    try:
+        standardiser = Standardiser.from_tensors(tensors)
+    except KeyError as exc:
+        raise LearningError(f"{weights_path}: standardisation tensor {exc} is missing") from None
+    network.eval()
+    network.to(memory_format=torch.channels_last)
+    return LoadedModel(folder, network, config, standardiser, sidecar)

@@ -1,0 +1,326 @@
+"""Training a CNN identifier on a data set: seeded, resumable, with early stopping.
+
+A model directory while training::
+
+    model.safetensors, model.json     the best network so far (see :mod:`.checkpoint`)
+    log.jsonl                         one line per epoch: losses, learning rate, time
+    loss.png                          the loss curves
+    training/state.json               what was asked (must match to resume), the history
+    training/epoch-NNNN.safetensors   weights and optimiser state after the last epoch
+
+Every epoch draws its sample order from ``SeedSequence([seed, epoch])``, and the state
+after each epoch is saved atomically, so a run killed at any point and started again with
+the same arguments continues from its last finished epoch and, on one thread, ends with
+the same weights as an uninterrupted run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn.functional as F  # noqa: N812 - torch's convention
+from safetensors.torch import load_file, save_file
+
+from posture_id.datasets.store import Dataset
+from posture_id.fileio import atomic_write, atomic_write_text, file_sha256
+from posture_id.learning.checkpoint import save_model
+from posture_id.learning.config import (
+    AdamWOneCycle,
+    ClassOutput,
+    Layout,
+    LearningError,
+    NetworkConfig,
+    SgdMomentum,
+    TrainingConfig,
+)
+from posture_id.learning.network import IdentifierNetwork
+from posture_id.learning.samples import SplitSamples, Standardiser
+from posture_id.plotting import plot_loss_curves
+from posture_id.progress import Progress, report
+from posture_id.provenance import jsonable, provenance
+
+__all__ = ["train", "TrainingResult", "Objective"]
+
+STATE = "training/state.json"
+
+
+class Objective:
+    """The loss of a network configuration on standardised targets.
+
+    REGRESSION: MSE over all 5M outputs (the paper). LOGIT: MSE over the 4M continuous
+    outputs plus the binary cross-entropy of each module's class logit.
+    """
+
+    def __init__(self, config: NetworkConfig, standardiser: Standardiser) -> None:
+        self.config = config
+        m = config.modules
+        mean = torch.as_tensor(standardiser.target_mean.reshape(m, 5)[:, 4], dtype=torch.float32)
+        std = torch.as_tensor(standardiser.target_std.reshape(m, 5)[:, 4], dtype=torch.float32)
+        #: a standardised class value above this is C = +1 (COM in space)
+        self.class_threshold = -mean / std
+
+    def __call__(self, outputs: torch.Tensor, targets: torch.Tensor) -> torch.Tensor:
+        if self.config.class_output is ClassOutput.REGRESSION:
+            return F.mse_loss(outputs, targets)
+        out = outputs.view(len(outputs), self.config.modules, 5)
+        tgt = targets.view(len(targets), self.config.modules, 5)
+        labels = (tgt[..., 4] > self.class_threshold).float()
+        return (F.mse_loss(out[..., :4], tgt[..., :4])
+                + F.binary_cross_entropy_with_logits(out[..., 4], labels))
+
+
+@dataclass(frozen=True)
+class TrainingResult:
+    """How a training run went.
+
+    Attributes:
+        model_dir: where the best model is. epochs_run: epochs finished in all.
+        best_epoch: the epoch of the best validation loss (1-based). best_validation_loss.
+        stopped_early: early stopping ended it. wall_time_s: this call's time, s.
+        history: one dict per epoch (epoch, train_loss, validation_loss, learning_rate,
+        seconds).
+    """
+
+    model_dir: Path
+    epochs_run: int
+    best_epoch: int
+    best_validation_loss: float
+    stopped_early: bool
+    wall_time_s: float
+    history: tuple[dict, ...] = field(repr=False)
+    provenance: dict = field(default_factory=dict, repr=False)
+
+    def to_dict(self) -> dict:
+        return {"model_dir": str(self.model_dir), "epochs_run": self.epochs_run,
+                "best_epoch": self.best_epoch,
+                "best_validation_loss": self.best_validation_loss,
+                "stopped_early": self.stopped_early, "wall_time_s": self.wall_time_s,
+                "history": list(self.history), "provenance": self.provenance}
+
+    def summary(self) -> str:
+        how = "stopped early" if self.stopped_early else "all epochs"
+        return (f"{self.model_dir}: {self.epochs_run} epochs ({how}), best validation loss "
+                f"{self.best_validation_loss:.4f} at epoch {self.best_epoch}, "
+                f"{self.wall_time_s:.0f} s")
+
+    def plot(self, path=None, ax=None):
+        """Training and validation loss per epoch."""
+        return plot_loss_curves(self.history, path=path, ax=ax)
+
+
+def _optimiser(network: IdentifierNetwork, training: TrainingConfig, steps_per_epoch: int):
+    """(optimiser, scheduler, step the scheduler per batch?)."""
+    opt = training.optimiser
+    if isinstance(opt, SgdMomentum):
+        optimiser = torch.optim.SGD(network.parameters(), lr=opt.learning_rate,
+                                    momentum=opt.momentum, weight_decay=opt.weight_decay)
+        drops = (round(0.5 * training.epochs), round(0.75 * training.epochs))
+        schedule = torch.optim.lr_scheduler.LambdaLR(
+            optimiser, lambda epoch: 0.1 ** sum(epoch >= d for d in drops))
+        return optimiser, schedule, False
+    assert isinstance(opt, AdamWOneCycle)
+    optimiser = torch.optim.AdamW(network.parameters(), lr=opt.max_learning_rate,
+                                  weight_decay=opt.weight_decay)
+    schedule = torch.optim.lr_scheduler.OneCycleLR(
+        optimiser, max_lr=opt.max_learning_rate,
+        total_steps=max(training.epochs * steps_per_epoch, 2))
+    return optimiser, schedule, True
+
+
+def _optimiser_tensors(optimiser) -> tuple[dict[str, torch.Tensor], dict]:
+    """Optimiser state as safetensors tensors plus JSON (param groups, scalars)."""
+    state = optimiser.state_dict()
+    tensors, scalars = {}, {}
+    for index, entries in state["state"].items():
+        for key, value in entries.items():
+            if torch.is_tensor(value):
+                tensors[f"optimiser.{index}.{key}"] = value.detach().contiguous()
+            else:
+                scalars[f"{index}.{key}"] = value
+    return tensors, {"param_groups": state["param_groups"], "scalars": scalars}
+
+
+def _restore_optimiser(optimiser, tensors: dict[str, torch.Tensor], data: dict) -> None:
+    state: dict = {}
+    for name, value in tensors.items():
+        if name.startswith("optimiser."):
+            _, index, key = name.split(".", 2)
+            state.setdefault(int(index), {})[key] = value
+    for name, value in data["scalars"].items():
+        index, key = name.split(".", 1)
+        state.setdefault(int(index), {})[key] = value
+    optimiser.load_state_dict({"state": state, "param_groups": data["param_groups"]})
+
+
+def _identity(data: Dataset, network: NetworkConfig, training: TrainingConfig) -> dict:
+    """What must match for a run to resume."""
+    return jsonable({"dataset_manifest_sha256": file_sha256(data.path / "manifest.json"),
+                     "network": network, "training": training})
+
+
+def train(dataset: str | Path, out: str | Path, network: NetworkConfig | None = None,
+          training: TrainingConfig | None = None, progress: Progress | None = None
+          ) -> TrainingResult:
+    """Train (or finish training) a CNN identifier on a data set.
+
+    Args:
+        dataset: a finished data-set directory. out: the model directory.
+        network: the architecture (default: modular, for the set's body).
+        training: optimiser, epochs, batches, early stopping, seed, threads.
+        progress: told the samples done in each epoch and a line per epoch.
+    """
+    start_time = time.perf_counter()
+    training = training or TrainingConfig()
+    data = Dataset.open(dataset)
+    network_config = network or NetworkConfig.for_body(Layout.MODULAR, data.n_segments)
+    expected = NetworkConfig.for_body(network_config.layout, data.n_segments)
+    if (network_config.in_channels, network_config.modules) != (expected.in_channels,
+                                                               expected.modules):
+        raise LearningError(
+            f"a {network_config.layout.value} network for this {data.n_segments}-segment "
+            f"data set takes {expected.in_channels} channels and {expected.modules} modules, "
+            f"not {network_config.in_channels} and {network_config.modules}")
+    out = Path(out)
+    identity = _identity(data, network_config, training)
+    state = _read_state(out, identity)
+    torch.set_num_threads(training.threads or os.cpu_count() or 1)
+    torch.manual_seed(training.seed)
+    net = IdentifierNetwork(network_config).to(memory_format=torch.channels_last)
+    standardiser = Standardiser.from_dataset(data, network_config.layout)
+    objective = Objective(network_config, standardiser)
+    train_set = SplitSamples(data, "train", network_config.layout, standardiser,
+                             training.buffer_shards)
+    validation_set = SplitSamples(data, "validation", network_config.layout, standardiser,
+                                  training.buffer_shards)
+    steps = math.ceil(len(train_set) / training.batch_size)
+    optimiser, schedule, per_batch = _optimiser(net, training, steps)
+    history: list[dict] = []
+    best = (math.inf, 0)
+    if state is not None:
+        tensors = load_file(str(out / state["weights"]))
+        net.load_state_dict({k[len("network."):]: v for k, v in tensors.items()
+                             if k.startswith("network.")})
+        _restore_optimiser(optimiser, tensors, state["optimiser"])
+        schedule.load_state_dict(state["schedule"])
+        history = state["history"]
+        best = (state["best_validation_loss"], state["best_epoch"])
+    sidecar = _sidecar(data, training)
+    stopped_early = False
+    for epoch in range(len(history) + 1, training.epochs + 1):
+        if epoch - best[1] > training.patience and best[1] > 0:
+            stopped_early = True
+            break
+        began = time.perf_counter()
+        rng = np.random.default_rng(np.random.SeedSequence([training.seed, epoch]))
+        net.train()
+        total, done = 0.0, 0
+        for images, targets in train_set.batches(training.batch_size, rng):
+            loss = objective(net(images), targets)
+            optimiser.zero_grad(set_to_none=True)
+            loss.backward()
+            optimiser.step()
+            if per_batch:
+                schedule.step()
+            total += float(loss) * len(images)
+            done += len(images)
+            report(progress, done, len(train_set), "sample")
+        if not per_batch:
+            schedule.step()
+        validation = evaluate_loss(net, objective, validation_set)
+        row = {"epoch": epoch, "train_loss": total / done, "validation_loss": validation,
+               "learning_rate": optimiser.param_groups[0]["lr"],
+               "seconds": time.perf_counter() - began}
+        history.append(row)
+        improved = validation < best[0]
+        if improved:
+            best = (validation, epoch)
+            save_model(out, net, standardiser,
+                       {**sidecar, "training": {**sidecar["training"], "best_epoch": epoch,
+                                                "best_validation_loss": validation,
+                                                "epochs_run": epoch}})
+        _write_state(out, identity, net, optimiser, schedule, history, best)
+        report(progress, done, len(train_set), "sample",
+               f"epoch {epoch}/{training.epochs}: train loss {row['train_loss']:.4f}, "
+               f"validation {validation:.4f}{' (best)' if improved else ''}, "
+               f"{row['seconds']:.0f} s")
+    else:
+        stopped_early = len(history) < training.epochs
+    result = TrainingResult(out, len(history), best[1], best[0], stopped_early,
+                            time.perf_counter() - start_time, tuple(history),
+                            provenance(training, dataset=str(data.path)))
+    result.plot(out / "loss.png")
+    return result
+
+
+def evaluate_loss(net: IdentifierNetwork, objective: Objective, samples: SplitSamples,
+                  batch_size: int = 512) -> float:
+    """Mean loss over a split (eval mode, no gradients)."""
+    net.eval()
+    total, count = 0.0, 0
+    with torch.no_grad():
+        for images, targets in samples.batches(batch_size):
+            total += float(objective(net(images), targets)) * len(images)
+            count += len(images)
+    return total / count
+
+
+def _sidecar(data: Dataset, training: TrainingConfig) -> dict:
+    m = data.manifest
+    return {
+        "body": m["body"],
+        "stimulus": m["stimulus"],
+        "simulation": m["options"],
+        "defaults": m["defaults"],
+        "dataset": {"path": str(data.path.resolve()),
+                    "manifest_sha256": file_sha256(data.path / "manifest.json"),
+                    "trials": m["counts"]["used"], "split": m["split"]},
+        "training": {"config": jsonable(training)},
+    }
+
+
+def _read_state(out: Path, identity: dict) -> dict | None:
+    """The state to resume from, None for a fresh start; refuse a foreign directory."""
+    path = out / STATE
+    if not path.exists():
+        if out.exists() and not out.is_dir():
+            raise LearningError(f"{out}: exists and is not a directory")
+        if out.exists() and any(out.iterdir()):
+            raise LearningError(f"{out}: exists, is not empty and holds no training state; "
+                                "choose another directory")
+        return None
+    try:
+        state = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise LearningError(f"{path}: not valid JSON ({exc})") from None
+    if state.get("identity") != identity:
+        theirs = state.get("identity", {})
+        diff = [k for k in identity if theirs.get(k) != identity[k]]
+        raise LearningError(f"{out}: was trained with other arguments ({', '.join(diff)} "
+                            "differ); choose another directory or repeat them")
+    if not (out / state["weights"]).is_file():
+        raise LearningError(f"{out / state['weights']}: the last epoch's state is missing")
+    return state
+
+
+def _write_state(out: Path, identity: dict, net, optimiser, schedule, history, best) -> None:
+    epoch = len(history)
+    weights = f"training/epoch-{epoch:04d}.safetensors"
+    tensors = {f"network.{k}": v.detach().contiguous() for k, v in net.state_dict().items()}
+    optimiser_tensors, optimiser_json = _optimiser_tensors(optimiser)
+    tensors.update(optimiser_tensors)
+    atomic_write(out / weights, lambda tmp: save_file(tensors, str(tmp)))
+    state = {"identity": identity, "weights": weights, "optimiser": optimiser_json,
+             "schedule": schedule.state_dict(), "history": history,
+             "best_validation_loss": best[0], "best_epoch": best[1]}
+    atomic_write_text(out / STATE, json.dumps(jsonable(state), indent=2) + "\n")
+    atomic_write_text(out / "log.jsonl", "".join(json.dumps(r) + "\n" for r in history))
+    for old in (out / "training").glob("epoch-*.safetensors"):
+        if old.name != Path(weights).name:
+            old.unlink()

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,6 +38,28 @@ class Recording:
     def sample_rate_hz(self) -> float:
         """Hz, from the median sample interval."""
         return float(1.0 / np.median(np.diff(self.time)))
+
+    @property
+    def duration_s(self) -> float:
+        """s, time of the last sample."""
+        return float(self.time[-1])
+
+    def evenly_sampled(self, tolerance: float = 0.01) -> bool:
+        """True when every interval is within ``tolerance`` (relative) of the median."""
+        steps = np.diff(self.time)
+        median = float(np.median(steps))
+        return bool(np.all(np.abs(steps - median) <= tolerance * median))
+
+    def resampled(self, rate_hz: float) -> Recording:
+        """The recording at ``rate_hz`` from t = 0 to its end, by linear interpolation
+        (itself when it is already at that rate)."""
+        if abs(self.sample_rate_hz - rate_hz) <= 1e-6 * rate_hz:
+            return self
+        n = int(math.floor(self.duration_s * rate_hz + 1e-9)) + 1
+        t = np.arange(n) / rate_hz
+        theta = np.stack([np.interp(t, self.time, self.theta[:, j])
+                          for j in range(self.theta.shape[1])], axis=1)
+        return Recording(t, np.interp(t, self.time, self.tilt), theta, self.segments)
 
     def to_csv(self, path: str | Path) -> Path:
         """Write atomically. Rows after the first NaN (an aborted trial) are left out."""

@@ -1,4 +1,5 @@
-"""Command line: ``posture-id body | simulate | fit | dataset``, one module per command.
+"""Command line: ``posture-id body | simulate | fit | dataset | train | evaluate | identify``,
+one module per command.
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
 a traceback: argument errors by :class:`~.arguments.Parser`, input errors as
@@ -9,7 +10,7 @@ from __future__ import annotations
 
 import sys
 
-from posture_id.cli import body, dataset, fit, simulate
+from posture_id.cli import body, dataset, evaluate, fit, identify, simulate, train
 from posture_id.cli.arguments import Parser
 from posture_id.errors import PostureIdError
 
@@ -20,7 +21,7 @@ def build_parser() -> Parser:
     parser = Parser(prog="posture-id",
                     description="Identify DEC posture-control parameters from body sway.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for command in (body, simulate, fit, dataset):
+    for command in (body, simulate, fit, dataset, train, evaluate, identify):
         command.add_parser(sub)
     return parser
 

@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-
 from posture_id.errors import RecordingError
 from posture_id.fitting.options import FitOptions
 from posture_id.recording import Recording
@@ -23,24 +19,16 @@ def prepare_recording(recording: Recording, source: str, options: FitOptions
     """
     rate_hz = options.simulation.sample_rate_hz
     notices = []
-    steps = np.diff(recording.time)
-    median = float(np.median(steps))
-    if np.any(np.abs(steps - median) > 0.01 * median):
+    if not recording.evenly_sampled():
         raise RecordingError(f"{source}: samples are not evenly spaced in time")
-    duration = float(recording.time[-1])
-    if duration < options.min_duration_s - 1e-9:
+    if recording.duration_s < options.min_duration_s - 1e-9:
         raise RecordingError(
-            f"{source}: the recording lasts {duration:.2f} s, shorter than one PRTS cycle "
-            f"({options.min_duration_s:g} s)"
+            f"{source}: the recording lasts {recording.duration_s:.2f} s, shorter than one "
+            f"PRTS cycle ({options.min_duration_s:g} s)"
         )
-    rate = 1.0 / median
-    if abs(rate - rate_hz) > 1e-6 * rate_hz:
-        n = int(math.floor(duration * rate_hz + 1e-9)) + 1
-        t = np.arange(n) / rate_hz
-        theta = np.stack([np.interp(t, recording.time, recording.theta[:, j])
-                          for j in range(recording.theta.shape[1])], axis=1)
-        recording = Recording(t, np.interp(t, recording.time, recording.tilt), theta,
-                              recording.segments)
+    rate = recording.sample_rate_hz
+    resampled = recording.resampled(rate_hz)
+    if resampled is not recording:
         notices.append(f"{source}: resampled from {rate:.4g} Hz to {rate_hz:g} Hz "
                        "by linear interpolation")
-    return recording, notices
+    return resampled, notices

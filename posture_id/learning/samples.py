@@ -19,6 +19,7 @@ import numpy as np
 import torch
 
 from posture_id.datasets.store import Dataset
+from posture_id.dec.parameters import ParameterArrays
 from posture_id.learning.config import Layout, LearningError
 
 __all__ = ["Standardiser", "SplitSamples"]
@@ -132,6 +133,18 @@ class SplitSamples:
         if self.buffer_shards == 0:
             self._memory = out
         return out
+
+    def trial_parameters(self) -> ParameterArrays:
+        """(trials, N) parameter arrays of the split's trials, in data-set order."""
+        parts = {f: [] for f in ParameterArrays.FIELDS}
+        for k, local in enumerate(self.local):
+            if not len(local):
+                continue
+            arrays = self.data.load_shard(k)
+            kept = arrays["kept"]
+            for f in ParameterArrays.FIELDS:
+                parts[f].append(arrays[f][kept][local])
+        return ParameterArrays(**{f: np.concatenate(v) for f, v in parts.items()})
 
     def batches(self, batch_size: int, rng: np.random.Generator | None = None
                 ) -> Iterator[tuple[torch.Tensor, torch.Tensor]]:

@@ -228,7 +228,7 @@ def train(dataset: str | Path, out: str | Path, network: NetworkConfig | None = 
             optimiser.step()
             if per_batch:
                 schedule.step()
-            total += float(loss) * len(images)
+            total += float(loss.detach()) * len(images)
             done += len(images)
             report(progress, done, len(train_set), "sample")
         if not per_batch:

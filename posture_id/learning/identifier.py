@@ -1,0 +1,195 @@
+"""Identify a recording with a trained CNN: features, prediction, parameters.
+
+    >>> from posture_id import load_body, Recording
+    >>> from posture_id.learning import CnnIdentifier
+    >>> body = load_body()
+    >>> identifier = CnnIdentifier.for_body(body)          # the bundled model
+    >>> result = identifier.identify(Recording.from_csv("rec.csv", body.segment_names))
+    >>> result.parameters                                  # DecParameters, SI units
+
+A CNN is only valid for the stimulus and body it was trained on: the recording's tilt
+must be that stimulus (the same PRTS, amplitude and length) and its segments the body's;
+otherwise the error says so (least squares, ``posture-id fit``, takes any tilt).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.bodies.body import Body
+from posture_id.datasets.features import FS_HZ, modular_images, monolithic_images, stft
+from posture_id.dec.parameters import (
+    TARGET_FIELDS,
+    DecParameters,
+    default_parameters,
+    denormalise_arrays,
+)
+from posture_id.errors import RecordingError
+from posture_id.fileio import atomic_write_text
+from posture_id.learning.bundled import bundled_model_dir
+from posture_id.learning.checkpoint import LoadedModel, load_model
+from posture_id.learning.config import Layout, LearningError
+from posture_id.learning.prediction import predict_images
+from posture_id.provenance import body_identity, provenance
+from posture_id.recording import Recording
+from posture_id.simulation.stimulus import prts, recognise_prts
+
+__all__ = ["CnnIdentifier", "CnnIdentification"]
+
+
+@dataclass(frozen=True)
+class CnnIdentification:
+    """What the CNN says about one recording.
+
+    Attributes:
+        parameters: every module's Kp, Ki, Kd, Δ and class (passive terms: the body's
+            defaults), SI units: the parameter-file format.
+        normalised: (N, 5) [K̃p, K̃i, K̃d, Δ̃, C]. class_probability: (N,) P(C = +1, COM).
+        joints: module names. model: the model directory and what made it.
+        notices: things to know. provenance: version, body identity, recording name.
+    """
+
+    parameters: DecParameters
+    normalised: np.ndarray
+    class_probability: np.ndarray
+    joints: tuple[str, ...]
+    model: dict
+    notices: tuple[str, ...] = ()
+    provenance: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def classes(self) -> tuple[str, ...]:
+        return tuple(self.parameters[j].controls for j in self.joints)
+
+    def to_dict(self) -> dict:
+        return {
+            "parameters": self.parameters.to_dict(),
+            "normalised": {j: dict(zip((*TARGET_FIELDS, "class"), map(float, row), strict=True))
+                           for j, row in zip(self.joints, self.normalised, strict=True)},
+            "class_probability_com": dict(zip(self.joints, map(float, self.class_probability),
+                                              strict=True)),
+            "method": "cnn",
+            "model": self.model,
+            "notices": list(self.notices),
+            "provenance": self.provenance,
+        }
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        text = json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+        if path is not None:
+            atomic_write_text(Path(path), text)
+        return text
+
+    def summary(self) -> str:
+        lines = [f"{'module':<10}{'Kp':>10}{'Ki':>9}{'Kd':>9}{'Δ s':>8}  controls  P(com)"]
+        for j, p in zip(self.joints, self.class_probability, strict=True):
+            m = self.parameters[j]
+            lines.append(f"{j:<10}{m.kp:>10.3f}{m.ki:>9.4f}{m.kd:>9.3f}{m.delay_s:>8.4f}  "
+                         f"{m.controls:<8}  {p:.3f}")
+        lines.append(f"model: {self.model['path']} ({self.model['layout']})")
+        lines += [f"note: {n}" for n in self.notices]
+        return "\n".join(lines)
+
+
+class CnnIdentifier:
+    """A loaded model and the body it identifies."""
+
+    def __init__(self, model: LoadedModel, body: Body, notices: tuple[str, ...] = ()) -> None:
+        self.model = model
+        self.body = body
+        self.notices = tuple(notices)
+        sidecar = model.sidecar
+        trained = sidecar.get("body", {})
+        if trained.get("n_segments") != body.n_segments:
+            raise LearningError(
+                f"{model.path}: trained for a {trained.get('n_segments')}-segment body, "
+                f"'{body.name}' has {body.n_segments}")
+        if model.config.layout is Layout.MONOLITHIC and model.config.modules != body.n_segments:
+            raise LearningError(f"{model.path}: monolithic model for {model.config.modules} "
+                                f"modules, body has {body.n_segments}")
+        if trained.get("sha256") != body.sha256:
+            self.notices += (f"the model was trained on body '{trained.get('name')}', not on "
+                             f"this URDF ('{body.name}'); its gains are normalised by this "
+                             "body's m·g·h",)
+        stim = sidecar.get("stimulus", {})
+        self.stimulus = stim
+        duration = stim["states"] * 0.25 * stim["cycles"]
+        self.n_samples = int(round(duration * FS_HZ)) + 1
+        self.defaults = default_parameters(body)
+
+    @classmethod
+    def load(cls, model_dir: str | Path, body: Body) -> CnnIdentifier:
+        return cls(load_model(model_dir), body)
+
+    @classmethod
+    def for_body(cls, body: Body) -> CnnIdentifier:
+        """The bundled model for ``body`` (see :func:`~.bundled.bundled_model_dir`)."""
+        folder, notices = bundled_model_dir(body)
+        return cls(load_model(folder), body, notices)
+
+    def features(self, recording: Recording, source: str = "recording") -> np.ndarray:
+        """(M, C, 51, 51) images of a recording: checked against the model's stimulus."""
+        if tuple(recording.segments) != self.body.segment_names:
+            raise RecordingError(
+                f"{source}: segment columns {','.join(recording.segments)} do not match the "
+                f"body's segments {','.join(self.body.segment_names)}")
+        if not recording.evenly_sampled():
+            raise RecordingError(f"{source}: samples are not evenly spaced in time")
+        recording = recording.resampled(FS_HZ)
+        if len(recording.time) < self.n_samples:
+            raise RecordingError(
+                f"{source}: {recording.duration_s:.2f} s of sway; the CNN was trained on "
+                f"{(self.n_samples - 1) / FS_HZ:g} s ({self._stimulus_text()}): use "
+                "posture-id fit for other lengths")
+        cut = slice(0, self.n_samples)
+        time, tilt, theta = recording.time[cut], recording.tilt[cut], recording.theta[cut]
+        self._check_stimulus(time, tilt, source)
+        spectra = stft(theta.T)[None]  # (1, N, 51, 51)
+        if self.model.config.layout is Layout.MODULAR:
+            return modular_images(stft(tilt), spectra)[0]
+        return monolithic_images(spectra)
+
+    def _stimulus_text(self) -> str:
+        s = self.stimulus
+        return f"PRTS {s['states']} states ×{s['cycles']}, {s['amplitude_deg']:g}° p-p"
+
+    def _check_stimulus(self, time: np.ndarray, tilt: np.ndarray, source: str) -> None:
+        """Refuse a tilt that is not the trained PRTS (within 1 % of its amplitude)."""
+        s = self.stimulus
+        expected = prts(s["amplitude_deg"], s["cycles"], s["states"])
+        tolerance = 0.01 * math.radians(s["amplitude_deg"])
+        if np.max(np.abs(expected.angle(time) - tilt)) <= tolerance:
+            return
+        found = recognise_prts(time, tilt)
+        what = f"a {found.description}" if found is not None else "not a PRTS"
+        raise RecordingError(
+            f"{source}: the tilt is {what}; the CNN was trained on {self._stimulus_text()} "
+            "and is valid for that stimulus only: use posture-id fit, which takes any tilt")
+
+    def identify(self, recording: Recording, source: str = "recording") -> CnnIdentification:
+        """The CNN's parameters for one recording."""
+        images = self.features(recording, source)
+        if self.model.config.layout is Layout.MODULAR:
+            prediction = predict_images(self.model, images)
+            normalised = prediction.targets[:, 0]
+            probability = prediction.class_probability[:, 0]
+        else:
+            prediction = predict_images(self.model, images)
+            normalised = prediction.targets[0]
+            probability = prediction.class_probability[0]
+        arrays = denormalise_arrays(normalised[None], self.defaults)
+        params = arrays.trial(0, self.body.joint_names)
+        model_info = {"path": str(self.model.path), "layout": self.model.config.layout.value,
+                      "weights_sha256": self.model.sidecar.get("weights_sha256"),
+                      "trained_on": self.model.sidecar.get("body", {}).get("name"),
+                      "package_version": self.model.sidecar.get("package_version")}
+        return CnnIdentification(
+            parameters=params, normalised=normalised, class_probability=probability,
+            joints=self.body.joint_names, model=model_info, notices=self.notices,
+            provenance={**provenance(None, self.body, source=source),
+                        "body": body_identity(self.body)})

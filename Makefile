@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-fast lint bench bodies clean
+.PHONY: demo test test-fast lint bench bodies models clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -34,7 +34,33 @@ lint: $(STAMP)
 
 bodies: $(STAMP)
 	for r in talos g1 human; do $(BIN)/posture-id body --from-robot $$r --out urdf/$${r}_tip.urdf > /dev/null; done
-	$(BIN)/posture-id body --default-tip --out urdf/tip_default.urdf > /dev/null
+	$(BIN)/posture-id body --default-tip --out posture_id/bodies/data/tip_default.urdf > /dev/null
+	$(BIN)/posture-id body --height 1.75 --mass 70 --segments 2 --out $(TWO_SEGMENT) > /dev/null
+
+# The bundled CNN models (docs/learning.md): a data set, training (under 30 min each on
+# 2 cores), evaluation into docs/models/, then weights + sidecar into the package.
+MODEL_TRIALS ?= 30000
+MODEL_EPOCHS ?= 24
+MODELS_DIR   := posture_id/learning/models
+TWO_SEGMENT  := urdf/winter_1.75m_70kg_2seg.urdf
+
+$(TWO_SEGMENT): | $(STAMP)
+	$(BIN)/posture-id body --height 1.75 --mass 70 --segments 2 --out $@ > /dev/null
+
+models: $(STAMP) $(TWO_SEGMENT)
+	$(MAKE) model NAME=tip_default URDF=urdf/tip_default.urdf
+	$(MAKE) model NAME=winter_1.75m_70kg_2seg URDF=$(TWO_SEGMENT)
+
+model: $(STAMP)
+	$(BIN)/posture-id dataset generate --trials $(MODEL_TRIALS) --body $(URDF) \
+	  --out data/$(NAME) --quiet
+	$(BIN)/posture-id train data/$(NAME) --out data/models/$(NAME) --epochs $(MODEL_EPOCHS) \
+	  --quiet
+	$(BIN)/posture-id evaluate data/models/$(NAME) data/$(NAME) --out docs/models/$(NAME)
+	mkdir -p $(MODELS_DIR)/$(NAME)
+	cp data/models/$(NAME)/model.safetensors data/models/$(NAME)/model.json \
+	  data/models/$(NAME)/log.jsonl data/models/$(NAME)/loss.png docs/models/$(NAME)/
+	cp data/models/$(NAME)/model.safetensors data/models/$(NAME)/model.json $(MODELS_DIR)/$(NAME)/
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/simulation.py

@@ -234,6 +234,7 @@ def _split_predictions(model: LoadedModel, samples: SplitSamples):
     pred = predict_images(model, images, standardised_input=True)
     truth_std = targets_std.reshape(len(targets_std), m, 5).astype(np.float64)
     truth = model.standardiser.raw_targets(targets_std).reshape(len(targets_std), m, 5)
+    truth[..., 4] = np.where(truth[..., 4] >= 0, 1.0, -1.0)  # exact ±1 after float32 storage
     return pred.standardised - truth_std, pred.targets, truth
 
 

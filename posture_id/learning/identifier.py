@@ -121,6 +121,9 @@ class CnnIdentifier:
         duration = stim["states"] * 0.25 * stim["cycles"]
         self.n_samples = int(round(duration * FS_HZ)) + 1
         self.defaults = default_parameters(body)
+        #: the trained stimulus at the sample times (rad), what a recording's tilt must be
+        self.expected_tilt = prts(stim["amplitude_deg"], stim["cycles"], stim["states"]).angle(
+            np.arange(self.n_samples) / FS_HZ)
 
     @classmethod
     def load(cls, model_dir: str | Path, body: Body) -> CnnIdentifier:
@@ -160,10 +163,8 @@ class CnnIdentifier:
 
     def _check_stimulus(self, time: np.ndarray, tilt: np.ndarray, source: str) -> None:
         """Refuse a tilt that is not the trained PRTS (within 1 % of its amplitude)."""
-        s = self.stimulus
-        expected = prts(s["amplitude_deg"], s["cycles"], s["states"])
-        tolerance = 0.01 * math.radians(s["amplitude_deg"])
-        if np.max(np.abs(expected.angle(time) - tilt)) <= tolerance:
+        tolerance = 0.01 * math.radians(self.stimulus["amplitude_deg"])
+        if np.max(np.abs(self.expected_tilt - tilt)) <= tolerance:
             return
         found = recognise_prts(time, tilt)
         what = f"a {found.description}" if found is not None else "not a PRTS"

@@ -23,7 +23,8 @@ class Prediction:
     """Predictions for B samples of M modules each.
 
     Attributes:
-        targets: (B, M, 5) normalised [K̃p, K̃i, K̃d, Δ̃, C] with C = ±1.
+        targets: (B, M, 5) normalised [K̃p, K̃i, K̃d, Δ̃, C] with C = ±1; the continuous
+            ones clipped at −1 (a parameter is never negative).
         class_probability: (B, M) probability of C = +1.
         standardised: (B, M, 5) the outputs in the training set's standardised units, the
             class column as the standardised value of E[C] (for the paper's RMSE).
@@ -60,6 +61,7 @@ def predict_images(model: LoadedModel, images: np.ndarray, batch_size: int = 512
         probability = (raw[..., 4] >= 0).astype(float)
         expected_c = raw[..., 4]
     targets = raw.copy()
+    targets[..., :4] = np.maximum(targets[..., :4], -1.0)  # p = p0·(1 + p̃) is never negative
     targets[..., 4] = np.where(probability >= 0.5, 1.0, -1.0)
     standardised = out.copy()
     standardised[..., 4] = (expected_c - mean[:, 4]) / scale[:, 4]

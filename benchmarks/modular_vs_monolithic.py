@@ -93,7 +93,7 @@ def markdown(rows: dict, args) -> str:
         total, fit, acc = PAPER[layout]
         out.append(f"| {layout}, paper (Table {2 if layout == 'modular' else 4}) | {total} | "
                    f"{fit} | {100 * acc:.2f} % | | | | |")
-        for name, row in rows.items():
+        for row in rows.values():
             if row["layout"] != layout:
                 continue
             test = row["report"]["splits"]["test"]

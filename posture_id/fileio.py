@@ -4,17 +4,23 @@ and the one reader of numeric CSV files."""
 from __future__ import annotations
 
 import csv
+import dataclasses
+import enum
 import hashlib
 import io
+import json
 import math
 import os
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-__all__ = ["atomic_write", "atomic_write_text", "file_sha256", "read_numeric_csv"]
+__all__ = ["atomic_write", "atomic_write_text", "file_sha256", "read_numeric_csv",
+           "jsonable", "json_text",
+           "check_time_column", "PLAUSIBLE_INTERVAL_S"]
 
 
 def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
@@ -105,3 +111,54 @@ def read_numeric_csv(path: str | Path, error: type[Exception], what: str
     if len(values) == 0:
         raise error(f"{path}: a header and no data rows")
     return header, values
+
+
+#: Sample intervals a recording or tilt file can plausibly have, s (1 Hz to 10 kHz).
+PLAUSIBLE_INTERVAL_S = (1e-4, 1.0)
+
+
+def check_time_column(path: Path, time_s: np.ndarray, error: type[Exception]) -> None:
+    """Refuse a time column that does not increase or is not in seconds (by its median
+    sample interval: milliseconds give intervals of 10 or 20 "seconds")."""
+    steps = np.diff(time_s)
+    if len(steps) == 0:
+        raise error(f"{path}: fewer than two samples")
+    bad = np.flatnonzero(steps <= 0)
+    if bad.size:
+        raise error(f"{path}: row {bad[0] + 2}: time_s does not increase "
+                    f"({time_s[bad[0]]:g} then {time_s[bad[0] + 1]:g})")
+    median = float(np.median(steps))
+    low, high = PLAUSIBLE_INTERVAL_S
+    if median > high:
+        raise error(f"{path}: column 'time_s': the median sample interval is {median:g} s "
+                    f"({1 / median:.3g} Hz); is the time in milliseconds? time_s is in seconds")
+    if median < low:
+        raise error(f"{path}: column 'time_s': the median sample interval is {median:g} s "
+                    f"({1 / median:.3g} Hz); time_s is in seconds")
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` as JSON-ready data: dataclasses as dicts (with a ``"type"``), enums by
+    value, tuples as lists, paths as strings, non-finite floats as None."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = {f.name: jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)
+                  if f.repr}
+        return {"type": type(value).__name__, **fields}
+    if isinstance(value, enum.Enum):
+        return jsonable(value.value)
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if hasattr(value, "item") and callable(value.item):  # numpy scalars
+        return jsonable(value.item())
+    return value
+
+
+def json_text(data: Any) -> str:
+    """Strict JSON (no NaN or Infinity: non-finite numbers become null), indented."""
+    return json.dumps(jsonable(data), indent=2, allow_nan=False) + "\n"

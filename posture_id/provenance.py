@@ -6,37 +6,12 @@ JSON file says which code, which settings and which URDF produced it.
 
 from __future__ import annotations
 
-import dataclasses
-import enum
-import math
-from pathlib import Path
 from typing import Any
 
 from posture_id._version import __version__
+from posture_id.fileio import jsonable
 
 __all__ = ["provenance", "body_identity", "jsonable"]
-
-
-def jsonable(value: Any) -> Any:
-    """``value`` as JSON-ready data: dataclasses as dicts (with a ``"type"``), enums by
-    value, tuples as lists, paths as strings, non-finite floats as None."""
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        fields = {f.name: jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)
-                  if f.repr}
-        return {"type": type(value).__name__, **fields}
-    if isinstance(value, enum.Enum):
-        return jsonable(value.value)
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v) for v in value]
-    if isinstance(value, Path):
-        return str(value)
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if hasattr(value, "item") and callable(value.item):  # numpy scalars
-        return jsonable(value.item())
-    return value
 
 
 def provenance(options: Any = None, body: Any = None, **extra: Any) -> dict:

@@ -15,9 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.errors import RecordingError
-from posture_id.fileio import atomic_write_text, read_numeric_csv
+from posture_id.fileio import atomic_write_text, check_time_column, read_numeric_csv
 
-__all__ = ["Recording"]
+__all__ = ["Recording", "RADIANS_SUSPECT_DEG"]
+
+#: A recording whose every angle (tilt and segments, "degrees") stays below this is taken
+#: to be in radians by mistake: 0.1° of sway and tilt at most is below any stimulus used.
+RADIANS_SUSPECT_DEG = 0.1
 
 
 @dataclass(frozen=True)
@@ -101,11 +105,12 @@ class Recording:
                 f"{path}: segment columns {','.join(names)} do not match the body's "
                 f"segments {','.join(segments)}"
             )
-        if len(values) < 2:
-            raise RecordingError(f"{path}: fewer than two samples")
-        if np.any(np.diff(values[:, 0]) <= 0):
-            bad = int(np.argmax(np.diff(values[:, 0]) <= 0)) + 3
-            raise RecordingError(f"{path}: line {bad}: time_s does not increase")
+        check_time_column(path, values[:, 0], RecordingError)
+        largest = float(np.abs(values[:, 1:]).max())
+        if 0 < largest < RADIANS_SUSPECT_DEG:
+            raise RecordingError(
+                f"{path}: every angle is below {RADIANS_SUSPECT_DEG}° (largest |value| "
+                f"{largest:.3g}); the columns look like radians, they must be degrees")
         return cls(
             time=values[:, 0] - values[0, 0],
             tilt=np.radians(values[:, 1]),

@@ -154,5 +154,5 @@ def test_missing_and_malformed_files(tmp_path):
         load_body(tmp_path / "nope.urdf")
     bad = tmp_path / "broken.urdf"
     bad.write_text("<robot name='x'><link name='a'>")
-    with pytest.raises(BodyError, match="cannot be read as URDF"):
+    with pytest.raises(BodyError, match="not well-formed XML"):
         load_body(bad)

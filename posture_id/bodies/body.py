@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from posture_id.bodies.urdf_checks import check_urdf_text
 from posture_id.errors import BodyError
 from posture_id.fileio import file_sha256
 
@@ -276,8 +277,11 @@ def load_body(path: str | Path = DEFAULT_URDF) -> Body:
     import pinocchio as pin
 
     path = Path(path)
+    if path.is_dir():
+        raise BodyError(f"{path}: is a folder, expected a URDF file")
     if not path.is_file():
         raise BodyError(f"{path}: no such URDF file")
+    check_urdf_text(path)
     try:
         model = pin.buildModelFromUrdf(str(path))
     except Exception as exc:  # pinocchio raises plain RuntimeError/ValueError

@@ -156,6 +156,35 @@ def _group_inertia(model, data, ids) -> tuple[float, np.ndarray, np.ndarray]:
     return mass, com, tensor
 
 
+#: Left and right joints of a pair must sit within this of each other's mirror image, m.
+MIRROR_TOL_M = 0.05
+
+
+def _check_pairs(urdf: Path, model, data, ids: dict[str, tuple[int, int]]) -> None:
+    """Every joint once; each left/right pair apart sideways and mirrored (same height and
+    fore-aft position within :data:`MIRROR_TOL_M`)."""
+    seen: dict[int, str] = {}
+    for role, (left, right) in ids.items():
+        if left == right:
+            raise BodyError(f"{urdf}: the left and right {role} joints are the same joint "
+                            f"'{model.names[left]}'")
+        for j in (left, right):
+            if j in seen:
+                raise BodyError(f"{urdf}: joint '{model.names[j]}' is given as both the "
+                                f"{seen[j]} and the {role}")
+            seen[j] = role
+        a, b = data.oMi[left].translation, data.oMi[right].translation
+        if abs(a[1] - b[1]) < 0.02 or abs(a[0] - b[0]) > MIRROR_TOL_M or \
+                abs(a[2] - b[2]) > MIRROR_TOL_M:
+            raise BodyError(
+                f"{urdf}: {role} joints '{model.names[left]}' and '{model.names[right]}' are "
+                f"not a mirrored left/right pair (at x, y, z = {_fmt3(a)} and {_fmt3(b)} m)")
+
+
+def _fmt3(v) -> str:
+    return "(" + ", ".join(f"{x:.3f}" for x in v) + ")"
+
+
 def lump_robot(
     urdf: str | Path,
     ankle: tuple[str, str],
@@ -241,6 +270,7 @@ def lump_robot(
                     f"({', '.join(f'{a:.3g}' for a in axis)}) is not the lateral axis y "
                     f"in the {label}"
                 )
+    _check_pairs(urdf, model, data, ids)
     subtree = {j: set(model.subtrees[j]) for pair in ids.values() for j in pair}
     for side in (0, 1):
         chain = [ids["hip"][side], *([ids["knee"][side]] if knee else []), ids["ankle"][side]]

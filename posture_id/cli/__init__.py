@@ -3,11 +3,14 @@ one module per command.
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
 a traceback: argument errors by :class:`~.arguments.Parser`, input errors as
-:class:`~posture_id.errors.PostureIdError`.
+:class:`~posture_id.errors.PostureIdError`. Anything else is a bug: one line saying so
+(exit status 3), the traceback with ``posture-id --debug``. Output paths are checked
+before any work starts (:func:`~.arguments.check_output_file`).
 """
 
 from __future__ import annotations
 
+import os
 import sys
 
 from posture_id.cli import body, dataset, evaluate, fit, identify, simulate, train
@@ -20,6 +23,8 @@ __all__ = ["main", "build_parser"]
 def build_parser() -> Parser:
     parser = Parser(prog="posture-id",
                     description="Identify DEC posture-control parameters from body sway.")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for command in (body, simulate, fit, dataset, train, evaluate, identify):
         command.add_parser(sub)
@@ -38,5 +43,17 @@ def main(argv: list[str] | None = None) -> int:
         print(f"posture-id: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # `posture-id body | head`: the reader left, nothing to say
-        sys.stderr.close()
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes stdout
         return 0
+    except KeyboardInterrupt:
+        print("posture-id: interrupted (finished work is kept; run the same command again "
+              "to continue where it resumes)", file=sys.stderr)
+        return 130
+    except Exception as exc:  # noqa: BLE001 - the one place that turns a bug into one line
+        if args.debug:
+            raise
+        detail = " ".join(str(exc).split())[:300]
+        print(f"posture-id: internal error (a bug; please report it): {type(exc).__name__}: "
+              f"{detail}. Run again with --debug for the traceback.", file=sys.stderr)
+        return 3

@@ -11,9 +11,13 @@ import argparse
 import dataclasses
 import inspect
 import math
+import os
 import sys
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, NoReturn
+
+from posture_id.errors import PostureIdError
 
 __all__ = [
     "Parser",
@@ -22,6 +26,9 @@ __all__ = [
     "non_negative_int",
     "positive_float",
     "non_negative_float",
+    "check_output_file",
+    "check_output_folder",
+    "say",
 ]
 
 
@@ -65,3 +72,55 @@ non_negative_float = _number(float, lambda x: x >= 0, "a number ≥ 0")
 def say(message: str) -> None:
     """A status line on stderr (results go to stdout)."""
     print(message, file=sys.stderr, flush=True)
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve() or (a.exists() and b.exists() and a.samefile(b))
+    except OSError:
+        return False
+
+
+def _writable_place(path: Path, flag: str) -> None:
+    """The nearest existing ancestor of ``path`` must be a writable folder."""
+    ancestor = path.parent
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise PostureIdError(f"{path}: {flag}: {ancestor} is a file, not a folder")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise PostureIdError(f"{path}: {flag}: the folder {ancestor} is not writable")
+
+
+def check_output_file(path: Path | None, flag: str, inputs=(), outputs=()) -> None:
+    """Refuse, before any work, an output file that cannot be written or would destroy
+    something: a directory, under a file or an unwritable folder, an input of the same
+    command, or the same path as another output. Missing folders are created later."""
+    if path is None:
+        return
+    if path.is_dir():
+        raise PostureIdError(f"{path}: {flag} is a folder; give a file name")
+    _writable_place(path, flag)
+    if path.exists() and not os.access(path, os.W_OK):
+        raise PostureIdError(f"{path}: {flag}: the file exists and is not writable")
+    for other in inputs:
+        if other is not None and _same_file(path, Path(other)):
+            raise PostureIdError(f"{path}: {flag} is also an input of this command; it would be "
+                                 "overwritten: write the result elsewhere")
+    for other in outputs:
+        if other is not None and _same_file(path, Path(other)):
+            raise PostureIdError(f"{path}: given as two different outputs; choose two names")
+
+
+def check_output_folder(path: Path, flag: str, inputs=()) -> None:
+    """Refuse an output folder that is a file, lies under a file or an unwritable folder,
+    or is an input of the command."""
+    if path.exists() and not path.is_dir():
+        raise PostureIdError(f"{path}: {flag} is a file, not a folder")
+    if not path.exists():
+        _writable_place(path, flag)
+    elif not os.access(path, os.W_OK | os.X_OK):
+        raise PostureIdError(f"{path}: {flag}: the folder is not writable")
+    for other in inputs:
+        if other is not None and _same_file(path, Path(other)):
+            raise PostureIdError(f"{path}: {flag} is also an input of this command")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from posture_id.bodies.anthropometry import (
@@ -14,9 +13,10 @@ from posture_id.bodies.anthropometry import (
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.bodies.lumping import PRESETS, lump_robot, preset_body
 from posture_id.bodies.urdf_writer import write_chain_urdf
-from posture_id.cli.arguments import positive_float, say
+from posture_id.cli.arguments import check_output_file, positive_float, say
 from posture_id.dec.parameters import default_parameters
 from posture_id.errors import PostureIdError
+from posture_id.fileio import json_text
 
 __all__ = ["add_parser", "run"]
 
@@ -58,6 +58,7 @@ def _write(args: argparse.Namespace) -> Path | None:
         return None
     if args.out is None:
         raise PostureIdError("--out is required to write a body URDF")
+    check_output_file(args.out, "--out", inputs=(args.urdf, args.lump, args.srdf))
     if args.urdf is not None:
         raise PostureIdError("give either a URDF to describe or flags to write one, not both")
     if args.from_robot:
@@ -97,8 +98,7 @@ def run(args: argparse.Namespace) -> int:
     body = load_body(urdf)
     params = default_parameters(body)
     if args.json:
-        print(json.dumps({**body.to_dict(), "default_parameters": params.to_dict()},
-                         indent=2))
+        print(json_text({**body.to_dict(), "default_parameters": params.to_dict()}), end="")
     else:
         print(body.summary() + "\n\ndefault parameters (MODEL §3):\n" + params.summary())
     return 0

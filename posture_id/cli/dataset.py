@@ -6,7 +6,13 @@ import argparse
 from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF
-from posture_id.cli.arguments import default_of, non_negative_int, positive_int, say
+from posture_id.cli.arguments import (
+    check_output_folder,
+    default_of,
+    non_negative_int,
+    positive_int,
+    say,
+)
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.simulate import add_model_arguments, add_stimulus_arguments, model_options
 from posture_id.datasets.config import DatasetConfig
@@ -43,6 +49,7 @@ def add_parser(sub) -> None:
 
 
 def run_generate(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out", inputs=(args.body,))
     config = DatasetConfig(
         trials=args.trials, body=str(args.body or DEFAULT_URDF), seed=args.seed,
         shard_size=args.shard_size, amplitude_deg=args.amplitude_deg, cycles=args.cycles,
@@ -56,6 +63,8 @@ def run_generate(args: argparse.Namespace) -> int:
 
 
 def run_info(args: argparse.Namespace) -> int:
+    if args.figures is not None:
+        check_output_folder(args.figures, "--figures")
     data = Dataset.open(args.dir, verify=not args.no_verify)
     print(data.summary())
     overview, images = data.plot(args.figures)

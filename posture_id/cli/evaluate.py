@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from posture_id.cli.arguments import non_negative_int, say
+from posture_id.cli.arguments import check_output_folder, non_negative_int, say
 from posture_id.cli.progress import TerminalProgress
 
 __all__ = ["add_parser"]
@@ -23,6 +23,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out", inputs=(args.model, args.dataset))
     # torch loads here, not when the parser is built: other commands start without it
     from posture_id.learning.evaluation import evaluate
 

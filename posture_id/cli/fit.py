@@ -6,7 +6,13 @@ import argparse
 from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
-from posture_id.cli.arguments import default_of, non_negative_int, positive_int, say
+from posture_id.cli.arguments import (
+    check_output_file,
+    default_of,
+    non_negative_int,
+    positive_int,
+    say,
+)
 from posture_id.cli.progress import TerminalProgress
 from posture_id.dec.parameters import DecParameters
 from posture_id.fitting.least_squares import fit_recording
@@ -49,6 +55,9 @@ def options_from(args: argparse.Namespace) -> FitOptions:
 
 
 def run(args: argparse.Namespace) -> int:
+    inputs = (args.recording, args.body, args.init)
+    check_output_file(args.out, "--out", inputs)
+    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
     recording = Recording.from_csv(args.recording, body.segment_names)
     init = DecParameters.from_json(args.init, body) if args.init else None

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
-from posture_id.cli.arguments import say
+from posture_id.cli.arguments import check_output_file, say
 from posture_id.recording import Recording
 
 __all__ = ["add_parser"]
@@ -24,6 +24,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_output_file(args.out, "--out", inputs=(args.recording, args.body, args.model))
     # torch loads here, not when the parser is built: other commands start without it
     from posture_id.learning.identifier import CnnIdentifier
 

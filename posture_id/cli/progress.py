@@ -13,7 +13,7 @@ __all__ = ["TerminalProgress"]
 
 class TerminalProgress:
     """A :data:`posture_id.progress.Progress` callback for the terminal; use as a context
-    manager so the bar is closed.
+    manager so the bar is closed. A count that goes back (the next epoch) starts a new bar.
 
     Args:
         description: the bar's label. prefix: put before every message line.
@@ -32,6 +32,9 @@ class TerminalProgress:
             print(f"{self.prefix}: {update.message}", file=sys.stderr, flush=True)
         if update.total is None or self.quiet:
             return
+        if self.bar is not None and (update.done < self.bar.n or update.total != self.bar.total):
+            self.bar.close()  # a new pass (the next epoch): a new bar
+            self.bar = None
         if self.bar is None:
             self.bar = tqdm(total=update.total, unit=update.unit, desc=self.description,
                             file=sys.stderr)

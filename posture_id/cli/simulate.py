@@ -7,6 +7,7 @@ from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
+    check_output_file,
     default_of,
     non_negative_float,
     positive_float,
@@ -62,6 +63,9 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    inputs = (args.body, args.params, args.tilt)
+    check_output_file(args.out, "--out", inputs)
+    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
     params = DecParameters.from_json(args.params, body) if args.params else None
     if args.tilt:

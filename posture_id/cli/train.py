@@ -5,7 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from posture_id.cli.arguments import default_of, non_negative_int, positive_float, positive_int, say
+from posture_id.cli.arguments import (
+    check_output_folder,
+    default_of,
+    non_negative_int,
+    positive_float,
+    positive_int,
+    say,
+)
 from posture_id.cli.progress import TerminalProgress
 from posture_id.datasets.store import Dataset
 from posture_id.learning.config import (
@@ -62,6 +69,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out", inputs=(args.dataset,))
     # torch loads here, not when the parser is built: other commands start without it
     from posture_id.learning.training import train
 

@@ -51,6 +51,21 @@ from posture_id.progress import Progress, report
 __all__ = ["generate_dataset"]
 
 
+#: Simulated trials after which the kept rate is judged, and the least rate accepted.
+HOPELESS_AFTER, LEAST_KEPT_RATE = 256, 0.01
+
+
+def _refuse_hopeless(config: DatasetConfig, simulated: int, rate: float) -> None:
+    """Stop when (almost) no trial stays within the sway limit: the set would never end."""
+    if simulated < HOPELESS_AFTER or rate >= LEAST_KEPT_RATE:
+        return
+    limit = config.simulation.sway_limit_deg
+    raise DatasetError(
+        f"only {100 * rate:.2f} % of the {simulated} trials simulated so far stayed within "
+        f"±{limit:g}° (at least {100 * LEAST_KEPT_RATE:g} % is needed): {config.trials} kept "
+        "trials are out of reach; check the body and --sway-limit-deg")
+
+
 class _RunningMoments:
     """Mean and variance over a stream of batches (Chan et al.'s parallel update)."""
 
@@ -193,8 +208,9 @@ def generate_dataset(
         while needed_shards() is None:
             # estimate how many more shards the wave needs from the acceptance so far
             done = [e for e in entries.values()]
-            rate = (sum(e["kept"] for e in done) / sum(e["simulated"] for e in done)
-                    if done else 0.75)
+            simulated = sum(e["simulated"] for e in done)
+            rate = sum(e["kept"] for e in done) / simulated if done else 0.75
+            _refuse_hopeless(config, simulated, rate)
             missing = max(config.trials - kept_total(), 1)
             wave = max(1, math.ceil(missing / max(rate, 0.05) / config.shard_size))
             todo = []

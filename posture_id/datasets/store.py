@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.datasets.config import DatasetError
-from posture_id.fileio import atomic_write, atomic_write_text, file_sha256
+from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
 from posture_id.plotting import plot_dataset_overview, plot_images
 
 __all__ = ["Dataset", "FORMAT", "FORMAT_VERSION", "read_manifest", "write_manifest",
@@ -164,7 +164,7 @@ def check_shard(path: Path, entry: dict) -> None:
 
 
 def write_manifest(path: Path, manifest: dict) -> None:
-    atomic_write_text(path / "manifest.json", json.dumps(manifest, indent=2) + "\n")
+    atomic_write_text(path / "manifest.json", json_text(manifest))
 
 
 def save_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:

@@ -22,7 +22,7 @@ from types import MappingProxyType
 import numpy as np
 
 from posture_id.errors import ParameterError
-from posture_id.fileio import atomic_write_text
+from posture_id.fileio import atomic_write_text, json_text
 
 __all__ = [
     "ModuleParameters",
@@ -129,7 +129,7 @@ class DecParameters:
 
     def to_json(self, path: str | Path | None = None) -> str:
         """JSON text; written atomically to ``path`` when given."""
-        text = json.dumps(self.to_dict(), indent=2) + "\n"
+        text = json_text(self.to_dict())
         if path is not None:
             atomic_write_text(Path(path), text)
         return text

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from posture_id.errors import RecordingError
 from posture_id.fitting.options import FitOptions
 from posture_id.recording import Recording
@@ -19,6 +21,9 @@ def prepare_recording(recording: Recording, source: str, options: FitOptions
     """
     rate_hz = options.simulation.sample_rate_hz
     notices = []
+    if np.ptp(recording.tilt) == 0:
+        raise RecordingError(f"{source}: the tilt is constant: there is no stimulus, so the "
+                             "controller's parameters cannot be identified from it")
     if not recording.evenly_sampled():
         raise RecordingError(f"{source}: samples are not evenly spaced in time")
     if recording.duration_s < options.min_duration_s - 1e-9:

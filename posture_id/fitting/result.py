@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
-from posture_id.fileio import atomic_write_text
+from posture_id.fileio import atomic_write_text, json_text
 from posture_id.plotting import plot_fit
 
 __all__ = ["StageResult", "FitResult", "class_names"]
@@ -118,7 +117,7 @@ class FitResult:
 
     def to_json(self, path: str | Path | None = None) -> str:
         """JSON text (strict: no NaN or Infinity); written atomically to ``path`` if given."""
-        text = json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+        text = json_text(self.to_dict())
         if path is not None:
             atomic_write_text(Path(path), text)
         return text

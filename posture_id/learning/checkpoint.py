@@ -30,11 +30,10 @@ from safetensors.torch import load_file, save_file
 
 from posture_id._version import __version__
 from posture_id.datasets.features import FEATURE_DEFINITION
-from posture_id.fileio import atomic_write, atomic_write_text, file_sha256
+from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text, jsonable
 from posture_id.learning.config import ClassOutput, Layout, LearningError, NetworkConfig
 from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import Standardiser
-from posture_id.provenance import jsonable
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "LoadedModel", "save_model", "load_model",
            "network_config_from_dict", "TARGETS"]
@@ -109,7 +108,7 @@ def save_model(folder: str | Path, network: IdentifierNetwork, standardiser: Sta
         **sidecar,
         "weights_sha256": file_sha256(folder / WEIGHTS),
     }
-    atomic_write_text(folder / SIDECAR, json.dumps(jsonable(data), indent=2) + "\n")
+    atomic_write_text(folder / SIDECAR, json_text(data))
     return folder
 
 

@@ -23,7 +23,6 @@ taken as infinite.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,7 +33,7 @@ from scipy.stats import spearmanr
 from posture_id.bodies.body import load_body
 from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import TARGET_FIELDS, default_parameters, denormalise_arrays
-from posture_id.fileio import atomic_write_text
+from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
 from posture_id.learning.prediction import predict_images
@@ -222,7 +221,7 @@ class EvaluationReport:
         """report.json, report.md and the plots, into ``folder``."""
         folder = Path(folder)
         json_path = atomic_write_text(folder / "report.json",
-                                      json.dumps(self.to_dict(), indent=2) + "\n")
+                                      json_text(self.to_dict()))
         md_path = atomic_write_text(folder / "report.md", self.to_markdown())
         return [json_path, md_path, *self.plot(folder)]
 

@@ -14,7 +14,6 @@ otherwise the error says so (least squares, ``posture-id fit``, takes any tilt).
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,7 +29,7 @@ from posture_id.dec.parameters import (
     denormalise_arrays,
 )
 from posture_id.errors import RecordingError
-from posture_id.fileio import atomic_write_text
+from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
@@ -80,7 +79,7 @@ class CnnIdentification:
         }
 
     def to_json(self, path: str | Path | None = None) -> str:
-        text = json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n"
+        text = json_text(self.to_dict())
         if path is not None:
             atomic_write_text(Path(path), text)
         return text

@@ -29,7 +29,7 @@ import torch.nn.functional as F  # noqa: N812 - torch's convention
 from safetensors.torch import load_file, save_file
 
 from posture_id.datasets.store import Dataset
-from posture_id.fileio import atomic_write, atomic_write_text, file_sha256
+from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text, jsonable
 from posture_id.learning.checkpoint import save_model
 from posture_id.learning.config import (
     AdamWOneCycle,
@@ -44,7 +44,7 @@ from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import SplitSamples, Standardiser
 from posture_id.plotting import plot_loss_curves
 from posture_id.progress import Progress, report
-from posture_id.provenance import jsonable, provenance
+from posture_id.provenance import provenance
 
 __all__ = ["train", "TrainingResult", "Objective"]
 
@@ -319,7 +319,7 @@ def _write_state(out: Path, identity: dict, net, optimiser, schedule, history, b
     state = {"identity": identity, "weights": weights, "optimiser": optimiser_json,
              "schedule": schedule.state_dict(), "history": history,
              "best_validation_loss": best[0], "best_epoch": best[1]}
-    atomic_write_text(out / STATE, json.dumps(jsonable(state), indent=2) + "\n")
+    atomic_write_text(out / STATE, json_text(state))
     atomic_write_text(out / "log.jsonl", "".join(json.dumps(r) + "\n" for r in history))
     for old in (out / "training").glob("epoch-*.safetensors"):
         if old.name != Path(weights).name:

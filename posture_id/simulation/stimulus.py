@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.errors import StimulusError
-from posture_id.fileio import read_numeric_csv
+from posture_id.fileio import check_time_column, read_numeric_csv
 
 __all__ = [
     "TiltProfile",
@@ -180,5 +180,8 @@ def tilt_from_csv(path: str | Path) -> TiltProfile:
         if col not in header:
             raise StimulusError(f"{path}: column '{col}' is missing (header: {','.join(header)})")
     times = values[:, header.index("time_s")]
+    check_time_column(Path(path), times, StimulusError)
     angles = np.radians(values[:, header.index("tilt_deg")])
+    if np.ptp(angles) == 0:
+        raise StimulusError(f"{path}: column 'tilt_deg' is constant: there is no stimulus")
     return tilt_from_array(times, angles, description=str(path))

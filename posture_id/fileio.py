@@ -81,7 +81,7 @@ def read_numeric_csv(path: str | Path, error: type[Exception], what: str
     except FileNotFoundError:
         raise error(f"{path}: no such {what}") from None
     except IsADirectoryError:
-        raise error(f"{path}: is a directory, expected a {what} (CSV)") from None
+        raise error(f"{path}: is a folder, expected a {what} (CSV)") from None
     except UnicodeDecodeError as exc:
         raise error(f"{path}: not UTF-8 text (byte {exc.start}); save the {what} as UTF-8 "
                     "CSV") from None

@@ -26,6 +26,10 @@ __all__ = ["Dataset", "FORMAT", "FORMAT_VERSION", "read_manifest", "write_manife
 FORMAT = "posture_id-dataset"
 #: 2: the simulation options are nested under "simulation" in the configuration.
 FORMAT_VERSION = 2
+#: Keys every manifest has, with their types (a finished one has more: counts, split).
+_MANIFEST_KEYS = {"config": dict, "body": dict, "stimulus": dict, "options": dict,
+                  "shards": list, "complete": bool}
+_SHARD_KEYS = {"index": int, "file": str, "simulated": int, "kept": int, "sha256": str}
 
 
 @dataclass
@@ -44,6 +48,12 @@ class Dataset:
             raise DatasetError(f"{path}: not a data set (no manifest.json)")
         if not manifest.get("complete"):
             raise DatasetError(f"{path}: generation did not finish; run the same command again")
+        file = path / "manifest.json"
+        for key in ("counts", "split"):
+            if not isinstance(manifest.get(key), dict):
+                raise DatasetError(f"{file}: a finished manifest has a '{key}' object")
+        if not all(isinstance(e.get("used"), int) for e in manifest["shards"]):
+            raise DatasetError(f"{file}: every shard entry of a finished set has 'used'")
         data = cls(path, manifest)
         if verify:
             data.verify()
@@ -139,9 +149,11 @@ def read_manifest(path: Path) -> dict | None:
     if not file.exists():
         return None
     try:
-        manifest = json.loads(file.read_text())
-    except json.JSONDecodeError as exc:
+        manifest = json.loads(file.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise DatasetError(f"{file}: not valid JSON ({exc})") from None
+    except OSError as exc:
+        raise DatasetError(f"{file}: cannot be read ({exc.strerror})") from None
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         raise DatasetError(f"{file}: not a posture_id data-set manifest")
     if manifest.get("format_version") != FORMAT_VERSION:
@@ -149,6 +161,17 @@ def read_manifest(path: Path) -> dict | None:
             f"{file}: data-set format version {manifest.get('format_version')!r}; this "
             f"posture_id reads version {FORMAT_VERSION}: generate the set again"
         )
+    for key, kind in _MANIFEST_KEYS.items():
+        if key not in manifest:
+            raise DatasetError(f"{file}: the manifest is missing '{key}'")
+        if not isinstance(manifest[key], kind):
+            raise DatasetError(f"{file}: '{key}' must be a {kind.__name__}, got "
+                               f"{type(manifest[key]).__name__}")
+    for k, entry in enumerate(manifest["shards"]):
+        if not isinstance(entry, dict) or not all(
+                isinstance(entry.get(f), t) for f, t in _SHARD_KEYS.items()):
+            raise DatasetError(f"{file}: shard entry {k} is not an object with "
+                               + ", ".join(f"{f} ({t.__name__})" for f, t in _SHARD_KEYS.items()))
     return manifest
 
 

@@ -34,6 +34,7 @@ __all__ = [
     "normalise",
     "denormalise",
     "ParameterArrays",
+    "MAX_DELAY_S",
     "normalise_arrays",
     "denormalise_arrays",
 ]
@@ -48,6 +49,8 @@ PAPER_TABLE = {
 #: Default class per column **[decision]**: lowest +1 (COM), middle −1 (joint), top +1.
 DEFAULT_CLASSES = {"ankle": "com", "knee": "joint", "hip": "com"}
 _CONTROLS = {"com": 1, "joint": -1}
+#: Longest lumped delay accepted, s (sizes the simulator's delay buffers).
+MAX_DELAY_S = 2.0
 _REQUIRED = ("kp", "ki", "kd", "delay_s", "controls")
 _OPTIONAL = ("kpas", "bpas")
 
@@ -190,9 +193,15 @@ class DecParameters:
         """Read and validate a parameter JSON file for ``body``."""
         path = Path(path)
         try:
-            data = json.loads(path.read_text())
+            data = json.loads(path.read_text(encoding="utf-8-sig"))
         except FileNotFoundError:
             raise ParameterError(f"{path}: no such parameter file") from None
+        except IsADirectoryError:
+            raise ParameterError(f"{path}: is a folder, expected a parameter file (JSON)") from None
+        except UnicodeDecodeError as exc:
+            raise ParameterError(f"{path}: not UTF-8 text (byte {exc.start})") from None
+        except OSError as exc:
+            raise ParameterError(f"{path}: cannot be read ({exc.strerror})") from None
         except json.JSONDecodeError as exc:
             raise ParameterError(f"{path}: not valid JSON ({exc})") from None
         return cls.from_dict(data, body, source=str(path))
@@ -209,6 +218,9 @@ def _validate_module(m: ModuleParameters, where: str) -> None:
             raise ParameterError(f"{where}: field '{key}' is not finite ({value})")
         if value < 0:
             raise ParameterError(f"{where}: field '{key}' is negative ({value})")
+    if m.delay_s > MAX_DELAY_S:
+        raise ParameterError(f"{where}: field 'delay_s' is {m.delay_s:g} s, longer than the "
+                             f"{MAX_DELAY_S:g} s supported (it is in seconds, not ms)")
 
 
 def _column(index: int, n: int) -> str:

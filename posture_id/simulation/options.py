@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from posture_id.dec.parameters import MAX_DELAY_S
 from posture_id.errors import SimulationError
 from posture_id.simulation.stimulus import TiltProfile
 
@@ -18,8 +19,6 @@ __all__ = ["SimulationOptions", "MAX_SWAY_LIMIT_DEG", "MAX_DELAY_S"]
 
 #: Largest sway limit accepted: the kernel's polynomial sin/cos are exact up to 45°.
 MAX_SWAY_LIMIT_DEG = 45.0
-#: Largest lumped delay accepted, s (sizes the delay buffers).
-MAX_DELAY_S = 2.0
 
 
 @dataclass(frozen=True)

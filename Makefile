@@ -58,8 +58,8 @@ model: $(STAMP)
 	  --quiet
 	$(BIN)/posture-id evaluate data/models/$(NAME) data/$(NAME) --out docs/models/$(NAME)
 	mkdir -p $(MODELS_DIR)/$(NAME)
-	cp data/models/$(NAME)/model.safetensors data/models/$(NAME)/model.json \
-	  data/models/$(NAME)/log.jsonl data/models/$(NAME)/loss.png docs/models/$(NAME)/
+	cp data/models/$(NAME)/model.json data/models/$(NAME)/log.jsonl \
+	  data/models/$(NAME)/loss.png docs/models/$(NAME)/
 	cp data/models/$(NAME)/model.safetensors data/models/$(NAME)/model.json $(MODELS_DIR)/$(NAME)/
 
 bench: $(STAMP)

@@ -208,3 +208,27 @@ def plot_identification_error(parameter_mse, error, path=None, ax=None, ylabel="
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_identification(result, path=None, ax=None):
+    """Recorded (grey) versus re-simulated (colour) sway of every segment and of the body
+    COM, degrees (the paper's Fig. 7)."""
+    names = [*(s.segment for s in result.segments), "body COM (α_BS)"]
+    n = len(names)
+    fig, axes = _axes(ax, n, 1, (10, 1.9 * n + 0.9), sharex=True)
+    recorded = np.column_stack([result.recorded, result.sway_recorded])
+    simulated = np.column_stack([result.resimulated, result.sway_resimulated])
+    for j, name in enumerate(names):
+        a = axes[j, 0]
+        a.plot(result.time, np.degrees(recorded[:, j]), color="0.6", lw=1.4, label="recorded")
+        a.plot(result.time, np.degrees(simulated[:, j]), color=f"C{j}", lw=0.8,
+               label="re-simulated")
+        a.set_ylabel(f"{name} (°)")
+        a.grid(alpha=0.3)
+        a.legend(loc="upper right", fontsize=8)
+    axes[-1, 0].set_xlabel("time (s)")
+    fig.suptitle(f"{result.method}: classes {'/'.join(result.classes)}, E_rel "
+                 f"{100 * result.e_rel:.2f} %")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

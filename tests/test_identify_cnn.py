@@ -26,7 +26,7 @@ def test_identify_recovers_the_classes_of_a_simulated_recording(tip, tmp_path, c
     result = json.loads((tmp_path / "r.json").read_text())
     assert [result["parameters"][j]["controls"] for j in tip.joint_names] == \
         ["com", "joint", "com"]
-    assert result["model"]["layout"] == "modular"
+    assert result["cnn"]["model"]["layout"] == "modular" and result["method"] == "cnn"
     assert all(p > 0.9 for p in result["class_probability_com"].values()
                if p > 0.5)
     # the parameters object is a parameter file: simulate takes it back

@@ -189,6 +189,14 @@ class Body:
         s = self.gravity_lever
         return np.cumsum(s[::-1])[::-1] / self.mass_above
 
+    def com_angles(self, theta: np.ndarray) -> np.ndarray:
+        """COM-above angles α_i,S (..., N) rad of segment angles θ (..., N) rad: the angle
+        from the vertical of the line from joint i to the COM of the segments above it
+        (α_1,S is the whole-body sway α_BS)."""
+        vectors = np.exp(1j * np.asarray(theta)) * self.gravity_lever
+        above = np.flip(np.cumsum(np.flip(vectors, axis=-1), axis=-1), axis=-1)
+        return np.angle(above)
+
     @property
     def com_height_above(self) -> np.ndarray:
         """(N,) m, h_i: distance from joint i to the COM of the segments above, upright."""

@@ -1,3 +1,8 @@
 """Identification of recordings: the CNN, least squares and the hybrid behind one entry
-point, cohorts and reports. Uses :mod:`posture_id.learning` and :mod:`posture_id.fitting`;
+point (:func:`identify`). Uses :mod:`posture_id.learning` and :mod:`posture_id.fitting`;
 only the command line sits above it."""
+
+from posture_id.identify.core import Method, identify
+from posture_id.identify.result import IdentificationResult, SegmentFit
+
+__all__ = ["identify", "Method", "IdentificationResult", "SegmentFit"]

@@ -1,0 +1,141 @@
+"""One entry point for identifying a recording: the CNN, least squares, or both.
+
+    >>> from posture_id import load_body, Recording
+    >>> from posture_id.identify import identify, Method
+    >>> body = load_body()
+    >>> rec = Recording.from_csv("rec.csv", body.segment_names)
+    >>> result = identify(rec, body, Method.HYBRID)   # the CNN's answer refined
+    >>> print(result.summary()); result.plot("result.png")
+
+- :attr:`Method.CNN`: the trained network alone (milliseconds; only for the stimulus it
+  was trained on);
+- :attr:`Method.FIT`: least squares from the body's defaults (any tilt; seconds, and it
+  can stall in a local minimum);
+- :attr:`Method.HYBRID`: least squares started from the CNN's parameters and classes (the
+  classes are kept when the CNN is sure of them, P(C = +1) outside 0.05–0.95, and
+  relaxed otherwise).
+
+Every result is checked by simulating the identified model on the recording's tilt: the
+body-sway errors E_id and E_rel (MODEL §7) and each segment's residual.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.bodies.body import Body, load_body
+from posture_id.fitting.least_squares import fit_recording
+from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
+from posture_id.identify.result import IdentificationResult, SegmentFit
+from posture_id.learning.identifier import CnnIdentifier
+from posture_id.progress import Progress
+from posture_id.provenance import provenance
+from posture_id.recording import Recording
+from posture_id.simulation.batch import simulate
+from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG, SimulationOptions
+from posture_id.simulation.stimulus import recognise_prts, tilt_from_array
+
+__all__ = ["Method", "identify"]
+
+#: The CNN is taken to be sure of a class when P(C = +1) is outside this band.
+UNSURE_CLASS = (0.05, 0.95)
+
+
+class Method(enum.Enum):
+    """How to identify (see the module doc)."""
+
+    CNN = "cnn"
+    FIT = "fit"
+    HYBRID = "hybrid"
+
+
+def identify(recording: Recording, body: Body | None = None, method: Method = Method.HYBRID,
+             model: str | Path | CnnIdentifier | None = None,
+             fit_options: FitOptions | None = None, progress: Progress | None = None,
+             source: str = "recording") -> IdentificationResult:
+    """Identify every module's Kp, Ki, Kd, Δ and class from one recording.
+
+    Args:
+        recording: tilt and segment angles (the body's segments). body: default the TIP.
+        method: :class:`Method`. model: a model directory or a loaded
+            :class:`~posture_id.learning.identifier.CnnIdentifier` (default: the bundled
+            model for the body). fit_options: for the least-squares stage.
+        progress: told the fit's stages. source: the recording's name in messages.
+    """
+    body = body or load_body()
+    start = time.perf_counter()
+    options = fit_options or FitOptions()
+    notices: list[str] = []
+    cnn = fit = None
+    if method in (Method.CNN, Method.HYBRID):
+        identifier = (model if isinstance(model, CnnIdentifier)
+                      else CnnIdentifier.load(model, body) if model is not None
+                      else CnnIdentifier.for_body(body))
+        cnn = identifier.identify(recording, source)
+        notices += cnn.notices
+    if method is Method.FIT:
+        fit = fit_recording(recording, body, None, options, progress, source)
+    elif method is Method.HYBRID:
+        low, high = UNSURE_CLASS
+        unsure = [j for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
+                  if low < p < high]
+        if unsure:
+            notices.append(f"the CNN is unsure of the class of {', '.join(unsure)}: least "
+                           "squares chooses the classes again")
+        classes = RelaxedClasses() if unsure else FixedClasses()
+        fit = fit_recording(recording, body, cnn.parameters, replace(options, classes=classes),
+                            progress, source)
+    if fit is not None:
+        notices += [n for n in fit.notices if n not in notices]
+        parameters, normalised = fit.parameters, fit.normalised
+    else:
+        parameters, normalised = cnn.parameters, cnn.normalised
+    checked = _resimulate(body, recording, parameters, options.simulation)
+    return IdentificationResult(
+        method=method.value, parameters=parameters, normalised=np.asarray(normalised),
+        class_probability=None if cnn is None else np.asarray(cnn.class_probability),
+        wall_time_s=time.perf_counter() - start, joints=body.joint_names,
+        cnn=None if cnn is None else cnn.to_dict(),
+        fit=None if fit is None else {k: v for k, v in fit.to_dict().items()
+                                      if k != "provenance"},
+        notices=tuple(notices),
+        provenance=provenance(options if fit is not None else None, body, source=source,
+                              method=method.value),
+        **checked,
+    )
+
+
+def _resimulate(body: Body, recording: Recording, parameters, simulation: SimulationOptions
+                ) -> dict:
+    """Simulate the identified model on the recording's tilt; E_id, E_rel, segment fits."""
+    rec = recording.resampled(simulation.sample_rate_hz)
+    stimulus = recognise_prts(rec.time, rec.tilt) or tilt_from_array(rec.time, rec.tilt,
+                                                                    "the recording's tilt")
+    wide = replace(simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
+    trial = simulate(body, parameters, stimulus, wide)
+    n = len(rec.time)
+    theta = trial.theta[:n]
+    sway_recorded = body.com_angles(rec.theta)[:, 0]
+    sway_simulated = trial.alpha[:n, 0]
+    diff = sway_recorded - sway_simulated
+    fell = not np.all(np.isfinite(diff))
+    e_id = math.inf if fell else math.degrees(float(np.linalg.norm(diff))) / n
+    e_rel = math.inf if fell else float(np.linalg.norm(diff) / np.linalg.norm(sway_recorded))
+    segments = []
+    for j, name in enumerate(rec.segments):
+        residual = rec.theta[:, j] - theta[:, j]
+        if fell:
+            segments.append(SegmentFit(name, math.inf, -math.inf))
+            continue
+        segments.append(SegmentFit(
+            name, math.degrees(float(np.sqrt(np.mean(residual**2)))),
+            float(1.0 - np.var(residual) / np.var(rec.theta[:, j]))))
+    return {"e_id_deg": e_id, "e_rel": e_rel, "segments": tuple(segments), "time": rec.time,
+            "recorded": rec.theta, "resimulated": theta, "sway_recorded": sway_recorded,
+            "sway_resimulated": sway_simulated}

@@ -1,0 +1,117 @@
+"""The answer to "how does this body keep its balance": an identification result."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.plotting import plot_identification
+
+__all__ = ["SegmentFit", "IdentificationResult"]
+
+
+@dataclass(frozen=True)
+class SegmentFit:
+    """How well the identified model reproduces one recorded segment.
+
+    Attributes:
+        segment: link name. rms_deg: RMS of recorded minus re-simulated angle, degrees.
+        variance_explained: 1 − var(residual) / var(recorded).
+    """
+
+    segment: str
+    rms_deg: float
+    variance_explained: float
+
+
+@dataclass(frozen=True)
+class IdentificationResult:
+    """Identified DEC parameters of one recording and the evidence for them.
+
+    Attributes:
+        method: "cnn", "fit" or "hybrid". parameters: every module, SI units (the
+            parameter-file format). normalised: (N, 5) [K̃p, K̃i, K̃d, Δ̃, C].
+        class_probability: (N,) P(C = +1) from the CNN, or None (least squares alone).
+        e_id_deg, e_rel: MODEL §7 of the body sway α_BS, recorded against re-simulated
+            with the identified parameters (inf when the re-simulation falls).
+        segments: per-segment fit. wall_time_s: the identification's time, s.
+        time (S,) s; recorded, resimulated (S, N) rad; sway_recorded, sway_resimulated (S,)
+        rad (α_BS); joints. cnn, fit: the stages' own results (``to_dict()``), or None.
+        notices: things to know. provenance: version, options, body identity, source.
+    """
+
+    method: str
+    parameters: DecParameters
+    normalised: np.ndarray
+    class_probability: np.ndarray | None
+    e_id_deg: float
+    e_rel: float
+    segments: tuple[SegmentFit, ...]
+    wall_time_s: float
+    joints: tuple[str, ...]
+    time: np.ndarray = field(repr=False)
+    recorded: np.ndarray = field(repr=False)
+    resimulated: np.ndarray = field(repr=False)
+    sway_recorded: np.ndarray = field(repr=False)
+    sway_resimulated: np.ndarray = field(repr=False)
+    cnn: dict | None = field(default=None, repr=False)
+    fit: dict | None = field(default=None, repr=False)
+    notices: tuple[str, ...] = ()
+    provenance: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def classes(self) -> tuple[str, ...]:
+        return tuple(self.parameters[j].controls for j in self.joints)
+
+    def to_dict(self) -> dict:
+        out = {
+            "method": self.method,
+            "parameters": self.parameters.to_dict(),
+            "normalised": {j: dict(zip((*TARGET_FIELDS, "class"), map(float, row), strict=True))
+                           for j, row in zip(self.joints, self.normalised, strict=True)},
+            "class_probability_com": (None if self.class_probability is None else dict(
+                zip(self.joints, map(float, self.class_probability), strict=True))),
+            "e_id_deg": self.e_id_deg,
+            "e_rel": self.e_rel,
+            "segments": {s.segment: {"rms_deg": s.rms_deg,
+                                     "variance_explained": s.variance_explained}
+                         for s in self.segments},
+            "wall_time_s": self.wall_time_s,
+            "notices": list(self.notices),
+            "cnn": self.cnn,
+            "fit": self.fit,
+            "provenance": self.provenance,
+        }
+        return out
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """Strict JSON; written atomically to ``path`` when given."""
+        text = json_text(self.to_dict())
+        if path is not None:
+            atomic_write_text(Path(path), text)
+        return text
+
+    def summary(self) -> str:
+        probability = (self.class_probability if self.class_probability is not None
+                       else [None] * len(self.joints))
+        lines = [f"{'module':<10}{'Kp':>10}{'Ki':>9}{'Kd':>9}{'Δ s':>8}  controls  P(com)"]
+        for j, p in zip(self.joints, probability, strict=True):
+            m = self.parameters[j]
+            shown = "  -" if p is None else f"{p:.3f}"
+            lines.append(f"{j:<10}{m.kp:>10.3f}{m.ki:>9.4f}{m.kd:>9.3f}{m.delay_s:>8.4f}  "
+                         f"{m.controls:<8}  {shown}")
+        lines.append("re-simulated: " + ", ".join(
+            f"{s.segment} RMS {s.rms_deg:.4f}° ({100 * s.variance_explained:.1f} % of variance)"
+            for s in self.segments))
+        lines.append(f"body sway: E_id {self.e_id_deg:.2e}°, E_rel {100 * self.e_rel:.2f} %; "
+                     f"{self.method} in {self.wall_time_s:.3g} s")
+        lines += [f"note: {n}" for n in self.notices]
+        return "\n".join(lines)
+
+    def plot(self, path=None, ax=None):
+        """Recorded versus re-simulated sway per segment and of the body COM (Fig. 7)."""
+        return plot_identification(self, path=path, ax=ax)

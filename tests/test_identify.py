@@ -1,0 +1,68 @@
+"""``posture_id.identify``: the CNN, least squares and the hybrid behind one entry point,
+checked by re-simulation."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from posture_id.cli import main
+from posture_id.dec import sample_parameters
+from posture_id.identify import Method, identify
+from posture_id.recording import Recording
+from posture_id.simulation import simulate
+
+
+def _noisy_trial(body, seed, noise_deg):
+    rng = np.random.default_rng(seed)
+    while True:
+        truth = sample_parameters(body, 1, rng).trial(0, body.joint_names)
+        trial = simulate(body, truth)
+        if trial.stable:
+            break
+    noisy = trial.theta + np.radians(noise_deg) * rng.standard_normal(trial.theta.shape)
+    return truth, Recording(trial.time, trial.tilt, noisy, trial.segments)
+
+
+def test_cnn_result_is_checked_by_resimulation(tip, tmp_path):
+    truth, recording = _noisy_trial(tip, 31, 0.0)
+    result = identify(recording, tip, Method.CNN)
+    assert result.classes == tuple(truth[j].controls for j in tip.joint_names)
+    assert 0 < result.e_rel < 0.5 and result.e_id_deg > 0
+    assert [s.segment for s in result.segments] == list(tip.segment_names)
+    assert all(s.variance_explained > 0.5 for s in result.segments)
+    data = json.loads(result.to_json())
+    assert data["method"] == "cnn" and data["fit"] is None
+    assert data["provenance"]["body"]["sha256"] == tip.sha256
+    fig = result.plot(tmp_path / "cnn.png")
+    assert len(fig.axes) == 4 and (tmp_path / "cnn.png").stat().st_size > 10_000
+    assert "E_rel" in result.summary()
+
+
+@pytest.mark.slow
+def test_hybrid_on_a_noisy_recording_recovers_classes_and_kp(tip, tmp_path):
+    truth, recording = _noisy_trial(tip, 12, 0.01)
+    csv = tmp_path / "noisy.csv"
+    recording.to_csv(csv)
+    out = tmp_path / "hybrid.json"
+    assert main(["identify", str(csv), "--method", "hybrid", "--out", str(out),
+                 "--plot", str(tmp_path / "hybrid.png")]) == 0
+    data = json.loads(out.read_text())
+    for joint in tip.joint_names:
+        assert data["parameters"][joint]["controls"] == truth[joint].controls
+        assert abs(data["parameters"][joint]["kp"] / truth[joint].kp - 1) <= 0.05, joint
+    assert data["fit"]["status"]["converged"]
+    assert data["cnn"]["parameters"].keys() == data["parameters"].keys()  # kept beside
+    cnn_only = identify(Recording.from_csv(csv, tip.segment_names), tip, Method.CNN)
+    assert data["e_rel"] < cnn_only.e_rel  # refining reproduces the sway better
+
+
+@pytest.mark.slow
+def test_fit_method_needs_no_model(tip):
+    truth, recording = _noisy_trial(tip, 11, 0.0)
+    result = identify(recording, tip, Method.FIT)
+    assert result.class_probability is None and result.cnn is None
+    assert result.classes == tuple(truth[j].controls for j in tip.joint_names)
+    assert result.e_rel < 1e-4

@@ -491,3 +491,44 @@ def test_an_unexpected_error_is_one_line_and_says_bug(monkeypatch, capsys):
 
 def test_default_urdf_is_untouched_by_the_suite():
     assert DEFAULT_URDF.read_text().startswith("<?xml")
+
+
+# ------------------------------------------------------------------ lumping, flags, shards
+G1 = ("g1_description/urdf/g1_29dof_rev_1_0.urdf")
+
+
+@pytest.mark.parametrize(("ankles", "hips", "problem"), [
+    (("left_ankle_pitch_joint", "left_ankle_pitch_joint"),
+     ("left_hip_pitch_joint", "right_hip_pitch_joint"), "are the same joint"),
+    (("left_ankle_pitch_joint", "right_ankle_pitch_joint"),
+     ("left_ankle_pitch_joint", "right_hip_pitch_joint"), "given as both the ankle and the hip"),
+    (("left_ankle_pitch_joint", "right_knee_joint"),
+     ("left_hip_pitch_joint", "right_hip_pitch_joint"), "not a mirrored left/right pair"),
+    (("left_ankle_pitch_joint", "right_ankle_pitch"),
+     ("left_hip_pitch_joint", "right_hip_pitch_joint"), "right_ankle_pitch"),
+])
+def test_bad_lumping_request(tmp_path, capsys, ankles, hips, problem):
+    from posture_id.bodies.lumping import robots_dir
+
+    urdf = robots_dir() / G1
+    _run(tmp_path, ["body", "--lump", str(urdf), "--segments", "2", "--ankle-joints", *ankles,
+                    "--hip-joints", *hips, "--out", str(tmp_path / "x.urdf")], capsys, problem,
+         names=str(urdf))
+
+
+@pytest.mark.parametrize("flag", [["--cycles", "1"], ["--amplitude-deg", "2"],
+                                  ["--states", "80"]])
+def test_prts_flags_next_to_a_tilt_file(tmp_path, capsys, flag):
+    tilt = tmp_path / "tilt.csv"
+    tilt.write_text("time_s,tilt_deg\n0,0\n1,1\n2,0\n")
+    _run(tmp_path, ["simulate", "--tilt", str(tilt), *flag, "--out", str(tmp_path / "o.csv")],
+         capsys, f"--tilt replaces the PRTS: {flag[0]} do not apply")
+
+
+def test_truncated_shard_without_verification(tmp_path, capsys, small_set):
+    folder = tmp_path / "set"
+    shutil.copytree(small_set, folder)
+    shard = folder / "shard-00000.npz"
+    shard.write_bytes(shard.read_bytes()[:3000])
+    _run(tmp_path, ["dataset", "info", str(folder), "--no-verify", "--figures",
+                    str(tmp_path / "figs")], capsys, "cannot be read", names=str(shard))

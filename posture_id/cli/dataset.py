@@ -14,7 +14,12 @@ from posture_id.cli.arguments import (
     say,
 )
 from posture_id.cli.progress import TerminalProgress
-from posture_id.cli.simulate import add_model_arguments, add_stimulus_arguments, model_options
+from posture_id.cli.simulate import (
+    add_model_arguments,
+    add_stimulus_arguments,
+    model_options,
+    prts_arguments,
+)
 from posture_id.datasets.config import DatasetConfig
 from posture_id.datasets.generation import generate_dataset
 from posture_id.datasets.store import Dataset
@@ -52,8 +57,7 @@ def run_generate(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=(args.body,))
     config = DatasetConfig(
         trials=args.trials, body=str(args.body or DEFAULT_URDF), seed=args.seed,
-        shard_size=args.shard_size, amplitude_deg=args.amplitude_deg, cycles=args.cycles,
-        states=args.states, simulation=model_options(args),
+        shard_size=args.shard_size, **prts_arguments(args), simulation=model_options(args),
     )
     with TerminalProgress("kept trials", quiet=args.quiet) as progress:
         data = generate_dataset(config, args.out, workers=args.workers,

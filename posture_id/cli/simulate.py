@@ -15,23 +15,35 @@ from posture_id.cli.arguments import (
     say,
 )
 from posture_id.dec.parameters import DecParameters
+from posture_id.errors import PostureIdError
 from posture_id.simulation.batch import simulate
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.stimulus import PRTS_REGISTERS, prts, tilt_from_csv
 
-__all__ = ["add_parser", "run", "add_stimulus_arguments", "add_model_arguments"]
+__all__ = ["add_parser", "run", "add_stimulus_arguments", "add_model_arguments",
+           "prts_arguments", "model_options"]
+
+
+_PRTS_FLAGS = {"amplitude_deg": "--amplitude-deg", "cycles": "--cycles", "states": "--states"}
 
 
 def add_stimulus_arguments(parser: argparse.ArgumentParser) -> None:
-    """--amplitude-deg, --cycles, --states with the PRTS defaults."""
+    """--amplitude-deg, --cycles, --states (defaults: the PRTS's, filled in by
+    :func:`prts_arguments`, so that a flag given next to ``--tilt`` can be told apart)."""
     parser.add_argument("--amplitude-deg", type=positive_float,
-                        default=default_of(prts, "amplitude_deg"),
-                        help="PRTS peak-to-peak tilt, degrees (default %(default)g)")
-    parser.add_argument("--cycles", type=positive_int, default=default_of(prts, "cycles"),
-                        help="PRTS cycles (default %(default)d)")
-    parser.add_argument("--states", type=int, default=default_of(prts, "states"),
-                        choices=sorted(PRTS_REGISTERS, reverse=True),
-                        help="PRTS length (default %(default)d states, 60.5 s a cycle)")
+                        help=f"PRTS peak-to-peak tilt, degrees (default "
+                             f"{default_of(prts, 'amplitude_deg'):g})")
+    parser.add_argument("--cycles", type=positive_int,
+                        help=f"PRTS cycles (default {default_of(prts, 'cycles')})")
+    parser.add_argument("--states", type=int, choices=sorted(PRTS_REGISTERS, reverse=True),
+                        help=f"PRTS length (default {default_of(prts, 'states')} states, "
+                             "60.5 s a cycle)")
+
+
+def prts_arguments(args: argparse.Namespace) -> dict:
+    """The PRTS keyword arguments the flags ask for, defaults filled in."""
+    return {k: getattr(args, k) if getattr(args, k) is not None else default_of(prts, k)
+            for k in _PRTS_FLAGS}
 
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
@@ -69,9 +81,12 @@ def run(args: argparse.Namespace) -> int:
     body = load_body(args.body or DEFAULT_URDF)
     params = DecParameters.from_json(args.params, body) if args.params else None
     if args.tilt:
+        given = [flag for key, flag in _PRTS_FLAGS.items() if getattr(args, key) is not None]
+        if given:
+            raise PostureIdError(f"--tilt replaces the PRTS: {', '.join(given)} do not apply")
         stimulus = tilt_from_csv(args.tilt)
     else:
-        stimulus = prts(amplitude_deg=args.amplitude_deg, cycles=args.cycles, states=args.states)
+        stimulus = prts(**prts_arguments(args))
     options = model_options(args)
     result = simulate(body, params, stimulus, options)
     result.to_csv(args.out)

@@ -10,6 +10,7 @@
 from __future__ import annotations
 
 import json
+import zipfile
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +27,9 @@ __all__ = ["Dataset", "FORMAT", "FORMAT_VERSION", "read_manifest", "write_manife
 FORMAT = "posture_id-dataset"
 #: 2: the simulation options are nested under "simulation" in the configuration.
 FORMAT_VERSION = 2
+#: Arrays every shard holds.
+SHARD_ARRAYS = ("kp", "ki", "kd", "delay_s", "sign", "kpas", "bpas", "abort_time",
+                "max_sway_deg", "kept", "theta", "alpha_bs", "modular", "monolithic", "targets")
 #: Keys every manifest has, with their types (a finished one has more: counts, split).
 _MANIFEST_KEYS = {"config": dict, "body": dict, "stimulus": dict, "options": dict,
                   "shards": list, "complete": bool}
@@ -74,8 +78,16 @@ class Dataset:
     def load_shard(self, k: int) -> dict[str, np.ndarray]:
         """Arrays of shard k; the kept-trial arrays cut to the trials the set uses."""
         entry = self.shards[k]
-        with np.load(self.path / entry["file"], allow_pickle=False) as npz:
-            arrays = {key: npz[key] for key in npz.files}
+        file = self.path / entry["file"]
+        try:
+            with np.load(file, allow_pickle=False) as npz:
+                arrays = {key: npz[key] for key in npz.files}
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            raise DatasetError(f"{file}: cannot be read ({type(exc).__name__}: {exc}); check "
+                               "the set without --no-verify") from None
+        missing = [key for key in SHARD_ARRAYS if key not in arrays]
+        if missing:
+            raise DatasetError(f"{file}: shard lacks {', '.join(missing)}")
         used = entry["used"]
         for key in ("theta", "alpha_bs", "modular", "monolithic", "targets"):
             arrays[key] = arrays[key][:used]

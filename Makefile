@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-fast lint bench bodies models clean
+.PHONY: demo test test-fast lint bench bodies models model examples clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,9 +18,18 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/posture-id body urdf/tip_default.urdf
-	$(BIN)/posture-id simulate --out demo/trial.csv --plot demo/trial.png
-	@echo "demo: wrote demo/trial.csv and demo/trial.png"
+	$(BIN)/posture-id demo --out demo
+	@echo "demo: wrote demo/report.md (open it beside its PNGs)"
+
+# The example recordings shipped for the demo: simulated subjects (their true parameters
+# in *.truth.json) with 0.01° white sensor noise.
+EXAMPLES := posture_id/identify/examples
+examples: $(STAMP)
+	$(BIN)/posture-id simulate --params $(EXAMPLES)/tip_subject.truth.json \
+	  --noise-deg 0.01 --seed 1 --out $(EXAMPLES)/tip_subject.csv
+	$(BIN)/posture-id simulate --body urdf/winter_1.75m_70kg_2seg.urdf \
+	  --params $(EXAMPLES)/straight_leg_subject.truth.json \
+	  --noise-deg 0.01 --seed 2 --out $(EXAMPLES)/straight_leg_subject.csv
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
@@ -35,7 +44,8 @@ lint: $(STAMP)
 bodies: $(STAMP)
 	for r in talos g1 human; do $(BIN)/posture-id body --from-robot $$r --out urdf/$${r}_tip.urdf > /dev/null; done
 	$(BIN)/posture-id body --default-tip --out posture_id/bodies/data/tip_default.urdf > /dev/null
-	$(BIN)/posture-id body --height 1.75 --mass 70 --segments 2 --out $(TWO_SEGMENT) > /dev/null
+	$(BIN)/posture-id body --height 1.75 --mass 70 --segments 2 \
+	  --out posture_id/bodies/data/winter_1.75m_70kg_2seg.urdf > /dev/null
 
 # The bundled CNN models (docs/learning.md): a data set, training (under 30 min each on
 # 2 cores), evaluation into docs/models/, then weights + sidecar into the package.
@@ -44,10 +54,7 @@ MODEL_EPOCHS ?= 24
 MODELS_DIR   := posture_id/learning/models
 TWO_SEGMENT  := urdf/winter_1.75m_70kg_2seg.urdf
 
-$(TWO_SEGMENT): | $(STAMP)
-	$(BIN)/posture-id body --height 1.75 --mass 70 --segments 2 --out $@ > /dev/null
-
-models: $(STAMP) $(TWO_SEGMENT)
+models: $(STAMP)
 	$(MAKE) model NAME=tip_default URDF=urdf/tip_default.urdf
 	$(MAKE) model NAME=winter_1.75m_70kg_2seg URDF=$(TWO_SEGMENT)
 

@@ -65,6 +65,15 @@ class Recording:
                           for j in range(self.theta.shape[1])], axis=1)
         return Recording(t, np.interp(t, self.time, self.tilt), theta, self.segments)
 
+    def with_sensor_noise(self, sd_deg: float, seed: int) -> Recording:
+        """A copy with white Gaussian noise of ``sd_deg`` degrees added to every segment
+        angle (the platform tilt is the commanded stimulus and stays clean), seeded."""
+        if not (math.isfinite(sd_deg) and sd_deg >= 0):
+            raise RecordingError(f"sensor noise must be a finite number ≥ 0 degrees, got {sd_deg}")
+        rng = np.random.default_rng(seed)
+        noise = math.radians(sd_deg) * rng.standard_normal(self.theta.shape)
+        return Recording(self.time, self.tilt, self.theta + noise, self.segments)
+
     def to_csv(self, path: str | Path) -> Path:
         """Write atomically. Rows after the first NaN (an aborted trial) are left out."""
         valid = np.all(np.isfinite(self.theta), axis=1)

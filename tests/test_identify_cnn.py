@@ -8,15 +8,14 @@ import json
 import numpy as np
 import pytest
 
+from posture_id.bodies.body import TWO_SEGMENT_URDF as TWO_SEGMENT
 from posture_id.bodies.body import load_body
 from posture_id.cli import main
 from posture_id.dec import default_parameters, sample_parameters
-from posture_id.learning.bundled import MODELS_DIR, bundled_model_dir
+from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.recording import Recording
 from posture_id.simulation import prts, simulate
-
-TWO_SEGMENT = MODELS_DIR.parents[2] / "urdf" / "winter_1.75m_70kg_2seg.urdf"
 
 
 def test_identify_recovers_the_classes_of_a_simulated_recording(tip, tmp_path, capsys):

@@ -5,9 +5,17 @@ identification. :func:`load_body` is the entry point; :mod:`.anthropometry` and
 :mod:`.urdf_writer` make new chains, :mod:`.lumping` reduces whole-body humanoids.
 """
 
-from posture_id.bodies.body import DEFAULT_URDF, Body, Segment, load_body
+from posture_id.bodies.body import (
+    BUNDLED_URDFS,
+    DEFAULT_URDF,
+    TWO_SEGMENT_URDF,
+    Body,
+    Segment,
+    load_body,
+)
 
-__all__ = ["DEFAULT_URDF", "Body", "Segment", "load_body", "lump_robot", "preset_body"]
+__all__ = ["DEFAULT_URDF", "TWO_SEGMENT_URDF", "BUNDLED_URDFS", "Body", "Segment", "load_body",
+           "lump_robot", "preset_body"]
 
 
 def __getattr__(name: str):

@@ -24,10 +24,14 @@ from posture_id.bodies.urdf_checks import check_urdf_text
 from posture_id.errors import BodyError
 from posture_id.fileio import file_sha256
 
-__all__ = ["Segment", "Body", "load_body", "DEFAULT_URDF"]
+__all__ = ["Segment", "Body", "load_body", "DEFAULT_URDF", "TWO_SEGMENT_URDF", "BUNDLED_URDFS"]
 
 #: The default triple inverted pendulum shipped with the package (MODEL §1).
 DEFAULT_URDF = Path(__file__).resolve().parent / "data" / "tip_default.urdf"
+#: The straight-leg 2-segment body of the paper's human experiment: Winter, 1.75 m, 70 kg.
+TWO_SEGMENT_URDF = DEFAULT_URDF.with_name("winter_1.75m_70kg_2seg.urdf")
+#: The bodies shipped with the package, by name.
+BUNDLED_URDFS = {"tip_default": DEFAULT_URDF, "winter_1.75m_70kg_2seg": TWO_SEGMENT_URDF}
 
 _REVOLUTE = {
     "JointModelRX",

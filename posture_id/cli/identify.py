@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
-from posture_id.cli.arguments import check_output_file, say
+from posture_id.cli.arguments import check_output_file, check_output_folder, say
 from posture_id.cli.progress import TerminalProgress
+from posture_id.errors import PostureIdError
 from posture_id.recording import Recording
 
 __all__ = ["add_parser"]
@@ -19,7 +20,9 @@ METHODS = ("cnn", "fit", "hybrid")
 
 def add_parser(sub) -> None:
     p = sub.add_parser("identify", help="identify DEC parameters of a recording")
-    p.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
+    p.add_argument("recording",
+                   help="recording CSV (time_s,tilt_deg,<seg>_deg...); a folder or a glob "
+                        "pattern identifies a cohort into the --out folder")
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     p.add_argument("--model", type=Path,
                    help="model directory (default: the bundled model for the body)")
@@ -27,12 +30,23 @@ def add_parser(sub) -> None:
                    help="cnn: the network alone, milliseconds (default); fit: least squares "
                         "from the defaults; hybrid: least squares from the CNN's answer")
     p.add_argument("--out", type=Path, required=True,
-                   help="result JSON; its \"parameters\" object is a parameter file")
+                   help="result JSON (its \"parameters\" object is a parameter file); for a "
+                        "cohort, a folder: one JSON per recording and summary.csv")
+    p.add_argument("--scheduler", help="cohort: Dask distributed scheduler (tcp://host:port)")
     p.add_argument("--plot", type=Path, help="recorded versus re-simulated sway (PNG)")
     p.set_defaults(func=run)
 
 
+def _is_cohort(recording: str) -> bool:
+    return Path(recording).is_dir() or any(c in recording for c in "*?[")
+
+
 def run(args: argparse.Namespace) -> int:
+    if _is_cohort(args.recording):
+        return run_cohort(args)
+    args.recording = Path(args.recording)
+    if args.scheduler:
+        raise PostureIdError("--scheduler goes with a folder or pattern of recordings")
     inputs = (args.recording, args.body, args.model)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
@@ -57,3 +71,19 @@ def run(args: argparse.Namespace) -> int:
         say(f"wrote {args.plot}")
     print(result.summary())
     return 0 if np.isfinite(result.e_rel) else 1
+
+
+def run_cohort(args: argparse.Namespace) -> int:
+    from posture_id.identify import Method
+    from posture_id.identify.cohort import find_recordings, identify_cohort
+
+    if args.plot:
+        raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording")
+    recordings = find_recordings(args.recording)
+    check_output_folder(args.out, "--out", inputs=(*recordings, args.body))
+    body = load_body(args.body or DEFAULT_URDF)
+    with TerminalProgress("recordings", prefix="posture-id identify") as progress:
+        result = identify_cohort(recordings, args.out, body, Method(args.method), args.model,
+                                 args.scheduler, progress)
+    say(result.summary())
+    return 1 if result.failed else 0

@@ -10,6 +10,7 @@ from posture_id.cli.arguments import (
     check_output_file,
     default_of,
     non_negative_float,
+    non_negative_int,
     positive_float,
     positive_int,
     say,
@@ -69,6 +70,10 @@ def add_parser(sub) -> None:
     add_stimulus_arguments(sim)
     sim.add_argument("--tilt", type=Path, help="tilt CSV (time_s,tilt_deg) instead of the PRTS")
     add_model_arguments(sim)
+    sim.add_argument("--noise-deg", type=non_negative_float, default=0.0,
+                     help="white sensor noise added to the segment angles, degrees (SD)")
+    sim.add_argument("--seed", type=non_negative_int, default=0,
+                     help="seed of the sensor noise (default %(default)d)")
     sim.add_argument("--out", type=Path, required=True, help="recording CSV to write")
     sim.add_argument("--plot", type=Path, help="plot of tilt and sway to write (PNG)")
     sim.set_defaults(func=run)
@@ -89,7 +94,10 @@ def run(args: argparse.Namespace) -> int:
         stimulus = prts(**prts_arguments(args))
     options = model_options(args)
     result = simulate(body, params, stimulus, options)
-    result.to_csv(args.out)
+    recording = result.to_recording()
+    if args.noise_deg > 0:
+        recording = recording.with_sensor_noise(args.noise_deg, args.seed)
+    recording.to_csv(args.out)
     say(f"wrote {args.out} ({len(result.time)} samples at {options.sample_rate_hz:g} Hz)")
     if args.plot:
         result.plot(args.plot)

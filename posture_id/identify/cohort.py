@@ -1,0 +1,184 @@
+"""Identify many recordings at once: locally or on a Dask cluster, resumable.
+
+``posture-id identify DIR_OR_GLOB --out RESULTS_DIR`` writes ``<recording>.json`` per
+recording (the :class:`~posture_id.identify.result.IdentificationResult`) and
+``summary.csv`` (one row per recording: status, classes, every module's parameters,
+E_rel, time). A recording whose JSON exists is not identified again, so a killed run
+started again continues. A recording that cannot be identified (a bad file) gets its
+one-line reason in the summary; the others go on.
+
+With a scheduler address the recordings are sent to a running Dask distributed cluster
+as tasks that carry the CSV text and the body's URDF text (the workers need not see the
+files); results come back and are written here, so the folder is the same as a local
+run's.
+"""
+
+from __future__ import annotations
+
+import csv
+import glob
+import io
+import json
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from posture_id.bodies.body import Body, load_body
+from posture_id.errors import PostureIdError
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.identify.core import Method, identify
+from posture_id.learning.identifier import CnnIdentifier
+from posture_id.progress import Progress, report
+from posture_id.recording import Recording
+
+__all__ = ["CohortResult", "find_recordings", "identify_cohort"]
+
+
+def find_recordings(pattern: str | Path) -> list[Path]:
+    """The CSV files of a folder, or those a glob pattern matches, sorted."""
+    path = Path(pattern)
+    if path.is_dir():
+        found = sorted(path.glob("*.csv"))
+    else:
+        found = sorted(Path(p) for p in glob.glob(str(pattern)))
+    if not found:
+        raise PostureIdError(f"{pattern}: no recording (CSV) found")
+    return found
+
+
+@dataclass(frozen=True)
+class CohortResult:
+    """What a cohort run did: per recording, "done", "skipped" (already done) or the error."""
+
+    out: Path
+    status: dict[str, str]
+
+    @property
+    def failed(self) -> dict[str, str]:
+        return {k: v for k, v in self.status.items() if v not in ("done", "skipped")}
+
+    def summary(self) -> str:
+        counts = {s: sum(v == s for v in self.status.values()) for s in ("done", "skipped")}
+        return (f"{self.out}: {len(self.status)} recordings, {counts['done']} identified, "
+                f"{counts['skipped']} already done, {len(self.failed)} failed"
+                + "".join(f"\n  {k}: {v}" for k, v in self.failed.items()))
+
+
+def _identify_text(csv_text: str, name: str, urdf_text: str, urdf_name: str, method: str,
+                   model: str | None) -> dict:
+    """One recording from its text (a cluster task): the result as a dict, or the error."""
+    with tempfile.TemporaryDirectory() as tmp:
+        urdf = Path(tmp) / urdf_name
+        urdf.write_text(urdf_text)
+        rec_path = Path(tmp) / name
+        rec_path.write_text(csv_text)
+        body = load_body(urdf)
+        return _identify_file(rec_path, body, method, model, source=name)
+
+
+def _identify_file(path: Path, body: Body, method: str, model, source: str) -> dict:
+    try:
+        recording = Recording.from_csv(path, body.segment_names)
+        return identify(recording, body, Method(method), model, source=source).to_dict()
+    except PostureIdError as exc:
+        return {"error": str(exc)}
+
+
+def identify_cohort(recordings: list[Path], out: str | Path, body: Body | None = None,
+                    method: Method = Method.CNN, model: str | Path | None = None,
+                    scheduler: str | None = None, progress: Progress | None = None
+                    ) -> CohortResult:
+    """Identify ``recordings`` into ``out`` (see the module doc).
+
+    Args:
+        model: a model directory (default: the bundled model for the body).
+        scheduler: a Dask distributed scheduler address, or None for this process.
+    """
+    out = Path(out)
+    body = body or load_body()
+    status: dict[str, str] = {}
+    todo = []
+    for path in recordings:
+        target = out / f"{path.stem}.json"
+        if _finished(target):
+            status[path.name] = "skipped"
+        else:
+            todo.append(path)
+    out.mkdir(parents=True, exist_ok=True)
+    done = len(status)
+    report(progress, done, len(recordings), "recording")
+
+    def record(path: Path, result: dict) -> None:
+        nonlocal done
+        if "error" in result:
+            status[path.name] = result["error"]
+        else:
+            atomic_write_text(out / f"{path.stem}.json", json_text(result))
+            status[path.name] = "done"
+        done += 1
+        report(progress, done, len(recordings), "recording")
+
+    if scheduler:
+        _run_on_cluster(scheduler, todo, body, method, model, record)
+    else:
+        identifier = None
+        if method is not Method.FIT and todo:  # load the network once for the cohort
+            identifier = (CnnIdentifier.load(model, body) if model is not None
+                          else CnnIdentifier.for_body(body))
+        for path in todo:
+            record(path, _identify_file(path, body, method.value, identifier, str(path)))
+    _write_summary(out, recordings, status)
+    return CohortResult(out, status)
+
+
+def _run_on_cluster(address: str, todo: list[Path], body: Body, method: Method, model,
+                    record) -> None:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise PostureIdError("--scheduler needs dask.distributed") from None
+    try:
+        client = Client(address, timeout=30)
+    except OSError as exc:
+        raise PostureIdError(f"cannot reach the Dask scheduler at {address} ({exc})") from None
+    urdf_text = Path(body.urdf_path).read_text()
+    model_path = None if model is None else str(model)
+    try:
+        futures = {client.submit(_identify_text, path.read_text(), path.name, urdf_text,
+                                 Path(body.urdf_path).name, method.value, model_path,
+                                 pure=False): path for path in todo}
+        for future in as_completed(futures):
+            record(futures[future], future.result())
+            future.release()
+    finally:
+        client.close()
+
+
+def _finished(target: Path) -> bool:
+    try:
+        return "parameters" in json.loads(target.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+
+
+def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) -> None:
+    rows, fields = [], ["recording", "status", "method", "classes", "e_rel"]
+    for path in recordings:
+        row = {"recording": path.name, "status": status.get(path.name, "")}
+        target = out / f"{path.stem}.json"
+        if status.get(path.name) in ("done", "skipped"):
+            data = json.loads(target.read_text(encoding="utf-8"))
+            row.update(method=data["method"], e_rel=data["e_rel"], classes="/".join(
+                m["controls"] for m in data["parameters"].values()))
+            for joint, module in data["parameters"].items():
+                for key in ("kp", "ki", "kd", "delay_s"):
+                    name = f"{joint}_{key}"
+                    row[name] = module[key]
+                    if name not in fields:
+                        fields.append(name)
+        rows.append(row)
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    atomic_write_text(out / "summary.csv", text.getvalue())

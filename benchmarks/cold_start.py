@@ -7,8 +7,10 @@ processes (medians of ``--repeats``):
   1. the first simulation in a new process (``simulate`` of one 121 s TIP trial, the
      call alone; import and URDF loading reported beside it);
   2. ``posture-id simulate`` of one trial, wall time of the whole command;
-  3. ``posture-id fit`` of a 121 s TIP recording, wall time of the whole command;
-and 2 and 3 again for revision ``--before`` (default: the last commit before the package
+  3. ``posture-id identify --method cnn`` of that recording (the bundled model), whole
+     command;
+  4. ``posture-id fit`` of a 121 s TIP recording, wall time of the whole command;
+and 2 and 4 again for revision ``--before`` (default: the last commit before the package
 layout), checked out into a temporary git worktree and run with the same interpreter,
 side by side in this one run.
 Writes benchmarks/results/cold_start.json.
@@ -112,6 +114,9 @@ def main() -> None:
                 break
         recording = tmp / "recording.csv"
         trial.to_csv(recording)
+        identify_s = median_wall([*cli, "identify", str(recording), "--method", "cnn", "--out",
+                                  str(tmp / "cnn.json")], args.repeats)
+        print(f"posture-id identify --method cnn, one recording: {identify_s:.2f} s wall")
         fit_args = ["fit", str(recording), "--out", str(tmp / "fit.json")]
         after_s = median_wall([*cli, *fit_args], args.repeats)
         print(f"posture-id fit, 121 s TIP recording, this checkout: {after_s:.1f} s wall")
@@ -142,6 +147,7 @@ def main() -> None:
         "import_and_load_s": import_s,
         "cli_simulate_wall_s": {"this_checkout": sim_s, args.before: sim_before_s,
                                 "ratio": sim_s / sim_before_s},
+        "cli_identify_cnn_wall_s": identify_s,
         "cli_fit_wall_s": {"this_checkout": after_s, args.before: before_s,
                            "ratio": after_s / before_s},
     }

@@ -232,3 +232,23 @@ def plot_identification(result, path=None, ax=None):
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_benchmark(groups: dict, path=None, ax=None):
+    """Box plots of E_rel (left, log scale) and seconds per recording (right) per group.
+
+    Args:
+        groups: label → (E_rel values, seconds values).
+    """
+    fig, axes = _axes(ax, 1, 2, (max(8, 1.1 * len(groups) + 3), 4.5))
+    labels = list(groups)
+    for a, k, title in ((axes[0, 0], 0, "E_rel of the re-simulated body sway"),
+                        (axes[0, 1], 1, "seconds per recording")):
+        a.boxplot([np.maximum(groups[g][k], 1e-6) for g in labels], tick_labels=labels)
+        a.set_yscale("log")
+        a.set_title(title)
+        a.grid(alpha=0.3, which="both", axis="y")
+        a.tick_params(axis="x", labelsize=7)
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

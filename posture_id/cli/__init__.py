@@ -13,7 +13,17 @@ from __future__ import annotations
 import os
 import sys
 
-from posture_id.cli import body, dataset, demo, evaluate, fit, identify, simulate, train
+from posture_id.cli import (
+    benchmark,
+    body,
+    dataset,
+    demo,
+    evaluate,
+    fit,
+    identify,
+    simulate,
+    train,
+)
 from posture_id.cli.arguments import Parser
 from posture_id.errors import PostureIdError
 
@@ -26,7 +36,7 @@ def build_parser() -> Parser:
     parser.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for command in (body, simulate, fit, dataset, train, evaluate, identify, demo):
+    for command in (body, simulate, fit, dataset, train, evaluate, identify, demo, benchmark):
         command.add_parser(sub)
     return parser
 

@@ -174,6 +174,10 @@ class CnnIdentifier:
     def identify(self, recording: Recording, source: str = "recording") -> CnnIdentification:
         """The CNN's parameters for one recording."""
         images = self.features(recording, source)
+        notices = self.notices
+        if recording.resampled(FS_HZ) is not recording:
+            notices += (f"{source}: resampled from {recording.sample_rate_hz:.4g} Hz to "
+                        f"{FS_HZ:g} Hz by linear interpolation",)
         if self.model.config.layout is Layout.MODULAR:
             prediction = predict_images(self.model, images)
             normalised = prediction.targets[:, 0]
@@ -190,6 +194,6 @@ class CnnIdentifier:
                       "package_version": self.model.sidecar.get("package_version")}
         return CnnIdentification(
             parameters=params, normalised=normalised, class_probability=probability,
-            joints=self.body.joint_names, model=model_info, notices=self.notices,
+            joints=self.body.joint_names, model=model_info, notices=notices,
             provenance={**provenance(None, self.body, source=source),
                         "body": body_identity(self.body)})

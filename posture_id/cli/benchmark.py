@@ -1,0 +1,46 @@
+"""``posture-id benchmark``: the CNN against the optimiser (docs/results/)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.cli.arguments import (
+    check_output_folder,
+    non_negative_float,
+    non_negative_int,
+    positive_int,
+    say,
+)
+from posture_id.cli.progress import TerminalProgress
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("benchmark", help="CNN versus least squares versus the hybrid")
+    p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    p.add_argument("--trials", type=positive_int, default=50,
+                   help="held-out simulated recordings per noise level (default %(default)d)")
+    p.add_argument("--noise-deg", type=non_negative_float, nargs="+", default=[0.0, 0.01, 0.05],
+                   help="sensor-noise levels, degrees (default %(default)s)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
+    p.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
+    p.add_argument("--out", type=Path, default=Path("docs/results"),
+                   help="report folder (default %(default)s)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out")
+    from posture_id.identify.benchmark import run_benchmark
+
+    body = load_body(args.body or DEFAULT_URDF)
+    with TerminalProgress("identifications", prefix="posture-id benchmark") as progress:
+        result = run_benchmark(body, args.trials, tuple(args.noise_deg), args.seed,
+                               args.workers, progress=progress)
+    paths = result.write(args.out)
+    print(result.to_markdown())
+    say("wrote " + ", ".join(str(p) for p in paths))
+    return 0

@@ -1,0 +1,215 @@
+"""The CNN against the optimiser, measured: accuracy, failures and time per recording.
+
+On ``trials`` held-out simulated recordings (MODEL §5 parameters drawn from a seed no data
+set uses; stable trials only) at each sensor-noise level (white, on the segment angles),
+three methods identify every recording:
+
+- ``cnn``: the bundled network alone;
+- ``fit``: least squares from the body's defaults;
+- ``hybrid``: least squares started from the CNN's answer.
+
+Per method and noise level: the mean absolute error of each normalised parameter
+(|p̃ − p̃_true|, medians too), class accuracy, E_rel of the body sway re-simulated with the
+identified parameters against the noise-free truth (MODEL §7), how many recordings end
+far from the truth (a wrong class or E_rel above :data:`FAR_E_REL`: a local minimum for
+the fits), and the wall time per recording. Recordings are identified in parallel
+processes, one per core; the times are per recording, measured inside its process.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.bodies.body import Body, load_body
+from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise
+from posture_id.dec.prior import sample_parameters
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.identify.core import Method, identify
+from posture_id.plotting import plot_benchmark
+from posture_id.progress import Progress, report
+from posture_id.simulation.batch import simulate, simulate_batch
+
+__all__ = ["BenchmarkReport", "run_benchmark", "FAR_E_REL"]
+
+#: A result whose re-simulated body sway differs from the truth's by more than this
+#: (relative) is counted as ending far from the truth.
+FAR_E_REL = 0.10
+METHODS = (Method.CNN, Method.FIT, Method.HYBRID)
+_THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                     "NUMBA_NUM_THREADS")
+
+
+def _held_out(body: Body, trials: int, seed: int) -> ParameterArrays:
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 7919]))
+    params = sample_parameters(body, 3 * trials, rng)
+    batch = simulate_batch(body, params)
+    keep = np.flatnonzero(batch.stable)[:trials]
+    return type(params)(**{f: getattr(params, f)[keep] for f in params.FIELDS})
+
+
+def _one(task: tuple) -> dict:
+    """Identify one recording with one method (a worker process)."""
+    urdf, arrays, index, noise_deg, method, seed = task
+    body = load_body(urdf)
+    truth = ParameterArrays(**arrays).trial(0, body.joint_names)
+    clean = simulate(body, truth)
+    recording = clean.to_recording()
+    if noise_deg > 0:
+        recording = recording.with_sensor_noise(noise_deg, seed)
+    start = time.perf_counter()
+    result = identify(recording, body, Method(method), source=f"trial {index}")
+    seconds = time.perf_counter() - start
+    # E_rel against the noise-free truth's sway, on the same tilt
+    sway_truth = clean.alpha[:, 0]
+    diff = sway_truth - result.sway_resimulated[: len(sway_truth)]
+    e_rel = (math.inf if not np.all(np.isfinite(diff))
+             else float(np.linalg.norm(diff) / np.linalg.norm(sway_truth)))
+    defaults_norm = normalise(truth, default_parameters(body))
+    error = np.abs(result.normalised[:, :4] - defaults_norm[:, :4])
+    correct = [result.parameters[j].controls == truth[j].controls for j in body.joint_names]
+    return {"index": index, "noise_deg": noise_deg, "method": method, "seconds": seconds,
+            "e_rel": e_rel, "abs_error": error.tolist(), "classes_correct": correct}
+
+
+@dataclass(frozen=True)
+class BenchmarkReport:
+    """Per-recording rows and their statistics (see the module doc)."""
+
+    body: str
+    joints: tuple[str, ...]
+    trials: int
+    noise_levels: tuple[float, ...]
+    rows: tuple[dict, ...]
+    workers: int
+
+    def statistics(self) -> dict:
+        out: dict = {}
+        for noise in self.noise_levels:
+            for method in METHODS:
+                rows = [r for r in self.rows
+                        if r["noise_deg"] == noise and r["method"] == method.value]
+                if not rows:
+                    continue
+                err = np.array([r["abs_error"] for r in rows])  # (R, N, 4)
+                e_rel = np.array([r["e_rel"] for r in rows])
+                correct = np.array([r["classes_correct"] for r in rows])
+                far = (~correct.all(axis=1)) | ~(e_rel <= FAR_E_REL)
+                out[f"{noise:g}|{method.value}"] = {
+                    "noise_deg": noise, "method": method.value, "recordings": len(rows),
+                    "mean_abs_error": err.mean(axis=0).tolist(),
+                    "median_abs_error": np.median(err, axis=0).tolist(),
+                    "class_accuracy": float(correct.mean()),
+                    "e_rel_median": float(np.median(e_rel)),
+                    "e_rel_p90": float(np.percentile(e_rel, 90)),
+                    "far_from_truth": int(far.sum()),
+                    "seconds_median": float(np.median([r["seconds"] for r in rows])),
+                    "seconds_mean": float(np.mean([r["seconds"] for r in rows])),
+                }
+        return out
+
+    def to_dict(self) -> dict:
+        return {"body": self.body, "joints": list(self.joints), "trials": self.trials,
+                "noise_levels": list(self.noise_levels), "workers": self.workers,
+                "far_e_rel": FAR_E_REL, "statistics": self.statistics(),
+                "rows": list(self.rows)}
+
+    def to_markdown(self) -> str:
+        stats = self.statistics()
+        lines = ["# The CNN against the optimiser", "",
+                 f"Body `{self.body}`, {self.trials} held-out simulated 121 s recordings "
+                 f"(MODEL §5 parameters, stable), sensor noise "
+                 f"{', '.join(f'{n:g}°' for n in self.noise_levels)}; "
+                 f"{self.workers} recordings identified at a time. E_rel: body sway "
+                 "re-simulated with the identified parameters against the noise-free truth. "
+                 f"Far: a wrong class or E_rel above {100 * FAR_E_REL:g} %. Made by "
+                 "`posture-id benchmark` (`benchmarks/cnn_vs_optimizer.py`).", ""]
+        for noise in self.noise_levels:
+            lines += [f"## Sensor noise {noise:g}°", "",
+                      "| method | classes | E_rel median | E_rel 90 % | far | s / recording "
+                      "(median) | mean \\|error\\| Kp, Ki, Kd, Δ (per module) |",
+                      "|---|---|---|---|---|---|---|"]
+            for method in METHODS:
+                s = stats.get(f"{noise:g}|{method.value}")
+                if s is None:
+                    continue
+                errors = "; ".join(", ".join(f"{e:.3f}" for e in module)
+                                   for module in s["mean_abs_error"])
+                lines.append(f"| {method.value} | {100 * s['class_accuracy']:.1f} % | "
+                             f"{100 * s['e_rel_median']:.2f} % | {100 * s['e_rel_p90']:.1f} % | "
+                             f"{s['far_from_truth']}/{s['recordings']} | "
+                             f"{s['seconds_median']:.3g} | {errors} |")
+            cnn, fit, hybrid = (stats.get(f"{noise:g}|{m}") for m in ("cnn", "fit", "hybrid"))
+            if cnn and fit and hybrid:
+                lines += ["", f"Ratios: least squares from the defaults takes "
+                              f"{fit['seconds_median'] / cnn['seconds_median']:.0f}× the CNN's "
+                              f"time (whole identify call, re-simulation included); the hybrid "
+                              f"is {fit['seconds_median'] / hybrid['seconds_median']:.2f}× "
+                              f"faster than least squares from the defaults; its median E_rel "
+                              f"is {hybrid['e_rel_median'] / cnn['e_rel_median']:.3f} of the "
+                              "CNN's."]
+            lines.append("")
+        lines += ["![E_rel per method](cnn_vs_optimizer.png)", ""]
+        return "\n".join(lines)
+
+    def write(self, folder: str | Path) -> list[Path]:
+        folder = Path(folder)
+        paths = [atomic_write_text(folder / "cnn_vs_optimizer.json", json_text(self.to_dict())),
+                 atomic_write_text(folder / "cnn_vs_optimizer.md", self.to_markdown()),
+                 folder / "cnn_vs_optimizer.png"]
+        self.plot(paths[2])
+        return paths
+
+    def plot(self, path=None, ax=None):
+        groups = {}
+        for noise in self.noise_levels:
+            for method in METHODS:
+                rows = [r for r in self.rows
+                        if r["noise_deg"] == noise and r["method"] == method.value]
+                if rows:
+                    groups[f"{method.value}\n{noise:g}°"] = (
+                        [min(r["e_rel"], 10.0) for r in rows], [r["seconds"] for r in rows])
+        return plot_benchmark(groups, path=path, ax=ax)
+
+
+def run_benchmark(body: Body | None = None, trials: int = 50,
+                  noise_levels: tuple[float, ...] = (0.0, 0.01, 0.05), seed: int = 0,
+                  workers: int | None = None, methods=METHODS,
+                  progress: Progress | None = None) -> BenchmarkReport:
+    """Run the benchmark (see the module doc)."""
+    body = body or load_body()
+    held_out = _held_out(body, trials, seed)
+    tasks = []
+    for noise in noise_levels:
+        for b in range(held_out.n_trials):
+            arrays = {f: getattr(held_out, f)[b : b + 1] for f in held_out.FIELDS}
+            for method in methods:
+                tasks.append((str(body.urdf_path), arrays, b, noise, method.value,
+                              int(1000 * seed + b)))
+    workers = workers or os.cpu_count() or 1
+    rows = []
+    # fresh processes (spawned: torch and fork do not mix), one thread of math each
+    saved = {k: os.environ.get(k) for k in _THREAD_VARIABLES}
+    os.environ.update({k: "1" for k in _THREAD_VARIABLES})
+    try:
+        with ProcessPoolExecutor(max_workers=workers,
+                                 mp_context=multiprocessing.get_context("spawn")) as pool:
+            for row in pool.map(_one, tasks, chunksize=1):
+                rows.append(row)
+                report(progress, len(rows), len(tasks), "identification")
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    return BenchmarkReport(body.name, body.joint_names, held_out.n_trials, tuple(noise_levels),
+                           tuple(rows), workers)
+

@@ -172,3 +172,17 @@ def test_features_need_the_rate_they_are_defined_for():
 
     with pytest.raises(DatasetError, match="defined at 50 Hz; the simulation samples at 100 Hz"):
         _config(simulation=SimulationOptions(sample_rate_hz=100.0))
+
+
+def test_sensor_noise_changes_the_features_only(tmp_path):
+    clean = generate_dataset(_config(trials=4, shard_size=8), tmp_path / "clean", workers=1)
+    noisy = generate_dataset(_config(trials=4, shard_size=8, sensor_noise_deg=0.05),
+                             tmp_path / "noisy", workers=1)
+    a, b = clean.load_shard(0), noisy.load_shard(0)
+    for key in ("kp", "delay_s", "sign", "theta", "targets"):
+        np.testing.assert_array_equal(a[key], b[key])
+    assert np.all(a["sensor_noise_deg"] == 0) and np.all(b["sensor_noise_deg"] <= 0.05)
+    assert b["sensor_noise_deg"].max() > 0
+    assert not np.allclose(a["modular"], b["modular"])
+    # white noise lifts the high-frequency magnitudes, where the clean sway has little
+    assert b["modular"][:, :, 0, 40:].mean() > 2 * a["modular"][:, :, 0, 40:].mean()

@@ -9,6 +9,7 @@ from posture_id.bodies.body import DEFAULT_URDF
 from posture_id.cli.arguments import (
     check_output_folder,
     default_of,
+    non_negative_float,
     non_negative_int,
     positive_int,
     say,
@@ -42,6 +43,10 @@ def add_parser(sub) -> None:
     gen.add_argument("--shard-size", type=positive_int,
                      default=default_of(DatasetConfig, "shard_size"),
                      help="simulated trials per shard (default %(default)d)")
+    gen.add_argument("--sensor-noise-deg", type=non_negative_float,
+                     default=default_of(DatasetConfig, "sensor_noise_deg"),
+                     help="features from angles plus white noise of an SD drawn from "
+                          "[0, this] per trial, degrees (default %(default)g: noise-free)")
     add_stimulus_arguments(gen)
     add_model_arguments(gen)
     gen.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -58,6 +63,7 @@ def run_generate(args: argparse.Namespace) -> int:
     config = DatasetConfig(
         trials=args.trials, body=str(args.body or DEFAULT_URDF), seed=args.seed,
         shard_size=args.shard_size, **prts_arguments(args), simulation=model_options(args),
+        sensor_noise_deg=args.sensor_noise_deg,
     )
     with TerminalProgress("kept trials", quiet=args.quiet) as progress:
         data = generate_dataset(config, args.out, workers=args.workers,

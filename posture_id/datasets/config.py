@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -31,6 +32,10 @@ class DatasetConfig:
         kept trials for train / validation / test (default: the paper's).
         amplitude_deg, cycles, states: the PRTS. simulation: what is modelled (step,
         rate, sway limit, dead-band). body: URDF path (its SHA-256 is checked too).
+        sensor_noise_deg: the features of each kept trial are computed from its segment
+        angles plus white noise of a standard deviation drawn uniformly from [0, this],
+        degrees (0: noise-free, as in the paper), so that a network learns to see through
+        sensor noise.
     """
 
     trials: int
@@ -43,6 +48,7 @@ class DatasetConfig:
     cycles: int = 2
     states: int = 242
     simulation: SimulationOptions = field(default_factory=SimulationOptions)
+    sensor_noise_deg: float = 0.0
 
     def __post_init__(self) -> None:
         if self.trials < 3:
@@ -52,6 +58,8 @@ class DatasetConfig:
                 f"the spectrogram features (MODEL §6) are defined at {FS_HZ:g} Hz; the "
                 f"simulation samples at {self.simulation.sample_rate_hz:g} Hz"
             )
+        if not (math.isfinite(self.sensor_noise_deg) and 0 <= self.sensor_noise_deg <= 1):
+            raise DatasetError(f"sensor_noise_deg must be in [0, 1]°, got {self.sensor_noise_deg}")
         if self.seed < 0:
             raise DatasetError(f"seed must be ≥ 0, got {self.seed}")
         if self.shard_size < 1:

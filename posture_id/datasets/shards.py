@@ -34,7 +34,9 @@ def make_shard(config: DatasetConfig, k: int, body: Body | None = None) -> dict[
     kept), ``max_sway_deg`` (S,), ``kept`` (S,) bool; for the K kept trials only:
     ``theta`` (K, 6051, N) float32 rad, ``alpha_bs`` (K, 6051) float32 rad,
     ``modular`` (K, N, 3, 51, 51) float32, ``monolithic`` (K, 2N−1, 51, 51) float32,
-    ``targets`` (K, N, 5) normalised [K̃p, K̃i, K̃d, Δ̃, C].
+    ``targets`` (K, N, 5) normalised [K̃p, K̃i, K̃d, Δ̃, C], ``sensor_noise_deg`` (K,) the
+    white noise SD added to each kept trial's segment angles before its features (drawn
+    uniformly from [0, ``config.sensor_noise_deg``]; ``theta`` is stored without it).
     """
     body = body or load_body(config.body)
     rng = np.random.default_rng(shard_seed(config.seed, k))
@@ -45,7 +47,10 @@ def make_shard(config: DatasetConfig, k: int, body: Body | None = None) -> dict[
         max_sway = np.degrees(np.nanmax(np.abs(batch.theta), axis=(1, 2)))
     max_sway = np.where(kept, max_sway, config.simulation.sway_limit_deg)
     theta = batch.theta[kept]
-    spectra = stft(np.moveaxis(theta, 1, 2))  # (K, N, 51, 51)
+    # sensor noise (after the parameter draws, so parameters do not depend on it)
+    noise_sd = config.sensor_noise_deg * rng.random(len(theta))
+    noisy = theta + np.radians(noise_sd)[:, None, None] * rng.standard_normal(theta.shape)
+    spectra = stft(np.moveaxis(noisy, 1, 2))  # (K, N, 51, 51)
     tilt_spectrum = stft(batch.tilt)
     targets = normalise_arrays(params, default_parameters(body))[kept]
     out = {f: getattr(params, f) for f in PARAMETER_FIELDS}
@@ -58,6 +63,7 @@ def make_shard(config: DatasetConfig, k: int, body: Body | None = None) -> dict[
         modular=modular_images(tilt_spectrum, spectra),
         monolithic=monolithic_images(spectra),
         targets=targets,
+        sensor_noise_deg=noise_sd,
     )
     return out
 

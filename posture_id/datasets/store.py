@@ -88,8 +88,10 @@ class Dataset:
         missing = [key for key in SHARD_ARRAYS if key not in arrays]
         if missing:
             raise DatasetError(f"{file}: shard lacks {', '.join(missing)}")
+        # sets made before sensor noise existed are noise-free
+        arrays.setdefault("sensor_noise_deg", np.zeros(len(arrays["targets"])))
         used = entry["used"]
-        for key in ("theta", "alpha_bs", "modular", "monolithic", "targets"):
+        for key in ("theta", "alpha_bs", "modular", "monolithic", "targets", "sensor_noise_deg"):
             arrays[key] = arrays[key][:used]
         return arrays
 

@@ -11,9 +11,10 @@
   was trained on);
 - :attr:`Method.FIT`: least squares from the body's defaults (any tilt; seconds, and it
   can stall in a local minimum);
-- :attr:`Method.HYBRID`: least squares started from the CNN's parameters and classes (the
-  classes are kept when the CNN is sure of them, P(C = +1) outside 0.05–0.95, and
-  relaxed otherwise).
+- :attr:`Method.HYBRID`: least squares started from the CNN's parameters, its classes
+  relaxed half-way (c = ±0.5) so that the fit can overturn a class the CNN got wrong
+  (it does: the bundled CNN, trained on noise-free sway, misjudges classes under sensor
+  noise, and the hybrid recovers them; docs/identify.md).
 
 Every result is checked by simulating the identified model on the recording's tilt: the
 body-sway errors E_id and E_rel (MODEL §7) and each segment's residual.
@@ -31,7 +32,7 @@ import numpy as np
 
 from posture_id.bodies.body import Body, load_body
 from posture_id.fitting.least_squares import fit_recording
-from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
+from posture_id.fitting.options import FitOptions, RelaxedClasses
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.progress import Progress
@@ -43,7 +44,7 @@ from posture_id.simulation.stimulus import recognise_prts, tilt_from_array
 
 __all__ = ["Method", "identify"]
 
-#: The CNN is taken to be sure of a class when P(C = +1) is outside this band.
+#: The CNN is said to be unsure of a class when P(C = +1) is inside this band.
 UNSURE_CLASS = (0.05, 0.95)
 
 
@@ -86,11 +87,15 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
         unsure = [j for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
                   if low < p < high]
         if unsure:
-            notices.append(f"the CNN is unsure of the class of {', '.join(unsure)}: least "
-                           "squares chooses the classes again")
-        classes = RelaxedClasses() if unsure else FixedClasses()
-        fit = fit_recording(recording, body, cnn.parameters, replace(options, classes=classes),
+            notices.append(f"the CNN is unsure of the class of {', '.join(unsure)}")
+        relaxed = options.classes if isinstance(options.classes, RelaxedClasses) \
+            else RelaxedClasses()
+        fit = fit_recording(recording, body, cnn.parameters, replace(options, classes=relaxed),
                             progress, source)
+        changed = [j for j in body.joint_names
+                   if fit.parameters[j].controls != cnn.parameters[j].controls]
+        if changed:
+            notices.append(f"least squares overturned the CNN's class of {', '.join(changed)}")
     if fit is not None:
         notices += [n for n in fit.notices if n not in notices]
         parameters, normalised = fit.parameters, fit.normalised

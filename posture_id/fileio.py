@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["atomic_write", "atomic_write_text", "file_sha256", "read_numeric_csv",
-           "jsonable", "json_text",
+           "jsonable", "json_text", "JsonResult",
            "check_time_column", "PLAUSIBLE_INTERVAL_S"]
 
 
@@ -162,3 +162,19 @@ def jsonable(value: Any) -> Any:
 def json_text(data: Any) -> str:
     """Strict JSON (no NaN or Infinity: non-finite numbers become null), indented."""
     return json.dumps(jsonable(data), indent=2, allow_nan=False) + "\n"
+
+
+
+class JsonResult:
+    """Mixin for results with ``to_dict()``: strict JSON text, written atomically."""
+
+    def to_dict(self) -> dict:  # pragma: no cover - every user defines it
+        raise NotImplementedError
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """Strict JSON (:func:`json_text`) of ``to_dict()``; written atomically to ``path``
+        when given."""
+        text = json_text(self.to_dict())
+        if path is not None:
+            atomic_write_text(Path(path), text)
+        return text

@@ -29,6 +29,7 @@ __all__ = [
     "check_output_file",
     "check_output_folder",
     "say",
+    "write_result",
 ]
 
 
@@ -124,3 +125,13 @@ def check_output_folder(path: Path, flag: str, inputs=()) -> None:
     for other in inputs:
         if other is not None and _same_file(path, Path(other)):
             raise PostureIdError(f"{path}: {flag} is also an input of this command")
+
+
+def write_result(result, out: Path, plot: Path | None = None) -> None:
+    """Write a result's JSON (and its plot), say so on stderr, print its summary."""
+    result.to_json(out)
+    say(f"wrote {out}")
+    if plot:
+        result.plot(plot)
+        say(f"wrote {plot}")
+    print(result.summary())

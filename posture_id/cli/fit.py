@@ -11,7 +11,7 @@ from posture_id.cli.arguments import (
     default_of,
     non_negative_int,
     positive_int,
-    say,
+    write_result,
 )
 from posture_id.cli.progress import TerminalProgress
 from posture_id.dec.parameters import DecParameters
@@ -65,10 +65,5 @@ def run(args: argparse.Namespace) -> int:
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
         result = fit_recording(recording, body, init, options, progress=progress,
                                source=str(args.recording))
-    result.to_json(args.out)
-    say(f"wrote {args.out}")
-    if args.plot:
-        result.plot(args.plot)
-        say(f"wrote {args.plot}")
-    print(result.summary())
+    write_result(result, args.out, args.plot)
     return 0 if result.converged else 1

@@ -8,7 +8,12 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
-from posture_id.cli.arguments import check_output_file, check_output_folder, say
+from posture_id.cli.arguments import (
+    check_output_file,
+    check_output_folder,
+    say,
+    write_result,
+)
 from posture_id.cli.progress import TerminalProgress
 from posture_id.errors import PostureIdError
 from posture_id.recording import Recording
@@ -64,12 +69,7 @@ def run(args: argparse.Namespace) -> int:
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
         result = identify(recording, body, method, model, progress=progress,
                           source=str(args.recording))
-    result.to_json(args.out)
-    say(f"wrote {args.out}")
-    if args.plot:
-        result.plot(args.plot)
-        say(f"wrote {args.plot}")
-    print(result.summary())
+    write_result(result, args.out, args.plot)
     return 0 if np.isfinite(result.e_rel) else 1
 
 

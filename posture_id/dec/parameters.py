@@ -121,6 +121,17 @@ class DecParameters:
         """The parameter-file format: one object per module keyed by joint (SI units)."""
         return {j: asdict(m) for j, m in self.modules.items()}
 
+    def identified_table(self, class_probability=None) -> list[str]:
+        """Lines of a table of the identified values, with P(C = +1) when given."""
+        probability = (list(class_probability) if class_probability is not None
+                       else [None] * len(self.modules))
+        lines = [f"{'module':<10}{'Kp':>10}{'Ki':>9}{'Kd':>9}{'Δ s':>8}  controls  P(com)"]
+        for (joint, m), p in zip(self.modules.items(), probability, strict=True):
+            shown = "  -" if p is None else f"{p:.3f}"
+            lines.append(f"{joint:<10}{m.kp:>10.3f}{m.ki:>9.4f}{m.kd:>9.3f}{m.delay_s:>8.4f}  "
+                         f"{m.controls:<8}  {shown}")
+        return lines
+
     def summary(self) -> str:
         """A printable table, one row per module."""
         lines = [f"{'module':<10}{'Kp':>10}{'Ki':>9}{'Kd':>9}{'Δ s':>7}{'Kpas':>9}{'Bpas':>9}"

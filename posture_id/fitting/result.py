@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import JsonResult
 from posture_id.plotting import plot_fit
 
 __all__ = ["StageResult", "FitResult", "class_names"]
@@ -53,7 +52,7 @@ class StageResult:
 
 
 @dataclass(frozen=True)
-class FitResult:
+class FitResult(JsonResult):
     """The identified parameters and how the fit went.
 
     Attributes:
@@ -114,13 +113,6 @@ class FitResult:
             "notices": list(self.notices),
             "provenance": self.provenance,
         }
-
-    def to_json(self, path: str | Path | None = None) -> str:
-        """JSON text (strict: no NaN or Infinity); written atomically to ``path`` if given."""
-        text = json_text(self.to_dict())
-        if path is not None:
-            atomic_write_text(Path(path), text)
-        return text
 
     def summary(self) -> str:
         """A printable table: values ± standard errors, flags, classes and the outcome."""

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import JsonResult
 from posture_id.plotting import plot_identification
 
 __all__ = ["SegmentFit", "IdentificationResult"]
@@ -29,7 +28,7 @@ class SegmentFit:
 
 
 @dataclass(frozen=True)
-class IdentificationResult:
+class IdentificationResult(JsonResult):
     """Identified DEC parameters of one recording and the evidence for them.
 
     Attributes:
@@ -88,22 +87,8 @@ class IdentificationResult:
         }
         return out
 
-    def to_json(self, path: str | Path | None = None) -> str:
-        """Strict JSON; written atomically to ``path`` when given."""
-        text = json_text(self.to_dict())
-        if path is not None:
-            atomic_write_text(Path(path), text)
-        return text
-
     def summary(self) -> str:
-        probability = (self.class_probability if self.class_probability is not None
-                       else [None] * len(self.joints))
-        lines = [f"{'module':<10}{'Kp':>10}{'Ki':>9}{'Kd':>9}{'Δ s':>8}  controls  P(com)"]
-        for j, p in zip(self.joints, probability, strict=True):
-            m = self.parameters[j]
-            shown = "  -" if p is None else f"{p:.3f}"
-            lines.append(f"{j:<10}{m.kp:>10.3f}{m.ki:>9.4f}{m.kd:>9.3f}{m.delay_s:>8.4f}  "
-                         f"{m.controls:<8}  {shown}")
+        lines = self.parameters.identified_table(self.class_probability)
         lines.append("re-simulated: " + ", ".join(
             f"{s.segment} RMS {s.rms_deg:.4f}° ({100 * s.variance_explained:.1f} % of variance)"
             for s in self.segments))

@@ -29,7 +29,7 @@ from posture_id.dec.parameters import (
     denormalise_arrays,
 )
 from posture_id.errors import RecordingError
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import JsonResult
 from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
@@ -42,7 +42,7 @@ __all__ = ["CnnIdentifier", "CnnIdentification"]
 
 
 @dataclass(frozen=True)
-class CnnIdentification:
+class CnnIdentification(JsonResult):
     """What the CNN says about one recording.
 
     Attributes:
@@ -78,18 +78,8 @@ class CnnIdentification:
             "provenance": self.provenance,
         }
 
-    def to_json(self, path: str | Path | None = None) -> str:
-        text = json_text(self.to_dict())
-        if path is not None:
-            atomic_write_text(Path(path), text)
-        return text
-
     def summary(self) -> str:
-        lines = [f"{'module':<10}{'Kp':>10}{'Ki':>9}{'Kd':>9}{'Δ s':>8}  controls  P(com)"]
-        for j, p in zip(self.joints, self.class_probability, strict=True):
-            m = self.parameters[j]
-            lines.append(f"{j:<10}{m.kp:>10.3f}{m.ki:>9.4f}{m.kd:>9.3f}{m.delay_s:>8.4f}  "
-                         f"{m.controls:<8}  {p:.3f}")
+        lines = self.parameters.identified_table(self.class_probability)
         lines.append(f"model: {self.model['path']} ({self.model['layout']})")
         lines += [f"note: {n}" for n in self.notices]
         return "\n".join(lines)

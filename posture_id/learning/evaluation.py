@@ -335,7 +335,7 @@ def _identification(model, data: Dataset, samples: SplitSamples, predicted: np.n
         "e_id_deg_median": float(np.median(e_id)),
         "e_id_deg_mean": float(np.mean(e_id[finite])) if finite.any() else math.inf,
         "e_rel_median": float(np.median(e_rel)),
-        "e_rel_p90": float(np.percentile(e_rel, 90)),
+        "e_rel_p90": float(np.percentile(e_rel, 90, method="higher")),
         "correlation_e_rel_vs_parameter_mse": pearson,
         "spearman_e_rel_vs_parameter_mse": spearman,
         "parameter_mse": "mean over the trial's 5N standardised squared errors",

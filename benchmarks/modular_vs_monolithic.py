@@ -86,7 +86,8 @@ def markdown(rows: dict, args) -> str:
            "(the paper's reading: predicting the training mean gives about √5 = 2.24 total "
            "and 2.0 fit for a module, √15 and √12 for a monolithic TIP sample), then per "
            "element (the mean gives 1.0). Command: `.venv/bin/python "
-           "benchmarks/modular_vs_monolithic.py " + str(args.dataset) + "`.", "",
+           "benchmarks/modular_vs_monolithic.py " + str(args.dataset)
+           + f" --epochs {args.epochs}`.", "",
            "| network | total RMSE | fit RMSE | accuracy | total / fit RMSE per element | "
            "E_rel median | fell | training |", "|---|---|---|---|---|---|---|---|"]
     for layout in ("modular", "monolithic"):

@@ -6,19 +6,6 @@ its cache), :mod:`.problem` (the compiled problem you can hold and reuse),
 :mod:`.prepare` (recordings in) and :mod:`.least_squares` (:func:`fit_recording`).
 """
 
-from posture_id.fitting.least_squares import fit_recording
-from posture_id.fitting.options import (
-    Compilation,
-    ExhaustiveClasses,
-    FitError,
-    FitOptions,
-    FixedClasses,
-    RelaxedClasses,
-)
-from posture_id.fitting.prepare import prepare_recording
-from posture_id.fitting.problem import FitProblem
-from posture_id.fitting.result import FitResult, StageResult
-
 __all__ = [
     "fit_recording",
     "FitOptions",
@@ -32,3 +19,20 @@ __all__ = [
     "StageResult",
     "prepare_recording",
 ]
+
+# Names load on first use: the options (imported by the command line and by identify) must
+# not pull in CasADi.
+_WHERE = {
+    "fit_recording": "least_squares", "FitOptions": "options", "FitError": "options",
+    "Compilation": "options", "RelaxedClasses": "options", "ExhaustiveClasses": "options",
+    "FixedClasses": "options", "FitProblem": "problem", "FitResult": "result",
+    "StageResult": "result", "prepare_recording": "prepare",
+}
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        import importlib
+
+        return getattr(importlib.import_module(f"posture_id.fitting.{_WHERE[name]}"), name)
+    raise AttributeError(f"module 'posture_id.fitting' has no attribute '{name}'")

@@ -31,7 +31,6 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
-from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import FitOptions, RelaxedClasses
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.learning.identifier import CnnIdentifier
@@ -80,6 +79,9 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
                       else CnnIdentifier.for_body(body))
         cnn = identifier.identify(recording, source)
         notices += cnn.notices
+    if method is not Method.CNN:
+        # CasADi loads only when least squares runs: the CNN alone starts half a second sooner
+        from posture_id.fitting.least_squares import fit_recording
     if method is Method.FIT:
         fit = fit_recording(recording, body, None, options, progress, source)
     elif method is Method.HYBRID:

@@ -19,6 +19,7 @@ The last two groups, the lumping and the reference path load on first use, so th
 ``import posture_id`` does not import CasADi, Dask or example-robot-data.
 """
 
+from posture_id._lazy import lazy_getattr
 from posture_id._version import __version__
 from posture_id.bodies import DEFAULT_URDF, Body, load_body
 from posture_id.dec import (
@@ -89,9 +90,4 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'posture_id' has no attribute '{name}'")
+__getattr__ = lazy_getattr("posture_id", _LAZY)

@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from posture_id.bodies.body import DEFAULT_URDF
 from posture_id.cli import main
 
 # ------------------------------------------------------------------ shared material
@@ -488,9 +487,6 @@ def test_an_unexpected_error_is_one_line_and_says_bug(monkeypatch, capsys):
     with pytest.raises(ZeroDivisionError):
         main(["--debug", "body"])
 
-
-def test_default_urdf_is_untouched_by_the_suite():
-    assert DEFAULT_URDF.read_text().startswith("<?xml")
 
 
 # ------------------------------------------------------------------ lumping, flags, shards

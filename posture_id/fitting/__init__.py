@@ -6,6 +6,8 @@ its cache), :mod:`.problem` (the compiled problem you can hold and reuse),
 :mod:`.prepare` (recordings in) and :mod:`.least_squares` (:func:`fit_recording`).
 """
 
+from posture_id._lazy import lazy_getattr
+
 __all__ = [
     "fit_recording",
     "FitOptions",
@@ -30,9 +32,5 @@ _WHERE = {
 }
 
 
-def __getattr__(name: str):
-    if name in _WHERE:
-        import importlib
-
-        return getattr(importlib.import_module(f"posture_id.fitting.{_WHERE[name]}"), name)
-    raise AttributeError(f"module 'posture_id.fitting' has no attribute '{name}'")
+__getattr__ = lazy_getattr("posture_id.fitting",
+                           {k: f"posture_id.fitting.{v}" for k, v in _WHERE.items()})

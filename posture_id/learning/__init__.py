@@ -10,6 +10,8 @@ Modules: :mod:`.config` (NetworkConfig, TrainingConfig), :mod:`.network`, :mod:`
 (:func:`evaluate`), :mod:`.identifier` (:class:`CnnIdentifier`), :mod:`.bundled`.
 """
 
+from posture_id._lazy import lazy_getattr
+
 __all__ = [
     "NetworkConfig",
     "TrainingConfig",
@@ -41,9 +43,5 @@ _WHERE = {
 }
 
 
-def __getattr__(name: str):
-    if name in _WHERE:
-        import importlib
-
-        return getattr(importlib.import_module(f"posture_id.learning.{_WHERE[name]}"), name)
-    raise AttributeError(f"module 'posture_id.learning' has no attribute '{name}'")
+__getattr__ = lazy_getattr("posture_id.learning",
+                           {k: f"posture_id.learning.{v}" for k, v in _WHERE.items()})

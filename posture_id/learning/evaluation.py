@@ -67,13 +67,9 @@ class SplitMetrics:
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
 
 
-def split_metrics(error: np.ndarray, correct: np.ndarray, per_sample_axes: int) -> SplitMetrics:
-    """Metrics from standardised errors (B, M, 5) and class hits (B, M) of B samples.
-
-    ``per_sample_axes`` M: how many modules one sample holds (1 modular, N monolithic);
-    the module index of a modular sample is its position modulo N (``correct`` is then
-    reshaped to trials × N for the per-module accuracy by the caller).
-    """
+def split_metrics(error: np.ndarray, correct: np.ndarray) -> SplitMetrics:
+    """Metrics from standardised errors (B, M, 5) of B samples of M modules each, and
+    class hits per trial and module (trials, N) for the per-module accuracy."""
     b = len(error)
     flat = error.reshape(b, -1, 5)
     total_sq = (flat**2).sum(axis=(1, 2))
@@ -261,7 +257,7 @@ def evaluate(model_dir: str | Path, dataset_dir: str | Path, resimulate: int = 2
             correct_by_module = correct.reshape(-1, n)
         else:
             correct_by_module = correct
-        metrics = split_metrics(error, correct_by_module, expected_modules)
+        metrics = split_metrics(error, correct_by_module)
         splits[name] = metrics
         if name == "test":
             test_detail = (samples, error, predicted, truth)
@@ -276,7 +272,7 @@ def evaluate(model_dir: str | Path, dataset_dir: str | Path, resimulate: int = 2
     mean_error[..., 4] += mean_class_std
     mean_correct = (truth[..., 4] == majority)
     mean_correct = mean_correct.reshape(-1, n) if layout is Layout.MODULAR else mean_correct
-    mean_predictor = split_metrics(mean_error, mean_correct, expected_modules)
+    mean_predictor = split_metrics(mean_error, mean_correct)
     # per-parameter |error| by module (trials × N × 5), class column: error rate
     by_trial_pred = predicted.reshape(-1, n, 5)
     by_trial_true = truth.reshape(-1, n, 5)

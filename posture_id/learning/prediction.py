@@ -13,7 +13,7 @@ import numpy as np
 import torch
 
 from posture_id.learning.checkpoint import LoadedModel
-from posture_id.learning.config import ClassOutput, Layout
+from posture_id.learning.config import ClassOutput
 
 __all__ = ["Prediction", "predict_images"]
 
@@ -67,6 +67,3 @@ def predict_images(model: LoadedModel, images: np.ndarray, batch_size: int = 512
     standardised[..., 4] = (expected_c - mean[:, 4]) / scale[:, 4]
     return Prediction(targets, probability, standardised)
 
-
-def modules_per_sample(layout: Layout, n_segments: int) -> int:
-    return 1 if layout is Layout.MODULAR else n_segments

@@ -51,6 +51,9 @@ bodies: $(STAMP)
 # 2 cores), evaluation into docs/models/, then weights + sidecar into the package.
 MODEL_TRIALS ?= 30000
 MODEL_EPOCHS ?= 24
+# white sensor noise on the training sway, SD drawn per trial from [0, MODEL_NOISE_DEG]°:
+# the bundled models hold on noisy recordings (docs/learning.md)
+MODEL_NOISE_DEG ?= 0.05
 MODELS_DIR   := posture_id/learning/models
 TWO_SEGMENT  := urdf/winter_1.75m_70kg_2seg.urdf
 
@@ -60,7 +63,7 @@ models: $(STAMP)
 
 model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(MODEL_TRIALS) --body $(URDF) \
-	  --out data/$(NAME) --quiet
+	  --sensor-noise-deg $(MODEL_NOISE_DEG) --out data/$(NAME) --quiet
 	$(BIN)/posture-id train data/$(NAME) --out data/models/$(NAME) --epochs $(MODEL_EPOCHS) \
 	  --quiet
 	$(BIN)/posture-id evaluate data/models/$(NAME) data/$(NAME) --out docs/models/$(NAME)

@@ -143,3 +143,21 @@ def test_two_fits_at_once_equal_the_same_fits_one_after_the_other(tip, winter2):
         np.testing.assert_array_equal(a.normalised, b.normalised)
         np.testing.assert_array_equal(a.standard_errors, b.standard_errors)
         assert a.cost == b.cost
+
+
+def test_any_robot_name_fits(tmp_path, winter2):
+    """A URDF whose robot name has dots, dashes and spaces (as `posture-id body --height
+    1.75` writes them) once crashed the fit inside CasADi's function naming."""
+    from posture_id.bodies import load_body
+
+    text = winter2.urdf_path.read_text()
+    start = text.index('<robot name="') + len('<robot name="')
+    end = text.index('"', start)
+    path = tmp_path / "lab robot.urdf"
+    path.write_text(text[:start] + "lab robot-v1.2 (left)" + text[end:])
+    body = load_body(path)
+    assert body.name == "lab robot-v1.2 (left)"
+    truth, trial, _ = _stable_trial(body, 4)
+    fitted = fit_recording(trial.to_recording(), body)
+    assert fitted.converged and fitted.rms_deg < 1e-6
+    _check_recovery(fitted, truth, 0.02, 4)

@@ -66,3 +66,35 @@ def test_fit_method_needs_no_model(tip):
     assert result.class_probability is None and result.cnn is None
     assert result.classes == tuple(truth[j].controls for j in tip.joint_names)
     assert result.e_rel < 1e-4
+
+
+@pytest.mark.slow
+def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
+    """The CNN calls the knee's class wrong with P = 0 or 1: the short route (classes
+    kept) leaves most of the sway unexplained, so the hybrid relaxes the classes and the
+    fit recovers the truth."""
+    from dataclasses import replace
+
+    from posture_id.learning.identifier import CnnIdentifier
+
+    truth, recording = _noisy_trial(tip, 12, 0.01)
+    honest = CnnIdentifier.identify
+
+    def confidently_wrong(self, rec, source="recording"):
+        answer = honest(self, rec, source)
+        wrong = "joint" if truth["knee"].controls == "com" else "com"
+        probability = np.where(np.array(tip.joint_names) == "knee",
+                               1.0 if wrong == "com" else 0.0,
+                               (np.array([truth[j].controls for j in tip.joint_names])
+                                == "com").astype(float))
+        return replace(answer, parameters=answer.parameters.replace("knee", controls=wrong),
+                       class_probability=probability)
+
+    monkeypatch.setattr(CnnIdentifier, "identify", confidently_wrong)
+    result = identify(recording, tip, Method.HYBRID)
+    assert result.cnn["parameters"]["knee"]["controls"] != truth["knee"].controls
+    assert any("fitted again with the classes relaxed" in n for n in result.notices)
+    assert any("overturned the CNN's class of knee" in n for n in result.notices)
+    assert result.classes == tuple(truth[j].controls for j in tip.joint_names)
+    for joint in tip.joint_names:
+        assert abs(result.parameters[joint].kp / truth[joint].kp - 1) <= 0.05, joint

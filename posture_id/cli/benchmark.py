@@ -28,19 +28,22 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     p.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     p.add_argument("--out", type=Path, default=Path("docs/results"),
-                   help="report folder (default %(default)s)")
+                   help="report folder (default %(default)s); an interrupted run goes on "
+                        "from its journal there")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
-    from posture_id.identify.benchmark import run_benchmark
+    from posture_id.identify.benchmark import JOURNAL, run_benchmark
 
     body = load_body(args.body or DEFAULT_URDF)
+    journal = args.out / JOURNAL
     with TerminalProgress("identifications", prefix="posture-id benchmark") as progress:
         result = run_benchmark(body, args.trials, tuple(args.noise_deg), args.seed,
-                               args.workers, progress=progress)
+                               args.workers, progress=progress, journal=journal)
     paths = result.write(args.out)
+    journal.unlink()  # its rows are in the report's JSON now
     print(result.to_markdown())
     say("wrote " + ", ".join(str(p) for p in paths))
     return 0

@@ -45,7 +45,15 @@ class Evaluator:
 
 
 class ExactEvaluator(Evaluator):
-    """The compiled CasADi problem: exact derivatives."""
+    """The compiled CasADi problem: exact derivatives.
+
+    A parameter set that makes the body fall is treated as the fast simulator treats it:
+    from the first sample at which a segment passes :data:`MAX_SWAY_LIMIT_DEG` (or the
+    rollout overflows), every angle is held at the limit and its derivatives are zero. So
+    residuals and Jacobians stay finite wherever the optimiser steps.
+    """
+
+    LIMIT = math.radians(MAX_SWAY_LIMIT_DEG)
 
     def __init__(self, problem: FitProblem, u: np.ndarray, measured: np.ndarray) -> None:
         super().__init__(measured)
@@ -53,10 +61,24 @@ class ExactEvaluator(Evaluator):
         self.u = u
 
     def simulate(self, q):
-        return self.problem.simulate(q, self.u)
+        theta = self.problem.simulate(q, self.u)
+        fall = self._fall(theta)
+        if fall is not None:
+            theta[fall:] = self.LIMIT
+        return theta
 
     def jacobian(self, q, free, residual):
-        return self.problem.jacobian(q, self.u, list(free)) * _DEG
+        jac = self.problem.jacobian(q, self.u, list(free)) * _DEG
+        fall = self._fall(residual.reshape(self.measured.shape) / _DEG + self.measured)
+        if fall is not None:
+            jac[fall * self.measured.shape[1]:] = 0.0
+        return np.where(np.isfinite(jac), jac, 0.0)
+
+    def _fall(self, theta: np.ndarray) -> int | None:
+        """First sample (row of (S, N) ``theta``) at or past the limit, or None."""
+        with np.errstate(invalid="ignore"):
+            out = ~(np.abs(theta) < self.LIMIT * (1.0 - 1e-12)).all(axis=1)
+        return int(np.argmax(out)) if out.any() else None
 
 
 class SimulatorEvaluator(Evaluator):

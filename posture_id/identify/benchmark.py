@@ -20,6 +20,7 @@ processes, one per core.
 
 from __future__ import annotations
 
+import json
 import math
 import multiprocessing
 import os
@@ -33,18 +34,21 @@ import numpy as np
 from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise
 from posture_id.dec.prior import sample_parameters
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.errors import PostureIdError
+from posture_id.fileio import atomic_write_text, json_text, jsonable
 from posture_id.identify.core import Method, identify
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.plotting import plot_benchmark
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate, simulate_batch
 
-__all__ = ["BenchmarkReport", "run_benchmark", "FAR_E_REL"]
+__all__ = ["BenchmarkReport", "run_benchmark", "FAR_E_REL", "JOURNAL"]
 
 #: A result whose re-simulated body sway differs from the truth's by more than this
 #: (relative) is counted as ending far from the truth.
 FAR_E_REL = 0.10
+#: The file in the report folder that finished identifications are appended to.
+JOURNAL = "cnn_vs_optimizer.journal.jsonl"
 METHODS = (Method.CNN, Method.FIT, Method.HYBRID)
 _THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
                      "NUMBA_NUM_THREADS")
@@ -196,8 +200,14 @@ class BenchmarkReport:
 def run_benchmark(body: Body | None = None, trials: int = 50,
                   noise_levels: tuple[float, ...] = (0.0, 0.01, 0.05), seed: int = 0,
                   workers: int | None = None, methods=METHODS,
-                  progress: Progress | None = None) -> BenchmarkReport:
-    """Run the benchmark (see the module doc)."""
+                  progress: Progress | None = None,
+                  journal: str | Path | None = None) -> BenchmarkReport:
+    """Run the benchmark (see the module doc).
+
+    ``journal``: a JSON-lines file that every finished identification is appended to; a
+    run given the journal of an interrupted one with the same body, model, trials and seed
+    redoes only what is missing (a journal of another set-up is refused).
+    """
     body = body or load_body()
     held_out = _held_out(body, trials, seed)
     tasks = []
@@ -207,16 +217,24 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
             for method in methods:
                 tasks.append((str(body.urdf_path), arrays, b, noise, method.value,
                               int(1000 * seed + b)))
+    header = {"format": "posture_id-benchmark-journal", "body_sha256": body.sha256,
+              "model_weights_sha256": CnnIdentifier.for_body(body).model.sidecar.get(
+                  "weights_sha256"), "trials": trials, "seed": seed}
+    done = _read_journal(Path(journal), header) if journal is not None else {}
+    rows = [done[_task_key(t)] for t in tasks if _task_key(t) in done]
+    todo = [t for t in tasks if _task_key(t) not in done]
+    report(progress, len(rows), len(tasks), "identification")
     workers = workers or os.cpu_count() or 1
-    rows = []
     # fresh processes (spawned: torch and fork do not mix), one thread of math each
     saved = {k: os.environ.get(k) for k in _THREAD_VARIABLES}
     os.environ.update({k: "1" for k in _THREAD_VARIABLES})
     try:
         with ProcessPoolExecutor(max_workers=workers,
                                  mp_context=multiprocessing.get_context("spawn")) as pool:
-            for row in pool.map(_one, tasks, chunksize=1):
+            for row in pool.map(_one, todo, chunksize=1):
                 rows.append(row)
+                if journal is not None:
+                    _append_journal(Path(journal), header, row)
                 report(progress, len(rows), len(tasks), "identification")
     finally:
         for k, v in saved.items():
@@ -224,9 +242,54 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
                 os.environ.pop(k, None)
             else:
                 os.environ[k] = v
+    rows.sort(key=lambda r: (noise_levels.index(r["noise_deg"]), r["index"],
+                             [m.value for m in methods].index(r["method"])))
     return BenchmarkReport(body.name, body.joint_names, held_out.n_trials, tuple(noise_levels),
                            tuple(rows), workers)
 
+
+def _task_key(task_or_row) -> tuple:
+    if isinstance(task_or_row, dict):
+        return (float(task_or_row["noise_deg"]), int(task_or_row["index"]), task_or_row["method"])
+    _, _, index, noise, method, _ = task_or_row
+    return (float(noise), int(index), method)
+
+
+def _read_journal(path: Path, header: dict) -> dict[tuple, dict]:
+    """Rows of a journal written for ``header`` (a torn last line is ignored)."""
+    if not path.exists():
+        return {}
+    lines = path.read_text(encoding="utf-8").splitlines()
+    try:
+        found = json.loads(lines[0]) if lines else None
+    except json.JSONDecodeError:
+        found = None
+    if found != header:
+        raise PostureIdError(f"{path}: a benchmark journal of another set-up (body, model, "
+                             "trials or seed differ); remove it or choose another --out")
+    rows, kept = {}, [lines[0]]
+    for line in lines[1:]:
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # the line being written when the run stopped
+        kept.append(line)
+        row["e_rel"] = math.inf if row["e_rel"] is None else row["e_rel"]
+        rows[_task_key(row)] = row
+    if len(kept) < len(lines) or not path.read_bytes().endswith(b"\n"):
+        atomic_write_text(path, "\n".join(kept) + "\n")  # the torn line out
+    return rows
+
+
+def _append_journal(path: Path, header: dict, row: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    new = not path.exists() or path.stat().st_size == 0
+    with path.open("a", encoding="utf-8") as f:
+        if new:
+            f.write(json.dumps(header) + "\n")
+        f.write(json.dumps(jsonable(row), allow_nan=False) + "\n")
+        f.flush()
+        os.fsync(f.fileno())
 
 
 def _ratio(a: float, b: float) -> str:

@@ -11,10 +11,9 @@
   was trained on);
 - :attr:`Method.FIT`: least squares from the body's defaults (any tilt; seconds, and it
   can stall in a local minimum);
-- :attr:`Method.HYBRID`: least squares started from the CNN's parameters, its classes
-  relaxed half-way (c = ±0.5) so that the fit can overturn a class the CNN got wrong
-  (it does: the bundled CNN, trained on noise-free sway, misjudges classes under sensor
-  noise, and the hybrid recovers them; docs/identify.md).
+- :attr:`Method.HYBRID`: least squares started from the CNN's answer: its classes kept
+  when it is sure of them and the fit then explains the sway, otherwise relaxed so that the
+  fit can overturn a class (:func:`_refine`; docs/identify.md).
 
 Every result is checked by simulating the identified model on the recording's tilt: the
 body-sway errors E_id and E_rel (MODEL §7) and each segment's residual.
@@ -31,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
-from posture_id.fitting.options import FitOptions, RelaxedClasses
+from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.progress import Progress
@@ -45,6 +44,9 @@ __all__ = ["Method", "identify"]
 
 #: The CNN is said to be unsure of a class when P(C = +1) is inside this band.
 UNSURE_CLASS = (0.05, 0.95)
+#: The hybrid's fit with the CNN's classes must explain this share of the recorded sway's
+#: variance, or it is done again with the classes relaxed.
+MIN_EXPLAINED = 0.9
 
 
 class Method(enum.Enum):
@@ -79,25 +81,13 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
                       else CnnIdentifier.for_body(body))
         cnn = identifier.identify(recording, source)
         notices += cnn.notices
-    if method is not Method.CNN:
+    if method is Method.FIT:
         # CasADi loads only when least squares runs: the CNN alone starts half a second sooner
         from posture_id.fitting.least_squares import fit_recording
-    if method is Method.FIT:
+
         fit = fit_recording(recording, body, None, options, progress, source)
     elif method is Method.HYBRID:
-        low, high = UNSURE_CLASS
-        unsure = [j for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
-                  if low < p < high]
-        if unsure:
-            notices.append(f"the CNN is unsure of the class of {', '.join(unsure)}")
-        relaxed = options.classes if isinstance(options.classes, RelaxedClasses) \
-            else RelaxedClasses()
-        fit = fit_recording(recording, body, cnn.parameters, replace(options, classes=relaxed),
-                            progress, source)
-        changed = [j for j in body.joint_names
-                   if fit.parameters[j].controls != cnn.parameters[j].controls]
-        if changed:
-            notices.append(f"least squares overturned the CNN's class of {', '.join(changed)}")
+        fit = _refine(recording, body, cnn, options, progress, source, notices)
     if fit is not None:
         notices += [n for n in fit.notices if n not in notices]
         parameters, normalised = fit.parameters, fit.normalised
@@ -116,6 +106,56 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
                               method=method.value),
         **checked,
     )
+
+
+def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
+            progress: Progress | None, source: str, notices: list[str]):
+    """The hybrid's least squares from the CNN's answer.
+
+    Classes the CNN is sure of (P(C = +1) outside :data:`UNSURE_CLASS` for every module)
+    are kept and only the continuous parameters refined: the short route. When the CNN is
+    unsure of a class, or the short route explains less than :data:`MIN_EXPLAINED` of the
+    recorded sway's variance (a confidently wrong class leaves a large residual), the fit
+    runs again from the CNN's parameters with its classes relaxed half-way (c = ±0.5), so
+    that it can overturn a class; the better of the two fits is kept.
+    """
+    from posture_id.fitting.least_squares import fit_recording
+
+    low, high = UNSURE_CLASS
+    unsure = [j for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
+              if low < p < high]
+    fit = None
+    if unsure:
+        notices.append(f"the CNN is unsure of the class of {', '.join(unsure)}: "
+                       "least squares decides it")
+    else:
+        fit = fit_recording(recording, body, cnn.parameters,
+                            replace(options, classes=FixedClasses()), progress, source)
+        explained = _explained(fit.recorded, fit.fitted)
+        if explained < MIN_EXPLAINED:
+            notices.append(f"with the CNN's classes the fit explains {100 * explained:.0f} % "
+                           "of the sway's variance: fitted again with the classes relaxed")
+    if fit is None or _explained(fit.recorded, fit.fitted) < MIN_EXPLAINED:
+        relaxed = options.classes if isinstance(options.classes, RelaxedClasses) \
+            else RelaxedClasses()
+        again = fit_recording(recording, body, cnn.parameters,
+                              replace(options, classes=relaxed), progress, source)
+        if fit is None or again.cost < fit.cost:
+            fit = again
+    changed = [j for j in body.joint_names
+               if fit.parameters[j].controls != cnn.parameters[j].controls]
+    if changed:
+        notices.append(f"least squares overturned the CNN's class of {', '.join(changed)}")
+    return fit
+
+
+def _explained(recorded: np.ndarray, fitted: np.ndarray) -> float:
+    """Share of the variance of (S, N) ``recorded`` explained by ``fitted`` (all segments
+    pooled); −inf when the fitted model fell."""
+    residual = recorded - fitted
+    if not np.all(np.isfinite(residual)):
+        return -math.inf
+    return float(1.0 - residual.var(axis=0).sum() / recorded.var(axis=0).sum())
 
 
 def _resimulate(body: Body, recording: Recording, parameters, simulation: SimulationOptions

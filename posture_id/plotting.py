@@ -252,3 +252,34 @@ def plot_benchmark(groups: dict, path=None, ax=None):
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_frf(result, path=None, ax=None):
+    """Gain (deg/deg), phase (degrees) and coherence against frequency (log axis), one
+    line per channel: the FRF plots of the posture literature."""
+    fig, axes = _axes(ax, 3, 1, (8, 8), sharex=True)
+    f = result.frequencies_hz
+    for m, name in enumerate(result.channels):
+        style = {"color": f"C{m}", "marker": "o", "ms": 3, "lw": 1, "label": name}
+        axes[0, 0].plot(f, result.gain[:, m], **style)
+        axes[1, 0].plot(f, result.phase_deg[:, m], **style)
+        if result.coherence is not None:
+            axes[2, 0].plot(f, result.coherence[:, m], **style)
+    axes[0, 0].set_yscale("log")
+    axes[0, 0].set_ylabel("gain (deg/deg)")
+    axes[1, 0].set_ylabel("phase (°)")
+    axes[2, 0].set_ylabel("coherence γ²")
+    axes[2, 0].set_ylim(0, 1.05)
+    if result.coherence is None:
+        axes[2, 0].text(0.5, 0.5, "one cycle, no bands: nothing averaged", ha="center",
+                        transform=axes[2, 0].transAxes)
+    axes[2, 0].set_xscale("log")
+    axes[2, 0].set_xlabel("frequency (Hz)")
+    for a in axes[:, 0]:
+        a.grid(alpha=0.3, which="both")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(f"FRF of {result.source} relative to the tilt ({result.cycles} cycle(s) "
+                 f"of {result.period_s:g} s)")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

@@ -20,6 +20,7 @@ from posture_id.cli import (
     demo,
     evaluate,
     fit,
+    frf,
     identify,
     simulate,
     train,
@@ -36,7 +37,7 @@ def build_parser() -> Parser:
     parser.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for command in (body, simulate, fit, dataset, train, evaluate, identify, demo, benchmark):
+    for command in (body, simulate, fit, frf, dataset, train, evaluate, identify, demo, benchmark):
         command.add_parser(sub)
     return parser
 

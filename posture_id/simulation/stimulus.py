@@ -43,11 +43,13 @@ class TiltProfile:
         times: (K,) s, strictly increasing knot times starting at 0.
         angles: (K,) rad, tilt at the knots (positive = toes down / forward, MODEL §1).
         description: a short human-readable origin ("PRTS 242 ×2, 1° p-p", a file name).
+        period_s: s, the period of a periodic stimulus (one PRTS cycle), None otherwise.
     """
 
     times: np.ndarray
     angles: np.ndarray
     description: str = "tilt"
+    period_s: float | None = None
 
     @property
     def duration(self) -> float:
@@ -116,6 +118,7 @@ def prts(
         times=times,
         angles=steps * scale,
         description=f"PRTS {states} states x{int(cycles)}, {amplitude_deg:g} deg p-p",
+        period_s=states * state_s,
     )
 
 
@@ -145,7 +148,7 @@ def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
             return candidate
         if np.max(np.abs(-sampled - a)) <= tolerance * ptp:
             return TiltProfile(candidate.times, -candidate.angles,
-                               candidate.description + " (negated)")
+                               candidate.description + " (negated)", candidate.period_s)
     return None
 
 

@@ -1,0 +1,57 @@
+"""``posture-id frf``: frequency-response functions of a recording relative to its tilt."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.cli.arguments import (
+    check_output_file,
+    default_of,
+    non_negative_int,
+    positive_float,
+    write_result,
+)
+from posture_id.frf import FrfOptions, frequency_response
+from posture_id.recording import Recording
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("frf", help="frequency-response functions (gain, phase, coherence) "
+                                   "of the sway relative to the tilt")
+    p.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
+    p.add_argument("--body", type=Path, help="URDF (default: the TIP); adds the body COM")
+    p.add_argument("--out", type=Path, required=True, help="FRF JSON to write")
+    p.add_argument("--plot", type=Path, help="gain, phase and coherence against frequency (PNG)")
+    p.add_argument("--period-s", type=positive_float,
+                   help="one stimulus cycle, s (default: recognised from a PRTS tilt)")
+    p.add_argument("--skip-cycles", type=non_negative_int,
+                   default=default_of(FrfOptions, "skip_cycles"),
+                   help="whole cycles left out at the start (default %(default)d)")
+    p.add_argument("--drift-order", type=non_negative_int,
+                   default=default_of(FrfOptions, "drift_order"),
+                   help="order of the polynomial drift removed (default %(default)d)")
+    p.add_argument("--bands", type=non_negative_int, default=default_of(FrfOptions, "bands"),
+                   help="average the excited frequencies into this many log-spaced bands "
+                        "(default %(default)d: none)")
+    p.add_argument("--max-frequency-hz", type=positive_float,
+                   default=default_of(FrfOptions, "max_frequency_hz"),
+                   help="highest frequency kept (default %(default)g Hz)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    inputs = (args.recording, args.body)
+    check_output_file(args.out, "--out", inputs)
+    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    body = load_body(args.body or DEFAULT_URDF)
+    recording = Recording.from_csv(args.recording, body.segment_names)
+    options = FrfOptions(skip_cycles=args.skip_cycles, drift_order=args.drift_order,
+                         bands=args.bands, max_frequency_hz=args.max_frequency_hz)
+    result = frequency_response(recording, body, options, args.period_s,
+                                source=str(args.recording))
+    write_result(result, args.out, args.plot)
+    return 0

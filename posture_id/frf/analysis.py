@@ -1,0 +1,46 @@
+"""The FRF of a recording: its segments and, with a body, its whole-body COM sway."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from posture_id.bodies.body import Body
+from posture_id.errors import RecordingError
+from posture_id.frf.response import FrequencyResponse, FrfOptions, frequency_response_arrays
+from posture_id.recording import Recording
+from posture_id.simulation.stimulus import recognise_prts
+
+__all__ = ["frequency_response"]
+
+
+def frequency_response(recording: Recording, body: Body | None = None,
+                       options: FrfOptions | None = None, period_s: float | None = None,
+                       source: str = "recording") -> FrequencyResponse:
+    """FRFs of every segment angle (and of the body COM sway α_BS when ``body`` is given)
+    relative to the recording's tilt.
+
+    Args:
+        recording: evenly sampled, starting with the stimulus. body: its segments must be
+            the recording's. options: :class:`FrfOptions`. period_s: one stimulus cycle, s
+            (default: recognised from the tilt, which must then be a PRTS).
+        source: the recording's name in messages.
+    """
+    if not recording.evenly_sampled():
+        raise RecordingError(f"{source}: the samples are not evenly spaced in time")
+    if period_s is None:
+        stimulus = recognise_prts(recording.time, recording.tilt)
+        if stimulus is None or stimulus.period_s is None:
+            raise RecordingError(f"{source}: the tilt is not a PRTS of 242 or 80 states; "
+                                 "give the stimulus's period (period_s, --period-s)")
+        period_s = stimulus.period_s
+    channels = tuple(recording.segments)
+    outputs = recording.theta
+    if body is not None:
+        if tuple(recording.segments) != body.segment_names:
+            raise RecordingError(
+                f"{source}: segment columns {','.join(recording.segments)} do not match the "
+                f"body's segments {','.join(body.segment_names)}")
+        outputs = np.column_stack([outputs, body.com_angles(recording.theta)[:, 0]])
+        channels += ("body COM",)
+    return frequency_response_arrays(recording.tilt, outputs, recording.sample_rate_hz,
+                                     period_s, channels, options, source)

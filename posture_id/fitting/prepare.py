@@ -7,6 +7,7 @@ import numpy as np
 from posture_id.errors import RecordingError
 from posture_id.fitting.options import FitOptions
 from posture_id.recording import Recording
+from posture_id.simulation.stimulus import sample_rate_hint
 
 __all__ = ["prepare_recording"]
 
@@ -31,6 +32,9 @@ def prepare_recording(recording: Recording, source: str, options: FitOptions
             f"{source}: the recording lasts {recording.duration_s:.2f} s, shorter than one "
             f"PRTS cycle ({options.min_duration_s:g} s)"
         )
+    hint = sample_rate_hint(recording.time, recording.tilt, source)
+    if hint is not None:
+        notices.append(hint)
     rate = recording.sample_rate_hz
     resampled = recording.resampled(rate_hz)
     if resampled is not recording:

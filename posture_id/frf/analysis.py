@@ -8,7 +8,7 @@ from posture_id.bodies.body import Body
 from posture_id.errors import RecordingError
 from posture_id.frf.response import FrequencyResponse, FrfOptions, frequency_response_arrays
 from posture_id.recording import Recording
-from posture_id.simulation.stimulus import recognise_prts
+from posture_id.simulation.stimulus import recognise_prts, sample_rate_hint
 
 __all__ = ["frequency_response"]
 
@@ -30,8 +30,11 @@ def frequency_response(recording: Recording, body: Body | None = None,
     if period_s is None:
         stimulus = recognise_prts(recording.time, recording.tilt)
         if stimulus is None or stimulus.period_s is None:
+            hint = sample_rate_hint(recording.time, recording.tilt, source)
             raise RecordingError(f"{source}: the tilt is not a PRTS of 242 or 80 states; "
-                                 "give the stimulus's period (period_s, --period-s)")
+                                 "give the stimulus's period (period_s, --period-s)"
+                                 + ("" if hint is None
+                                    else f"; and {hint.removeprefix(source + ': ')}"))
         period_s = stimulus.period_s
     channels = tuple(recording.segments)
     outputs = recording.theta

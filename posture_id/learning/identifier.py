@@ -36,7 +36,7 @@ from posture_id.learning.config import Layout, LearningError
 from posture_id.learning.prediction import predict_images
 from posture_id.provenance import body_identity, provenance
 from posture_id.recording import Recording
-from posture_id.simulation.stimulus import prts, recognise_prts
+from posture_id.simulation.stimulus import prts, recognise_prts, sample_rate_hint
 
 __all__ = ["CnnIdentifier", "CnnIdentification"]
 
@@ -132,15 +132,23 @@ class CnnIdentifier:
                 f"body's segments {','.join(self.body.segment_names)}")
         if not recording.evenly_sampled():
             raise RecordingError(f"{source}: samples are not evenly spaced in time")
+        as_given = recording
         recording = recording.resampled(FS_HZ)
-        if len(recording.time) < self.n_samples:
-            raise RecordingError(
-                f"{source}: {recording.duration_s:.2f} s of sway; the CNN was trained on "
-                f"{(self.n_samples - 1) / FS_HZ:g} s ({self._stimulus_text()}): use "
-                "posture-id fit for other lengths")
-        cut = slice(0, self.n_samples)
-        time, tilt, theta = recording.time[cut], recording.tilt[cut], recording.theta[cut]
-        self._check_stimulus(time, tilt, source)
+        try:
+            if len(recording.time) < self.n_samples:
+                raise RecordingError(
+                    f"{source}: {recording.duration_s:.2f} s of sway; the CNN was trained on "
+                    f"{(self.n_samples - 1) / FS_HZ:g} s ({self._stimulus_text()}): use "
+                    "posture-id fit for other lengths")
+            cut = slice(0, self.n_samples)
+            time, tilt, theta = recording.time[cut], recording.tilt[cut], recording.theta[cut]
+            self._check_stimulus(time, tilt, source)
+        except RecordingError as error:
+            # a wrong time column shows as a wrong stimulus: say so when it is that
+            hint = sample_rate_hint(as_given.time, as_given.tilt, source)
+            if hint is None:
+                raise
+            raise RecordingError(f"{error}; and {hint.removeprefix(source + ': ')}") from None
         spectra = stft(theta.T)[None]  # (1, N, 51, 51)
         if self.model.config.layout is Layout.MODULAR:
             return modular_images(stft(tilt), spectra)[0]

@@ -23,6 +23,9 @@ __all__ = [
     "tilt_from_array",
     "tilt_from_csv",
     "recognise_prts",
+    "prts_match",
+    "sample_rate_hint",
+    "COMMON_RATES_HZ",
     "PRTS_REGISTERS",
 ]
 
@@ -150,6 +153,58 @@ def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
             return TiltProfile(candidate.times, -candidate.angles,
                                candidate.description + " (negated)", candidate.period_s)
     return None
+
+
+#: Sampling rates (Hz) of posture labs' force plates and motion capture, tried by
+#: :func:`sample_rate_hint` besides the stated one.
+COMMON_RATES_HZ = (25.0, 30.0, 50.0, 60.0, 100.0, 120.0, 200.0, 240.0, 250.0, 500.0, 1000.0)
+
+
+def prts_match(tilt_rad: np.ndarray, rate_hz: float, states: int,
+               state_s: float = PRTS_STATE_S) -> float:
+    """How well the first cycle of a sampled tilt matches the PRTS of ``states`` states
+    sampled at ``rate_hz``: the largest |normalised circular cross-correlation| over all
+    starting phases and both signs (1 = a perfect match; noise, a lead-in or a platform
+    lag lower it a little). 0 when the tilt is shorter than one cycle."""
+    period = states * state_s * rate_hz
+    n = int(round(period))
+    x = np.asarray(tilt_rad, dtype=float)
+    if n < 8 or len(x) < n:
+        return 0.0
+    x = x[:n] - x[:n].mean()
+    template = prts(1.0, 1, states, state_s).angle(np.arange(n) / rate_hz)
+    template = template - template.mean()
+    norm = float(np.linalg.norm(x) * np.linalg.norm(template))
+    if norm == 0:
+        return 0.0
+    correlation = np.fft.irfft(np.fft.rfft(x) * np.conj(np.fft.rfft(template)), n)
+    return float(np.max(np.abs(correlation)) / norm)
+
+
+def sample_rate_hint(times_s: np.ndarray, tilt_rad: np.ndarray, source: str,
+                     state_s: float = PRTS_STATE_S) -> str | None:
+    """A warning when the tilt is a PRTS (242 or 80 states of ``state_s``) sampled at a
+    rate other than the one the time column gives, naming the likely true rate; None when
+    the stated rate fits or no PRTS fits at any common rate (:data:`COMMON_RATES_HZ`).
+
+    A PRTS matches at its true rate with a correlation near 1 and poorly at any other
+    rate, because the cycle then spans another number of samples.
+    """
+    stated = float(1.0 / np.median(np.diff(np.asarray(times_s, dtype=float))))
+    best = (0.0, stated, 0)
+    at_stated = 0.0
+    for states in PRTS_REGISTERS:
+        at_stated = max(at_stated, prts_match(tilt_rad, stated, states, state_s))
+        for rate in COMMON_RATES_HZ:
+            match = prts_match(tilt_rad, rate, states, state_s)
+            if match > best[0]:
+                best = (match, rate, states)
+    match, rate, states = best
+    if match < 0.9 or abs(rate / stated - 1) <= 0.01 or at_stated >= match - 0.05:
+        return None
+    return (f"{source}: the tilt is a {states}-state PRTS sampled at {rate:g} Hz "
+            f"(match {match:.2f}), not at the {stated:.4g} Hz the time column says "
+            f"(match {at_stated:.2f}): check the time column")
 
 
 def tilt_from_array(times_s, angles_rad, description: str = "array") -> TiltProfile:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -90,14 +91,28 @@ class Recording:
         return atomic_write_text(Path(path), out.getvalue())
 
     @classmethod
-    def from_csv(cls, path: str | Path, segments: tuple[str, ...] | None = None) -> Recording:
+    def from_csv(cls, path: str | Path, segments: tuple[str, ...] | None = None,
+                 tilt_of: Callable[[np.ndarray], np.ndarray] | None = None) -> Recording:
         """Read a recording; with ``segments`` given, its columns must match them in order.
+
+        Args:
+            tilt_of: the named stimulus's tilt (rad) at given times (s), e.g.
+                ``TiltProfile.angle``: then the file may leave out its ``tilt_deg`` column
+                (``time_s,<segment>_deg...``) and the tilt is taken from the stimulus.
 
         Raises:
             RecordingError: naming the file, the line or column, and the problem.
         """
         path = Path(path)
         header, values = read_numeric_csv(path, RecordingError, "recording")
+        if header[:1] == ["time_s"] and header[1:2] != ["tilt_deg"] and tilt_of is not None:
+            values = np.insert(values, 1, np.degrees(tilt_of(values[:, 0] - values[0, 0])),
+                               axis=1)
+            header = ["time_s", "tilt_deg", *header[1:]]
+        elif header[:1] == ["time_s"] and header[1:2] != ["tilt_deg"]:
+            raise RecordingError(
+                f"{path}: no 'tilt_deg' column after time_s; name the stimulus the recording "
+                "was made with (the PRTS flags, or --tilt FILE) to take the tilt from it")
         if header[:2] != ["time_s", "tilt_deg"]:
             raise RecordingError(
                 f"{path}: header must start with 'time_s,tilt_deg', got '{','.join(header[:2])}'"

@@ -213,7 +213,8 @@ RECORDING_CASES = {
     "no_time": (lambda ls: [ls[0].replace("time_s", "t")] + ls[1:],
                 "header must start with 'time_s,tilt_deg'"),
     "tilt_missing": (lambda ls: [",".join(c for i, c in enumerate(r.split(",")) if i != 1)
-                                 for r in ls], "header must start"),
+                                 for r in ls], "no 'tilt_deg' column after time_s; name the "
+                                               "stimulus"),
     "misnamed_segment": (lambda ls: [ls[0].replace("thigh_deg", "femur_deg")] + ls[1:],
                          "do not match the body's segments"),
     "segment_without_unit": (lambda ls: [ls[0].replace("trunk_deg", "trunk")] + ls[1:],
@@ -240,7 +241,7 @@ RECORDING_CASES = {
     "constant_tilt": (lambda ls: [ls[0]] + [",".join([r.split(",")[0], "0",
                                                       *r.split(",")[2:]]) for r in ls[1:]],
                       "the tilt is constant"),
-    "short": (lambda ls: ls[:1500], "shorter than one PRTS cycle"),
+    "short": (lambda ls: ls[:1500], "shorter than one whole cycle of its stimulus"),
     "uneven": (lambda ls: ls[:3000] + ls[3001:], "not evenly spaced"),
 }
 

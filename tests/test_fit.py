@@ -90,7 +90,7 @@ def test_short_recording_is_refused(tip):
     result = simulate(tip, stimulus=None, options=SimulationOptions())
     short = Recording(result.time[:1500], result.tilt[:1500], result.theta[:1500],
                       result.segments)
-    with pytest.raises(RecordingError, match="shorter than one PRTS cycle"):
+    with pytest.raises(RecordingError, match="shorter than one whole cycle of its stimulus"):
         fit_recording(short, tip, source="short.csv")
 
 

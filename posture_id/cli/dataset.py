@@ -17,10 +17,9 @@ from posture_id.cli.arguments import (
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.simulate import (
     add_model_arguments,
-    add_stimulus_arguments,
     model_options,
-    prts_arguments,
 )
+from posture_id.cli.stimulus import add_stimulus_arguments, prts_arguments
 from posture_id.datasets.config import DatasetConfig
 from posture_id.datasets.generation import generate_dataset
 from posture_id.datasets.store import Dataset

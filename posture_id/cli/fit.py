@@ -14,6 +14,7 @@ from posture_id.cli.arguments import (
     write_result,
 )
 from posture_id.cli.progress import TerminalProgress
+from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
 from posture_id.dec.parameters import DecParameters
 from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import (
@@ -44,6 +45,7 @@ def add_parser(sub) -> None:
                      help="--classes relaxed: seed of the prior draws (default %(default)d)")
     fit.add_argument("--no-compile", action="store_true",
                      help="run CasADi in its virtual machine (no C compiler)")
+    add_lab_stimulus_arguments(fit, "tilt CSV (time_s,tilt_deg) the recording was made with")
     fit.set_defaults(func=run)
 
 
@@ -55,15 +57,17 @@ def options_from(args: argparse.Namespace) -> FitOptions:
 
 
 def run(args: argparse.Namespace) -> int:
-    inputs = (args.recording, args.body, args.init)
+    inputs = (args.recording, args.body, args.init, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
-    recording = Recording.from_csv(args.recording, body.segment_names)
+    stimulus = stimulus_from_args(args, default=None)
+    recording = Recording.from_csv(args.recording, body.segment_names,
+                                   None if stimulus is None else stimulus.angle)
     init = DecParameters.from_json(args.init, body) if args.init else None
     options = options_from(args)
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
         result = fit_recording(recording, body, init, options, progress=progress,
-                               source=str(args.recording))
+                               source=str(args.recording), stimulus=stimulus)
     write_result(result, args.out, args.plot)
     return 0 if result.converged else 1

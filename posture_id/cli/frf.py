@@ -13,6 +13,7 @@ from posture_id.cli.arguments import (
     positive_float,
     write_result,
 )
+from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
 from posture_id.frf import FrfOptions, frequency_response
 from posture_id.recording import Recording
 
@@ -27,7 +28,8 @@ def add_parser(sub) -> None:
     p.add_argument("--out", type=Path, required=True, help="FRF JSON to write")
     p.add_argument("--plot", type=Path, help="gain, phase and coherence against frequency (PNG)")
     p.add_argument("--period-s", type=positive_float,
-                   help="one stimulus cycle, s (default: recognised from a PRTS tilt)")
+                   help="one cycle of a periodic tilt that is not a PRTS, s (default: from the "
+                        "named or recognised PRTS)")
     p.add_argument("--skip-cycles", type=non_negative_int,
                    default=default_of(FrfOptions, "skip_cycles"),
                    help="whole cycles left out at the start (default %(default)d)")
@@ -40,18 +42,22 @@ def add_parser(sub) -> None:
     p.add_argument("--max-frequency-hz", type=positive_float,
                    default=default_of(FrfOptions, "max_frequency_hz"),
                    help="highest frequency kept (default %(default)g Hz)")
+    add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with; "
+                                  "give --period-s with it")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    inputs = (args.recording, args.body)
+    inputs = (args.recording, args.body, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
-    recording = Recording.from_csv(args.recording, body.segment_names)
+    stimulus = stimulus_from_args(args, default=None)
+    recording = Recording.from_csv(args.recording, body.segment_names,
+                                   None if stimulus is None else stimulus.angle)
     options = FrfOptions(skip_cycles=args.skip_cycles, drift_order=args.drift_order,
                          bands=args.bands, max_frequency_hz=args.max_frequency_hz)
     result = frequency_response(recording, body, options, args.period_s,
-                                source=str(args.recording))
+                                source=str(args.recording), stimulus=stimulus)
     write_result(result, args.out, args.plot)
     return 0

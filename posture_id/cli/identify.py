@@ -15,6 +15,7 @@ from posture_id.cli.arguments import (
     write_result,
 )
 from posture_id.cli.progress import TerminalProgress
+from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
 from posture_id.errors import PostureIdError
 from posture_id.recording import Recording
 
@@ -39,6 +40,7 @@ def add_parser(sub) -> None:
                         "cohort, a folder: one JSON per recording and summary.csv")
     p.add_argument("--scheduler", help="cohort: Dask distributed scheduler (tcp://host:port)")
     p.add_argument("--plot", type=Path, help="recorded versus re-simulated sway (PNG)")
+    add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recordings were made with")
     p.set_defaults(func=run)
 
 
@@ -52,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     args.recording = Path(args.recording)
     if args.scheduler:
         raise PostureIdError("--scheduler goes with a folder or pattern of recordings")
-    inputs = (args.recording, args.body, args.model)
+    inputs = (args.recording, args.body, args.model, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     # torch and CasADi load here, not when the parser is built: other commands start fast
@@ -60,15 +62,17 @@ def run(args: argparse.Namespace) -> int:
     from posture_id.learning.identifier import CnnIdentifier
 
     body = load_body(args.body or DEFAULT_URDF)
+    stimulus = stimulus_from_args(args, default=None)
     method = Method(args.method)
     model = None
     if method is not Method.FIT:
         model = (CnnIdentifier.load(args.model, body) if args.model
                  else CnnIdentifier.for_body(body))
-    recording = Recording.from_csv(args.recording, body.segment_names)
+    recording = Recording.from_csv(args.recording, body.segment_names,
+                                   None if stimulus is None else stimulus.angle)
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
         result = identify(recording, body, method, model, progress=progress,
-                          source=str(args.recording))
+                          source=str(args.recording), stimulus=stimulus)
     write_result(result, args.out, args.plot)
     return 0 if np.isfinite(result.e_rel) else 1
 
@@ -80,10 +84,11 @@ def run_cohort(args: argparse.Namespace) -> int:
     if args.plot:
         raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording")
     recordings = find_recordings(args.recording)
-    check_output_folder(args.out, "--out", inputs=(*recordings, args.body))
+    check_output_folder(args.out, "--out", inputs=(*recordings, args.body, args.tilt))
     body = load_body(args.body or DEFAULT_URDF)
+    stimulus = stimulus_from_args(args, default=None)
     with TerminalProgress("recordings", prefix="posture-id identify") as progress:
         result = identify_cohort(recordings, args.out, body, Method(args.method), args.model,
-                                 args.scheduler, progress)
+                                 args.scheduler, progress, stimulus)
     say(result.summary())
     return 1 if result.failed else 0

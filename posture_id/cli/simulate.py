@@ -12,39 +12,15 @@ from posture_id.cli.arguments import (
     non_negative_float,
     non_negative_int,
     positive_float,
-    positive_int,
     say,
 )
+from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
 from posture_id.dec.parameters import DecParameters
-from posture_id.errors import PostureIdError
 from posture_id.simulation.batch import simulate
 from posture_id.simulation.options import SimulationOptions
-from posture_id.simulation.stimulus import PRTS_REGISTERS, prts, tilt_from_csv
+from posture_id.simulation.stimulus import prts
 
-__all__ = ["add_parser", "run", "add_stimulus_arguments", "add_model_arguments",
-           "prts_arguments", "model_options"]
-
-
-_PRTS_FLAGS = {"amplitude_deg": "--amplitude-deg", "cycles": "--cycles", "states": "--states"}
-
-
-def add_stimulus_arguments(parser: argparse.ArgumentParser) -> None:
-    """--amplitude-deg, --cycles, --states (defaults: the PRTS's, filled in by
-    :func:`prts_arguments`, so that a flag given next to ``--tilt`` can be told apart)."""
-    parser.add_argument("--amplitude-deg", type=positive_float,
-                        help=f"PRTS peak-to-peak tilt, degrees (default "
-                             f"{default_of(prts, 'amplitude_deg'):g})")
-    parser.add_argument("--cycles", type=positive_int,
-                        help=f"PRTS cycles (default {default_of(prts, 'cycles')})")
-    parser.add_argument("--states", type=int, choices=sorted(PRTS_REGISTERS, reverse=True),
-                        help=f"PRTS length (default {default_of(prts, 'states')} states, "
-                             "60.5 s a cycle)")
-
-
-def prts_arguments(args: argparse.Namespace) -> dict:
-    """The PRTS keyword arguments the flags ask for, defaults filled in."""
-    return {k: getattr(args, k) if getattr(args, k) is not None else default_of(prts, k)
-            for k in _PRTS_FLAGS}
+__all__ = ["add_parser", "run", "add_model_arguments", "model_options"]
 
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
@@ -67,8 +43,7 @@ def add_parser(sub) -> None:
     sim = sub.add_parser("simulate", help="simulate a DEC-controlled body on the tilting platform")
     sim.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     sim.add_argument("--params", type=Path, help="parameter JSON (default: the body's defaults)")
-    add_stimulus_arguments(sim)
-    sim.add_argument("--tilt", type=Path, help="tilt CSV (time_s,tilt_deg) instead of the PRTS")
+    add_lab_stimulus_arguments(sim, "tilt CSV (time_s,tilt_deg) instead of the PRTS")
     add_model_arguments(sim)
     sim.add_argument("--noise-deg", type=non_negative_float, default=0.0,
                      help="white sensor noise added to the segment angles, degrees (SD)")
@@ -85,13 +60,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
     params = DecParameters.from_json(args.params, body) if args.params else None
-    if args.tilt:
-        given = [flag for key, flag in _PRTS_FLAGS.items() if getattr(args, key) is not None]
-        if given:
-            raise PostureIdError(f"--tilt replaces the PRTS: {', '.join(given)} do not apply")
-        stimulus = tilt_from_csv(args.tilt)
-    else:
-        stimulus = prts(**prts_arguments(args))
+    stimulus = stimulus_from_args(args, default=prts())
     options = model_options(args)
     result = simulate(body, params, stimulus, options)
     recording = result.to_recording()

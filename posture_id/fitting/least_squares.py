@@ -57,7 +57,7 @@ from posture_id.fitting.unknowns import q_from_targets, targets_from_q
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 from posture_id.recording import Recording
-from posture_id.simulation.stimulus import recognise_prts, tilt_from_array
+from posture_id.simulation.stimulus import TiltProfile
 
 __all__ = ["fit_recording"]
 
@@ -70,6 +70,7 @@ def fit_recording(
     progress: Progress | None = None,
     source: str = "recording",
     problem: FitProblem | None = None,
+    stimulus: TiltProfile | None = None,
 ) -> FitResult:
     """Fit every module's Kp, Ki, Kd, Δ and class to one recording.
 
@@ -80,6 +81,9 @@ def fit_recording(
         source: the recording's name in messages.
         problem: a :class:`~.problem.FitProblem` to reuse (default: the cached one for
             this body, recording length and options).
+        stimulus: the tilt as the lab ran it (:func:`~posture_id.simulation.prts` with its
+            onset, starting state, sign and lag, or a tilt file); the recording's tilt
+            column is checked against it. Default: recognised from the tilt column.
     """
     options = options or FitOptions()
     if tuple(recording.segments) != body.segment_names:
@@ -92,7 +96,7 @@ def fit_recording(
         report(progress, 0, None, "message", message)
 
     start = time.perf_counter()
-    recording, notices = prepare_recording(recording, source, options)
+    recording, stim, notices = prepare_recording(recording, source, options, stimulus)
     for notice in notices:
         say(notice)
     n = body.n_segments
@@ -103,14 +107,6 @@ def fit_recording(
         raise ValueError("the given FitProblem was built for another body or recording length")
     if not problem.backend.compiled:
         notices.append(f"CasADi runs in its virtual machine ({problem.backend.reason}): slower")
-    stim = recognise_prts(recording.time, recording.tilt)
-    if stim is not None:
-        notices.append(f"{source}: the tilt is a {stim.description}; the exact profile is "
-                       "used (samples miss its corners)")
-    else:
-        stim = tilt_from_array(recording.time, recording.tilt, description=source)
-        notices.append(f"{source}: the tilt is not a PRTS; it is interpolated linearly "
-                       "between samples")
     sim = options.simulation
     tilt, tilt_vel = stim.on_grid(sim.dt, problem.n_steps_u)
     u = step_inputs(tilt, tilt_vel, problem.n_steps_u)

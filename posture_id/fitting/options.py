@@ -89,7 +89,10 @@ class FitOptions:
         smooth_deadband_rad_s: softplus width of the dead-band inside the exact stages.
         noise_floor_deg: least σ assumed for standard errors (sensor resolution).
         precision_rel: a parameter is poorly determined when 1.96·SE > this × |value|.
-        min_duration_s: shortest recording accepted (one 242-state PRTS cycle).
+        min_duration_s: shortest recording accepted; None (default): one whole cycle of
+            the recording's stimulus (named, or a recognised PRTS: 60.5 s for 242 states,
+            20 s for 80, plus any lead-in), and :data:`MIN_ANY_TILT_S` for a tilt that is
+            not periodic.
         compilation: :class:`Compilation` of the CasADi functions.
         threads: threads evaluating Jacobian columns.
         warm_start: first fit with the fast simulator and finite differences (cheap), then
@@ -107,7 +110,7 @@ class FitOptions:
     smooth_deadband_rad_s: float = 1e-5
     noise_floor_deg: float = 0.001
     precision_rel: float = 0.05
-    min_duration_s: float = 60.5
+    min_duration_s: float | None = None
     compilation: Compilation = Compilation.AUTO
     threads: int = 2
     warm_start: bool = True
@@ -130,6 +133,8 @@ class FitOptions:
         for name in ("tolerance", "warm_tolerance", "noise_floor_deg", "precision_rel",
                      "min_duration_s"):
             value = getattr(self, name)
+            if name == "min_duration_s" and value is None:
+                continue
             if not (math.isfinite(value) and value > 0):
                 raise FitError(f"{name} must be a finite number > 0, got {value!r}")
         if not (math.isfinite(self.smooth_deadband_rad_s) and self.smooth_deadband_rad_s >= 0):

@@ -8,25 +8,39 @@ from posture_id.bodies.body import Body
 from posture_id.errors import RecordingError
 from posture_id.frf.response import FrequencyResponse, FrfOptions, frequency_response_arrays
 from posture_id.recording import Recording
-from posture_id.simulation.stimulus import recognise_prts, sample_rate_hint
+from posture_id.simulation.stimulus import (
+    TiltProfile,
+    check_recorded_tilt,
+    recognise_prts,
+    sample_rate_hint,
+)
 
 __all__ = ["frequency_response"]
 
 
 def frequency_response(recording: Recording, body: Body | None = None,
                        options: FrfOptions | None = None, period_s: float | None = None,
-                       source: str = "recording") -> FrequencyResponse:
+                       source: str = "recording", stimulus: TiltProfile | None = None
+                       ) -> FrequencyResponse:
     """FRFs of every segment angle (and of the body COM sway α_BS when ``body`` is given)
     relative to the recording's tilt.
 
     Args:
         recording: evenly sampled, starting with the stimulus. body: its segments must be
             the recording's. options: :class:`FrfOptions`. period_s: one stimulus cycle, s
-            (default: recognised from the tilt, which must then be a PRTS).
+            (default: the named stimulus's, or recognised from a PRTS tilt).
         source: the recording's name in messages.
+        stimulus: the stimulus as the lab ran it (:func:`~posture_id.simulation.prts`):
+            the recording's tilt is checked against it and the analysis starts where its
+            periodic part does (after a lead-in and the platform's lag).
     """
     if not recording.evenly_sampled():
         raise RecordingError(f"{source}: the samples are not evenly spaced in time")
+    start = 0
+    if stimulus is not None:
+        check_recorded_tilt(recording.time, recording.tilt, stimulus, source)
+        period_s = period_s or stimulus.period_s
+        start = int(np.searchsorted(recording.time, stimulus.periodic_from_s - 1e-9))
     if period_s is None:
         stimulus = recognise_prts(recording.time, recording.tilt)
         if stimulus is None or stimulus.period_s is None:
@@ -37,13 +51,13 @@ def frequency_response(recording: Recording, body: Body | None = None,
                                     else f"; and {hint.removeprefix(source + ': ')}"))
         period_s = stimulus.period_s
     channels = tuple(recording.segments)
-    outputs = recording.theta
+    outputs = recording.theta[start:]
     if body is not None:
         if tuple(recording.segments) != body.segment_names:
             raise RecordingError(
                 f"{source}: segment columns {','.join(recording.segments)} do not match the "
                 f"body's segments {','.join(body.segment_names)}")
-        outputs = np.column_stack([outputs, body.com_angles(recording.theta)[:, 0]])
+        outputs = np.column_stack([outputs, body.com_angles(recording.theta[start:])[:, 0]])
         channels += ("body COM",)
-    return frequency_response_arrays(recording.tilt, outputs, recording.sample_rate_hz,
+    return frequency_response_arrays(recording.tilt[start:], outputs, recording.sample_rate_hz,
                                      period_s, channels, options, source)

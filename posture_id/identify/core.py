@@ -38,7 +38,12 @@ from posture_id.provenance import provenance
 from posture_id.recording import Recording
 from posture_id.simulation.batch import simulate
 from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG, SimulationOptions
-from posture_id.simulation.stimulus import recognise_prts, tilt_from_array
+from posture_id.simulation.stimulus import (
+    TiltProfile,
+    check_recorded_tilt,
+    recognise_prts,
+    tilt_from_array,
+)
 
 __all__ = ["Method", "identify"]
 
@@ -60,7 +65,8 @@ class Method(enum.Enum):
 def identify(recording: Recording, body: Body | None = None, method: Method = Method.HYBRID,
              model: str | Path | CnnIdentifier | None = None,
              fit_options: FitOptions | None = None, progress: Progress | None = None,
-             source: str = "recording") -> IdentificationResult:
+             source: str = "recording", stimulus: TiltProfile | None = None
+             ) -> IdentificationResult:
     """Identify every module's Kp, Ki, Kd, Δ and class from one recording.
 
     Args:
@@ -69,12 +75,17 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
             :class:`~posture_id.learning.identifier.CnnIdentifier` (default: the bundled
             model for the body). fit_options: for the least-squares stage.
         progress: told the fit's stages. source: the recording's name in messages.
+        stimulus: the tilt as the lab ran it (checked against the recording's tilt column;
+            see :func:`~posture_id.fitting.least_squares.fit_recording`); default:
+            recognised from the tilt column.
     """
     body = body or load_body()
     start = time.perf_counter()
     options = fit_options or FitOptions()
     notices: list[str] = []
     cnn = fit = None
+    if stimulus is not None:
+        check_recorded_tilt(recording.time, recording.tilt, stimulus, source)
     if method in (Method.CNN, Method.HYBRID):
         identifier = (model if isinstance(model, CnnIdentifier)
                       else CnnIdentifier.load(model, body) if model is not None
@@ -85,15 +96,16 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
         # CasADi loads only when least squares runs: the CNN alone starts half a second sooner
         from posture_id.fitting.least_squares import fit_recording
 
-        fit = fit_recording(recording, body, None, options, progress, source)
+        fit = fit_recording(recording, body, None, options, progress, source,
+                            stimulus=stimulus)
     elif method is Method.HYBRID:
-        fit = _refine(recording, body, cnn, options, progress, source, notices)
+        fit = _refine(recording, body, cnn, options, progress, source, notices, stimulus)
     if fit is not None:
         notices += [n for n in fit.notices if n not in notices]
         parameters, normalised = fit.parameters, fit.normalised
     else:
         parameters, normalised = cnn.parameters, cnn.normalised
-    checked = _resimulate(body, recording, parameters, options.simulation)
+    checked = _resimulate(body, recording, parameters, options.simulation, stimulus)
     return IdentificationResult(
         method=method.value, parameters=parameters, normalised=np.asarray(normalised),
         class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -109,7 +121,8 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
 
 
 def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
-            progress: Progress | None, source: str, notices: list[str]):
+            progress: Progress | None, source: str, notices: list[str],
+            stimulus: TiltProfile | None = None):
     """The hybrid's least squares from the CNN's answer.
 
     Classes the CNN is sure of (P(C = +1) outside :data:`UNSURE_CLASS` for every module)
@@ -130,7 +143,8 @@ def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
                        "least squares decides it")
     else:
         fit = fit_recording(recording, body, cnn.parameters,
-                            replace(options, classes=FixedClasses()), progress, source)
+                            replace(options, classes=FixedClasses()), progress, source,
+                            stimulus=stimulus)
         explained = _explained(fit.recorded, fit.fitted)
         if explained < MIN_EXPLAINED:
             notices.append(f"with the CNN's classes the fit explains {100 * explained:.0f} % "
@@ -139,7 +153,8 @@ def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
         relaxed = options.classes if isinstance(options.classes, RelaxedClasses) \
             else RelaxedClasses()
         again = fit_recording(recording, body, cnn.parameters,
-                              replace(options, classes=relaxed), progress, source)
+                              replace(options, classes=relaxed), progress, source,
+                              stimulus=stimulus)
         if fit is None or again.cost < fit.cost:
             fit = again
     changed = [j for j in body.joint_names
@@ -158,12 +173,13 @@ def _explained(recorded: np.ndarray, fitted: np.ndarray) -> float:
     return float(1.0 - residual.var(axis=0).sum() / recorded.var(axis=0).sum())
 
 
-def _resimulate(body: Body, recording: Recording, parameters, simulation: SimulationOptions
-                ) -> dict:
-    """Simulate the identified model on the recording's tilt; E_id, E_rel, segment fits."""
+def _resimulate(body: Body, recording: Recording, parameters, simulation: SimulationOptions,
+                stimulus: TiltProfile | None = None) -> dict:
+    """Simulate the identified model on the recording's tilt (or the named stimulus);
+    E_id, E_rel, segment fits."""
     rec = recording.resampled(simulation.sample_rate_hz)
-    stimulus = recognise_prts(rec.time, rec.tilt) or tilt_from_array(rec.time, rec.tilt,
-                                                                    "the recording's tilt")
+    stimulus = stimulus or recognise_prts(rec.time, rec.tilt) or tilt_from_array(
+        rec.time, rec.tilt, "the recording's tilt")
     wide = replace(simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
     trial = simulate(body, parameters, stimulus, wide)
     n = len(rec.time)

@@ -23,6 +23,7 @@ __all__ = [
     "tilt_from_array",
     "tilt_from_csv",
     "recognise_prts",
+    "check_recorded_tilt",
     "prts_match",
     "sample_rate_hint",
     "COMMON_RATES_HZ",
@@ -47,12 +48,20 @@ class TiltProfile:
         angles: (K,) rad, tilt at the knots (positive = toes down / forward, MODEL §1).
         description: a short human-readable origin ("PRTS 242 ×2, 1° p-p", a file name).
         period_s: s, the period of a periodic stimulus (one PRTS cycle), None otherwise.
+        periodic_from_s: s, when the periodic part starts (after a lead-in and the
+            platform's lag); 0 for a stimulus that starts at once.
     """
 
     times: np.ndarray
     angles: np.ndarray
     description: str = "tilt"
     period_s: float | None = None
+    periodic_from_s: float = 0.0
+
+    @property
+    def whole_cycles_s(self) -> float | None:
+        """s, the shortest recording that holds one whole cycle (None: not periodic)."""
+        return None if self.period_s is None else self.periodic_from_s + self.period_s
 
     @property
     def duration(self) -> float:
@@ -99,29 +108,63 @@ def prts(
     cycles: int = 2,
     states: int = 242,
     state_s: float = PRTS_STATE_S,
+    *,
+    onset_s: float = 0.0,
+    start_state: int = 0,
+    sign: int = 1,
+    lag_s: float = 0.0,
 ) -> TiltProfile:
     """The PRTS tilt: velocity = the ternary sequence, position scaled to a peak-to-peak.
+
+    The defaults are MODEL §4's stimulus; the keyword-only arguments describe a PRTS as a
+    lab ran it.
 
     Args:
         amplitude_deg: peak-to-peak tilt over a cycle, degrees (default 1° **[decision]**).
         cycles: number of cycles (default 2: 121 s for 242 states).
         states: 242 (5 stages, 60.5 s) or 80 (4 stages, 20 s).
         state_s: s per state.
+        onset_s: s of level platform before the sequence starts (a lead-in).
+        start_state: the sequence starts at this state of its cycle (0: the register's
+            start state; the lab's PRTS may start part-way into its cycle).
+        sign: +1, or −1 when the platform's positive tilt is the other way.
+        lag_s: s the platform's tilt follows its command late (adds to the onset).
     """
     if not (math.isfinite(amplitude_deg) and amplitude_deg >= 0):
         raise StimulusError(f"PRTS amplitude must be a finite angle ≥ 0, got {amplitude_deg}")
     if int(cycles) != cycles or cycles < 1:
         raise StimulusError(f"PRTS cycles must be a positive integer, got {cycles}")
-    symbols = np.tile(prts_symbols(states).astype(float), int(cycles))
+    if not (math.isfinite(state_s) and state_s > 0):
+        raise StimulusError(f"PRTS state duration must be > 0 s, got {state_s}")
+    for name, value in (("onset_s", onset_s), ("lag_s", lag_s)):
+        if not (math.isfinite(value) and value >= 0):
+            raise StimulusError(f"PRTS {name} must be a finite time ≥ 0 s, got {value}")
+    if sign not in (1, -1):
+        raise StimulusError(f"PRTS sign must be +1 or -1, got {sign}")
+    symbols = prts_symbols(states)
+    if int(start_state) != start_state or not 0 <= start_state < states:
+        raise StimulusError(f"PRTS start state must be an integer in [0, {states}), "
+                            f"got {start_state}")
+    symbols = np.tile(np.roll(symbols, -int(start_state)).astype(float), int(cycles))
     steps = np.concatenate([[0.0], np.cumsum(symbols)])
     one_cycle = steps[: states + 1]
     scale = math.radians(amplitude_deg) / float(one_cycle.max() - one_cycle.min())
-    times = np.arange(len(steps)) * state_s
+    delay = float(onset_s + lag_s)
+    times = delay + np.arange(len(steps)) * state_s
+    angles = sign * steps * scale
+    if delay > 0:
+        times, angles = np.concatenate([[0.0], times]), np.concatenate([[0.0], angles])
+    extras = [text for text, used in (
+        (f"state {state_s:g} s", state_s != PRTS_STATE_S),
+        (f"onset {onset_s:g} s", onset_s > 0), (f"from state {int(start_state)}", start_state),
+        ("negated", sign < 0), (f"lag {lag_s:g} s", lag_s > 0)) if used]
     return TiltProfile(
         times=times,
-        angles=steps * scale,
-        description=f"PRTS {states} states x{int(cycles)}, {amplitude_deg:g} deg p-p",
+        angles=angles,
+        description=f"PRTS {states} states x{int(cycles)}, {amplitude_deg:g} deg p-p"
+                    + "".join(f", {e}" for e in extras),
         period_s=states * state_s,
+        periodic_from_s=delay,
     )
 
 
@@ -130,28 +173,26 @@ def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
     """The PRTS a sampled tilt follows, or None.
 
     Recordings sample the tilt at 50 Hz, which misses the PRTS corners at odd multiples of
-    0.25 s; when the samples are a PRTS (242 or 80 states, any amplitude and sign, within
-    ``tolerance`` of its peak-to-peak), the exact profile is returned instead, extended to
-    whole cycles covering the recording.
+    0.25 s; when the samples are a PRTS of MODEL §4 (242 or 80 states from the start of
+    its cycle, at once, either sign, any amplitude: the least-squares scale of the unit
+    sequence), within ``tolerance`` of its peak-to-peak, the exact profile is returned,
+    extended to whole cycles covering the recording. A recording shorter than one cycle
+    is recognised too (at least 4 states long), so that it can be told it is too short.
+    A PRTS with a lead-in, a lag or another starting state is not guessed: name it
+    (:func:`prts` and the command line's stimulus flags).
     """
     t = np.asarray(times_s, dtype=float)
     a = np.asarray(tilt_rad, dtype=float)
+    if len(t) < 2 or t[-1] < 4 * PRTS_STATE_S or not np.any(a):
+        return None
     for states in (242, 80):
-        cycle = states * PRTS_STATE_S
-        if t[-1] < cycle - 1e-9:
+        cycles = max(1, int(math.ceil(t[-1] / (states * PRTS_STATE_S) - 1e-9)))
+        unit = prts(1.0, cycles, states).angle(t)  # 1° peak to peak over a cycle
+        k = float(unit @ a) / float(unit @ unit)
+        if k == 0.0:
             continue
-        first = t <= cycle + 1e-9
-        ptp = float(np.ptp(a[first]))
-        if ptp == 0.0:
-            return None
-        cycles = int(math.ceil(t[-1] / cycle - 1e-9))
-        candidate = prts(math.degrees(ptp), cycles, states)
-        sampled = candidate.angle(t)
-        if np.max(np.abs(sampled - a)) <= tolerance * ptp:
-            return candidate
-        if np.max(np.abs(-sampled - a)) <= tolerance * ptp:
-            return TiltProfile(candidate.times, -candidate.angles,
-                               candidate.description + " (negated)", candidate.period_s)
+        if np.max(np.abs(k * unit - a)) <= tolerance * abs(k) * math.radians(1.0):
+            return prts(abs(k), cycles, states, sign=1 if k > 0 else -1)
     return None
 
 
@@ -205,6 +246,25 @@ def sample_rate_hint(times_s: np.ndarray, tilt_rad: np.ndarray, source: str,
     return (f"{source}: the tilt is a {states}-state PRTS sampled at {rate:g} Hz "
             f"(match {match:.2f}), not at the {stated:.4g} Hz the time column says "
             f"(match {at_stated:.2f}): check the time column")
+
+
+def check_recorded_tilt(times_s: np.ndarray, tilt_rad: np.ndarray, stimulus: TiltProfile,
+                        source: str, tolerance: float = 0.05) -> None:
+    """Refuse a recorded tilt (``times_s``, ``tilt_rad``) that departs from the named
+    stimulus by more than ``tolerance`` of its peak-to-peak (measurement noise stays well
+    inside)."""
+    expected = stimulus.angle(times_s)
+    span = float(np.ptp(stimulus.angles)) or 1.0
+    error = np.abs(tilt_rad - expected)
+    worst = int(np.argmax(error))
+    if error[worst] > tolerance * span:
+        raise StimulusError(
+            f"{source}: the tilt column is not the named stimulus ({stimulus.description}): "
+            f"at t = {times_s[worst]:.3f} s it reads "
+            f"{np.degrees(tilt_rad[worst]):.4g}° where the stimulus is at "
+            f"{np.degrees(expected[worst]):.4g}° "
+            f"({100 * error[worst] / span:.0f} % of its peak-to-peak); check the stimulus's "
+            "states, onset, starting state, sign and lag")
 
 
 def tilt_from_array(times_s, angles_rad, description: str = "array") -> TiltProfile:

@@ -1,0 +1,84 @@
+"""Stimulus flags shared by the commands: the PRTS as MODEL §4 defines it, as a lab ran
+it (state duration, lead-in, starting state, sign, platform lag), or a tilt file."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.cli.arguments import (
+    default_of,
+    non_negative_float,
+    non_negative_int,
+    positive_float,
+    positive_int,
+)
+from posture_id.errors import PostureIdError
+from posture_id.simulation.stimulus import (
+    PRTS_REGISTERS,
+    PRTS_STATE_S,
+    TiltProfile,
+    prts,
+    tilt_from_csv,
+)
+
+__all__ = ["add_stimulus_arguments", "add_lab_stimulus_arguments", "prts_arguments",
+           "stimulus_from_args"]
+
+_PRTS_FLAGS = {"amplitude_deg": "--amplitude-deg", "cycles": "--cycles", "states": "--states"}
+_LAB_FLAGS = {"state_s": "--state-s", "onset_s": "--onset-s", "start_state": "--start-state",
+              "sign": "--sign", "lag_s": "--lag-s"}
+
+
+def add_stimulus_arguments(parser: argparse.ArgumentParser) -> None:
+    """--amplitude-deg, --cycles, --states (defaults: the PRTS's, filled in by
+    :func:`prts_arguments`, so that a flag given next to ``--tilt`` can be told apart)."""
+    parser.add_argument("--amplitude-deg", type=positive_float,
+                        help=f"PRTS peak-to-peak tilt, degrees (default "
+                             f"{default_of(prts, 'amplitude_deg'):g})")
+    parser.add_argument("--cycles", type=positive_int,
+                        help=f"PRTS cycles (default {default_of(prts, 'cycles')})")
+    parser.add_argument("--states", type=int, choices=sorted(PRTS_REGISTERS, reverse=True),
+                        help=f"PRTS length (default {default_of(prts, 'states')} states, "
+                             "60.5 s a cycle)")
+
+
+def add_lab_stimulus_arguments(parser: argparse.ArgumentParser, tilt_help: str) -> None:
+    """The PRTS flags, those describing how a lab ran it, and ``--tilt FILE``."""
+    add_stimulus_arguments(parser)
+    parser.add_argument("--state-s", type=positive_float,
+                        help=f"PRTS state duration, s (default {PRTS_STATE_S:g})")
+    parser.add_argument("--onset-s", type=non_negative_float,
+                        help="level platform before the sequence starts, s (default 0)")
+    parser.add_argument("--start-state", type=non_negative_int,
+                        help="the sequence starts at this state of its cycle (default 0)")
+    parser.add_argument("--sign", choices=("+1", "-1"),
+                        help="-1 when the platform's positive tilt is the other way")
+    parser.add_argument("--lag-s", type=non_negative_float,
+                        help="the platform follows its command this late, s (default 0)")
+    parser.add_argument("--tilt", type=Path, help=tilt_help)
+
+
+def prts_arguments(args: argparse.Namespace) -> dict:
+    """The PRTS keyword arguments the flags ask for, defaults filled in."""
+    out = {k: getattr(args, k) if getattr(args, k) is not None else default_of(prts, k)
+           for k in _PRTS_FLAGS}
+    out.update({k: getattr(args, k) for k in _LAB_FLAGS if getattr(args, k, None) is not None})
+    if "sign" in out:
+        out["sign"] = int(out["sign"])
+    return out
+
+
+def stimulus_from_args(args: argparse.Namespace, default: TiltProfile | None
+                       ) -> TiltProfile | None:
+    """The stimulus the flags name: a tilt file, a PRTS (when any PRTS flag is given), or
+    ``default``. A PRTS flag next to ``--tilt`` is refused."""
+    given = [flag for key, flag in {**_PRTS_FLAGS, **_LAB_FLAGS}.items()
+             if getattr(args, key, None) is not None]
+    if getattr(args, "tilt", None):
+        if given:
+            raise PostureIdError(f"--tilt replaces the PRTS: {', '.join(given)} do not apply")
+        return tilt_from_csv(args.tilt)
+    if given:
+        return prts(**prts_arguments(args))
+    return default

@@ -104,7 +104,7 @@ def test_segment_mismatch_is_refused(tip, winter2):
 def test_other_rates_are_resampled_with_a_notice(tip):
     fine = simulate(tip, options=SimulationOptions(sample_rate_hz=100.0))
     rec = Recording(fine.time, fine.tilt, fine.theta, fine.segments)
-    resampled, notices = prepare_recording(rec, "rec100.csv", FitOptions())
+    resampled, _, notices = prepare_recording(rec, "rec100.csv", FitOptions())
     assert "resampled from 100 Hz to 50 Hz" in notices[0]
     at50 = simulate(tip)
     np.testing.assert_allclose(resampled.time, at50.time)

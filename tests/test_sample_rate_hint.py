@@ -48,7 +48,7 @@ def test_fit_and_identify_say_it(tip, tmp_path, capsys):
     recording = trial.to_recording()
     # 50 Hz samples written with a time column of 25 Hz (a lab's mistake)
     wrong = Recording(recording.time * 2, recording.tilt, recording.theta, recording.segments)
-    _, notices = prepare_recording(wrong, "lab.csv", FitOptions())
+    _, _, notices = prepare_recording(wrong, "lab.csv", FitOptions())
     assert any("sampled at 50 Hz" in n and "25 Hz the time column" in n for n in notices)
     csv = tmp_path / "lab.csv"
     wrong.to_csv(csv)

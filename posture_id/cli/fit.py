@@ -14,7 +14,7 @@ from posture_id.cli.arguments import (
     write_result,
 )
 from posture_id.cli.progress import TerminalProgress
-from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
+from posture_id.cli.stimulus import add_lab_stimulus_arguments, recording_and_stimulus
 from posture_id.dec.parameters import DecParameters
 from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import (
@@ -24,7 +24,6 @@ from posture_id.fitting.options import (
     FixedClasses,
     RelaxedClasses,
 )
-from posture_id.recording import Recording
 
 __all__ = ["add_parser", "run"]
 
@@ -61,9 +60,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
-    stimulus = stimulus_from_args(args, default=None)
-    recording = Recording.from_csv(args.recording, body.segment_names,
-                                   None if stimulus is None else stimulus.angle)
+    recording, stimulus = recording_and_stimulus(args, body)
     init = DecParameters.from_json(args.init, body) if args.init else None
     options = options_from(args)
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:

@@ -13,9 +13,8 @@ from posture_id.cli.arguments import (
     positive_float,
     write_result,
 )
-from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
+from posture_id.cli.stimulus import add_lab_stimulus_arguments, recording_and_stimulus
 from posture_id.frf import FrfOptions, frequency_response
-from posture_id.recording import Recording
 
 __all__ = ["add_parser", "run"]
 
@@ -52,9 +51,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
-    stimulus = stimulus_from_args(args, default=None)
-    recording = Recording.from_csv(args.recording, body.segment_names,
-                                   None if stimulus is None else stimulus.angle)
+    recording, stimulus = recording_and_stimulus(args, body)
     options = FrfOptions(skip_cycles=args.skip_cycles, drift_order=args.drift_order,
                          bands=args.bands, max_frequency_hz=args.max_frequency_hz)
     result = frequency_response(recording, body, options, args.period_s,

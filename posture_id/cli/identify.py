@@ -15,9 +15,12 @@ from posture_id.cli.arguments import (
     write_result,
 )
 from posture_id.cli.progress import TerminalProgress
-from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
+from posture_id.cli.stimulus import (
+    add_lab_stimulus_arguments,
+    recording_and_stimulus,
+    stimulus_from_args,
+)
 from posture_id.errors import PostureIdError
-from posture_id.recording import Recording
 
 __all__ = ["add_parser"]
 
@@ -62,14 +65,12 @@ def run(args: argparse.Namespace) -> int:
     from posture_id.learning.identifier import CnnIdentifier
 
     body = load_body(args.body or DEFAULT_URDF)
-    stimulus = stimulus_from_args(args, default=None)
     method = Method(args.method)
     model = None
     if method is not Method.FIT:
         model = (CnnIdentifier.load(args.model, body) if args.model
                  else CnnIdentifier.for_body(body))
-    recording = Recording.from_csv(args.recording, body.segment_names,
-                                   None if stimulus is None else stimulus.angle)
+    recording, stimulus = recording_and_stimulus(args, body)
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
         result = identify(recording, body, method, model, progress=progress,
                           source=str(args.recording), stimulus=stimulus)

@@ -14,6 +14,7 @@ from posture_id.cli.arguments import (
     positive_int,
 )
 from posture_id.errors import PostureIdError
+from posture_id.recording import Recording
 from posture_id.simulation.stimulus import (
     PRTS_REGISTERS,
     PRTS_STATE_S,
@@ -23,7 +24,7 @@ from posture_id.simulation.stimulus import (
 )
 
 __all__ = ["add_stimulus_arguments", "add_lab_stimulus_arguments", "prts_arguments",
-           "stimulus_from_args"]
+           "stimulus_from_args", "recording_and_stimulus"]
 
 _PRTS_FLAGS = {"amplitude_deg": "--amplitude-deg", "cycles": "--cycles", "states": "--states"}
 _LAB_FLAGS = {"state_s": "--state-s", "onset_s": "--onset-s", "start_state": "--start-state",
@@ -82,3 +83,13 @@ def stimulus_from_args(args: argparse.Namespace, default: TiltProfile | None
     if given:
         return prts(**prts_arguments(args))
     return default
+
+
+def recording_and_stimulus(args: argparse.Namespace, body) -> tuple[Recording,
+                                                                    TiltProfile | None]:
+    """The recording ``args.recording`` for ``body`` and the stimulus the flags name (its
+    tilt fills in a recording without a tilt column)."""
+    stimulus = stimulus_from_args(args, default=None)
+    recording = Recording.from_csv(args.recording, body.segment_names,
+                                   None if stimulus is None else stimulus.angle)
+    return recording, stimulus

@@ -107,3 +107,21 @@ def test_console_script_prints_no_traceback(tmp_path):
     assert "Traceback" not in proc.stderr
     assert proc.stderr.strip().count("\n") == 0
     assert str(tilt) in proc.stderr and "line 3" in proc.stderr
+
+
+def test_search_ranges_of_the_fit(tmp_path, capsys):
+    """--gain-range / --delay-range widen the search box (the paper's own human ankle Ki,
+    74.7 for a 70 kg subject, lies outside the default 4×)."""
+    from posture_id.cli import build_parser
+    from posture_id.cli.fit import options_from
+
+    args = build_parser().parse_args(["fit", "rec.csv", "--out", "o.json", "--gain-range",
+                                      "0", "10", "--delay-range", "0.5", "3"])
+    options = options_from(args)
+    assert options.gain_bounds == (-1.0, 9.0) and options.delay_bounds == (-0.5, 2.0)
+    defaults = options_from(build_parser().parse_args(["fit", "rec.csv", "--out", "o.json"]))
+    assert defaults.gain_bounds == (-1.0, 3.0) and defaults.delay_bounds == (-1.0, 1.5)
+    for command in ("fit", "identify"):
+        assert main([command, "rec.csv", "--out", str(tmp_path / "o.json"), "--gain-range",
+                     "3", "2"]) == 2
+        assert "--gain-range: MIN must be below MAX, got 3 2" in capsys.readouterr().err

@@ -9,6 +9,7 @@ from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
     check_output_file,
     default_of,
+    non_negative_float,
     non_negative_int,
     positive_int,
     write_result,
@@ -16,6 +17,7 @@ from posture_id.cli.arguments import (
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import add_lab_stimulus_arguments, recording_and_stimulus
 from posture_id.dec.parameters import DecParameters
+from posture_id.errors import PostureIdError
 from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import (
     Compilation,
@@ -25,7 +27,7 @@ from posture_id.fitting.options import (
     RelaxedClasses,
 )
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "add_bounds_arguments", "bounds_from"]
 
 
 def add_parser(sub) -> None:
@@ -44,25 +46,52 @@ def add_parser(sub) -> None:
                      help="--classes relaxed: seed of the prior draws (default %(default)d)")
     fit.add_argument("--no-compile", action="store_true",
                      help="run CasADi in its virtual machine (no C compiler)")
+    add_bounds_arguments(fit)
     add_lab_stimulus_arguments(fit, "tilt CSV (time_s,tilt_deg) the recording was made with")
     fit.set_defaults(func=run)
+
+
+def add_bounds_arguments(parser: argparse.ArgumentParser) -> None:
+    """--gain-range and --delay-range: the search box, as multiples of the defaults."""
+    low, high = (1 + b for b in default_of(FitOptions, "gain_bounds"))
+    parser.add_argument("--gain-range", type=non_negative_float, nargs=2, metavar=("MIN", "MAX"),
+                        default=[low, high],
+                        help="Kp, Ki and Kd are searched between MIN× and MAX× the body's "
+                             f"default gains (default {low:g} {high:g})")
+    low, high = (1 + b for b in default_of(FitOptions, "delay_bounds"))
+    parser.add_argument("--delay-range", type=non_negative_float, nargs=2,
+                        metavar=("MIN", "MAX"), default=[low, high],
+                        help="delays are searched between MIN× and MAX× the default delay "
+                             f"(default {low:g} {high:g})")
+
+
+def bounds_from(args: argparse.Namespace) -> dict:
+    """FitOptions keywords of --gain-range and --delay-range (normalised: factor − 1)."""
+    out = {}
+    for flag, key in (("--gain-range", "gain_bounds"), ("--delay-range", "delay_bounds")):
+        low, high = getattr(args, key.replace("bounds", "range"))
+        if not low < high:
+            raise PostureIdError(f"{flag}: MIN must be below MAX, got {low:g} {high:g}")
+        out[key] = (low - 1.0, high - 1.0)
+    return out
 
 
 def options_from(args: argparse.Namespace) -> FitOptions:
     classes = {"relaxed": RelaxedClasses(starts=args.starts, seed=args.seed),
                "exhaustive": ExhaustiveClasses(), "fixed": FixedClasses()}[args.classes]
     return FitOptions(classes=classes,
-                      compilation=Compilation.NEVER if args.no_compile else Compilation.AUTO)
+                      compilation=Compilation.NEVER if args.no_compile else Compilation.AUTO,
+                      **bounds_from(args))
 
 
 def run(args: argparse.Namespace) -> int:
     inputs = (args.recording, args.body, args.init, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    options = options_from(args)
     body = load_body(args.body or DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)
     init = DecParameters.from_json(args.init, body) if args.init else None
-    options = options_from(args)
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
         result = fit_recording(recording, body, init, options, progress=progress,
                                source=str(args.recording), stimulus=stimulus)

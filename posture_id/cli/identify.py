@@ -14,6 +14,7 @@ from posture_id.cli.arguments import (
     say,
     write_result,
 )
+from posture_id.cli.fit import add_bounds_arguments, bounds_from
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_lab_stimulus_arguments,
@@ -21,6 +22,7 @@ from posture_id.cli.stimulus import (
     stimulus_from_args,
 )
 from posture_id.errors import PostureIdError
+from posture_id.fitting.options import FitOptions
 
 __all__ = ["add_parser"]
 
@@ -44,6 +46,7 @@ def add_parser(sub) -> None:
     p.add_argument("--scheduler", help="cohort: Dask distributed scheduler (tcp://host:port)")
     p.add_argument("--plot", type=Path, help="recorded versus re-simulated sway (PNG)")
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recordings were made with")
+    add_bounds_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -57,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     args.recording = Path(args.recording)
     if args.scheduler:
         raise PostureIdError("--scheduler goes with a folder or pattern of recordings")
+    fit_options = FitOptions(**bounds_from(args))
     inputs = (args.recording, args.body, args.model, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
@@ -72,7 +76,8 @@ def run(args: argparse.Namespace) -> int:
                  else CnnIdentifier.for_body(body))
     recording, stimulus = recording_and_stimulus(args, body)
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
-        result = identify(recording, body, method, model, progress=progress,
+        result = identify(recording, body, method, model,
+                          fit_options=fit_options, progress=progress,
                           source=str(args.recording), stimulus=stimulus)
     write_result(result, args.out, args.plot)
     return 0 if np.isfinite(result.e_rel) else 1
@@ -84,12 +89,13 @@ def run_cohort(args: argparse.Namespace) -> int:
 
     if args.plot:
         raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording")
+    fit_options = FitOptions(**bounds_from(args))
     recordings = find_recordings(args.recording)
     check_output_folder(args.out, "--out", inputs=(*recordings, args.body, args.tilt))
     body = load_body(args.body or DEFAULT_URDF)
     stimulus = stimulus_from_args(args, default=None)
     with TerminalProgress("recordings", prefix="posture-id identify") as progress:
         result = identify_cohort(recordings, args.out, body, Method(args.method), args.model,
-                                 args.scheduler, progress, stimulus)
+                                 args.scheduler, progress, stimulus, fit_options)
     say(result.summary())
     return 1 if result.failed else 0

@@ -26,6 +26,7 @@ from pathlib import Path
 from posture_id.bodies.body import Body, load_body
 from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Method, identify
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.progress import Progress, report
@@ -66,7 +67,8 @@ class CohortResult:
 
 
 def _identify_text(csv_text: str, name: str, urdf_text: str, urdf_name: str, method: str,
-                   model: str | None, stimulus: TiltProfile | None = None) -> dict:
+                   model: str | None, stimulus: TiltProfile | None = None,
+                   fit_options: FitOptions | None = None) -> dict:
     """One recording from its text (a cluster task): the result as a dict, or the error."""
     with tempfile.TemporaryDirectory() as tmp:
         urdf = Path(tmp) / urdf_name
@@ -74,16 +76,18 @@ def _identify_text(csv_text: str, name: str, urdf_text: str, urdf_name: str, met
         rec_path = Path(tmp) / name
         rec_path.write_text(csv_text)
         body = load_body(urdf)
-        return _identify_file(rec_path, body, method, model, source=name, stimulus=stimulus)
+        return _identify_file(rec_path, body, method, model, source=name, stimulus=stimulus,
+                              fit_options=fit_options)
 
 
 def _identify_file(path: Path, body: Body, method: str, model, source: str,
-                   stimulus: TiltProfile | None = None) -> dict:
+                   stimulus: TiltProfile | None = None,
+                   fit_options: FitOptions | None = None) -> dict:
     try:
         recording = Recording.from_csv(path, body.segment_names,
                                        None if stimulus is None else stimulus.angle)
-        return identify(recording, body, Method(method), model, source=source,
-                        stimulus=stimulus).to_dict()
+        return identify(recording, body, Method(method), model, fit_options=fit_options,
+                        source=source, stimulus=stimulus).to_dict()
     except PostureIdError as exc:
         return {"error": str(exc)}
 
@@ -91,13 +95,15 @@ def _identify_file(path: Path, body: Body, method: str, model, source: str,
 def identify_cohort(recordings: list[Path], out: str | Path, body: Body | None = None,
                     method: Method = Method.CNN, model: str | Path | None = None,
                     scheduler: str | None = None, progress: Progress | None = None,
-                    stimulus: TiltProfile | None = None) -> CohortResult:
+                    stimulus: TiltProfile | None = None,
+                    fit_options: FitOptions | None = None) -> CohortResult:
     """Identify ``recordings`` into ``out`` (see the module doc).
 
     Args:
         model: a model directory (default: the bundled model for the body).
         scheduler: a Dask distributed scheduler address, or None for this process.
         stimulus: the stimulus every recording was made with (default: each one's tilt).
+        fit_options: for the least squares of ``fit`` and ``hybrid``.
     """
     out = Path(out)
     body = body or load_body()
@@ -124,7 +130,7 @@ def identify_cohort(recordings: list[Path], out: str | Path, body: Body | None =
         report(progress, done, len(recordings), "recording")
 
     if scheduler:
-        _run_on_cluster(scheduler, todo, body, method, model, record, stimulus)
+        _run_on_cluster(scheduler, todo, body, method, model, record, stimulus, fit_options)
     else:
         identifier = None
         if method is not Method.FIT and todo:  # load the network once for the cohort
@@ -132,13 +138,14 @@ def identify_cohort(recordings: list[Path], out: str | Path, body: Body | None =
                           else CnnIdentifier.for_body(body))
         for path in todo:
             record(path, _identify_file(path, body, method.value, identifier, str(path),
-                                        stimulus))
+                                        stimulus, fit_options))
     _write_summary(out, recordings, status)
     return CohortResult(out, status)
 
 
 def _run_on_cluster(address: str, todo: list[Path], body: Body, method: Method, model,
-                    record, stimulus: TiltProfile | None = None) -> None:
+                    record, stimulus: TiltProfile | None = None,
+                    fit_options: FitOptions | None = None) -> None:
     try:
         from distributed import Client, as_completed
     except ImportError:
@@ -152,7 +159,7 @@ def _run_on_cluster(address: str, todo: list[Path], body: Body, method: Method, 
     try:
         futures = {client.submit(_identify_text, path.read_text(), path.name, urdf_text,
                                  Path(body.urdf_path).name, method.value, model_path,
-                                 stimulus, pure=False): path for path in todo}
+                                 stimulus, fit_options, pure=False): path for path in todo}
         for future in as_completed(futures):
             record(futures[future], future.result())
             future.release()

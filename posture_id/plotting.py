@@ -243,7 +243,7 @@ def plot_benchmark(groups: dict, path=None, ax=None):
     fig, axes = _axes(ax, 1, 2, (max(8, 1.1 * len(groups) + 3), 4.5))
     labels = list(groups)
     for a, k, title in ((axes[0, 0], 0, "E_rel of the re-simulated body sway"),
-                        (axes[0, 1], 1, "seconds per recording")):
+                        (axes[0, 1], 1, "seconds identifying a recording")):
         a.boxplot([np.maximum(groups[g][k], 1e-6) for g in labels], tick_labels=labels)
         a.set_yscale("log")
         a.set_title(title)

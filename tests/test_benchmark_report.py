@@ -20,12 +20,15 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
     clean = stats["0|cnn"]
     assert clean["recordings"] == 2 and 0 <= clean["class_accuracy"] <= 1
     assert clean["seconds_median"] > 0
+    # the CNN's own time excludes the checks and the re-simulation every method shares
+    assert all(0 < r["identification_seconds"] < r["seconds"] for r in report.rows)
     assert len(clean["mean_abs_error"]) == 3 and len(clean["mean_abs_error"][0]) == 4
     paths = report.write(tmp_path)
     data = json.loads(paths[0].read_text())
     assert data["trials"] == 2 and len(data["rows"]) == 4
     text = paths[1].read_text()
     assert "## Sensor noise 0.01°" in text and "| cnn |" in text
+    assert "Ending far from the truth, all noise levels: cnn " in text
     assert paths[2].stat().st_size > 10_000
 
 

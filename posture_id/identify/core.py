@@ -90,8 +90,13 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
         identifier = (model if isinstance(model, CnnIdentifier)
                       else CnnIdentifier.load(model, body) if model is not None
                       else CnnIdentifier.for_body(body))
+        began = time.perf_counter()
         cnn = identifier.identify(recording, source)
+        spent = time.perf_counter() - began
         notices += cnn.notices
+    else:
+        spent = 0.0
+    began = time.perf_counter()
     if method is Method.FIT:
         # CasADi loads only when least squares runs: the CNN alone starts half a second sooner
         from posture_id.fitting.least_squares import fit_recording
@@ -100,6 +105,7 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
                             stimulus=stimulus)
     elif method is Method.HYBRID:
         fit = _refine(recording, body, cnn, options, progress, source, notices, stimulus)
+    spent += time.perf_counter() - began if fit is not None else 0.0
     if fit is not None:
         notices += [n for n in fit.notices if n not in notices]
         parameters, normalised = fit.parameters, fit.normalised
@@ -109,7 +115,8 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
     return IdentificationResult(
         method=method.value, parameters=parameters, normalised=np.asarray(normalised),
         class_probability=None if cnn is None else np.asarray(cnn.class_probability),
-        wall_time_s=time.perf_counter() - start, joints=body.joint_names,
+        wall_time_s=time.perf_counter() - start, identification_time_s=spent,
+        joints=body.joint_names,
         cnn=None if cnn is None else cnn.to_dict(),
         fit=None if fit is None else {k: v for k, v in fit.to_dict().items()
                                       if k != "provenance"},

@@ -31,6 +31,7 @@ from __future__ import annotations
 import itertools
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -130,6 +131,7 @@ def fit_recording(
         return result
 
     suffix = " (simulator)" if options.warm_start else ""
+    chosen = None  # the warm fit with the classes fixed, when they are
     if isinstance(options.classes, RelaxedClasses):
         # the guess (classes half-way to their values), then draws of the MODEL §5 prior
         rng = np.random.default_rng(options.classes.seed)
@@ -156,9 +158,19 @@ def fit_recording(
             q0 = np.concatenate([guess[: 4 * n], combo])
             candidates.append(stage(f"classes {class_names(combo)}{suffix}", first_evaluator,
                                     q0, continuous, first_tolerance, first_limit))
-        start_q = min(candidates, key=lambda s: s.cost).q
-    best = stage("polish (exact derivatives)", exact, start_q, continuous, options.tolerance,
-                 options.polish_iterations if options.warm_start else options.max_iterations)
+        chosen = min(candidates, key=lambda s: s.cost)
+        start_q = chosen.q
+    if chosen is not None and options.warm_start and chosen.converged:
+        # the warm start solved the final problem (classes fixed): the exact model only
+        # gives the Jacobian at its optimum, for the standard errors (docs/fit.md)
+        best = stage("exact Jacobian at the optimum", exact, start_q, continuous,
+                     options.tolerance, 1)
+        best = replace(best, converged=True, status=chosen.status)
+        stages[-1] = best
+    else:
+        best = stage("polish (exact derivatives)", exact, start_q, continuous,
+                     options.tolerance,
+                     options.polish_iterations if options.warm_start else options.max_iterations)
 
     normalised = targets_from_q(best.q)
     params = denormalise(normalised, defaults)

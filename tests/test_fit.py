@@ -161,3 +161,22 @@ def test_any_robot_name_fits(tmp_path, winter2):
     fitted = fit_recording(trial.to_recording(), body)
     assert fitted.converged and fitted.rms_deg < 1e-6
     _check_recovery(fitted, truth, 0.02, 4)
+
+
+def test_known_classes_end_with_one_exact_jacobian(tip):
+    """With the classes fixed and the warm start converged, the exact model gives the
+    Jacobian at the warm optimum instead of iterating again: the parameters are the
+    truth's (noise-free) and the standard errors come from the exact model."""
+    from posture_id.fitting import FitOptions
+    from posture_id.fitting.options import FixedClasses
+
+    truth, trial, _ = _stable_trial(tip, 21)
+    start = truth  # the truth's classes, gains 10 % off
+    for joint in tip.joint_names:
+        start = start.replace(joint, kp=1.1 * truth[joint].kp, kd=0.9 * truth[joint].kd)
+    fitted = fit_recording(trial.to_recording(), tip, start, FitOptions(classes=FixedClasses()))
+    assert [s.name for s in fitted.stages][-1] == "exact Jacobian at the optimum"
+    assert fitted.stages[-1].evaluations == 1 and fitted.converged
+    assert fitted.rms_deg < 1e-6
+    _check_recovery(fitted, truth, 1e-4, 4)
+    assert np.all(np.isfinite(fitted.standard_errors)) and np.all(fitted.standard_errors > 0)

@@ -96,6 +96,7 @@ def test_cycle_averaging_removes_a_drift_ten_times_the_locked_amplitude():
                                         ("y",), FrfOptions(skip_cycles=1, drift_order=2))
     np.testing.assert_allclose(removed.response, clean.response, rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(removed.coherence, 1.0, atol=1e-8)
+    assert removed.locked_share[0] == pytest.approx(1.0, abs=1e-9)  # all locked but drift
     average = cycle_average(locked + drift, p, skip_cycles=1, drift_order=2)
     # the drift's constant is the cycle average's: compare both about their means
     offset = drift[span].mean() - average.drift.mean()

@@ -32,8 +32,8 @@ class CycleAverage:
         mean: (P, ...) the cycle average (drift removed).
         cycles: (C, P, ...) each analysed cycle, drift removed.
         drift: (C·P, ...) the fitted drift across the analysed span (zero mean).
-        locked_share: (...) share of the analysed signal's variance (about its mean) that
-            is the repeated cycle average: the stimulus-locked share.
+        locked_share: (...) share of the drift-free signal's variance (about its mean)
+            that is the repeated cycle average: the stimulus-locked share, in [0, 1].
     """
 
     mean: np.ndarray
@@ -90,10 +90,12 @@ def cycle_average(signal: np.ndarray, samples_per_cycle: int, skip_cycles: int =
         drift = basis @ coefficients
     locked = (flat - drift).reshape(cycles, p, -1)
     mean = locked.mean(axis=0)
-    centred = flat - flat.mean(axis=0)
-    periodic = np.tile(mean - mean.mean(axis=0), (cycles, 1))
+    # the drift-free signal splits into the repeated cycle average and a remainder whose
+    # cycle average is zero: two orthogonal parts, so the shares add up to 1
+    periodic = ((mean - mean.mean(axis=0)) ** 2).sum(axis=0) * cycles
+    remainder = ((locked - mean) ** 2).sum(axis=(0, 1))
     with np.errstate(invalid="ignore", divide="ignore"):
-        share = (periodic**2).sum(axis=0) / (centred**2).sum(axis=0)
+        share = periodic / (periodic + remainder)
     return CycleAverage(mean=mean.reshape(p, *trailing),
                         cycles=locked.reshape(cycles, p, *trailing),
                         drift=drift.reshape(cycles * p, *trailing),

@@ -157,12 +157,23 @@ def test_frf_command_line(tip, tmp_path, capsys):
     csv = tmp_path / "rec.csv"
     recording.to_csv(csv)
     out = tmp_path / "frf.json"
-    assert main(["frf", str(csv), "--out", str(out), "--plot", str(tmp_path / "frf.png"),
-                 "--bands", "12"]) == 0
+    assert main(["frf", str(csv), "--body", str(tip.urdf_path), "--out", str(out), "--plot",
+                 str(tmp_path / "frf.png"), "--bands", "12"]) == 0
     data = json.loads(out.read_text())
     assert len(data["frequencies_hz"]) <= 12
     assert data["channels"]["body COM"]["coherence"] is not None
     assert data["provenance"]["options"]["bands"] == 12
+    # a lab's COM-only recording: no body, the columns as they are
+    com = tip.com_angles(recording.theta)[:, 0]
+    only = tmp_path / "com_only.csv"
+    only.write_text("time_s,tilt_deg,com_deg\n" + "".join(
+        f"{t:.6f},{np.degrees(a):.12g},{np.degrees(c):.12g}\n"
+        for t, a, c in zip(recording.time, recording.tilt, com, strict=True)))
+    assert main(["frf", str(only), "--bands", "12", "--out", str(tmp_path / "com.json")]) == 0
+    alone = json.loads((tmp_path / "com.json").read_text())
+    assert list(alone["channels"]) == ["com"]
+    np.testing.assert_allclose(alone["channels"]["com"]["gain"],
+                               data["channels"]["body COM"]["gain"], rtol=1e-6)
 
 
 def test_bad_input_is_refused(tip):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.bodies.body import load_body
 from posture_id.cli.arguments import (
     check_output_file,
     default_of,
@@ -23,7 +23,10 @@ def add_parser(sub) -> None:
     p = sub.add_parser("frf", help="frequency-response functions (gain, phase, coherence) "
                                    "of the sway relative to the tilt")
     p.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
-    p.add_argument("--body", type=Path, help="URDF (default: the TIP); adds the body COM")
+    p.add_argument("--body", type=Path,
+                   help="URDF whose segments the recording's columns must be; adds the body "
+                        "COM (default: none, every angle column as it is, e.g. a COM-only "
+                        "recording)")
     p.add_argument("--out", type=Path, required=True, help="FRF JSON to write")
     p.add_argument("--plot", type=Path, help="gain, phase and coherence against frequency (PNG)")
     p.add_argument("--period-s", type=positive_float,
@@ -50,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     inputs = (args.recording, args.body, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
-    body = load_body(args.body or DEFAULT_URDF)
+    body = load_body(args.body) if args.body else None
     recording, stimulus = recording_and_stimulus(args, body)
     options = FrfOptions(skip_cycles=args.skip_cycles, drift_order=args.drift_order,
                          bands=args.bands, max_frequency_hz=args.max_frequency_hz)

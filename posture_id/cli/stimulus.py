@@ -87,9 +87,10 @@ def stimulus_from_args(args: argparse.Namespace, default: TiltProfile | None
 
 def recording_and_stimulus(args: argparse.Namespace, body) -> tuple[Recording,
                                                                     TiltProfile | None]:
-    """The recording ``args.recording`` for ``body`` and the stimulus the flags name (its
-    tilt fills in a recording without a tilt column)."""
+    """The recording ``args.recording`` for ``body`` (None: any angle columns) and the
+    stimulus the flags name (its tilt fills in a recording without a tilt column)."""
     stimulus = stimulus_from_args(args, default=None)
-    recording = Recording.from_csv(args.recording, body.segment_names,
+    recording = Recording.from_csv(args.recording,
+                                   None if body is None else body.segment_names,
                                    None if stimulus is None else stimulus.angle)
     return recording, stimulus

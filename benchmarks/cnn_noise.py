@@ -30,8 +30,7 @@ def main() -> None:
                         default=Path(__file__).parent / "results" / "cnn_noise.json")
     args = parser.parse_args()
     body = load_body()
-    identifier = (CnnIdentifier.load(args.model, body) if args.model
-                  else CnnIdentifier.for_body(body))
+    identifier = CnnIdentifier.resolve(args.model, body)
     params = sample_parameters(body, args.trials, np.random.default_rng(5))
     batch = simulate_batch(body, params)
     results = {}

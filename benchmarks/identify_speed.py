@@ -46,8 +46,7 @@ def main() -> None:
                         default=Path(__file__).parent / "results" / "identify_speed.json")
     args = parser.parse_args()
     body = load_body()
-    identifier = (CnnIdentifier.load(args.model, body) if args.model
-                  else CnnIdentifier.for_body(body))
+    identifier = CnnIdentifier.resolve(args.model, body)
     params = sample_parameters(body, 2 * args.recordings, np.random.default_rng(5))
     batch = simulate_batch(body, params)
     recordings = [batch.trial(b).to_recording() for b in np.flatnonzero(batch.stable)]

@@ -66,6 +66,11 @@ class Recording:
                           for j in range(self.theta.shape[1])], axis=1)
         return Recording(t, np.interp(t, self.time, self.tilt), theta, self.segments)
 
+    def check_segments(self, segments: tuple[str, ...], source: str) -> None:
+        """Refuse a recording whose segment columns are not ``segments`` (a body's), in
+        order; ``source`` names it in the message."""
+        _check_segment_names(self.segments, segments, source)
+
     def with_sensor_noise(self, sd_deg: float, seed: int) -> Recording:
         """A copy with white Gaussian noise of ``sd_deg`` degrees added to every segment
         angle (the platform tilt is the commanded stimulus and stays clean), seeded."""
@@ -124,11 +129,8 @@ class Recording:
             names.append(col[:-4])
         if not names:
             raise RecordingError(f"{path}: no segment columns after time_s,tilt_deg")
-        if segments is not None and tuple(names) != tuple(segments):
-            raise RecordingError(
-                f"{path}: segment columns {','.join(names)} do not match the body's "
-                f"segments {','.join(segments)}"
-            )
+        if segments is not None:
+            _check_segment_names(names, segments, str(path))
         check_time_column(path, values[:, 0], RecordingError)
         largest = float(np.abs(values[:, 1:]).max())
         if 0 < largest < RADIANS_SUSPECT_DEG:
@@ -141,3 +143,9 @@ class Recording:
             theta=np.radians(values[:, 2:]),
             segments=tuple(names),
         )
+
+
+def _check_segment_names(names, segments, source: str) -> None:
+    if tuple(names) != tuple(segments):
+        raise RecordingError(f"{source}: segment columns {','.join(names)} do not match the "
+                             f"body's segments {','.join(segments)}")

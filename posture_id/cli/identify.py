@@ -72,8 +72,7 @@ def run(args: argparse.Namespace) -> int:
     method = Method(args.method)
     model = None
     if method is not Method.FIT:
-        model = (CnnIdentifier.load(args.model, body) if args.model
-                 else CnnIdentifier.for_body(body))
+        model = CnnIdentifier.resolve(args.model, body)
     recording, stimulus = recording_and_stimulus(args, body)
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
         result = identify(recording, body, method, model,

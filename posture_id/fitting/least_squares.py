@@ -43,7 +43,6 @@ from posture_id.dec.parameters import (
     normalise,
 )
 from posture_id.dec.prior import relative_factors
-from posture_id.errors import RecordingError
 from posture_id.fitting.evaluators import ExactEvaluator, SimulatorEvaluator, run_stage
 from posture_id.fitting.options import (
     ExhaustiveClasses,
@@ -87,11 +86,7 @@ def fit_recording(
             column is checked against it. Default: recognised from the tilt column.
     """
     options = options or FitOptions()
-    if tuple(recording.segments) != body.segment_names:
-        raise RecordingError(
-            f"{source}: segment columns {','.join(recording.segments)} do not match the body's "
-            f"segments {','.join(body.segment_names)}"
-        )
+    recording.check_segments(body.segment_names, source)
 
     def say(message: str) -> None:
         report(progress, 0, None, "message", message)

@@ -53,10 +53,7 @@ def frequency_response(recording: Recording, body: Body | None = None,
     channels = tuple(recording.segments)
     outputs = recording.theta[start:]
     if body is not None:
-        if tuple(recording.segments) != body.segment_names:
-            raise RecordingError(
-                f"{source}: segment columns {','.join(recording.segments)} do not match the "
-                f"body's segments {','.join(body.segment_names)}")
+        recording.check_segments(body.segment_names, source)
         outputs = np.column_stack([outputs, body.com_angles(recording.theta[start:])[:, 0]])
         channels += ("body COM",)
     return frequency_response_arrays(recording.tilt[start:], outputs, recording.sample_rate_hz,

@@ -8,14 +8,14 @@ three methods identify every recording:
 - ``fit``: least squares from the body's defaults;
 - ``hybrid``: least squares started from the CNN's answer.
 
-Each worker process loads the body and the network once; the time of a recording is the
-whole ``identify`` call (checks, CNN and/or least squares, and the re-simulation that
-checks the result). Per method and noise level: the mean absolute error of each normalised parameter
-(|p̃ − p̃_true|, medians too), class accuracy, E_rel of the body sway re-simulated with the
-identified parameters against the noise-free truth (MODEL §7), how many recordings end
-far from the truth (a wrong class or E_rel above :data:`FAR_E_REL`: a local minimum for
-the fits), and the wall time per recording. Recordings are identified in parallel
-processes, one per core.
+Each worker process loads the body and the network once. Per method and noise level: the
+mean absolute error of each normalised parameter (|p̃ − p̃_true|, medians too), class
+accuracy, E_rel of the body sway re-simulated with the identified parameters against the
+noise-free truth (MODEL §7), how many recordings end far from the truth (a wrong class or
+E_rel above :data:`FAR_E_REL`: a local minimum for the fits), and two times per
+recording: identifying (the CNN and/or least squares) and the whole ``identify`` call
+(with the checks and the re-simulation every method shares). Recordings are identified in
+parallel processes, one per core, each on one thread.
 """
 
 from __future__ import annotations
@@ -38,6 +38,8 @@ from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write_text, json_text, jsonable
 from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Method, identify
+from posture_id.learning.bundled import bundled_model_dir
+from posture_id.learning.checkpoint import SIDECAR
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.plotting import plot_benchmark
 from posture_id.progress import Progress, report
@@ -113,12 +115,14 @@ class BenchmarkReport:
     rows: tuple[dict, ...]
     workers: int
 
+    def _rows(self, noise: float, method: Method) -> list[dict]:
+        return [r for r in self.rows if r["noise_deg"] == noise and r["method"] == method.value]
+
     def statistics(self) -> dict:
         out: dict = {}
         for noise in self.noise_levels:
             for method in METHODS:
-                rows = [r for r in self.rows
-                        if r["noise_deg"] == noise and r["method"] == method.value]
+                rows = self._rows(noise, method)
                 if not rows:
                     continue
                 err = np.array([r["abs_error"] for r in rows])  # (R, N, 4)
@@ -211,8 +215,7 @@ class BenchmarkReport:
         groups = {}
         for noise in self.noise_levels:
             for method in METHODS:
-                rows = [r for r in self.rows
-                        if r["noise_deg"] == noise and r["method"] == method.value]
+                rows = self._rows(noise, method)
                 if rows:
                     groups[f"{method.value}\n{noise:g}°"] = (
                         [min(r["e_rel"], 10.0) for r in rows],
@@ -240,9 +243,10 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
             for method in methods:
                 tasks.append((str(body.urdf_path), arrays, b, noise, method.value,
                               int(1000 * seed + b)))
+    model_dir, _ = bundled_model_dir(body)  # its sidecar names the weights; no need to load
+    weights = json.loads((model_dir / SIDECAR).read_text(encoding="utf-8"))["weights_sha256"]
     header = {"format": "posture_id-benchmark-journal", "body_sha256": body.sha256,
-              "model_weights_sha256": CnnIdentifier.for_body(body).model.sidecar.get(
-                  "weights_sha256"), "trials": trials, "seed": seed}
+              "model_weights_sha256": weights, "trials": trials, "seed": seed}
     done = _read_journal(Path(journal), header) if journal is not None else {}
     rows = [done[_task_key(t)] for t in tasks if _task_key(t) in done]
     todo = [t for t in tasks if _task_key(t) not in done]

@@ -134,8 +134,7 @@ def identify_cohort(recordings: list[Path], out: str | Path, body: Body | None =
     else:
         identifier = None
         if method is not Method.FIT and todo:  # load the network once for the cohort
-            identifier = (CnnIdentifier.load(model, body) if model is not None
-                          else CnnIdentifier.for_body(body))
+            identifier = CnnIdentifier.resolve(model, body)
         for path in todo:
             record(path, _identify_file(path, body, method.value, identifier, str(path),
                                         stimulus, fit_options))

@@ -84,12 +84,10 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
     options = fit_options or FitOptions()
     notices: list[str] = []
     cnn = fit = None
-    if stimulus is not None:
+    if stimulus is not None and method is Method.CNN:  # least squares checks it itself
         check_recorded_tilt(recording.time, recording.tilt, stimulus, source)
     if method in (Method.CNN, Method.HYBRID):
-        identifier = (model if isinstance(model, CnnIdentifier)
-                      else CnnIdentifier.load(model, body) if model is not None
-                      else CnnIdentifier.for_body(body))
+        identifier = CnnIdentifier.resolve(model, body)
         began = time.perf_counter()
         cnn = identifier.identify(recording, source)
         spent = time.perf_counter() - began
@@ -144,7 +142,7 @@ def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
     low, high = UNSURE_CLASS
     unsure = [j for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
               if low < p < high]
-    fit = None
+    fit, explained = None, -math.inf
     if unsure:
         notices.append(f"the CNN is unsure of the class of {', '.join(unsure)}: "
                        "least squares decides it")
@@ -156,7 +154,7 @@ def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
         if explained < MIN_EXPLAINED:
             notices.append(f"with the CNN's classes the fit explains {100 * explained:.0f} % "
                            "of the sway's variance: fitted again with the classes relaxed")
-    if fit is None or _explained(fit.recorded, fit.fitted) < MIN_EXPLAINED:
+    if fit is None or explained < MIN_EXPLAINED:
         relaxed = options.classes if isinstance(options.classes, RelaxedClasses) \
             else RelaxedClasses()
         again = fit_recording(recording, body, cnn.parameters,

@@ -119,6 +119,14 @@ class CnnIdentifier:
         return cls(load_model(model_dir), body)
 
     @classmethod
+    def resolve(cls, model: str | Path | CnnIdentifier | None, body: Body) -> CnnIdentifier:
+        """``model`` as an identifier for ``body``: one already loaded, a model directory,
+        or None for the bundled model."""
+        if isinstance(model, CnnIdentifier):
+            return model
+        return cls.for_body(body) if model is None else cls.load(model, body)
+
+    @classmethod
     def for_body(cls, body: Body) -> CnnIdentifier:
         """The bundled model for ``body`` (see :func:`~.bundled.bundled_model_dir`)."""
         folder, notices = bundled_model_dir(body)
@@ -126,10 +134,7 @@ class CnnIdentifier:
 
     def features(self, recording: Recording, source: str = "recording") -> np.ndarray:
         """(M, C, 51, 51) images of a recording: checked against the model's stimulus."""
-        if tuple(recording.segments) != self.body.segment_names:
-            raise RecordingError(
-                f"{source}: segment columns {','.join(recording.segments)} do not match the "
-                f"body's segments {','.join(self.body.segment_names)}")
+        recording.check_segments(self.body.segment_names, source)
         if not recording.evenly_sampled():
             raise RecordingError(f"{source}: samples are not evenly spaced in time")
         as_given = recording

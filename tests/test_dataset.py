@@ -186,3 +186,33 @@ def test_sensor_noise_changes_the_features_only(tmp_path):
     assert not np.allclose(a["modular"], b["modular"])
     # white noise lifts the high-frequency magnitudes, where the clean sway has little
     assert b["modular"][:, :, 0, 40:].mean() > 2 * a["modular"][:, :, 0, 40:].mean()
+
+
+def test_motor_noise_moves_the_bodies_with_each_trials_own_seed(tmp_path):
+    from posture_id.bodies.body import load_body
+    from posture_id.dec.parameters import ParameterArrays
+    from posture_id.simulation import simulate_batch
+    from posture_id.simulation.noise import MotorNoise
+
+    config = _config(trials=4, shard_size=8, motor_noise_deg=0.3, motor_cutoff_hz=0.5)
+    clean = generate_dataset(_config(trials=4, shard_size=8), tmp_path / "clean", workers=1)
+    noisy = generate_dataset(config, tmp_path / "noisy", workers=1)
+    a, b = clean.load_shard(0), noisy.load_shard(0)
+    for key in ("kp", "delay_s", "sign"):  # the parameters do not depend on the noise
+        np.testing.assert_array_equal(a[key], b[key])
+    assert np.all(a["motor_noise_deg"] == 0)
+    assert np.all((b["motor_noise_deg"] >= 0) & (b["motor_noise_deg"] <= 0.3))
+    assert len(set(b["motor_noise_deg"].round(12))) == len(b["motor_noise_deg"])
+    # the stored sway is the noisy sway: one trial re-simulated alone with its own noise
+    from posture_id.datasets.shards import motor_noises
+
+    noises = motor_noises(config, 0)
+    first = int(np.flatnonzero(b["kept"])[0])
+    assert noises[first].sd_deg == b["motor_noise_deg"][0]
+    params = ParameterArrays(**{f: b[f][first : first + 1] for f in ParameterArrays.FIELDS})
+    alone = simulate_batch(load_body(config.body), params, config.stimulus(),
+                           config.simulation, motor_noise=[noises[first]])
+    np.testing.assert_allclose(b["theta"][0], alone.theta[0], atol=1e-7)  # float32 storage
+    assert isinstance(noises[first], MotorNoise)
+    assert not np.allclose(a["theta"][0], b["theta"][0], atol=1e-5)
+    assert noisy.manifest["config"]["motor_noise_deg"] == 0.3

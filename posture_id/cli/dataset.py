@@ -17,6 +17,7 @@ from posture_id.cli.arguments import (
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.simulate import (
     add_model_arguments,
+    add_motor_noise_arguments,
     model_options,
 )
 from posture_id.cli.stimulus import add_stimulus_arguments, prts_arguments
@@ -46,6 +47,7 @@ def add_parser(sub) -> None:
                      default=default_of(DatasetConfig, "sensor_noise_deg"),
                      help="features from angles plus white noise of an SD drawn from "
                           "[0, this] per trial, degrees (default %(default)g: noise-free)")
+    add_motor_noise_arguments(gen, "a level drawn from [0, DEG] per trial")
     add_stimulus_arguments(gen)
     add_model_arguments(gen)
     gen.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -62,7 +64,8 @@ def run_generate(args: argparse.Namespace) -> int:
     config = DatasetConfig(
         trials=args.trials, body=str(args.body or DEFAULT_URDF), seed=args.seed,
         shard_size=args.shard_size, **prts_arguments(args), simulation=model_options(args),
-        sensor_noise_deg=args.sensor_noise_deg,
+        sensor_noise_deg=args.sensor_noise_deg, motor_noise_deg=args.motor_noise,
+        motor_cutoff_hz=args.motor_cutoff_hz,
     )
     with TerminalProgress("kept trials", quiet=args.quiet) as progress:
         data = generate_dataset(config, args.out, workers=args.workers,

@@ -17,10 +17,12 @@ from posture_id.cli.arguments import (
 from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
 from posture_id.dec.parameters import DecParameters
 from posture_id.simulation.batch import simulate
+from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorNoise
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.stimulus import prts
 
-__all__ = ["add_parser", "run", "add_model_arguments", "model_options"]
+__all__ = ["add_parser", "run", "add_model_arguments", "model_options",
+           "add_motor_noise_arguments"]
 
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
@@ -39,6 +41,16 @@ def model_options(args: argparse.Namespace) -> SimulationOptions:
                              deadband_rad_s=args.deadband_rad_s)
 
 
+def add_motor_noise_arguments(parser: argparse.ArgumentParser, what: str) -> None:
+    """--motor-noise DEG and --motor-cutoff-hz (low-pass torque noise at every joint)."""
+    parser.add_argument("--motor-noise", type=non_negative_float, default=0.0, metavar="DEG",
+                        help=f"low-pass torque noise at every joint, its SD the gravity torque "
+                             f"m·g·h of a lean of {what} (default 0: none)")
+    parser.add_argument("--motor-cutoff-hz", type=positive_float, default=DEFAULT_CUTOFF_HZ,
+                        help="corner frequency of the motor noise's first-order low-pass "
+                             "(default %(default)g Hz)")
+
+
 def add_parser(sub) -> None:
     sim = sub.add_parser("simulate", help="simulate a DEC-controlled body on the tilting platform")
     sim.add_argument("--body", type=Path, help="URDF (default: the TIP)")
@@ -47,8 +59,9 @@ def add_parser(sub) -> None:
     add_model_arguments(sim)
     sim.add_argument("--noise-deg", type=non_negative_float, default=0.0,
                      help="white sensor noise added to the segment angles, degrees (SD)")
+    add_motor_noise_arguments(sim, "this many degrees")
     sim.add_argument("--seed", type=non_negative_int, default=0,
-                     help="seed of the sensor noise (default %(default)d)")
+                     help="seed of the sensor and motor noise (default %(default)d)")
     sim.add_argument("--out", type=Path, required=True, help="recording CSV to write")
     sim.add_argument("--plot", type=Path, help="plot of tilt and sway to write (PNG)")
     sim.set_defaults(func=run)
@@ -62,7 +75,9 @@ def run(args: argparse.Namespace) -> int:
     params = DecParameters.from_json(args.params, body) if args.params else None
     stimulus = stimulus_from_args(args, default=prts())
     options = model_options(args)
-    result = simulate(body, params, stimulus, options)
+    motor = (MotorNoise(args.motor_noise, args.motor_cutoff_hz, args.seed)
+             if args.motor_noise > 0 else None)
+    result = simulate(body, params, stimulus, options, motor_noise=motor)
     recording = result.to_recording()
     if args.noise_deg > 0:
         recording = recording.with_sensor_noise(args.noise_deg, args.seed)

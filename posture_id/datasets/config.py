@@ -9,6 +9,7 @@ from pathlib import Path
 from posture_id.datasets.features import FS_HZ
 from posture_id.dec.prior import SIGMA
 from posture_id.errors import PostureIdError
+from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.stimulus import TiltProfile, prts
 
@@ -36,6 +37,10 @@ class DatasetConfig:
         angles plus white noise of a standard deviation drawn uniformly from [0, this],
         degrees (0: noise-free, as in the paper), so that a network learns to see through
         sensor noise.
+        motor_noise_deg: every simulated trial gets low-pass torque noise at its joints
+        (:class:`~posture_id.simulation.noise.MotorNoise`) of a level drawn uniformly from
+        [0, this], degrees (0: none); seeded per trial. motor_cutoff_hz: its corner
+        frequency.
     """
 
     trials: int
@@ -49,6 +54,8 @@ class DatasetConfig:
     states: int = 242
     simulation: SimulationOptions = field(default_factory=SimulationOptions)
     sensor_noise_deg: float = 0.0
+    motor_noise_deg: float = 0.0
+    motor_cutoff_hz: float = DEFAULT_CUTOFF_HZ
 
     def __post_init__(self) -> None:
         if self.trials < 3:
@@ -60,6 +67,10 @@ class DatasetConfig:
             )
         if not (math.isfinite(self.sensor_noise_deg) and 0 <= self.sensor_noise_deg <= 1):
             raise DatasetError(f"sensor_noise_deg must be in [0, 1]°, got {self.sensor_noise_deg}")
+        if not (math.isfinite(self.motor_noise_deg) and 0 <= self.motor_noise_deg <= 10):
+            raise DatasetError(f"motor_noise_deg must be in [0, 10]°, got {self.motor_noise_deg}")
+        if not (math.isfinite(self.motor_cutoff_hz) and self.motor_cutoff_hz > 0):
+            raise DatasetError(f"motor_cutoff_hz must be > 0, got {self.motor_cutoff_hz}")
         if self.seed < 0:
             raise DatasetError(f"seed must be ≥ 0, got {self.seed}")
         if self.shard_size < 1:

@@ -121,6 +121,8 @@ def _new_manifest(config: DatasetConfig, body: Body, body_hash: str) -> dict:
             "seed": config.seed,
             "shard_seeds": "shard k: numpy.random.SeedSequence([seed, 0]).spawn(k + 1)[k]",
             "split_seed": "numpy.random.SeedSequence([seed, 1])",
+            "motor_noise": "shard k: levels uniform in [0, motor_noise_deg] and per-trial "
+                           "seeds from numpy.random.SeedSequence([seed, 2, k])",
         },
         "features": FEATURE_DEFINITION,
         "shards": [],

@@ -17,8 +17,9 @@ from posture_id.datasets.features import modular_images, monolithic_images, stft
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
 from posture_id.dec.prior import sample_parameters
 from posture_id.simulation.batch import simulate_batch
+from posture_id.simulation.noise import MotorNoise
 
-__all__ = ["make_shard", "make_shard_remote", "shard_seed", "PARAMETER_FIELDS"]
+__all__ = ["make_shard", "make_shard_remote", "shard_seed", "motor_noises", "PARAMETER_FIELDS"]
 
 PARAMETER_FIELDS = ParameterArrays.FIELDS
 
@@ -36,12 +37,17 @@ def make_shard(config: DatasetConfig, k: int, body: Body | None = None) -> dict[
     ``modular`` (K, N, 3, 51, 51) float32, ``monolithic`` (K, 2N−1, 51, 51) float32,
     ``targets`` (K, N, 5) normalised [K̃p, K̃i, K̃d, Δ̃, C], ``sensor_noise_deg`` (K,) the
     white noise SD added to each kept trial's segment angles before its features (drawn
-    uniformly from [0, ``config.sensor_noise_deg``]; ``theta`` is stored without it).
+    uniformly from [0, ``config.sensor_noise_deg``]; ``theta`` is stored without it),
+    ``motor_noise_deg`` (K,) the level of each kept trial's motor noise (drawn uniformly
+    from [0, ``config.motor_noise_deg``] with its seed from ``SeedSequence([seed, 2, k])``,
+    so sets without motor noise keep their bytes).
     """
     body = body or load_body(config.body)
     rng = np.random.default_rng(shard_seed(config.seed, k))
     params = sample_parameters(body, config.shard_size, rng, sigma=config.sigma)
-    batch = simulate_batch(body, params, config.stimulus(), config.simulation, workers=1)
+    motor = motor_noises(config, k)
+    batch = simulate_batch(body, params, config.stimulus(), config.simulation, workers=1,
+                           motor_noise=motor)
     kept = batch.stable
     with np.errstate(invalid="ignore"):
         max_sway = np.degrees(np.nanmax(np.abs(batch.theta), axis=(1, 2)))
@@ -64,8 +70,21 @@ def make_shard(config: DatasetConfig, k: int, body: Body | None = None) -> dict[
         monolithic=monolithic_images(spectra),
         targets=targets,
         sensor_noise_deg=noise_sd,
+        motor_noise_deg=np.array([m.sd_deg for m in motor] if motor else
+                                 np.zeros(len(kept)))[kept],
     )
     return out
+
+
+def motor_noises(config: DatasetConfig, k: int) -> list[MotorNoise] | None:
+    """The motor noise of every trial of shard ``k`` (None when the set has none)."""
+    if config.motor_noise_deg == 0:
+        return None
+    rng = np.random.default_rng(np.random.SeedSequence([config.seed, 2, k]))
+    levels = config.motor_noise_deg * rng.random(config.shard_size)
+    seeds = rng.integers(0, 2**63 - 1, config.shard_size)
+    return [MotorNoise(float(level), config.motor_cutoff_hz, int(seed))
+            for level, seed in zip(levels, seeds, strict=True)]
 
 
 def make_shard_remote(config: DatasetConfig, k: int, urdf_text: str) -> dict[str, np.ndarray]:

@@ -90,8 +90,10 @@ class Dataset:
             raise DatasetError(f"{file}: shard lacks {', '.join(missing)}")
         # sets made before sensor noise existed are noise-free
         arrays.setdefault("sensor_noise_deg", np.zeros(len(arrays["targets"])))
+        arrays.setdefault("motor_noise_deg", np.zeros(len(arrays["targets"])))
         used = entry["used"]
-        for key in ("theta", "alpha_bs", "modular", "monolithic", "targets", "sensor_noise_deg"):
+        for key in ("theta", "alpha_bs", "modular", "monolithic", "targets", "sensor_noise_deg",
+                    "motor_noise_deg"):
             arrays[key] = arrays[key][:used]
         return arrays
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import os
 import threading
+from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -24,6 +25,7 @@ from posture_id.errors import SimulationError
 from posture_id.progress import Progress, report
 from posture_id.provenance import body_identity
 from posture_id.simulation.kernel import LANES, buffer_length, kernels
+from posture_id.simulation.noise import MotorNoise, motor_noise_torques, per_trial
 from posture_id.simulation.options import MAX_DELAY_S, SimulationOptions
 from posture_id.simulation.results import BatchResult, SimulationResult
 from posture_id.simulation.stimulus import TiltProfile, prts
@@ -71,6 +73,7 @@ def simulate_batch(
     options: SimulationOptions | None = None,
     progress: Progress | None = None,
     workers: int | None = None,
+    motor_noise: MotorNoise | Sequence[MotorNoise] | None = None,
 ) -> BatchResult:
     """Simulate B trials of ``body`` with their own parameters, in parallel.
 
@@ -81,6 +84,9 @@ def simulate_batch(
         options: what is modelled: step, sampling, sway limit, dead-band.
         progress: told the trials finished so far as each block of 32 completes.
         workers: threads running blocks (default: all cores).
+        motor_noise: low-pass torque noise at every joint (:mod:`.noise`): one
+            :class:`~.noise.MotorNoise` for every trial (trial b seeded by [seed, b]) or
+            one per trial (each its own level and seed). Default: none.
     """
     options = options or SimulationOptions()
     stimulus = stimulus or prts()
@@ -110,15 +116,19 @@ def simulate_batch(
     out_alpha = np.empty((n_trials, n_samples, n))
     abort_step = np.empty(n_trials, dtype=np.int64)
     limit = math.radians(options.sway_limit_deg)
+    noises = per_trial(motor_noise, n_trials)
+    no_motor = np.zeros(n * LANES)
 
     def run_block(first: int) -> int:
         count = min(LANES, n_trials - first)
         par, buf = block_arrays(k, params, options, first, count)
         w = np.zeros(k.rows.count * LANES)
+        motor = (no_motor if noises is None else motor_noise_torques(
+            noises[first : first + count], n_steps, options.dt, body.mgh, LANES).ravel())
         k.simulate_block(
             w, par, buf, d_re, d_im, inertia, s_re, s_im, body.gravity, tilt,
             tilt_vel, n_steps, options.dt, every, limit, options.deadband_rad_s, out_theta,
-            out_alpha, abort_step, first, count,
+            out_alpha, abort_step, first, count, motor, noises is not None,
         )
         with lock:
             finished[0] += count
@@ -156,12 +166,14 @@ def simulate(
     params: DecParameters | None = None,
     stimulus: TiltProfile | None = None,
     options: SimulationOptions | None = None,
+    motor_noise: MotorNoise | None = None,
 ) -> SimulationResult:
-    """Simulate one trial (default parameters and PRTS unless given); see
-    :func:`simulate_batch`."""
+    """Simulate one trial (default parameters and PRTS unless given; motor noise seeded
+    by its own seed); see :func:`simulate_batch`."""
     params = params or default_parameters(body)
     check_joints(body, params)
-    batch = simulate_batch(body, params.arrays(), stimulus, options)
+    batch = simulate_batch(body, params.arrays(), stimulus, options,
+                           motor_noise=None if motor_noise is None else [motor_noise])
     return batch.trial(0)
 
 

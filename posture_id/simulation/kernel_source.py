@@ -203,13 +203,15 @@ def dynamics(w, d_re, d_im, inertia, gravity, dt):
 @njit(cache=True, nogil=True, error_model="numpy")
 def simulate_block(w, par, buf, d_re, d_im, inertia, s_re, s_im, gravity, tilt, tilt_vel,
                    n_steps, dt, sample_every, sway_limit, deadband_rad_s, out_theta,
-                   out_alpha, abort_step, first, count):
+                   out_alpha, abort_step, first, count, motor, motor_on):
     """Simulate trials ``first .. first+count−1`` of a batch as one block of L lanes.
 
     w, par, buf: the block's work, parameter and buffer arrays (lanes ≥ count are
     padding). tilt, tilt_vel: (n_steps + 1,) α_FS (rad) and rate on the step grid.
     out_theta, out_alpha: (B, S, N) θ and α_S at every ``sample_every``-th step (rad),
     NaN from an abort on. abort_step: (B,) int64, the step of the abort or −1.
+    motor: (n_steps·N·L,) motor-noise torques (N·m) added to the joint torques of every
+    step, step-major then joint then lane; read only when ``motor_on``.
     Releases the GIL: blocks run in parallel threads.
     """
     alive = np.zeros(L, dtype=np.bool_)
@@ -254,4 +256,9 @@ def simulate_block(w, par, buf, d_re, d_im, inertia, s_re, s_im, gravity, tilt, 
         if step == n_steps:
             return
         dec_torques(step, w, par, buf, tilt[step], tilt_vel[step], dt, deadband_rad_s)
+        if motor_on:
+            base = step * N * L
+            for i in range(N):
+                for lane in range(L):
+                    w[(TAU + i) * L + lane] += motor[base + i * L + lane]
         dynamics(w, d_re, d_im, inertia, gravity, dt)

@@ -24,6 +24,7 @@ from posture_id.dec.parameters import DecParameters, default_parameters
 from posture_id.provenance import body_identity
 from posture_id.simulation.batch import block_arrays, check_joints
 from posture_id.simulation.kernel import LANES, kernels
+from posture_id.simulation.noise import MotorNoise, motor_noise_torques, per_trial
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.results import SimulationResult
 from posture_id.simulation.stimulus import TiltProfile, prts
@@ -68,8 +69,10 @@ def simulate_reference(
     params: DecParameters | None = None,
     stimulus: TiltProfile | None = None,
     options: SimulationOptions | None = None,
+    motor_noise: MotorNoise | None = None,
 ) -> SimulationResult:
-    """Simulate one trial with Pinocchio's forward dynamics (slow; for validation)."""
+    """Simulate one trial with Pinocchio's forward dynamics (slow; for validation); the
+    motor noise, when given, is the same torque sequence the fast simulator adds."""
     import pinocchio as pin
 
     options = options or SimulationOptions()
@@ -87,6 +90,8 @@ def simulate_reference(
     par, buf = block_arrays(k, params.arrays(), options, 0, 1)
     w = np.zeros(rows.count * LANES)
     limit = math.radians(options.sway_limit_deg)
+    motor = (None if motor_noise is None else motor_noise_torques(
+        per_trial([motor_noise], 1), n_steps, options.dt, body.mgh, 1)[:, :, 0])
 
     q = np.zeros(n)
     v = np.zeros(n)
@@ -119,6 +124,8 @@ def simulate_reference(
         k.dec_torques(step, w, par, buf, tilt[step], tilt_vel[step], options.dt,
                       options.deadband_rad_s)
         tau = w[lane0(rows.tau)].copy()
+        if motor is not None:
+            tau += motor[step]
         acc = pin.aba(model, data, q, v, tau)
         v = v + options.dt * np.asarray(acc)
         q = q + options.dt * v

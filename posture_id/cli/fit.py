@@ -11,6 +11,7 @@ from posture_id.cli.arguments import (
     default_of,
     non_negative_float,
     non_negative_int,
+    positive_float,
     positive_int,
     write_result,
 )
@@ -26,8 +27,9 @@ from posture_id.fitting.options import (
     FixedClasses,
     RelaxedClasses,
 )
+from posture_id.frf.locked import LockedOptions
 
-__all__ = ["add_parser", "run", "add_bounds_arguments", "bounds_from"]
+__all__ = ["add_parser", "run", "add_search_arguments", "search_keywords"]
 
 
 def add_parser(sub) -> None:
@@ -46,13 +48,22 @@ def add_parser(sub) -> None:
                      help="--classes relaxed: seed of the prior draws (default %(default)d)")
     fit.add_argument("--no-compile", action="store_true",
                      help="run CasADi in its virtual machine (no C compiler)")
-    add_bounds_arguments(fit)
+    add_search_arguments(fit)
     add_lab_stimulus_arguments(fit, "tilt CSV (time_s,tilt_deg) the recording was made with")
     fit.set_defaults(func=run)
 
 
-def add_bounds_arguments(parser: argparse.ArgumentParser) -> None:
-    """--gain-range and --delay-range: the search box, as multiples of the defaults."""
+def add_search_arguments(parser: argparse.ArgumentParser) -> None:
+    """What the fit compares and where it searches: --locked [--max-frequency-hz],
+    --gain-range and --delay-range (multiples of the defaults)."""
+    parser.add_argument("--locked", action="store_true",
+                        help="fit only the stimulus-locked sway (cycle average without offset "
+                             "and drift, at the stimulated frequencies, weighted by the "
+                             "recording's noise there): for real, noisy sway")
+    parser.add_argument("--max-frequency-hz", type=positive_float,
+                        default=default_of(LockedOptions, "max_frequency_hz"),
+                        help="--locked: highest stimulated frequency compared "
+                             "(default %(default)g Hz)")
     low, high = (1 + b for b in default_of(FitOptions, "gain_bounds"))
     parser.add_argument("--gain-range", type=non_negative_float, nargs=2, metavar=("MIN", "MAX"),
                         default=[low, high],
@@ -65,9 +76,11 @@ def add_bounds_arguments(parser: argparse.ArgumentParser) -> None:
                              f"(default {low:g} {high:g})")
 
 
-def bounds_from(args: argparse.Namespace) -> dict:
-    """FitOptions keywords of --gain-range and --delay-range (normalised: factor − 1)."""
-    out = {}
+def search_keywords(args: argparse.Namespace) -> dict:
+    """FitOptions keywords of --locked, --gain-range and --delay-range (bounds normalised:
+    factor − 1)."""
+    out = {"locked": (LockedOptions(max_frequency_hz=args.max_frequency_hz) if args.locked
+                      else None)}
     for flag, key in (("--gain-range", "gain_bounds"), ("--delay-range", "delay_bounds")):
         low, high = getattr(args, key.replace("bounds", "range"))
         if not low < high:
@@ -81,7 +94,7 @@ def options_from(args: argparse.Namespace) -> FitOptions:
                "exhaustive": ExhaustiveClasses(), "fixed": FixedClasses()}[args.classes]
     return FitOptions(classes=classes,
                       compilation=Compilation.NEVER if args.no_compile else Compilation.AUTO,
-                      **bounds_from(args))
+                      **search_keywords(args))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -14,7 +14,7 @@ from posture_id.cli.arguments import (
     say,
     write_result,
 )
-from posture_id.cli.fit import add_bounds_arguments, bounds_from
+from posture_id.cli.fit import add_search_arguments, search_keywords
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_lab_stimulus_arguments,
@@ -46,7 +46,7 @@ def add_parser(sub) -> None:
     p.add_argument("--scheduler", help="cohort: Dask distributed scheduler (tcp://host:port)")
     p.add_argument("--plot", type=Path, help="recorded versus re-simulated sway (PNG)")
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recordings were made with")
-    add_bounds_arguments(p)
+    add_search_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     args.recording = Path(args.recording)
     if args.scheduler:
         raise PostureIdError("--scheduler goes with a folder or pattern of recordings")
-    fit_options = FitOptions(**bounds_from(args))
+    fit_options = FitOptions(**search_keywords(args))
     inputs = (args.recording, args.body, args.model, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
@@ -88,7 +88,7 @@ def run_cohort(args: argparse.Namespace) -> int:
 
     if args.plot:
         raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording")
-    fit_options = FitOptions(**bounds_from(args))
+    fit_options = FitOptions(**search_keywords(args))
     recordings = find_recordings(args.recording)
     check_output_folder(args.out, "--out", inputs=(*recordings, args.body, args.tilt))
     body = load_body(args.body or DEFAULT_URDF)

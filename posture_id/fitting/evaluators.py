@@ -2,8 +2,10 @@
 
 Two evaluators of the same model: :class:`ExactEvaluator` (CasADi, exact forward-mode
 derivatives, smoothed dead-band) and :class:`SimulatorEvaluator` (the fast batch
-simulator with forward differences: a cheap warm start). Residuals are simulated minus
-recorded segment angles in degrees, sample-major (S·N,).
+simulator with forward differences: a cheap warm start). What is compared is a
+:class:`SwayResidual` of simulated minus recorded segment angles in degrees: every sample
+(:class:`SwayResidual`, sample-major (S·N,)) or their weighted stimulus-locked harmonics
+(:class:`LockedResidual`, a linear map applied alike to residuals and Jacobians).
 """
 
 from __future__ import annotations
@@ -18,27 +20,66 @@ from posture_id.dec.parameters import DecParameters, denormalise_arrays
 from posture_id.fitting.problem import FitProblem
 from posture_id.fitting.result import StageResult
 from posture_id.fitting.unknowns import targets_from_qs
+from posture_id.frf.locked import LockedProjection
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG, SimulationOptions
 from posture_id.simulation.stimulus import TiltProfile
 
-__all__ = ["Evaluator", "ExactEvaluator", "SimulatorEvaluator", "run_stage"]
+__all__ = ["Evaluator", "ExactEvaluator", "SimulatorEvaluator", "run_stage", "SwayResidual",
+           "LockedResidual"]
 
 _DEG = 180.0 / math.pi
 
 
-class Evaluator:
-    """Residuals (deg) and Jacobians of simulated minus measured sway (S, N) rad."""
+class SwayResidual:
+    """Compare every sample: the residual is simulated minus recorded angles (deg)."""
 
-    def __init__(self, measured: np.ndarray) -> None:
+    def values(self, difference_deg: np.ndarray) -> np.ndarray:
+        """(S, N) deg → (R,) residual."""
+        return difference_deg.ravel()
+
+    def columns(self, jacobian_deg: np.ndarray) -> np.ndarray:
+        """(S, N, P) ∂θ/∂q (deg) → (R, P) Jacobian of :meth:`values`."""
+        return jacobian_deg.reshape(-1, jacobian_deg.shape[-1])
+
+
+class LockedResidual(SwayResidual):
+    """Compare the weighted stimulus-locked harmonics
+    (:class:`~posture_id.frf.locked.LockedProjection`, made for the recording in degrees)."""
+
+    def __init__(self, projection: LockedProjection) -> None:
+        self.projection = projection
+
+    def values(self, difference_deg):
+        return self.projection.apply(difference_deg).ravel()
+
+    def columns(self, jacobian_deg):
+        return self.projection.apply(jacobian_deg).reshape(-1, jacobian_deg.shape[-1])
+
+
+class Evaluator:
+    """Residuals and Jacobians of simulated minus measured sway (S, N) rad, compared as
+    ``target`` says (default: every sample, in degrees)."""
+
+    def __init__(self, measured: np.ndarray, target: SwayResidual | None = None) -> None:
         self.measured = measured
+        self.target = target or SwayResidual()
+        self._last: tuple[np.ndarray, np.ndarray] | None = None
 
     def simulate(self, q: np.ndarray) -> np.ndarray:  # (S, N) rad
         raise NotImplementedError
 
+    def simulated(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`simulate`, remembered for the last q (a Jacobian follows its residual)."""
+        if self._last is not None and np.array_equal(self._last[0], q):
+            return self._last[1]
+        theta = self.simulate(q)
+        self._last = (np.array(q, copy=True), theta)
+        return theta
+
     def residual(self, q: np.ndarray) -> np.ndarray:
-        return (self.simulate(q) - self.measured).ravel() * _DEG
+        return self.target.values((self.simulated(q) - self.measured) * _DEG)
 
     def jacobian(self, q: np.ndarray, free: list[int], residual: np.ndarray) -> np.ndarray:
         raise NotImplementedError
@@ -55,8 +96,9 @@ class ExactEvaluator(Evaluator):
 
     LIMIT = math.radians(MAX_SWAY_LIMIT_DEG)
 
-    def __init__(self, problem: FitProblem, u: np.ndarray, measured: np.ndarray) -> None:
-        super().__init__(measured)
+    def __init__(self, problem: FitProblem, u: np.ndarray, measured: np.ndarray,
+                 target: SwayResidual | None = None) -> None:
+        super().__init__(measured, target)
         self.problem = problem
         self.u = u
 
@@ -69,10 +111,11 @@ class ExactEvaluator(Evaluator):
 
     def jacobian(self, q, free, residual):
         jac = self.problem.jacobian(q, self.u, list(free)) * _DEG
-        fall = self._fall(residual.reshape(self.measured.shape) / _DEG + self.measured)
+        fall = self._fall(self.simulated(q))
         if fall is not None:
             jac[fall * self.measured.shape[1]:] = 0.0
-        return np.where(np.isfinite(jac), jac, 0.0)
+        jac = np.where(np.isfinite(jac), jac, 0.0)
+        return self.target.columns(jac.reshape(*self.measured.shape, -1))
 
     def _fall(self, theta: np.ndarray) -> int | None:
         """First sample (row of (S, N) ``theta``) at or past the limit, or None."""
@@ -89,8 +132,9 @@ class SimulatorEvaluator(Evaluator):
     STEP = 1e-6
 
     def __init__(self, body: Body, defaults: DecParameters, stimulus: TiltProfile,
-                 simulation: SimulationOptions, measured: np.ndarray) -> None:
-        super().__init__(measured)
+                 simulation: SimulationOptions, measured: np.ndarray,
+                 target: SwayResidual | None = None) -> None:
+        super().__init__(measured, target)
         self.body = body
         self.stimulus = stimulus
         # a trial that falls is held at the limit (a large, finite residual), never aborted
@@ -121,7 +165,7 @@ class SimulatorEvaluator(Evaluator):
         qs[rows[over], free[over]] -= 2 * self.STEP
         steps = np.where(over, -self.STEP, self.STEP)
         theta = self._simulate_many(qs)
-        r = (theta - self.measured[None]).reshape(len(free), -1) * _DEG
+        r = np.stack([self.target.values((t - self.measured) * _DEG) for t in theta])
         return ((r - residual[None]) / steps[:, None]).T
 
 

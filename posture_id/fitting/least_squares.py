@@ -43,9 +43,16 @@ from posture_id.dec.parameters import (
     normalise,
 )
 from posture_id.dec.prior import relative_factors
-from posture_id.fitting.evaluators import ExactEvaluator, SimulatorEvaluator, run_stage
+from posture_id.fitting.evaluators import (
+    ExactEvaluator,
+    LockedResidual,
+    SimulatorEvaluator,
+    SwayResidual,
+    run_stage,
+)
 from posture_id.fitting.options import (
     ExhaustiveClasses,
+    FitError,
     FitOptions,
     RelaxedClasses,
 )
@@ -54,6 +61,7 @@ from posture_id.fitting.problem import FitProblem
 from posture_id.fitting.result import FitResult, StageResult, class_names
 from posture_id.fitting.symbolic import step_inputs
 from posture_id.fitting.unknowns import q_from_targets, targets_from_q
+from posture_id.frf.locked import LockedProjection
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 from posture_id.recording import Recording
@@ -113,8 +121,9 @@ def fit_recording(
     guess[: 4 * n] = np.clip(guess[: 4 * n], lower[: 4 * n], upper[: 4 * n])
     continuous = list(range(4 * n))
     everything = list(range(5 * n))
-    exact = ExactEvaluator(problem, u, measured)
-    warm = SimulatorEvaluator(body, defaults, stim, sim, measured)
+    target = _target(recording, stim, options, source)
+    exact = ExactEvaluator(problem, u, measured, target)
+    warm = SimulatorEvaluator(body, defaults, stim, sim, measured, target)
     first_evaluator, first_tolerance, first_limit = (
         (warm, options.warm_tolerance, options.max_iterations) if options.warm_start
         else (exact, options.tolerance, options.max_iterations))
@@ -177,11 +186,26 @@ def fit_recording(
         converged=best.converged, iterations=sum(s.iterations for s in stages),
         evaluations=sum(s.evaluations for s in stages),
         wall_time_s=time.perf_counter() - start, cost=best.cost,
-        rms_deg=math.sqrt(2 * best.cost / len(best.residual)), stages=tuple(stages),
+        rms_deg=float(np.degrees(np.sqrt(np.mean((exact.simulated(best.q) - measured) ** 2)))),
+        stages=tuple(stages),
         backend=str(problem.backend), notices=tuple(notices), time=recording.time,
         recorded=measured, fitted=fitted, segments=body.segment_names,
         joints=body.joint_names, provenance=provenance(options, body, source=source),
     )
+
+
+def _target(recording: Recording, stimulus: TiltProfile, options: FitOptions,
+            source: str) -> SwayResidual:
+    """What the fit compares: every sample, or the weighted stimulus-locked harmonics."""
+    if options.locked is None:
+        return SwayResidual()
+    if stimulus.period_s is None:
+        raise FitError(f"{source}: the locked fit compares stimulus cycles, and this tilt is "
+                       "not periodic (name the PRTS the lab ran, or fit the raw sway)")
+    projection = LockedProjection.for_recording(
+        recording.tilt, np.degrees(recording.theta), recording.sample_rate_hz,
+        stimulus.period_s, stimulus.periodic_from_s, options.locked, source)
+    return LockedResidual(projection)
 
 
 def _standard_errors(best: StageResult, params: DecParameters, defaults: DecParameters,

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 
 from posture_id.errors import PostureIdError
+from posture_id.frf.locked import LockedOptions
 from posture_id.simulation.options import SimulationOptions
 
 __all__ = [
@@ -98,6 +99,11 @@ class FitOptions:
         warm_start: first fit with the fast simulator and finite differences (cheap), then
             finish with CasADi's exact derivatives; otherwise CasADi does every stage.
         warm_tolerance: tolerance of the warm-start stage.
+        locked: None (default): compare every sample of the sway; a
+            :class:`~posture_id.frf.locked.LockedOptions`: compare only the stimulus-locked
+            part (cycle average without drift, at the excited harmonics, each weighted by
+            the recording's noise level there): the fit for real, noisy sway
+            (docs/real_recordings.md). Needs a periodic stimulus.
     """
 
     simulation: SimulationOptions = field(default_factory=SimulationOptions)
@@ -115,6 +121,7 @@ class FitOptions:
     threads: int = 2
     warm_start: bool = True
     warm_tolerance: float = 1e-7
+    locked: LockedOptions | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.classes, RelaxedClasses | ExhaustiveClasses | FixedClasses):
@@ -137,5 +144,7 @@ class FitOptions:
                 continue
             if not (math.isfinite(value) and value > 0):
                 raise FitError(f"{name} must be a finite number > 0, got {value!r}")
+        if self.locked is not None and not isinstance(self.locked, LockedOptions):
+            raise FitError(f"locked must be None or LockedOptions(), got {self.locked!r}")
         if not (math.isfinite(self.smooth_deadband_rad_s) and self.smooth_deadband_rad_s >= 0):
             raise FitError(f"smooth_deadband_rad_s must be ≥ 0, got {self.smooth_deadband_rad_s}")

@@ -43,6 +43,12 @@ def prepare_recording(recording: Recording, source: str, options: FitOptions,
     if np.ptp(recording.tilt) == 0:
         raise RecordingError(f"{source}: the tilt is constant: there is no stimulus, so the "
                              "controller's parameters cannot be identified from it")
+    bad = ~np.isfinite(recording.theta).all(axis=1) | ~np.isfinite(recording.tilt)
+    if bad.any():
+        first = int(np.argmax(bad))
+        raise RecordingError(f"{source}: angles are not finite (NaN or ∞) from sample {first} "
+                             f"(t = {recording.time[first]:g} s) in {int(bad.sum())} samples; "
+                             "a simulated body that fell stops there: cut the recording")
     if not recording.evenly_sampled():
         raise RecordingError(f"{source}: samples are not evenly spaced in time")
     hint = sample_rate_hint(recording.time, recording.tilt, source)

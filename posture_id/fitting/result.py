@@ -61,7 +61,9 @@ class FitResult(JsonResult):
         standard_errors_normalised: (N, 4) the same relative to the defaults.
         poorly_determined: (N, 4) bool. converged: the last stage met its tolerance.
         iterations: Jacobian evaluations in all. evaluations: residual evaluations.
-        wall_time_s: s. cost: ½Σr² (deg²). rms_deg: residual RMS.
+        wall_time_s: s. cost: ½Σr² (deg² comparing every sample; in
+            units of the noise level for a locked fit). rms_deg: RMS of fitted minus
+            recorded angles, degrees.
         stages: every stage. backend: how CasADi ran. notices: things to know.
         time (S,) s, recorded and fitted (S, N) rad; segments, joints: names.
         provenance: package version, options and the body's identity.

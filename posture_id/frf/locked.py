@@ -1,0 +1,161 @@
+"""The stimulus-locked part of a sway as a weighted vector: what the locked fit compares.
+
+Raw sway is mostly not locked to the stimulus (spontaneous sway, drift); comparing a model
+with it sample by sample fits the noise. :class:`LockedProjection` maps a sway (S, ...) to
+its stimulus-locked content, a linear map applied alike to recorded and simulated sway:
+
+1. the analysed span: whole stimulus cycles (P samples each) from ``start``;
+2. a polynomial drift of order d removed jointly with the periodic part, then the cycle
+   average (:func:`~posture_id.frf.cycles.cycle_average`): offsets and slow drift vanish;
+3. its DFT at the harmonics the stimulus excites, up to ``max_frequency_hz`` (K of them):
+   the same numbers as an FRF times the tilt's spectrum;
+4. each harmonic of each channel divided by the noise level σ_k there (the SD of its real
+   and of its imaginary part), estimated from the
+   recorded sway's cycle average at the neighbouring harmonics the stimulus does *not*
+   excite (a PRTS leaves every even harmonic empty): whatever is there is not locked to
+   the stimulus. Frequencies where the sway is noisy count less, as in a fit of FRFs
+   weighted by their coherence.
+
+The result, real and imaginary parts stacked, is (2K, ...); with the weights, a residual
+between a model and a recording is in units of its own noise (its squared norm is a
+χ² with 2K·channels degrees of freedom when the model is right).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from posture_id.errors import PostureIdError
+from posture_id.frf.cycles import cycle_average, cycle_spans
+
+__all__ = ["LockedOptions", "LockedProjection"]
+
+
+@dataclass(frozen=True)
+class LockedOptions:
+    """How the stimulus-locked part is taken.
+
+    Attributes:
+        drift_order: polynomial drift removed with the periodic part (needs ≥ 2 cycles;
+            with one cycle only the offset is removed).
+        skip_cycles: whole cycles left out at the start (a model simulated from rest
+            shares the recording's transient, so 0 keeps it).
+        max_frequency_hz: highest harmonic compared.
+        weighted: divide each harmonic by the noise level estimated there (else by 1°).
+        neighbours: harmonics on each side whose empty (non-excited) ones estimate the
+            noise level of a harmonic.
+        excited_threshold: a harmonic is excited when the tilt's amplitude there exceeds
+            this share of its largest.
+    """
+
+    drift_order: int = 1
+    skip_cycles: int = 0
+    max_frequency_hz: float = 2.0
+    weighted: bool = True
+    neighbours: int = 3
+    excited_threshold: float = 1e-3
+
+    def __post_init__(self) -> None:
+        for name in ("drift_order", "skip_cycles", "neighbours"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise PostureIdError(f"locked {name} must be an integer ≥ 0, got {value!r}")
+        if self.neighbours < 1:
+            raise PostureIdError("locked neighbours must be ≥ 1")
+        if not (math.isfinite(self.max_frequency_hz) and self.max_frequency_hz > 0):
+            raise PostureIdError(f"locked max_frequency_hz must be > 0, got "
+                                 f"{self.max_frequency_hz}")
+        if not (0 < self.excited_threshold < 1):
+            raise PostureIdError(f"locked excited_threshold must be in (0, 1), got "
+                                 f"{self.excited_threshold}")
+
+
+@dataclass(frozen=True)
+class LockedProjection:
+    """The linear map of a sway onto its weighted stimulus-locked harmonics.
+
+    Attributes:
+        start: first analysed sample. period: P, samples per cycle. cycles: C analysed.
+        drift_order: the drift removed. harmonics: (K,) indices k of the compared
+        harmonics (frequency k/(P·dt)). frequencies_hz: (K,). noise: (K, M) the noise
+        level σ (SD of the real and of the imaginary part) of each harmonic of each of the
+        M channels of the recording it was made for (ones when unweighted), in the
+        recording's units.
+    """
+
+    start: int
+    period: int
+    cycles: int
+    drift_order: int
+    harmonics: np.ndarray
+    frequencies_hz: np.ndarray
+    noise: np.ndarray
+
+    @classmethod
+    def for_recording(cls, tilt: np.ndarray, sway: np.ndarray, sample_rate_hz: float,
+                      period_s: float, start_s: float = 0.0,
+                      options: LockedOptions | None = None,
+                      source: str = "recording") -> LockedProjection:
+        """The projection for one recording.
+
+        Args:
+            tilt: (S,) rad, the stimulus on the samples. sway: (S, M) the recorded channels.
+            sample_rate_hz: the samples' rate. period_s: one stimulus cycle.
+            start_s: where the periodic stimulus starts (after a lead-in), s.
+        """
+        options = options or LockedOptions()
+        samples = period_s * sample_rate_hz
+        p = int(round(samples))
+        if abs(samples - p) > 1e-6 * max(samples, 1.0):
+            raise PostureIdError(f"{source}: a stimulus cycle of {period_s:g} s is not a whole "
+                                 f"number of samples at {sample_rate_hz:g} Hz")
+        sway = np.asarray(sway, dtype=float)
+        first = int(math.ceil(start_s * sample_rate_hz - 1e-9))
+        offset, cycles = cycle_spans(len(sway) - first, p, options.skip_cycles, source)
+        drift = options.drift_order if cycles >= 2 else 0
+        base = cls(first + offset, p, cycles, drift, np.arange(1, p // 2 + 1),
+                   np.arange(1, p // 2 + 1) * sample_rate_hz / p, np.ones((p // 2, 1)))
+        u = np.abs(base._spectrum(np.asarray(tilt, dtype=float)))
+        excited = u > options.excited_threshold * u.max()
+        keep = excited & (base.frequencies_hz <= options.max_frequency_hz)
+        if not keep.any():
+            raise PostureIdError(f"{source}: the tilt excites no frequency up to "
+                                 f"{options.max_frequency_hz:g} Hz")
+        channels = sway.reshape(len(sway), -1).shape[1]
+        noise = np.ones((int(keep.sum()), channels))
+        if options.weighted:
+            power = np.abs(base._spectrum(sway.reshape(len(sway), -1))) ** 2  # (P/2, M)
+            empty = np.flatnonzero(~excited)
+            if len(empty) == 0:
+                raise PostureIdError(f"{source}: the stimulus excites every harmonic; the "
+                                     "noise cannot be told apart (use weighted=False)")
+            for row, k in enumerate(np.flatnonzero(keep)):
+                near = empty[np.argsort(np.abs(empty - k), kind="stable")[: 2 * options.neighbours]]
+                # E|X|² = σ² splits evenly into the real and imaginary parts
+                noise[row] = np.sqrt(power[near].mean(axis=0) / 2)
+            # a harmonic can never be trusted more than 100× the median one
+            floor = 0.01 * np.median(noise, axis=0)
+            noise = np.maximum(noise, np.where(floor > 0, floor, 1.0))
+        return cls(base.start, p, cycles, drift, np.flatnonzero(keep) + 1,
+                   base.frequencies_hz[keep], noise)
+
+    def _spectrum(self, x: np.ndarray) -> np.ndarray:
+        """(P/2, ...) complex DFT (÷P) of the drift-free cycle average at harmonics 1..P/2."""
+        span = x[self.start : self.start + self.cycles * self.period]
+        mean = cycle_average(span, self.period, 0, self.drift_order).mean
+        return np.fft.rfft(mean, axis=0)[1 : self.period // 2 + 1] / self.period
+
+    def spectrum(self, x: np.ndarray) -> np.ndarray:
+        """(K, ...) complex: the compared harmonics of a sway (S, ...), not weighted."""
+        return self._spectrum(x)[self.harmonics - 1]
+
+    def apply(self, x: np.ndarray) -> np.ndarray:
+        """(2K, ...) real: the weighted stimulus-locked harmonics of ``x`` (S, M, ...)
+        whose channels M are the recording's (real parts, then imaginary parts)."""
+        z = self.spectrum(x)
+        weights = self.noise.reshape(self.noise.shape + (1,) * (z.ndim - self.noise.ndim))
+        z = z / weights
+        return np.concatenate([z.real, z.imag], axis=0)

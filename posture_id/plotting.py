@@ -15,7 +15,7 @@ import numpy as np
 
 from posture_id.fileio import atomic_write
 
-__all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit"]
+__all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit", "plot_locked_sway"]
 
 
 def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
@@ -280,6 +280,46 @@ def plot_frf(result, path=None, ax=None):
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(f"FRF of {result.source} relative to the tilt ({result.cycles} cycle(s) "
                  f"of {result.period_s:g} s)")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_locked_sway(time, recorded, locked, fits: dict, frequencies_hz, recorded_spectrum,
+                     excited, noise, path=None, ax=None, title=""):
+    """Why raw sway fails: the recorded body COM sway against its stimulus-locked part and
+    fits (top), the sway's spectrum at the excited and the empty harmonics with the noise
+    level estimated there (bottom).
+
+    Args:
+        time: (S,) s. recorded, locked: (S,) body COM sway, degrees (with and without the
+            noise). fits: label → (S,) the sway each fit's parameters give without noise.
+        frequencies_hz: (H,) harmonics of the stimulus cycle. recorded_spectrum: (H,) |X|
+            of the recording's drift-free cycle average, degrees. excited: (H,) bool.
+        noise: (K,) the noise level estimated at the excited harmonics, degrees.
+    """
+    fig, axes = _axes(ax, 2, 1, (10, 7))
+    top, bottom = axes[:, 0]
+    top.plot(time, recorded, color="0.6", lw=0.7, label="recorded (motor + sensor noise)")
+    top.plot(time, locked, "k", lw=1.2, label="stimulus-locked response (truth)")
+    for (label, sway), style in zip(fits.items(), ("C3--", "C0-", "C2-."), strict=False):
+        top.plot(time, sway, style, lw=1.0, label=label)
+    top.set_xlabel("time (s)")
+    top.set_ylabel("body COM sway (°)")
+    top.legend(loc="upper right", fontsize=8)
+    top.grid(alpha=0.3)
+    f = np.asarray(frequencies_hz)
+    spectrum = np.asarray(recorded_spectrum)
+    bottom.loglog(f[~excited], spectrum[~excited], ".", color="0.6", ms=3,
+                  label="empty harmonics (noise only)")
+    bottom.loglog(f[excited], spectrum[excited], "C3.", ms=4, label="excited harmonics")
+    bottom.loglog(f[excited][: len(noise)], np.asarray(noise) * np.sqrt(2), "C0-", lw=1,
+                  label="noise level estimated (σ√2)")
+    bottom.set_xlabel("frequency (Hz)")
+    bottom.set_ylabel("|cycle average DFT| (°)")
+    bottom.legend(loc="lower left", fontsize=8)
+    bottom.grid(alpha=0.3, which="both")
+    fig.suptitle(title)
     fig.tight_layout()
     _save(fig, path)
     return fig

@@ -56,7 +56,7 @@ def trained(tiny_set, tmp_path_factory):
     return out, result
 
 
-@pytest.mark.parametrize("layout", [Layout.MODULAR, Layout.MONOLITHIC])
+@pytest.mark.parametrize("layout", [Layout.MODULAR, Layout.MONOLITHIC, Layout.FRF])
 @pytest.mark.parametrize("optimiser", [SgdMomentum(learning_rate=0.02), AdamWOneCycle()])
 def test_tiny_training_reduces_the_loss(tiny_set, tmp_path, layout, optimiser):
     result = train(tiny_set, tmp_path / "m", _small(layout, ClassOutput.REGRESSION),
@@ -163,3 +163,32 @@ def test_the_command_line_does_not_import_torch_to_start():
     code = "import sys, posture_id.cli; print('torch' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.stdout.strip() == "False", out.stderr
+
+
+def test_frf_network_round_trips_and_identifies(tiny_set, tmp_path, tip):
+    """An FRF-feature network: trained by the same machinery, its checkpoint names the FRF
+    features, and the identifier computes them from a recording exactly as training did."""
+    from posture_id.datasets import Dataset
+    from posture_id.frf.features import FRF_FEATURE_DEFINITION
+    from posture_id.learning.identifier import CnnIdentifier
+    from posture_id.learning.samples import frf_inputs
+    from posture_id.recording import Recording
+
+    out = tmp_path / "frf"
+    train(tiny_set, out, _small(Layout.FRF), _one_thread(epochs=2))
+    sidecar = json.loads((out / "model.json").read_text())
+    assert sidecar["features"] == FRF_FEATURE_DEFINITION
+    model = load_model(out)
+    assert model.config.in_channels == 9 and model.config.image_size == 76  # odd harmonics ≤ 2.5 Hz
+    data = Dataset.open(tiny_set)
+    arrays = data.load_shard(0)
+    arrays["sensor_noise_deg"][:] = 0.0  # the recording below is noise-free
+    features = frf_inputs(data, arrays, 0)[0]
+    identifier = CnnIdentifier.load(out, tip)
+    time = np.arange(arrays["theta"].shape[1]) / 50.0
+    recording = Recording(time, identifier.expected_tilt, arrays["theta"][0].astype(float),
+                          tip.segment_names)
+    np.testing.assert_allclose(identifier.features(recording)[0], features, rtol=1e-5,
+                               atol=1e-5)
+    result = identifier.identify(recording)
+    assert result.parameters.joints == tip.joint_names

@@ -134,3 +134,19 @@ def test_cli_fit_locked(tip, tmp_path):
     data = json.loads((tmp_path / "fit.json").read_text())
     assert data["parameters"]["knee"]["kp"] == pytest.approx(200.0, rel=1e-3)
     assert data["provenance"]["options"]["locked"]["max_frequency_hz"] == 2.0
+
+
+def test_the_prior_keeps_undetermined_parameters_at_the_defaults(tip):
+    truth = default_parameters(tip).replace("ankle", kp=560.0)
+    stim = prts(states=80, cycles=3)
+    rec = simulate(tip, truth, stim).to_recording().with_sensor_noise(0.01, 1)
+
+    def fit(prior_sd):
+        return fit_recording(rec, tip, options=FitOptions(
+            classes=FixedClasses(), locked=LockedOptions(), prior_sd=prior_sd), stimulus=stim)
+
+    loose, tight = fit(1e3), fit(1e-5)
+    assert loose.parameters["ankle"].kp == pytest.approx(560.0, rel=0.02)  # the data rule
+    assert np.abs(tight.normalised[:, :4]).max() < 1e-3  # the prior rules
+    with pytest.raises(FitError, match="prior_sd needs the locked"):
+        FitOptions(prior_sd=0.5)

@@ -113,3 +113,16 @@ def test_cli_simulate_with_motor_noise_is_the_api_trial(tip, tmp_path):
     api = simulate(tip, motor_noise=MotorNoise(0.3, 0.5, seed=9))
     np.testing.assert_allclose(recorded.theta, api.theta, atol=1e-9)
     assert not np.allclose(recorded.theta, simulate(tip).theta, atol=1e-5)
+
+
+@pytest.mark.parametrize("share", [0.1, 0.3])
+def test_people_like_subject_has_the_asked_locked_share(tip, share):
+    from posture_id.simulation.subjects import people_like
+
+    subject = people_like(tip, default_parameters(tip), prts(states=80, cycles=6), share, 3)
+    assert subject.locked_share == pytest.approx(share, rel=0.1)
+    assert subject.motor_noise.sd_deg > 0
+    # the recording is the noisy sway plus sensor noise; the locked response is noise-free
+    assert np.std(subject.recording.theta - subject.locked.theta) > 0
+    np.testing.assert_allclose(subject.locked.theta, simulate(
+        tip, default_parameters(tip), prts(states=80, cycles=6)).theta)

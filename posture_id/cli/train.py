@@ -31,7 +31,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("train", help="train a CNN identifier on a data set")
     p.add_argument("dataset", type=Path, help="data-set directory (posture-id dataset generate)")
     p.add_argument("--layout", choices=[x.value for x in Layout], default="modular",
-                   help="one sample per module (default) or one per trial")
+                   help="spectrograms, one sample per module (default) or one per trial; "
+                        "or FRF features, one per trial (posture_id.frf.features)")
     p.add_argument("--out", type=Path, required=True, help="model directory (resumed if it "
                    "holds a run with the same arguments)")
     p.add_argument("--optimiser", choices=("adamw", "sgd"), default="adamw",

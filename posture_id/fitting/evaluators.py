@@ -171,14 +171,21 @@ class SimulatorEvaluator(Evaluator):
 
 def run_stage(name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
               lower: np.ndarray, upper: np.ndarray, tolerance: float, max_iterations: int,
-              progress: Progress | None = None) -> StageResult:
+              progress: Progress | None = None,
+              prior_sd: np.ndarray | None = None) -> StageResult:
     """One bounded trust-region least-squares stage over the ``free`` entries of q (5N,).
 
     ``lower``/``upper`` are (5N,) bounds; entries not free keep their q0 values.
+    ``prior_sd``: (5N,) standard deviations of a Gaussian prior on q centred on 0 (the
+    defaults; inf: none): each free entry adds the residual q_k / sd_k, so the stage finds
+    the maximum a posteriori estimate when the residuals are in units of their noise.
     """
     free = list(free)
     cache: dict = {}
     jacobians = [0]
+    weights = (np.zeros(len(free)) if prior_sd is None
+               else 1.0 / np.asarray(prior_sd, dtype=float)[free])
+    priored = np.flatnonzero(weights > 0)
 
     def full(x):
         q = q0.copy()
@@ -186,7 +193,7 @@ def run_stage(name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
         return q
 
     def residual(x):
-        r = evaluator.residual(full(x))
+        r = np.concatenate([evaluator.residual(full(x)), x[priored] * weights[priored]])
         cache["x"], cache["r"] = x.copy(), r
         return r
 
@@ -197,7 +204,10 @@ def run_stage(name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
             report(progress, jacobians[0], None, "iteration",
                    f"{name}: iteration {jacobians[0]}, RMS "
                    f"{math.sqrt(float(r @ r) / len(r)):.6f}°")
-        return evaluator.jacobian(full(x), free, r)
+        jac = evaluator.jacobian(full(x), free, r[: len(r) - len(priored)])
+        rows = np.zeros((len(priored), len(free)))
+        rows[np.arange(len(priored)), priored] = weights[priored]
+        return np.vstack([jac, rows])
 
     sol = least_squares(residual, np.clip(q0[free], lower[free], upper[free]), jac=jacobian,
                         bounds=(lower[free], upper[free]), method="trf", x_scale="jac",

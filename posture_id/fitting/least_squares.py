@@ -122,6 +122,8 @@ def fit_recording(
     continuous = list(range(4 * n))
     everything = list(range(5 * n))
     target = _target(recording, stim, options, source)
+    prior_sd = (None if options.prior_sd is None
+                else np.array([options.prior_sd] * 4 * n + [np.inf] * n))
     exact = ExactEvaluator(problem, u, measured, target)
     warm = SimulatorEvaluator(body, defaults, stim, sim, measured, target)
     first_evaluator, first_tolerance, first_limit = (
@@ -130,7 +132,8 @@ def fit_recording(
     stages: list[StageResult] = []
 
     def stage(name, evaluator, q0, free, tolerance, limit) -> StageResult:
-        result = run_stage(name, evaluator, q0, free, lower, upper, tolerance, limit, progress)
+        result = run_stage(name, evaluator, q0, free, lower, upper, tolerance, limit, progress,
+                           prior_sd)
         stages.append(result)
         return result
 

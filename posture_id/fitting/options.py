@@ -104,6 +104,11 @@ class FitOptions:
             part (cycle average without drift, at the excited harmonics, each weighted by
             the recording's noise level there): the fit for real, noisy sway
             (docs/real_recordings.md). Needs a periodic stimulus.
+        prior_sd: None (default): least squares. A number σ_p: maximum a posteriori under
+            a Gaussian prior of SD σ_p on every normalised gain and delay, centred on the
+            body's defaults (MODEL §5 draws with σ = 0.5): parameters the sway does not
+            determine stay near the defaults instead of wandering. Needs the locked fit
+            (whose residuals are in units of the recording's noise).
     """
 
     simulation: SimulationOptions = field(default_factory=SimulationOptions)
@@ -122,6 +127,7 @@ class FitOptions:
     warm_start: bool = True
     warm_tolerance: float = 1e-7
     locked: LockedOptions | None = None
+    prior_sd: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.classes, RelaxedClasses | ExhaustiveClasses | FixedClasses):
@@ -146,5 +152,11 @@ class FitOptions:
                 raise FitError(f"{name} must be a finite number > 0, got {value!r}")
         if self.locked is not None and not isinstance(self.locked, LockedOptions):
             raise FitError(f"locked must be None or LockedOptions(), got {self.locked!r}")
+        if self.prior_sd is not None:
+            if not (math.isfinite(self.prior_sd) and self.prior_sd > 0):
+                raise FitError(f"prior_sd must be a finite number > 0, got {self.prior_sd!r}")
+            if self.locked is None or not self.locked.weighted:
+                raise FitError("prior_sd needs the locked, weighted fit (residuals in units "
+                               "of the noise): set locked=LockedOptions()")
         if not (math.isfinite(self.smooth_deadband_rad_s) and self.smooth_deadband_rad_s >= 0):
             raise FitError(f"smooth_deadband_rad_s must be ≥ 0, got {self.smooth_deadband_rad_s}")

@@ -31,7 +31,19 @@ import numpy as np
 from posture_id.errors import PostureIdError
 from posture_id.frf.cycles import cycle_average, cycle_spans
 
-__all__ = ["LockedOptions", "LockedProjection"]
+__all__ = ["LockedOptions", "LockedProjection", "noise_levels"]
+
+
+def noise_levels(power: np.ndarray, excited: np.ndarray, rows: np.ndarray,
+                 neighbours: int) -> np.ndarray:
+    """(K, ...) noise level (SD of the real and of the imaginary part) at harmonics
+    ``rows`` (indices into the P/2 harmonics 1..P/2), from the mean ``power`` (P/2, ...) of
+    the 2·``neighbours`` nearest harmonics the stimulus leaves empty (``excited`` false)."""
+    empty = np.flatnonzero(~excited)
+    order = np.argsort(np.abs(empty[None, :] - np.asarray(rows)[:, None]), axis=1,
+                       kind="stable")[:, : 2 * neighbours]
+    # E|X|² = σ² splits evenly into the real and imaginary parts
+    return np.sqrt(power[empty[order]].mean(axis=1) / 2)
 
 
 @dataclass(frozen=True)
@@ -128,14 +140,10 @@ class LockedProjection:
         noise = np.ones((int(keep.sum()), channels))
         if options.weighted:
             power = np.abs(base._spectrum(sway.reshape(len(sway), -1))) ** 2  # (P/2, M)
-            empty = np.flatnonzero(~excited)
-            if len(empty) == 0:
+            if excited.all():
                 raise PostureIdError(f"{source}: the stimulus excites every harmonic; the "
                                      "noise cannot be told apart (use weighted=False)")
-            for row, k in enumerate(np.flatnonzero(keep)):
-                near = empty[np.argsort(np.abs(empty - k), kind="stable")[: 2 * options.neighbours]]
-                # E|X|² = σ² splits evenly into the real and imaginary parts
-                noise[row] = np.sqrt(power[near].mean(axis=0) / 2)
+            noise = noise_levels(power, excited, np.flatnonzero(keep), options.neighbours)
             # a harmonic can never be trusted more than 100× the median one
             floor = 0.01 * np.median(noise, axis=0)
             noise = np.maximum(noise, np.where(floor > 0, floor, 1.0))

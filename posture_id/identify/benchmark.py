@@ -45,7 +45,8 @@ from posture_id.plotting import plot_benchmark
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate, simulate_batch
 
-__all__ = ["BenchmarkReport", "run_benchmark", "FAR_E_REL", "JOURNAL"]
+__all__ = ["BenchmarkReport", "run_benchmark", "FAR_E_REL", "JOURNAL", "read_journal",
+           "append_journal"]
 
 #: A result whose re-simulated body sway differs from the truth's by more than this
 #: (relative) is counted as ending far from the truth.
@@ -247,7 +248,7 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
     weights = json.loads((model_dir / SIDECAR).read_text(encoding="utf-8"))["weights_sha256"]
     header = {"format": "posture_id-benchmark-journal", "body_sha256": body.sha256,
               "model_weights_sha256": weights, "trials": trials, "seed": seed}
-    done = _read_journal(Path(journal), header) if journal is not None else {}
+    done = read_journal(Path(journal), header) if journal is not None else {}
     rows = [done[_task_key(t)] for t in tasks if _task_key(t) in done]
     todo = [t for t in tasks if _task_key(t) not in done]
     report(progress, len(rows), len(tasks), "identification")
@@ -261,7 +262,7 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
             for row in pool.map(_one, todo, chunksize=1):
                 rows.append(row)
                 if journal is not None:
-                    _append_journal(Path(journal), header, row)
+                    append_journal(Path(journal), header, row)
                 report(progress, len(rows), len(tasks), "identification")
     finally:
         for k, v in saved.items():
@@ -282,8 +283,10 @@ def _task_key(task_or_row) -> tuple:
     return (float(noise), int(index), method)
 
 
-def _read_journal(path: Path, header: dict) -> dict[tuple, dict]:
-    """Rows of a journal written for ``header`` (a torn last line is ignored)."""
+def read_journal(path: Path, header: dict, key=None) -> dict[tuple, dict]:
+    """Rows of a journal written for ``header`` (a torn last line is ignored), by
+    ``key(row)`` (default: noise level, trial, method)."""
+    key = key or _task_key
     if not path.exists():
         return {}
     lines = path.read_text(encoding="utf-8").splitlines()
@@ -301,14 +304,15 @@ def _read_journal(path: Path, header: dict) -> dict[tuple, dict]:
         except json.JSONDecodeError:
             continue  # the line being written when the run stopped
         kept.append(line)
-        row["e_rel"] = math.inf if row["e_rel"] is None else row["e_rel"]
-        rows[_task_key(row)] = row
+        if "e_rel" in row:
+            row["e_rel"] = math.inf if row["e_rel"] is None else row["e_rel"]
+        rows[key(row)] = row
     if len(kept) < len(lines) or not path.read_bytes().endswith(b"\n"):
         atomic_write_text(path, "\n".join(kept) + "\n")  # the torn line out
     return rows
 
 
-def _append_journal(path: Path, header: dict, row: dict) -> None:
+def append_journal(path: Path, header: dict, row: dict) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     new = not path.exists() or path.stat().st_size == 0
     with path.open("a", encoding="utf-8") as f:

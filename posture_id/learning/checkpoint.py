@@ -29,7 +29,6 @@ from safetensors import SafetensorError
 from safetensors.torch import load_file, save_file
 
 from posture_id._version import __version__
-from posture_id.datasets.features import FEATURE_DEFINITION
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text, jsonable
 from posture_id.learning.config import ClassOutput, Layout, LearningError, NetworkConfig
 from posture_id.learning.network import IdentifierNetwork
@@ -100,7 +99,7 @@ def save_model(folder: str | Path, network: IdentifierNetwork, standardiser: Sta
         "format_version": FORMAT_VERSION,
         "package_version": __version__,
         "architecture": jsonable(network.config),
-        "features": FEATURE_DEFINITION,
+        "features": network.config.feature_definition,
         "targets": TARGETS,
         "standardisation": {"target_mean": standardiser.target_mean.tolist(),
                             "target_std": standardiser.target_std.tolist(),
@@ -132,13 +131,13 @@ def load_model(folder: str | Path) -> LoadedModel:
     if not isinstance(version, int) or version > FORMAT_VERSION:
         raise LearningError(f"{sidecar_path}: model format version {version!r} is newer than "
                             f"this posture_id reads ({FORMAT_VERSION}); upgrade posture_id")
-    if sidecar.get("features") != FEATURE_DEFINITION:
-        raise LearningError(f"{sidecar_path}: the model was trained on another feature "
-                            "definition than this code computes; retrain it")
     if file_sha256(weights_path) != sidecar.get("weights_sha256"):
         raise LearningError(f"{weights_path}: corrupt or truncated (SHA-256 differs from "
                             f"{SIDECAR})")
     config = network_config_from_dict(sidecar.get("architecture") or {})
+    if sidecar.get("features") != config.feature_definition:
+        raise LearningError(f"{sidecar_path}: the model was trained on another feature "
+                            "definition than this code computes; retrain it")
     try:
         tensors = load_file(str(weights_path))
     except (SafetensorError, OSError, ValueError) as exc:

@@ -11,7 +11,9 @@ import enum
 import math
 from dataclasses import dataclass, field
 
+from posture_id.datasets.features import FEATURE_DEFINITION
 from posture_id.errors import PostureIdError
+from posture_id.frf.features import FRF_FEATURE_DEFINITION
 
 __all__ = [
     "LearningError",
@@ -30,11 +32,14 @@ class LearningError(PostureIdError):
 
 
 class Layout(enum.Enum):
-    """MODEL §5–6: one sample per module (3 channels in, 5 targets out) or one per trial
-    (2N − 1 channels in, 5N targets out)."""
+    """What a network sees. MODEL §5–6: spectrograms, one sample per module (3 channels in,
+    5 targets out) or one per trial (2N − 1 channels in, 5N targets out). FRF: one sample
+    per trial of FRF features (:mod:`posture_id.frf.features`: 3N channels, one row of F
+    excited frequencies; 5N targets out)."""
 
     MODULAR = "modular"
     MONOLITHIC = "monolithic"
+    FRF = "frf"
 
 
 class ClassOutput(enum.Enum):
@@ -55,12 +60,14 @@ class NetworkConfig:
     max pooling), then global average pooling and a head of fully connected layers.
 
     Attributes:
-        layout: modular or monolithic. in_channels: 3 (modular) or 2N − 1.
-        modules: modules predicted per sample: 1 (modular) or N (monolithic).
+        layout: modular, monolithic or frf. in_channels: 3 (modular), 2N − 1 (monolithic)
+            or 3N (frf).
+        modules: modules predicted per sample: 1 (modular) or N (monolithic, frf).
         widths: channels of each block (the paper's figure shows 5 blocks).
         head: widths of the hidden fully connected layers of the head.
         class_output: :class:`ClassOutput`.
-        image_size: pixels of the square input image (51, MODEL §6).
+        image_size: pixels of the square input image (51, MODEL §6); for frf, F, the
+            frequencies of the one-row input.
     """
 
     layout: Layout
@@ -97,7 +104,15 @@ class NetworkConfig:
         """The configuration of ``layout`` for a body of ``n_segments``."""
         if layout is Layout.MODULAR:
             return cls(layout, 3, 1, **kwargs)
+        if layout is Layout.FRF:
+            return cls(layout, 3 * n_segments, n_segments, **kwargs)
         return cls(layout, 2 * n_segments - 1, n_segments, **kwargs)
+
+    @property
+    def feature_definition(self) -> dict:
+        """What the inputs are (written into checkpoints; a model whose definition differs
+        from this code's is refused)."""
+        return FRF_FEATURE_DEFINITION if self.layout is Layout.FRF else FEATURE_DEFINITION
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import TARGET_FIELDS, default_parameters, denormalise_arrays
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.checkpoint import LoadedModel, load_model
-from posture_id.learning.config import Layout, LearningError
+from posture_id.learning.config import Layout, LearningError, NetworkConfig
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import SplitSamples
 from posture_id.plotting import plot_identification_error, plot_parameter_errors
@@ -240,9 +240,9 @@ def evaluate(model_dir: str | Path, dataset_dir: str | Path, resimulate: int = 2
     data = Dataset.open(dataset_dir)
     n = data.n_segments
     layout = model.config.layout
-    expected_modules = 1 if layout is Layout.MODULAR else n
-    if model.config.modules != expected_modules or (
-            layout is Layout.MONOLITHIC and model.config.in_channels != 2 * n - 1):
+    expected = NetworkConfig.for_body(layout, n)
+    if (model.config.modules, model.config.in_channels) != (expected.modules,
+                                                            expected.in_channels):
         raise LearningError(f"{model_dir}: a {layout.value} model for "
                             f"{model.config.modules} modules cannot read the {n}-segment "
                             f"data set {dataset_dir}")

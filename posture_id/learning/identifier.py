@@ -30,6 +30,7 @@ from posture_id.dec.parameters import (
 )
 from posture_id.errors import RecordingError
 from posture_id.fileio import JsonResult
+from posture_id.frf.features import frf_features
 from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
@@ -98,21 +99,20 @@ class CnnIdentifier:
             raise LearningError(
                 f"{model.path}: trained for a {trained.get('n_segments')}-segment body, "
                 f"'{body.name}' has {body.n_segments}")
-        if model.config.layout is Layout.MONOLITHIC and model.config.modules != body.n_segments:
-            raise LearningError(f"{model.path}: monolithic model for {model.config.modules} "
-                                f"modules, body has {body.n_segments}")
+        if model.config.layout is not Layout.MODULAR and model.config.modules != body.n_segments:
+            raise LearningError(f"{model.path}: {model.config.layout.value} model for "
+                                f"{model.config.modules} modules, body has {body.n_segments}")
         if trained.get("sha256") != body.sha256:
             self.notices += (f"the model was trained on body '{trained.get('name')}', not on "
                              f"this URDF ('{body.name}'); its gains are normalised by this "
                              "body's m·g·h",)
         stim = sidecar.get("stimulus", {})
         self.stimulus = stim
-        duration = stim["states"] * 0.25 * stim["cycles"]
-        self.n_samples = int(round(duration * FS_HZ)) + 1
+        self.profile = prts(stim["amplitude_deg"], stim["cycles"], stim["states"])
+        self.n_samples = int(round(self.profile.duration * FS_HZ)) + 1
         self.defaults = default_parameters(body)
         #: the trained stimulus at the sample times (rad), what a recording's tilt must be
-        self.expected_tilt = prts(stim["amplitude_deg"], stim["cycles"], stim["states"]).angle(
-            np.arange(self.n_samples) / FS_HZ)
+        self.expected_tilt = self.profile.angle(np.arange(self.n_samples) / FS_HZ)
 
     @classmethod
     def load(cls, model_dir: str | Path, body: Body) -> CnnIdentifier:
@@ -133,7 +133,8 @@ class CnnIdentifier:
         return cls(load_model(folder), body, notices)
 
     def features(self, recording: Recording, source: str = "recording") -> np.ndarray:
-        """(M, C, 51, 51) images of a recording: checked against the model's stimulus."""
+        """(M, C, 51, 51) images of a recording, or (1, 3N, 1, F) FRF features for an FRF
+        model: checked against the model's stimulus."""
         recording.check_segments(self.body.segment_names, source)
         if not recording.evenly_sampled():
             raise RecordingError(f"{source}: samples are not evenly spaced in time")
@@ -154,6 +155,9 @@ class CnnIdentifier:
             if hint is None:
                 raise
             raise RecordingError(f"{error}; and {hint.removeprefix(source + ': ')}") from None
+        if self.model.config.layout is Layout.FRF:
+            return frf_features(self.expected_tilt, theta[None], FS_HZ, self.profile.period_s,
+                                self.profile.periodic_from_s)
         spectra = stft(theta.T)[None]  # (1, N, 51, 51)
         if self.model.config.layout is Layout.MODULAR:
             return modular_images(stft(tilt), spectra)[0]

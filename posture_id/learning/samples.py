@@ -2,8 +2,11 @@
 
 Modular layout: one sample per (trial, module): image (3, 51, 51), targets (5,).
 Monolithic: one per trial: image (2N − 1, 51, 51), targets (5N,) (module after module).
+FRF: one per trial: FRF features (3N, 1, F) (:mod:`posture_id.frf.features`) computed here
+from the stored sway plus the trial's sensor noise (seeded by the shard), targets (5N,).
 Images are standardised pixel by pixel and channel by channel, targets element by
-element, with the training split's statistics (MODEL §5–6; ``stats.npz`` of the set).
+element, with the training split's statistics (MODEL §5–6; ``stats.npz`` of the set; for
+FRF features, computed from the training split when training starts).
 
 A split is held in memory when ``buffer_shards`` is 0; otherwise shards are read a few at
 a time (in a seeded random order) and the samples of each group shuffled together, so a
@@ -20,9 +23,34 @@ import torch
 
 from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import ParameterArrays
+from posture_id.frf.features import frf_features
 from posture_id.learning.config import Layout, LearningError
+from posture_id.simulation.stimulus import TiltProfile, prts
 
-__all__ = ["Standardiser", "SplitSamples"]
+__all__ = ["Standardiser", "SplitSamples", "dataset_stimulus", "frf_inputs"]
+
+#: Second word of the seed of the sensor noise added to a shard's sway for FRF features.
+FRF_NOISE_STREAM = 0x465246
+
+
+def dataset_stimulus(data: Dataset) -> TiltProfile:
+    """The PRTS a data set was simulated with."""
+    s = data.manifest["stimulus"]
+    return prts(s["amplitude_deg"], s["cycles"], s["states"])
+
+
+def frf_inputs(data: Dataset, arrays: dict[str, np.ndarray], k: int) -> np.ndarray:
+    """(K, 3N, 1, F) FRF features of every used trial of shard ``k`` (``arrays``): its
+    stored sway plus white sensor noise of the trial's ``sensor_noise_deg``, drawn from
+    ``SeedSequence([k, FRF_NOISE_STREAM])``."""
+    stimulus = dataset_stimulus(data)
+    rate = float(data.manifest["options"]["sample_rate_hz"])
+    theta = arrays["theta"].astype(np.float64)
+    rng = np.random.default_rng(np.random.SeedSequence([k, FRF_NOISE_STREAM]))
+    sd = np.radians(arrays["sensor_noise_deg"])[:, None, None]
+    noisy = theta + sd * rng.standard_normal(theta.shape)
+    tilt = stimulus.angle(np.arange(theta.shape[1]) / rate)
+    return frf_features(tilt, noisy, rate, stimulus.period_s, stimulus.periodic_from_s)
 
 
 @dataclass(frozen=True)
@@ -37,6 +65,12 @@ class Standardiser:
     @classmethod
     def from_dataset(cls, data: Dataset, layout: Layout) -> Standardiser:
         stats = data.stats()
+        if layout is Layout.FRF:
+            raw = cls(np.zeros(1), np.ones(1), np.zeros(1), np.ones(1))
+            images, _ = SplitSamples(data, "train", layout, raw, buffer_shards=1).arrays()
+            return cls(images.mean(axis=0, dtype=np.float64), images.std(axis=0, dtype=np.float64),
+                       np.asarray(stats["monolithic_targets_mean"], dtype=np.float64),
+                       np.asarray(stats["monolithic_targets_std"], dtype=np.float64))
         if layout is Layout.MODULAR:
             keys = ("modular_mean", "modular_std", "targets_mean", "targets_std")
         else:
@@ -111,7 +145,8 @@ class SplitSamples:
             if not len(self.local[k]):
                 continue
             arrays = self.data.load_shard(k)
-            x = arrays[key][self.local[k]]
+            x = (frf_inputs(self.data, arrays, k) if self.layout is Layout.FRF
+                 else arrays[key])[self.local[k]]
             t = arrays["targets"][self.local[k]]  # (K, N, 5)
             if self.layout is Layout.MODULAR:
                 x = x.reshape(-1, *x.shape[2:])

@@ -20,7 +20,7 @@ import json
 import math
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +30,7 @@ from safetensors.torch import load_file, save_file
 
 from posture_id.datasets.store import Dataset
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text, jsonable
+from posture_id.frf.features import frf_width
 from posture_id.learning.checkpoint import save_model
 from posture_id.learning.config import (
     AdamWOneCycle,
@@ -41,7 +42,7 @@ from posture_id.learning.config import (
     TrainingConfig,
 )
 from posture_id.learning.network import IdentifierNetwork
-from posture_id.learning.samples import SplitSamples, Standardiser
+from posture_id.learning.samples import SplitSamples, Standardiser, dataset_stimulus
 from posture_id.plotting import plot_loss_curves
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
@@ -180,6 +181,12 @@ def train(dataset: str | Path, out: str | Path, network: NetworkConfig | None = 
     training = training or TrainingConfig()
     data = Dataset.open(dataset)
     network_config = network or NetworkConfig.for_body(Layout.MODULAR, data.n_segments)
+    if network_config.layout is Layout.FRF:  # the input's width follows the stimulus
+        stimulus = dataset_stimulus(data)
+        rate = float(data.manifest["options"]["sample_rate_hz"])
+        tilt = stimulus.angle(np.arange(int(round(stimulus.duration * rate)) + 1) / rate)
+        network_config = replace(network_config, image_size=frf_width(
+            tilt, rate, stimulus.period_s, stimulus.periodic_from_s))
     expected = NetworkConfig.for_body(network_config.layout, data.n_segments)
     if (network_config.in_channels, network_config.modules) != (expected.in_channels,
                                                                expected.modules):

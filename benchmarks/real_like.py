@@ -1,0 +1,243 @@
+"""Identification of people-like subjects: most of their sway is not the stimulus's.
+
+Run:  .venv/bin/python benchmarks/real_like.py [--subjects 30] [--workers 2]
+      (the networks first: ``make real-like-models``, docs/real_recordings.md)
+
+``--subjects`` simulated TIP subjects, each recorded with the 242-state PRTS (2 cycles,
+121 s) and with the 80-state PRTS (6 cycles, 120 s), both 1° peak-to-peak: MODEL §5
+parameters (from a seed no data set uses; subjects that fall under either stimulus are
+drawn again), motor noise scaled so that a share drawn uniformly from [10 %, 30 %] of
+their body COM sway's variance is stimulus-locked
+(:func:`posture_id.simulation.subjects.people_like`), 0.05° sensor noise. Every recording
+is identified by:
+
+- ``raw LS``: least squares on every sample of the sway (relaxed classes, from defaults);
+- ``locked LS``: least squares on the stimulus-locked sway (``FitOptions.locked``);
+- ``CNN``: the spectrogram network trained on motor-noisy data of that stimulus;
+- ``FRF net``: the FRF-feature network trained on the same data.
+
+Per method: the share of subjects with every class right, the median |relative error| of
+each parameter per module, E_rel of the stimulus-locked response (the identified
+parameters simulated without noise against the subject's noise-free response, body COM),
+and the time. Writes ``docs/results/real_like.{md,json,png}``; a journal makes an
+interrupted run resumable.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import multiprocessing
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from posture_id import __version__
+from posture_id.bodies.body import load_body
+from posture_id.dec.parameters import DecParameters
+from posture_id.dec.prior import sample_parameters
+from posture_id.errors import SimulationError
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fitting import FitOptions, fit_recording
+from posture_id.frf.locked import LockedOptions
+from posture_id.identify.benchmark import append_journal, read_journal
+from posture_id.learning.identifier import CnnIdentifier
+from posture_id.plotting import plot_benchmark
+from posture_id.simulation import prts, simulate
+from posture_id.simulation.subjects import people_like
+
+ROOT = Path(__file__).resolve().parent.parent
+STIMULI = {"242": dict(states=242, cycles=2), "80": dict(states=80, cycles=6)}
+METHODS = ("raw LS", "locked LS", "CNN", "FRF net")
+FIELDS = ("kp", "ki", "kd", "delay_s")
+SHARE_RANGE = (0.10, 0.30)
+_THREADS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS")
+_LOADED: dict = {}
+
+
+def subjects(body, n: int, seed: int) -> list[dict]:
+    """``n`` subjects (parameters, share, noise seed) that stay up with their noise under
+    every stimulus."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 4242]))
+    out = []
+    while len(out) < n:
+        params = sample_parameters(body, 1, rng).trial(0, body.joint_names)
+        share = float(rng.uniform(*SHARE_RANGE))
+        noise_seed = int(rng.integers(0, 2**31))
+        try:
+            for spec in STIMULI.values():
+                people_like(body, params, prts(**spec), share, noise_seed)
+        except SimulationError:
+            continue
+        out.append({"params": params.to_dict(), "share": share, "seed": noise_seed})
+    return out
+
+
+def _models(stimulus_key: str, folders: dict):
+    if stimulus_key not in _LOADED:
+        body = load_body()
+        _LOADED[stimulus_key] = (body, {kind: CnnIdentifier.load(folders[kind], body)
+                                        for kind in ("cnn", "frf")})
+    return _LOADED[stimulus_key]
+
+
+def _one(task: tuple) -> dict:
+    """Identify one subject with one method (a worker process, one thread)."""
+    stimulus_key, index, spec, method, folders = task
+    body, nets = _models(stimulus_key, folders)
+    stim = prts(**STIMULI[stimulus_key])
+    truth = DecParameters.from_dict(spec["params"], body)
+    subject = people_like(body, truth, stim, spec["share"], spec["seed"])
+    rec = subject.recording
+    locked_fit = FitOptions(threads=1, locked=LockedOptions())
+    start = time.perf_counter()
+    if method == "raw LS":
+        params = fit_recording(rec, body, options=FitOptions(threads=1), stimulus=stim).parameters
+    elif method == "locked LS":
+        params = fit_recording(rec, body, options=locked_fit, stimulus=stim).parameters
+    elif method == "CNN":
+        params = nets["cnn"].identify(rec).parameters
+    else:
+        params = nets["frf"].identify(rec).parameters
+    seconds = time.perf_counter() - start
+    again = simulate(body, params, stim, options=None)
+    reference = subject.locked.alpha[:, 0]
+    got = again.alpha[: len(reference), 0]
+    e_rel = (math.inf if not np.all(np.isfinite(got))
+             else float(np.linalg.norm(got - reference) / np.linalg.norm(reference)))
+    rel = np.column_stack([params.array(f) / truth.array(f) - 1 for f in FIELDS])
+    return {"stimulus": stimulus_key, "index": index, "method": method, "seconds": seconds,
+            "share": subject.locked_share, "motor_noise_deg": subject.motor_noise.sd_deg,
+            "relative_error": rel.tolist(), "e_rel": e_rel,
+            "classes_correct": [params[j].controls == truth[j].controls
+                                for j in body.joint_names]}
+
+
+def statistics(rows: list[dict], joints) -> dict:
+    out = {}
+    for stimulus_key in STIMULI:
+        for method in METHODS:
+            mine = [r for r in rows if r["stimulus"] == stimulus_key and r["method"] == method]
+            if not mine:
+                continue
+            rel = np.abs(np.array([r["relative_error"] for r in mine]))  # (R, N, 4)
+            correct = np.array([r["classes_correct"] for r in mine])
+            e_rel = np.array([r["e_rel"] for r in mine])
+            out[f"{stimulus_key}|{method}"] = {
+                "subjects": len(mine),
+                "all_classes_right": float(correct.all(axis=1).mean()),
+                "modules_right": float(correct.mean()),
+                "median_abs_relative_error": {
+                    j: {f: float(np.median(rel[:, m, k])) for k, f in enumerate(FIELDS)}
+                    for m, j in enumerate(joints)},
+                "median_abs_kp_error_all_modules": float(np.median(rel[:, :, 0])),
+                "e_rel_median": float(np.median(e_rel)),
+                "seconds_median": float(np.median([r["seconds"] for r in mine])),
+                "locked_share_median": float(np.median([r["share"] for r in mine])),
+            }
+    return out
+
+
+def markdown(stats: dict, joints, n_subjects: int, workers: int) -> str:
+    lines = ["# People-like subjects: raw sway, locked least squares and the networks", "",
+             f"{n_subjects} simulated TIP subjects, each under both stimuli (MODEL §5 "
+             "parameters; motor noise scaled so that "
+             f"{100 * SHARE_RANGE[0]:g}–{100 * SHARE_RANGE[1]:g} % of "
+             "the body COM sway's variance is stimulus-locked, drawn per subject; 0.05° "
+             "sensor noise). Errors are |identified / true − 1|, medians over subjects. "
+             "E_rel: the identified parameters simulated without noise against the subject's "
+             "noise-free (stimulus-locked) body sway. Made by `benchmarks/real_like.py` "
+             f"(posture_id {__version__}, {workers} subjects at a time, one thread each).", ""]
+    for stimulus_key, spec in STIMULI.items():
+        lines += [f"## PRTS {spec['states']} states × {spec['cycles']}", "",
+                  "| method | every class right | Kp error (all modules) | Kp error "
+                  + " / ".join(joints) + " | Kd error " + " / ".join(joints)
+                  + " | Δ error " + " / ".join(joints) + " | E_rel locked | s |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for method in METHODS:
+            s = stats.get(f"{stimulus_key}|{method}")
+            if s is None:
+                continue
+            med = s["median_abs_relative_error"]
+
+            def per(field, med=med):
+                return " / ".join(f"{100 * med[j][field]:.0f} %" for j in joints)
+
+            lines.append(f"| {method} | {100 * s['all_classes_right']:.0f} % "
+                         f"({s['subjects']}) | "
+                         f"{100 * s['median_abs_kp_error_all_modules']:.1f} % | {per('kp')} | "
+                         f"{per('kd')} | {per('delay_s')} | {100 * s['e_rel_median']:.1f} % | "
+                         f"{s['seconds_median']:.3g} |")
+        share = next((s["locked_share_median"] for k, s in stats.items()
+                      if k.startswith(stimulus_key + "|")), float("nan"))
+        lines += ["", f"Median realised locked share: {100 * share:.1f} %.", ""]
+    lines += ["![E_rel of the locked response per method](real_like.png)", ""]
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--subjects", type=int, default=30)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--models", type=Path, default=ROOT / "data" / "models",
+                        help="folder of real_<states>_<cnn|frf> model directories")
+    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
+    parser.add_argument("--stimuli", nargs="+", choices=list(STIMULI), default=list(STIMULI),
+                        help="PRTS lengths to run (default: both)")
+    args = parser.parse_args()
+    body = load_body()
+    journal = args.out / "real_like.journal.jsonl"
+    header = {"format": "posture_id-real-like-journal", "subjects": args.subjects,
+              "seed": args.seed, "body_sha256": body.sha256, "stimuli": args.stimuli}
+    key = lambda r: (r["stimulus"], int(r["index"]), r["method"])  # noqa: E731
+    done = read_journal(journal, header, key)
+    tasks = []
+    specs = subjects(body, args.subjects, args.seed)
+    for stimulus_key in args.stimuli:
+        folders = {kind: str(args.models / f"real_{stimulus_key}_{kind}")
+                   for kind in ("cnn", "frf")}
+        for index, spec in enumerate(specs):
+            for method in METHODS:
+                if (stimulus_key, index, method) not in done:
+                    tasks.append((stimulus_key, index, spec, method, folders))
+    rows = list(done.values())
+    total = len(rows) + len(tasks)
+    print(f"{len(rows)} identifications journalled, {len(tasks)} to do", flush=True)
+    os.environ.update({k: "1" for k in _THREADS})
+    began = time.perf_counter()
+    with ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        for row in pool.map(_one, tasks, chunksize=1):
+            rows.append(row)
+            append_journal(journal, header, row)
+            print(f"[{len(rows)}/{total}] "
+                  f"{row['stimulus']} #{row['index']} {row['method']}: classes "
+                  f"{sum(row['classes_correct'])}/{len(row['classes_correct'])}, Kp "
+                  + ", ".join(f"{100 * e[0]:+.0f} %" for e in row["relative_error"])
+                  + f", {row['seconds']:.1f} s ({time.perf_counter() - began:.0f} s)",
+                  flush=True)
+    rows.sort(key=lambda r: (r["stimulus"], r["index"], METHODS.index(r["method"])))
+    stats = statistics(rows, body.joint_names)
+    args.out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(args.out / "real_like.json", json_text(
+        {"subjects": args.subjects, "seed": args.seed, "share_range": SHARE_RANGE,
+         "statistics": stats, "rows": rows}))
+    atomic_write_text(args.out / "real_like.md",
+                      markdown(stats, body.joint_names, args.subjects, args.workers))
+    groups = {}
+    for stimulus_key in STIMULI:
+        for method in METHODS:
+            mine = [r for r in rows if r["stimulus"] == stimulus_key and r["method"] == method]
+            if mine:
+                groups[f"{method}\n{stimulus_key}"] = ([min(r["e_rel"], 10.0) for r in mine],
+                                                       [r["seconds"] for r in mine])
+    plot_benchmark(groups, path=args.out / "real_like.png")
+    journal.unlink(missing_ok=True)
+    print(f"wrote {args.out / 'real_like.md'}")
+
+
+if __name__ == "__main__":
+    main()

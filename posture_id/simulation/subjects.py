@@ -1,0 +1,85 @@
+"""People-like recordings: a subject whose sway is only partly locked to the stimulus.
+
+In a posture lab most of a person's sway on a tilting floor is not the response to the
+tilt: spontaneous sway, drift. :func:`people_like` simulates a subject whose body COM sway
+(α_BS) has a chosen stimulus-locked share: the motor noise (:mod:`.noise`) is scaled so
+that
+
+    share = var(α_BS without motor noise) / var(α_BS with it),
+
+measured on the trial itself (the body is nearly linear at these angles, so the noise's
+contribution scales with its level: one calibration run with a unit level gives the
+level, and the realised share is reported), then white sensor noise is added.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from posture_id.bodies.body import Body
+from posture_id.dec.parameters import DecParameters
+from posture_id.errors import SimulationError
+from posture_id.recording import Recording
+from posture_id.simulation.batch import simulate
+from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorNoise
+from posture_id.simulation.options import SimulationOptions
+from posture_id.simulation.results import SimulationResult
+from posture_id.simulation.stimulus import TiltProfile
+
+__all__ = ["PeopleLike", "people_like"]
+
+
+@dataclass(frozen=True)
+class PeopleLike:
+    """A simulated subject.
+
+    Attributes:
+        recording: what a lab would record (motor and sensor noise).
+        locked: the same subject without any noise: the stimulus-locked response.
+        motor_noise: the motor noise used. locked_share: the realised share of the body
+        COM sway's variance that is the locked response.
+    """
+
+    recording: Recording
+    locked: SimulationResult
+    motor_noise: MotorNoise
+    locked_share: float
+
+
+def people_like(body: Body, params: DecParameters, stimulus: TiltProfile,
+                locked_share: float, seed: int, sensor_noise_deg: float = 0.05,
+                cutoff_hz: float = DEFAULT_CUTOFF_HZ,
+                options: SimulationOptions | None = None) -> PeopleLike:
+    """Simulate a subject whose body COM sway is ``locked_share`` stimulus-locked.
+
+    Raises:
+        SimulationError: the subject falls (without noise or with it), or the share is not
+            in (0, 1).
+    """
+    if not 0 < locked_share < 1:
+        raise SimulationError(f"locked_share must be in (0, 1), got {locked_share}")
+    locked = simulate(body, params, stimulus, options)
+    unit = simulate(body, params, stimulus, options, MotorNoise(1.0, cutoff_hz, seed))
+    if not (locked.stable and unit.stable):
+        # a unit level may tip the body over: calibrate at a tenth of it
+        unit = simulate(body, params, stimulus, options, MotorNoise(0.1, cutoff_hz, seed))
+        scale = 0.1
+    else:
+        scale = 1.0
+    if not (locked.stable and unit.stable):
+        raise SimulationError("the subject falls")
+    response = np.var(locked.alpha[:, 0])
+    per_level = np.var(unit.alpha[:, 0] - locked.alpha[:, 0]) / scale**2
+    level = math.sqrt(response * (1 - locked_share) / locked_share / per_level)
+    motor = MotorNoise(float(level), cutoff_hz, seed)
+    noisy = simulate(body, params, stimulus, options, motor)
+    if not noisy.stable:
+        raise SimulationError("the subject falls with its motor noise")
+    realised = float(response / np.var(noisy.alpha[:, 0]))
+    recording = noisy.to_recording()
+    if sensor_noise_deg > 0:
+        recording = recording.with_sensor_noise(sensor_noise_deg, seed)
+    return PeopleLike(recording, locked, motor, realised)

@@ -5,7 +5,8 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-fast lint bench bodies models model examples clean
+.PHONY: demo test test-fast lint bench bodies models model examples real-like real-like-models \
+        real-like-model clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -71,6 +72,27 @@ model: $(STAMP)
 	cp data/models/$(NAME)/model.json data/models/$(NAME)/log.jsonl \
 	  data/models/$(NAME)/loss.png docs/models/$(NAME)/
 	cp data/models/$(NAME)/model.safetensors data/models/$(NAME)/model.json $(MODELS_DIR)/$(NAME)/
+
+# People-like subjects (docs/real_recordings.md): per PRTS, a data set with motor noise
+# (level drawn per trial from [0, 0.8]°) and 0.05° sensor noise, a spectrogram CNN and an
+# FRF network trained on it; then the benchmark of raw-sway and locked least squares and
+# the two networks, into docs/results/real_like.*.
+REAL_TRIALS ?= 12000
+real-like-models: $(STAMP)
+	$(MAKE) real-like-model STATES=242 CYCLES=2
+	$(MAKE) real-like-model STATES=80 CYCLES=6
+
+real-like-model: $(STAMP)
+	$(BIN)/posture-id dataset generate --trials $(REAL_TRIALS) --states $(STATES) \
+	  --cycles $(CYCLES) --motor-noise 0.8 --sensor-noise-deg 0.05 --out data/real_$(STATES) --quiet
+	$(BIN)/posture-id train data/real_$(STATES) --layout frf --epochs 30 \
+	  --out data/models/real_$(STATES)_frf --quiet
+	$(BIN)/posture-id train data/real_$(STATES) --epochs 20 --out data/models/real_$(STATES)_cnn \
+	  --quiet
+
+real-like: real-like-models
+	$(BIN)/python benchmarks/why_raw_sway_fails.py
+	$(BIN)/python benchmarks/real_like.py --subjects 30
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/simulation.py

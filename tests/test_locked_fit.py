@@ -129,11 +129,14 @@ def test_cli_fit_locked(tip, tmp_path):
     leaning = Recording(rec.time, rec.tilt, rec.theta + np.radians(1.0), rec.segments)
     leaning.to_csv(tmp_path / "rec.csv")
     code = main(["fit", str(tmp_path / "rec.csv"), "--locked", "--classes", "fixed",
-                 "--states", "80", "--cycles", "3", "--out", str(tmp_path / "fit.json")])
+                 "--fit-passive", "--states", "80", "--cycles", "3",
+                 "--out", str(tmp_path / "fit.json")])
     assert code == 0
     data = json.loads((tmp_path / "fit.json").read_text())
     assert data["parameters"]["knee"]["kp"] == pytest.approx(200.0, rel=1e-3)
     assert data["provenance"]["options"]["locked"]["max_frequency_hz"] == 2.0
+    assert data["provenance"]["options"]["fit_passive"] is True
+    assert data["parameters"]["knee"]["kpas"] == pytest.approx(61.25, rel=1e-3)
 
 
 def test_the_prior_keeps_undetermined_parameters_at_the_defaults(tip):
@@ -150,3 +153,18 @@ def test_the_prior_keeps_undetermined_parameters_at_the_defaults(tip):
     assert np.abs(tight.normalised[:, :4]).max() < 1e-3  # the prior rules
     with pytest.raises(FitError, match="prior_sd needs the locked"):
         FitOptions(prior_sd=0.5)
+
+
+def test_passive_stiffness_and_damping_are_fitted_when_asked(tip):
+    truth = (default_parameters(tip).replace("ankle", kpas=300.0, bpas=120.0)
+             .replace("hip", kpas=45.0))
+    stim = prts(states=80, cycles=3)
+    rec = simulate(tip, truth, stim).to_recording()
+    fixed = fit_recording(rec, tip, options=FitOptions(classes=FixedClasses()), stimulus=stim)
+    fitted = fit_recording(rec, tip, options=FitOptions(classes=FixedClasses(),
+                                                        fit_passive=True), stimulus=stim)
+    assert fixed.parameters["ankle"].kpas == pytest.approx(232.5)  # not fitted: defaults
+    for joint, field, value in (("ankle", "kpas", 300.0), ("ankle", "bpas", 120.0),
+                                ("hip", "kpas", 45.0)):
+        assert getattr(fitted.parameters[joint], field) == pytest.approx(value, rel=0.01)
+    assert fitted.rms_deg < 1e-3 < fixed.rms_deg

@@ -54,8 +54,9 @@ def add_parser(sub) -> None:
 
 
 def add_search_arguments(parser: argparse.ArgumentParser) -> None:
-    """What the fit compares and where it searches: --locked [--max-frequency-hz],
-    --gain-range and --delay-range (multiples of the defaults)."""
+    """What the fit compares and where it searches: --locked [--max-frequency-hz
+    --prior-sd], --fit-passive, --gain-range and --delay-range (multiples of the
+    defaults)."""
     parser.add_argument("--locked", action="store_true",
                         help="fit only the stimulus-locked sway (cycle average without offset "
                              "and drift, at the stimulated frequencies, weighted by the "
@@ -64,6 +65,12 @@ def add_search_arguments(parser: argparse.ArgumentParser) -> None:
                         default=default_of(LockedOptions, "max_frequency_hz"),
                         help="--locked: highest stimulated frequency compared "
                              "(default %(default)g Hz)")
+    parser.add_argument("--prior-sd", type=positive_float,
+                        help="--locked: maximum a posteriori with a Gaussian prior of this SD "
+                             "on every normalised gain and delay, centred on the defaults "
+                             "(MODEL §5 draws have 0.5)")
+    parser.add_argument("--fit-passive", action="store_true",
+                        help="also fit each module's passive stiffness and damping")
     low, high = (1 + b for b in default_of(FitOptions, "gain_bounds"))
     parser.add_argument("--gain-range", type=non_negative_float, nargs=2, metavar=("MIN", "MAX"),
                         default=[low, high],
@@ -77,10 +84,13 @@ def add_search_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def search_keywords(args: argparse.Namespace) -> dict:
-    """FitOptions keywords of --locked, --gain-range and --delay-range (bounds normalised:
-    factor − 1)."""
+    """FitOptions keywords of --locked, --prior-sd, --fit-passive, --gain-range and
+    --delay-range (bounds normalised: factor − 1)."""
+    if args.prior_sd is not None and not args.locked:
+        raise PostureIdError("--prior-sd goes with --locked (residuals in units of the noise)")
     out = {"locked": (LockedOptions(max_frequency_hz=args.max_frequency_hz) if args.locked
-                      else None)}
+                      else None),
+           "prior_sd": args.prior_sd, "fit_passive": args.fit_passive}
     for flag, key in (("--gain-range", "gain_bounds"), ("--delay-range", "delay_bounds")):
         low, high = getattr(args, key.replace("bounds", "range"))
         if not low < high:

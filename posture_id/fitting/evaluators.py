@@ -11,6 +11,7 @@ simulator with forward differences: a cheap warm start). What is compared is a
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -19,7 +20,7 @@ from posture_id.bodies.body import Body
 from posture_id.dec.parameters import DecParameters, denormalise_arrays
 from posture_id.fitting.problem import FitProblem
 from posture_id.fitting.result import StageResult
-from posture_id.fitting.unknowns import targets_from_qs
+from posture_id.fitting.unknowns import passive_from_qs, targets_from_qs
 from posture_id.frf.locked import LockedProjection
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate_batch
@@ -148,6 +149,9 @@ class SimulatorEvaluator(Evaluator):
 
     def _simulate_many(self, qs: np.ndarray) -> np.ndarray:
         params = denormalise_arrays(targets_from_qs(qs), self.defaults)
+        passive = passive_from_qs(qs)
+        params = replace(params, kpas=params.kpas * (1 + passive[..., 0]),
+                         bpas=params.bpas * (1 + passive[..., 1]))
         batch = simulate_batch(self.body, params, self.stimulus, self.options, workers=1)
         theta = batch.theta[:, : len(self.measured)]
         return np.where(np.isnan(theta), self.limit, theta)
@@ -173,10 +177,10 @@ def run_stage(name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
               lower: np.ndarray, upper: np.ndarray, tolerance: float, max_iterations: int,
               progress: Progress | None = None,
               prior_sd: np.ndarray | None = None) -> StageResult:
-    """One bounded trust-region least-squares stage over the ``free`` entries of q (5N,).
+    """One bounded trust-region least-squares stage over the ``free`` entries of q (7N,).
 
-    ``lower``/``upper`` are (5N,) bounds; entries not free keep their q0 values.
-    ``prior_sd``: (5N,) standard deviations of a Gaussian prior on q centred on 0 (the
+    ``lower``/``upper`` are (7N,) bounds; entries not free keep their q0 values.
+    ``prior_sd``: (7N,) standard deviations of a Gaussian prior on q centred on 0 (the
     defaults; inf: none): each free entry adds the residual q_k / sd_k, so the stage finds
     the maximum a posteriori estimate when the residuals are in units of their noise.
     """

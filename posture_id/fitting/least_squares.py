@@ -60,7 +60,7 @@ from posture_id.fitting.prepare import prepare_recording
 from posture_id.fitting.problem import FitProblem
 from posture_id.fitting.result import FitResult, StageResult, class_names
 from posture_id.fitting.symbolic import step_inputs
-from posture_id.fitting.unknowns import q_from_targets, targets_from_q
+from posture_id.fitting.unknowns import passive_normalised, q_from_targets, targets_from_q
 from posture_id.frf.locked import LockedProjection
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
@@ -116,14 +116,24 @@ def fit_recording(
     u = step_inputs(tilt, tilt_vel, problem.n_steps_u)
     measured = recording.theta
     defaults = problem.defaults
-    guess = q_from_targets(normalise(init or defaults, defaults))
+    start_params = init or defaults
+    guess = q_from_targets(normalise(start_params, defaults),
+                           passive_normalised(start_params, defaults))
     lower, upper = _bounds(options, n)
-    guess[: 4 * n] = np.clip(guess[: 4 * n], lower[: 4 * n], upper[: 4 * n])
-    continuous = list(range(4 * n))
-    everything = list(range(5 * n))
+    guess = np.where(np.arange(len(guess)) // n == 4, guess, np.clip(guess, lower, upper))
+    passive = guess[5 * n :]  # kept, or fitted with the continuous parameters
+
+    def assemble(gains_delays: np.ndarray, classes: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.clip(gains_delays, lower[: 4 * n], upper[: 4 * n]), classes,
+                               passive])
+
+    fitted_passive = list(range(5 * n, 7 * n)) if options.fit_passive else []
+    continuous = list(range(4 * n)) + fitted_passive
+    everything = list(range(5 * n)) + fitted_passive
     target = _target(recording, stim, options, source)
     prior_sd = (None if options.prior_sd is None
-                else np.array([options.prior_sd] * 4 * n + [np.inf] * n))
+                else np.array([options.prior_sd] * 4 * n + [np.inf] * n
+                              + [options.prior_sd] * 2 * n))
     exact = ExactEvaluator(problem, u, measured, target)
     warm = SimulatorEvaluator(body, defaults, stim, sim, measured, target)
     first_evaluator, first_tolerance, first_limit = (
@@ -142,27 +152,25 @@ def fit_recording(
     if isinstance(options.classes, RelaxedClasses):
         # the guess (classes half-way to their values), then draws of the MODEL §5 prior
         rng = np.random.default_rng(options.classes.seed)
-        starts = [np.concatenate([guess[: 4 * n], 0.5 * guess[4 * n :]])]
+        starts = [assemble(guess[: 4 * n], 0.5 * guess[4 * n : 5 * n])]
         for _ in range(options.classes.starts - 1):
-            draw = relative_factors(rng, 4 * n) - 1
-            starts.append(np.concatenate([np.clip(draw, lower[: 4 * n], upper[: 4 * n]),
-                                          np.zeros(n)]))
+            starts.append(assemble(relative_factors(rng, 4 * n) - 1, np.zeros(n)))
         tries = []
         for k, q0 in enumerate(starts):
             label = "relaxed classes" + (f", start {k + 1}/{len(starts)}" if k else "")
             tries.append(stage(label + suffix, first_evaluator, q0, everything,
                                first_tolerance, first_limit))
         best_relaxed = min(tries, key=lambda t: t.cost)
-        signs = np.where(best_relaxed.q[4 * n :] >= 0, 1.0, -1.0)
+        signs = np.where(best_relaxed.q[4 * n : 5 * n] >= 0, 1.0, -1.0)
         say(f"classes from the relaxed fit: {class_names(signs)}")
-        start_q = np.concatenate([np.clip(best_relaxed.q[: 4 * n], lower[: 4 * n],
-                                          upper[: 4 * n]), signs])
+        start_q = best_relaxed.q.copy()
+        start_q[4 * n : 5 * n] = signs
     else:
         combos = (itertools.product((1.0, -1.0), repeat=n)
-                  if isinstance(options.classes, ExhaustiveClasses) else [guess[4 * n :]])
+                  if isinstance(options.classes, ExhaustiveClasses) else [guess[4 * n : 5 * n]])
         candidates = []
         for combo in combos:
-            q0 = np.concatenate([guess[: 4 * n], combo])
+            q0 = assemble(guess[: 4 * n], np.asarray(combo, dtype=float))
             candidates.append(stage(f"classes {class_names(combo)}{suffix}", first_evaluator,
                                     q0, continuous, first_tolerance, first_limit))
         chosen = min(candidates, key=lambda s: s.cost)
@@ -181,6 +189,9 @@ def fit_recording(
 
     normalised = targets_from_q(best.q)
     params = denormalise(normalised, defaults)
+    for i, joint in enumerate(body.joint_names):
+        params = params.replace(joint, kpas=float(defaults[joint].kpas * (1 + best.q[5 * n + i])),
+                                bpas=float(defaults[joint].bpas * (1 + best.q[6 * n + i])))
     se_norm, se_phys, poorly = _standard_errors(best, params, defaults, options, n)
     fitted = problem.simulate(best.q, u)
     return FitResult(
@@ -224,7 +235,7 @@ def _standard_errors(best: StageResult, params: DecParameters, defaults: DecPara
             se_z = np.sqrt(np.clip(np.diag(cov), 0, None))
         except np.linalg.LinAlgError:
             se_z = np.full(jac.shape[1], np.inf)
-    se_norm = se_z.reshape(4, n).T
+    se_norm = se_z[: 4 * n].reshape(4, n).T  # the passive terms, when fitted, follow
     default_values = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
     se_phys = se_norm * default_values
     values = np.column_stack([params.array(f) for f in TARGET_FIELDS])
@@ -234,7 +245,10 @@ def _standard_errors(best: StageResult, params: DecParameters, defaults: DecPara
 
 
 def _bounds(options: FitOptions, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(5N,) lower and upper bounds of q: gains, delays, classes in [−1, 1]."""
-    lo = [options.gain_bounds[0]] * 3 * n + [options.delay_bounds[0]] * n + [-1.0] * n
-    hi = [options.gain_bounds[1]] * 3 * n + [options.delay_bounds[1]] * n + [1.0] * n
+    """(7N,) lower and upper bounds of q: gains, delays, classes in [−1, 1], and the
+    passive terms within the gains' bounds."""
+    lo = ([options.gain_bounds[0]] * 3 * n + [options.delay_bounds[0]] * n + [-1.0] * n
+          + [options.gain_bounds[0]] * 2 * n)
+    hi = ([options.gain_bounds[1]] * 3 * n + [options.delay_bounds[1]] * n + [1.0] * n
+          + [options.gain_bounds[1]] * 2 * n)
     return np.array(lo), np.array(hi)

@@ -109,6 +109,9 @@ class FitOptions:
             body's defaults (MODEL §5 draws with σ = 0.5): parameters the sway does not
             determine stay near the defaults instead of wandering. Needs the locked fit
             (whose residuals are in units of the recording's noise).
+        fit_passive: also fit every module's passive stiffness Kpas and damping Bpas
+            (normalised like the gains, within ``gain_bounds``); otherwise they stay at the
+            initial guess's values (the defaults).
     """
 
     simulation: SimulationOptions = field(default_factory=SimulationOptions)
@@ -128,6 +131,7 @@ class FitOptions:
     warm_tolerance: float = 1e-7
     locked: LockedOptions | None = None
     prior_sd: float | None = None
+    fit_passive: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.classes, RelaxedClasses | ExhaustiveClasses | FixedClasses):

@@ -32,6 +32,7 @@ from posture_id.fitting.symbolic import (
     rollout_steps,
     step_function,
 )
+from posture_id.fitting.unknowns import PER_MODULE
 
 __all__ = ["ProblemKey", "FitProblem"]
 
@@ -94,18 +95,20 @@ class FitProblem:
         sizes = buffer_sizes(delay0 * (1 + key.delay_upper))
         model = SymbolicModel(body, tuple(sizes), key.dt, key.deadband_rad_s,
                               smooth=key.smooth_deadband_rad_s)
-        self.width = -(-5 * n // key.threads)  # Jacobian columns per thread
+        unknowns = PER_MODULE * n
+        self.width = -(-unknowns // key.threads)  # Jacobian columns per thread
 
         def build() -> list[ca.Function]:
             rollout = rollout_function(model, key.n_samples, key.sample_every)
-            q = ca.MX.sym("q", 5 * n)
+            q = ca.MX.sym("q", unknowns)
             u = ca.MX.sym("u", 3, self.n_steps_u)
             delay = delay0 * (1 + q[3 * n : 4 * n])
             p = ca.vertcat(base["kp"] * (1 + q[0:n]), base["ki"] * (1 + q[n : 2 * n]),
                            base["kd"] * (1 + q[2 * n : 3 * n]), delay, q[4 * n : 5 * n],
-                           base["kpas"], base["bpas"])
+                           base["kpas"] * (1 + q[5 * n : 6 * n]),
+                           base["bpas"] * (1 + q[6 * n : 7 * n]))
             theta = rollout(u, p, delay_weights(delay, sizes))
-            seeds = ca.MX.sym("V", 5 * n, self.width)
+            seeds = ca.MX.sym("V", unknowns, self.width)
             sim = ca.Function("dec_sim", [q, u], [theta])
             # vec() of the (N, S) samples is sample-major: row s·N + j, as numpy ravels (S, N)
             dirs = ca.Function("dec_dirs", [q, u, seeds],
@@ -144,7 +147,7 @@ class FitProblem:
             return problem
 
     def simulate(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """(S, N) rad segment angles for unknowns q (5N,) and rollout input u."""
+        """(S, N) rad segment angles for unknowns q (7N,) and rollout input u."""
         return np.array(self.sim(q, u)).T
 
     def jacobian(self, q: np.ndarray, u: np.ndarray, columns: list[int]) -> np.ndarray:
@@ -152,7 +155,7 @@ class FitProblem:
         chunks = [columns[i : i + self.width] for i in range(0, len(columns), self.width)]
 
         def run(chunk):
-            seeds = np.zeros((5 * self.n, self.width))
+            seeds = np.zeros((PER_MODULE * self.n, self.width))
             seeds[chunk, range(len(chunk))] = 1.0
             return np.array(self.dirs(q, u, seeds))[:, : len(chunk)]
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
 from posture_id.fileio import JsonResult
+from posture_id.fitting.unknowns import PER_MODULE
 from posture_id.plotting import plot_fit
 
 __all__ = ["StageResult", "FitResult", "class_names"]
@@ -23,7 +24,7 @@ class StageResult:
     """One bounded least-squares stage.
 
     Attributes:
-        name: what the stage did. q: (5N,) unknowns at its end (see
+        name: what the stage did. q: (7N,) unknowns at its end (see
             :mod:`posture_id.fitting.unknowns`). cost: ½Σr² (deg²). status: scipy's.
         converged: met its tolerance. iterations: Jacobian evaluations. evaluations:
             residual evaluations. jacobian: (S·N, free) at the end (deg per unit).
@@ -42,8 +43,8 @@ class StageResult:
 
     @property
     def classes(self) -> str:
-        n = len(self.q) // 5
-        return class_names(np.sign(self.q[4 * n :]))
+        n = len(self.q) // PER_MODULE
+        return class_names(np.sign(self.q[4 * n : 5 * n]))
 
     def to_dict(self) -> dict:
         return {"name": self.name, "cost": self.cost, "status": self.status,

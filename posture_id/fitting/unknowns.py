@@ -1,28 +1,47 @@
 """The fit's vector of unknowns and the (N, 5) targets of MODEL §3: one conversion.
 
-q (5N,) is field-major: K̃p of every module (support upward), then K̃i, K̃d, Δ̃ and
-last the class values c; targets (N, 5) hold [K̃p, K̃i, K̃d, Δ̃, C] per module. The
-continuous part is q[:4N]; the classes are q[4N:].
+q (7N,) is field-major: K̃p of every module (support upward), then K̃i, K̃d, Δ̃, the class
+values c, and last the passive stiffness and damping K̃pas, B̃pas (normalised like the
+gains: p/p_default − 1; they stay at the defaults unless ``FitOptions.fit_passive``).
+Targets (N, 5) hold [K̃p, K̃i, K̃d, Δ̃, C] per module. The continuous part is q[:4N], the
+classes q[4N:5N], the passive terms q[5N:].
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["q_from_targets", "targets_from_q", "targets_from_qs"]
+__all__ = ["PER_MODULE", "q_from_targets", "targets_from_q", "targets_from_qs",
+           "passive_from_qs", "passive_normalised"]
+
+#: Unknowns per module in q.
+PER_MODULE = 7
 
 
-def q_from_targets(targets: np.ndarray) -> np.ndarray:
-    """(N, 5) targets → (5N,) q."""
-    return np.asarray(targets, dtype=float).T.ravel().copy()
+def q_from_targets(targets: np.ndarray, passive: np.ndarray | None = None) -> np.ndarray:
+    """(N, 5) targets and (N, 2) normalised passive terms (default 0) → (7N,) q."""
+    targets = np.asarray(targets, dtype=float)
+    passive = np.zeros((len(targets), 2)) if passive is None else np.asarray(passive, float)
+    return np.concatenate([targets.T.ravel(), passive.T.ravel()])
 
 
 def targets_from_q(q: np.ndarray) -> np.ndarray:
-    """(5N,) q → (N, 5) targets."""
+    """(7N,) q → (N, 5) targets."""
     return targets_from_qs(np.asarray(q)[None])[0]
 
 
 def targets_from_qs(qs: np.ndarray) -> np.ndarray:
-    """(B, 5N) unknown vectors → (B, N, 5) targets."""
+    """(B, 7N) unknown vectors → (B, N, 5) targets."""
     qs = np.asarray(qs, dtype=float)
-    return qs.reshape(len(qs), 5, -1).transpose(0, 2, 1)
+    return qs.reshape(len(qs), PER_MODULE, -1)[:, :5].transpose(0, 2, 1)
+
+
+def passive_from_qs(qs: np.ndarray) -> np.ndarray:
+    """(B, 7N) unknown vectors → (B, N, 2) normalised [K̃pas, B̃pas]."""
+    qs = np.asarray(qs, dtype=float)
+    return qs.reshape(len(qs), PER_MODULE, -1)[:, 5:].transpose(0, 2, 1)
+
+
+def passive_normalised(params, defaults) -> np.ndarray:
+    """(N, 2) [K̃pas, B̃pas] of :class:`~posture_id.dec.parameters.DecParameters`."""
+    return np.column_stack([params.array(f) / defaults.array(f) - 1 for f in ("kpas", "bpas")])

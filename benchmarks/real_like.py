@@ -26,6 +26,7 @@ interrupted run resumable.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import multiprocessing
 import os
@@ -141,7 +142,7 @@ def statistics(rows: list[dict], joints) -> dict:
     return out
 
 
-def markdown(stats: dict, joints, n_subjects: int, workers: int) -> str:
+def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict) -> str:
     lines = ["# People-like subjects: raw sway, locked least squares and the networks", "",
              f"{n_subjects} simulated TIP subjects, each under both stimuli (MODEL §5 "
              "parameters; motor noise scaled so that "
@@ -150,7 +151,10 @@ def markdown(stats: dict, joints, n_subjects: int, workers: int) -> str:
              "sensor noise). Errors are |identified / true − 1|, medians over subjects. "
              "E_rel: the identified parameters simulated without noise against the subject's "
              "noise-free (stimulus-locked) body sway. Made by `benchmarks/real_like.py` "
-             f"(posture_id {__version__}, {workers} subjects at a time, one thread each).", ""]
+             f"(posture_id {__version__}, {workers} subjects at a time, one thread each). "
+             "The networks were trained on motor-noisy data sets of "
+             + ", ".join(f"{m['trials']} trials ({k.replace('_', ' PRTS, ')})"
+                         for k, m in models.items()) + " (`make real-like-models`).", ""]
     for stimulus_key, spec in STIMULI.items():
         lines += [f"## PRTS {spec['states']} states × {spec['cycles']}", "",
                   "| method | every class right | Kp error (all modules) | Kp error "
@@ -188,11 +192,18 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
     parser.add_argument("--stimuli", nargs="+", choices=list(STIMULI), default=list(STIMULI),
                         help="PRTS lengths to run (default: both)")
+    parser.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
+                        help="methods to run (default: all)")
+    parser.add_argument("--reuse", type=Path,
+                        help="an earlier real_like.json of the same subjects and seed: the "
+                             "rows of the methods not run now are taken from it (e.g. the "
+                             "least-squares rows after retraining a network)")
     args = parser.parse_args()
     body = load_body()
     journal = args.out / "real_like.journal.jsonl"
     header = {"format": "posture_id-real-like-journal", "subjects": args.subjects,
-              "seed": args.seed, "body_sha256": body.sha256, "stimuli": args.stimuli}
+              "seed": args.seed, "body_sha256": body.sha256, "stimuli": args.stimuli,
+              "methods": args.methods}
     key = lambda r: (r["stimulus"], int(r["index"]), r["method"])  # noqa: E731
     done = read_journal(journal, header, key)
     tasks = []
@@ -201,10 +212,16 @@ def main() -> None:
         folders = {kind: str(args.models / f"real_{stimulus_key}_{kind}")
                    for kind in ("cnn", "frf")}
         for index, spec in enumerate(specs):
-            for method in METHODS:
+            for method in args.methods:
                 if (stimulus_key, index, method) not in done:
                     tasks.append((stimulus_key, index, spec, method, folders))
     rows = list(done.values())
+    if args.reuse is not None:
+        earlier = json.loads(args.reuse.read_text(encoding="utf-8"))
+        if (earlier["subjects"], earlier["seed"]) != (args.subjects, args.seed):
+            raise SystemExit(f"{args.reuse}: made for other subjects or another seed")
+        rows += [r for r in earlier["rows"]
+                 if r["method"] not in args.methods and r["stimulus"] in args.stimuli]
     total = len(rows) + len(tasks)
     print(f"{len(rows)} identifications journalled, {len(tasks)} to do", flush=True)
     os.environ.update({k: "1" for k in _THREADS})
@@ -222,11 +239,18 @@ def main() -> None:
     rows.sort(key=lambda r: (r["stimulus"], r["index"], METHODS.index(r["method"])))
     stats = statistics(rows, body.joint_names)
     args.out.mkdir(parents=True, exist_ok=True)
+    models = {}
+    for stimulus_key in args.stimuli:
+        for kind in ("cnn", "frf"):
+            sidecar = json.loads((args.models / f"real_{stimulus_key}_{kind}" / "model.json")
+                                 .read_text(encoding="utf-8"))
+            models[f"{stimulus_key}_{kind}"] = {"trials": sidecar["dataset"]["trials"],
+                                                "weights_sha256": sidecar["weights_sha256"]}
     atomic_write_text(args.out / "real_like.json", json_text(
         {"subjects": args.subjects, "seed": args.seed, "share_range": SHARE_RANGE,
-         "statistics": stats, "rows": rows}))
+         "models": models, "statistics": stats, "rows": rows}))
     atomic_write_text(args.out / "real_like.md",
-                      markdown(stats, body.joint_names, args.subjects, args.workers))
+                      markdown(stats, body.joint_names, args.subjects, args.workers, models))
     groups = {}
     for stimulus_key in STIMULI:
         for method in METHODS:

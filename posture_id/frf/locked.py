@@ -30,6 +30,7 @@ import numpy as np
 
 from posture_id.errors import PostureIdError
 from posture_id.frf.cycles import cycle_average, cycle_spans
+from posture_id.frf.response import check_analysis_options, samples_per_cycle
 
 __all__ = ["LockedOptions", "LockedProjection", "noise_levels"]
 
@@ -71,18 +72,9 @@ class LockedOptions:
     excited_threshold: float = 1e-3
 
     def __post_init__(self) -> None:
-        for name in ("drift_order", "skip_cycles", "neighbours"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise PostureIdError(f"locked {name} must be an integer ≥ 0, got {value!r}")
+        check_analysis_options(self, "locked", ("drift_order", "skip_cycles", "neighbours"))
         if self.neighbours < 1:
             raise PostureIdError("locked neighbours must be ≥ 1")
-        if not (math.isfinite(self.max_frequency_hz) and self.max_frequency_hz > 0):
-            raise PostureIdError(f"locked max_frequency_hz must be > 0, got "
-                                 f"{self.max_frequency_hz}")
-        if not (0 < self.excited_threshold < 1):
-            raise PostureIdError(f"locked excited_threshold must be in (0, 1), got "
-                                 f"{self.excited_threshold}")
 
 
 @dataclass(frozen=True)
@@ -119,11 +111,7 @@ class LockedProjection:
             start_s: where the periodic stimulus starts (after a lead-in), s.
         """
         options = options or LockedOptions()
-        samples = period_s * sample_rate_hz
-        p = int(round(samples))
-        if abs(samples - p) > 1e-6 * max(samples, 1.0):
-            raise PostureIdError(f"{source}: a stimulus cycle of {period_s:g} s is not a whole "
-                                 f"number of samples at {sample_rate_hz:g} Hz")
+        p = samples_per_cycle(period_s, sample_rate_hz, source)
         sway = np.asarray(sway, dtype=float)
         first = int(math.ceil(start_s * sample_rate_hz - 1e-9))
         offset, cycles = cycle_spans(len(sway) - first, p, options.skip_cycles, source)

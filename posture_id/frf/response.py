@@ -25,7 +25,33 @@ from posture_id.errors import PostureIdError
 from posture_id.fileio import JsonResult
 from posture_id.frf.cycles import cycle_average
 
-__all__ = ["FrfOptions", "FrequencyResponse", "frequency_response_arrays"]
+__all__ = ["FrfOptions", "FrequencyResponse", "frequency_response_arrays",
+           "check_analysis_options", "samples_per_cycle"]
+
+
+def samples_per_cycle(period_s: float, sample_rate_hz: float, source: str) -> int:
+    """P, the samples in one stimulus cycle; refused unless a whole number."""
+    samples = period_s * sample_rate_hz
+    p = int(round(samples))
+    if abs(samples - p) > 1e-6 * max(samples, 1.0):
+        raise PostureIdError(f"{source}: a stimulus cycle of {period_s:g} s is not a whole "
+                             f"number of samples at {sample_rate_hz:g} Hz")
+    return p
+
+
+def check_analysis_options(options, label: str, integer_fields: tuple[str, ...]) -> None:
+    """Refuse an options object whose ``integer_fields`` are not integers ≥ 0, whose
+    ``max_frequency_hz`` is not > 0 or whose ``excited_threshold`` is not in (0, 1)."""
+    for name in integer_fields:
+        value = getattr(options, name)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise PostureIdError(f"{label} {name} must be an integer ≥ 0, got {value!r}")
+    if not (math.isfinite(options.max_frequency_hz) and options.max_frequency_hz > 0):
+        raise PostureIdError(f"{label} max_frequency_hz must be > 0, got "
+                             f"{options.max_frequency_hz}")
+    if not (0 < options.excited_threshold < 1):
+        raise PostureIdError(f"{label} excited_threshold must be in (0, 1), got "
+                             f"{options.excited_threshold}")
 
 
 @dataclass(frozen=True)
@@ -49,15 +75,7 @@ class FrfOptions:
     excited_threshold: float = 1e-3
 
     def __post_init__(self) -> None:
-        for name in ("skip_cycles", "drift_order", "bands"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise PostureIdError(f"FRF {name} must be an integer ≥ 0, got {value!r}")
-        if not (math.isfinite(self.max_frequency_hz) and self.max_frequency_hz > 0):
-            raise PostureIdError(f"FRF max_frequency_hz must be > 0, got {self.max_frequency_hz}")
-        if not (0 < self.excited_threshold < 1):
-            raise PostureIdError("FRF excited_threshold must be in (0, 1), got "
-                                 f"{self.excited_threshold}")
+        check_analysis_options(self, "FRF", ("skip_cycles", "drift_order", "bands"))
 
 
 @dataclass(frozen=True)
@@ -134,11 +152,7 @@ def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate
     """FRFs of ``outputs`` (S, M) relative to ``tilt`` (S,), both rad, sampled evenly at
     ``sample_rate_hz`` from the stimulus's start; ``period_s``: one stimulus cycle."""
     options = options or FrfOptions()
-    samples = period_s * sample_rate_hz
-    p = int(round(samples))
-    if abs(samples - p) > 1e-6 * max(samples, 1.0):
-        raise PostureIdError(f"{source}: a stimulus cycle of {period_s:g} s is not a whole "
-                             f"number of samples at {sample_rate_hz:g} Hz")
+    p = samples_per_cycle(period_s, sample_rate_hz, source)
     y = np.asarray(outputs, dtype=float)
     u = np.asarray(tilt, dtype=float)
     if y.ndim != 2 or len(u) != len(y) or y.shape[1] != len(channels):

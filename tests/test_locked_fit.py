@@ -168,3 +168,26 @@ def test_passive_stiffness_and_damping_are_fitted_when_asked(tip):
                                 ("hip", "kpas", 45.0)):
         assert getattr(fitted.parameters[joint], field) == pytest.approx(value, rel=0.01)
     assert fitted.rms_deg < 1e-3 < fixed.rms_deg
+
+
+def test_a_stimulus_time_offset_is_found_and_fitted(tip):
+    """The platform followed its command 60 ms late and the lab did not say so: with the
+    offset fitted, the parameters come back; without, they do not."""
+    truth = default_parameters(tip)
+    named = prts(states=80, cycles=3)
+    late = named.delayed(0.06)
+    np.testing.assert_allclose(late.angle(np.array([0.0, 10.06, 30.0])),
+                               named.angle(np.array([-0.06, 10.0, 29.94])), atol=1e-15)
+    sway = simulate(tip, truth, late).to_recording()
+    cut = slice(0, int(round(named.duration * 50)) + 1)  # the lab records the named 60 s
+    rec = Recording(sway.time[cut], named.angle(sway.time[cut]), sway.theta[cut],
+                    sway.segments)
+    found = fit_recording(rec, tip, options=FitOptions(
+        classes=FixedClasses(), locked=LockedOptions(weighted=False, max_offset_s=0.2)),
+        stimulus=named)
+    assert found.time_offset_s == pytest.approx(0.06, abs=0.002)
+    assert np.abs(found.normalised[:, [0, 2]]).max() < 0.02
+    assert found.to_dict()["status"]["time_offset_s"] == found.time_offset_s
+    ignored = fit_recording(rec, tip, options=FitOptions(
+        classes=FixedClasses(), locked=LockedOptions(weighted=False)), stimulus=named)
+    assert np.abs(ignored.normalised[:, [0, 2, 3]]).max() > 0.05

@@ -55,7 +55,7 @@ def add_parser(sub) -> None:
 
 def add_search_arguments(parser: argparse.ArgumentParser) -> None:
     """What the fit compares and where it searches: --locked [--max-frequency-hz
-    --prior-sd], --fit-passive, --gain-range and --delay-range (multiples of the
+    --max-offset-s --prior-sd], --fit-passive, --gain-range and --delay-range (multiples of the
     defaults)."""
     parser.add_argument("--locked", action="store_true",
                         help="fit only the stimulus-locked sway (cycle average without offset "
@@ -65,6 +65,9 @@ def add_search_arguments(parser: argparse.ArgumentParser) -> None:
                         default=default_of(LockedOptions, "max_frequency_hz"),
                         help="--locked: highest stimulated frequency compared "
                              "(default %(default)g Hz)")
+    parser.add_argument("--max-offset-s", type=non_negative_float, default=0.0,
+                        help="--locked: also fit a time offset of the stimulus within ±this "
+                             "(a platform lag nobody measured; default 0: none)")
     parser.add_argument("--prior-sd", type=positive_float,
                         help="--locked: maximum a posteriori with a Gaussian prior of this SD "
                              "on every normalised gain and delay, centred on the defaults "
@@ -86,9 +89,10 @@ def add_search_arguments(parser: argparse.ArgumentParser) -> None:
 def search_keywords(args: argparse.Namespace) -> dict:
     """FitOptions keywords of --locked, --prior-sd, --fit-passive, --gain-range and
     --delay-range (bounds normalised: factor − 1)."""
-    if args.prior_sd is not None and not args.locked:
-        raise PostureIdError("--prior-sd goes with --locked (residuals in units of the noise)")
-    out = {"locked": (LockedOptions(max_frequency_hz=args.max_frequency_hz) if args.locked
+    if (args.prior_sd is not None or args.max_offset_s) and not args.locked:
+        raise PostureIdError("--prior-sd and --max-offset-s go with --locked")
+    out = {"locked": (LockedOptions(max_frequency_hz=args.max_frequency_hz,
+                                    max_offset_s=args.max_offset_s) if args.locked
                       else None),
            "prior_sd": args.prior_sd, "fit_passive": args.fit_passive}
     for flag, key in (("--gain-range", "gain_bounds"), ("--delay-range", "delay_bounds")):

@@ -54,6 +54,7 @@ from posture_id.fitting.options import (
     ExhaustiveClasses,
     FitError,
     FitOptions,
+    FixedClasses,
     RelaxedClasses,
 )
 from posture_id.fitting.prepare import prepare_recording
@@ -194,7 +195,7 @@ def fit_recording(
                                 bpas=float(defaults[joint].bpas * (1 + best.q[6 * n + i])))
     se_norm, se_phys, poorly = _standard_errors(best, params, defaults, options, n)
     fitted = problem.simulate(best.q, u)
-    return FitResult(
+    result = FitResult(
         parameters=params, normalised=normalised, standard_errors=se_phys,
         standard_errors_normalised=se_norm, poorly_determined=poorly,
         converged=best.converged, iterations=sum(s.iterations for s in stages),
@@ -206,6 +207,32 @@ def fit_recording(
         recorded=measured, fitted=fitted, segments=body.segment_names,
         joints=body.joint_names, provenance=provenance(options, body, source=source),
     )
+    if options.locked is None or options.locked.max_offset_s == 0:
+        return result
+    # the stimulus's time offset: the one that best aligns the fitted locked sway with the
+    # recorded one, then the fit again with the stimulus shifted by it (classes kept);
+    # repeated while the offset still moves by a millisecond or more (at most 4 times)
+    offset, fit = 0.0, result
+    fixed = replace(options, classes=FixedClasses(),
+                    locked=replace(options.locked, max_offset_s=0.0))
+    for _ in range(4):
+        step = target.projection.best_offset(np.degrees(fit.fitted), np.degrees(measured),
+                                             options.locked.max_offset_s)
+        if abs(step) < 1e-3 or abs(offset + step) > options.locked.max_offset_s:
+            break
+        offset += step
+        say(f"stimulus time offset {1000 * offset:+.0f} ms; fitting again with it")
+        shifted = stim.delayed(offset)
+        aligned = Recording(recording.time, shifted.angle(recording.time), recording.theta,
+                            recording.segments)
+        again = fit_recording(aligned, body, fit.parameters, fixed, progress, source,
+                              stimulus=shifted)
+        fit = replace(again, stages=fit.stages + again.stages,
+                      iterations=fit.iterations + again.iterations,
+                      evaluations=fit.evaluations + again.evaluations)
+    return replace(fit, time_offset_s=offset, wall_time_s=time.perf_counter() - start,
+                   notices=tuple(dict.fromkeys(result.notices + fit.notices)),
+                   time=result.time, recorded=result.recorded, provenance=result.provenance)
 
 
 def _target(recording: Recording, stimulus: TiltProfile, options: FitOptions,

@@ -68,6 +68,8 @@ class FitResult(JsonResult):
         stages: every stage. backend: how CasADi ran. notices: things to know.
         time (S,) s, recorded and fitted (S, N) rad; segments, joints: names.
         provenance: package version, options and the body's identity.
+        time_offset_s: the stimulus's fitted time offset, s (0 unless
+            ``LockedOptions.max_offset_s`` asked for one).
     """
 
     parameters: DecParameters
@@ -90,6 +92,7 @@ class FitResult(JsonResult):
     segments: tuple[str, ...] = ()
     joints: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
+    time_offset_s: float = 0.0
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -111,6 +114,7 @@ class FitResult(JsonResult):
                 "converged": self.converged, "iterations": self.iterations,
                 "evaluations": self.evaluations, "wall_time_s": self.wall_time_s,
                 "cost_deg2": self.cost, "rms_deg": self.rms_deg, "backend": self.backend,
+                "time_offset_s": self.time_offset_s,
                 "stages": [s.to_dict() for s in self.stages],
             },
             "notices": list(self.notices),
@@ -136,7 +140,9 @@ class FitResult(JsonResult):
             lines.append(f"{'':<8}{errs}")
         status = "converged" if self.converged else "NOT converged"
         lines.append(f"{status} in {self.iterations} iterations, {self.wall_time_s:.1f} s, "
-                     f"residual RMS {self.rms_deg:.5f}° ({self.backend})")
+                     f"residual RMS {self.rms_deg:.5f}° ({self.backend})"
+                     + (f"; stimulus offset {1000 * self.time_offset_s:+.0f} ms"
+                        if self.time_offset_s else ""))
         lines += [f"note: {n}" for n in self.notices]
         return "\n".join(lines)
 

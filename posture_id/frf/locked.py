@@ -62,6 +62,10 @@ class LockedOptions:
             noise level of a harmonic.
         excited_threshold: a harmonic is excited when the tilt's amplitude there exceeds
             this share of its largest.
+        max_offset_s: > 0: also fit a time offset of the stimulus within ±this (a
+            platform lag, or clocks that are not in step): after the fit the offset that
+            best aligns the fitted and the recorded locked sway is found, and the fit is
+            repeated with the stimulus shifted by it. 0 (default): none.
     """
 
     drift_order: int = 1
@@ -70,9 +74,13 @@ class LockedOptions:
     weighted: bool = True
     neighbours: int = 3
     excited_threshold: float = 1e-3
+    max_offset_s: float = 0.0
 
     def __post_init__(self) -> None:
         check_analysis_options(self, "locked", ("drift_order", "skip_cycles", "neighbours"))
+        if not (math.isfinite(self.max_offset_s) and 0 <= self.max_offset_s <= 1.0):
+            raise PostureIdError(f"locked max_offset_s must be in [0, 1] s, got "
+                                 f"{self.max_offset_s}")
         if self.neighbours < 1:
             raise PostureIdError("locked neighbours must be ≥ 1")
 
@@ -147,6 +155,17 @@ class LockedProjection:
     def spectrum(self, x: np.ndarray) -> np.ndarray:
         """(K, ...) complex: the compared harmonics of a sway (S, ...), not weighted."""
         return self._spectrum(x)[self.harmonics - 1]
+
+    def best_offset(self, fitted: np.ndarray, recorded: np.ndarray, max_offset_s: float,
+                    step_s: float = 0.001) -> float:
+        """s, the stimulus offset τ in [−max, max] that minimises the weighted distance of
+        the fitted locked sway delayed by τ (its harmonics times e^{−2πifτ}) from the
+        recorded one; ``fitted``, ``recorded``: (S, M) in the recording's units."""
+        a, b = self.spectrum(fitted), self.spectrum(recorded)  # (K, M)
+        taus = np.arange(-max_offset_s, max_offset_s + step_s / 2, step_s)
+        shift = np.exp(-2j * np.pi * np.outer(taus, self.frequencies_hz))  # (T, K)
+        cost = (np.abs((shift[:, :, None] * a[None] - b[None]) / self.noise[None]) ** 2)
+        return float(taus[np.argmin(cost.sum(axis=(1, 2)))])
 
     def apply(self, x: np.ndarray) -> np.ndarray:
         """(2K, ...) real: the weighted stimulus-locked harmonics of ``x`` (S, M, ...)

@@ -79,6 +79,24 @@ class TiltProfile:
         inside = (idx >= 0) & (idx < len(slopes))
         return np.where(inside, slopes[np.clip(idx, 0, len(slopes) - 1)], 0.0)
 
+    def delayed(self, offset_s: float) -> TiltProfile:
+        """The same tilt ``offset_s`` later (earlier when negative), over the same duration:
+        the knots move, the tilt before the first one is the first angle, what moves
+        outside [0, duration] is cut. The
+        periodic part is still counted from where it started (``periodic_from_s``): a small
+        offset does not cost a whole cycle of analysis, and the cycle average of a periodic
+        response does not depend on where its cycles are cut."""
+        if not math.isfinite(offset_s):
+            raise StimulusError(f"a time offset must be finite, got {offset_s}")
+        times = self.times + offset_s
+        end = self.duration
+        keep = (times > 1e-12) & (times < end - 1e-12)
+        return TiltProfile(np.concatenate([[0.0], times[keep], [end]]),
+                           np.interp(np.concatenate([[0.0], times[keep], [end]]) - offset_s,
+                                     self.times, self.angles),
+                           f"{self.description}, offset {offset_s:+.3f} s", self.period_s,
+                           self.periodic_from_s)
+
     def on_grid(self, dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
         """Tilt and tilt velocity at t = n·dt, n = 0..n_steps → two (n_steps + 1,) arrays."""
         t = np.arange(n_steps + 1) * dt

@@ -77,11 +77,11 @@ model: $(STAMP)
 # (level drawn per trial from [0, 0.8]°) and 0.05° sensor noise, a spectrogram CNN and an
 # FRF network trained on it; then the benchmark of raw-sway and locked least squares and
 # the two networks, into docs/results/real_like.*.
-# (36 000 trials for the 242-state PRTS, 12 000 for the 80-state one: docs/real_recordings.md)
-REAL_TRIALS ?= 12000
+# (36 000 trials per PRTS: docs/real_recordings.md)
+REAL_TRIALS ?= 36000
 real-like-models: $(STAMP)
 	$(MAKE) real-like-model STATES=242 CYCLES=2 REAL_TRIALS=36000
-	$(MAKE) real-like-model STATES=80 CYCLES=6 REAL_TRIALS=12000
+	$(MAKE) real-like-model STATES=80 CYCLES=6 REAL_TRIALS=36000
 
 real-like-model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(REAL_TRIALS) --states $(STATES) \

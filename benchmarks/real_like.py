@@ -220,8 +220,11 @@ def main() -> None:
         earlier = json.loads(args.reuse.read_text(encoding="utf-8"))
         if (earlier["subjects"], earlier["seed"]) != (args.subjects, args.seed):
             raise SystemExit(f"{args.reuse}: made for other subjects or another seed")
-        rows += [r for r in earlier["rows"]
-                 if r["method"] not in args.methods and r["stimulus"] in args.stimuli]
+        reused = [r for r in earlier["rows"]
+                  if r["method"] not in args.methods and r["stimulus"] in args.stimuli]
+        for r in reused:  # JSON writes an infinite E_rel (the body fell) as null
+            r["e_rel"] = math.inf if r["e_rel"] is None else r["e_rel"]
+        rows += reused
     total = len(rows) + len(tasks)
     print(f"{len(rows)} identifications journalled, {len(tasks)} to do", flush=True)
     os.environ.update({k: "1" for k in _THREADS})

@@ -104,7 +104,7 @@ def _one(task: tuple) -> dict:
     else:
         params = nets["frf"].identify(rec).parameters
     seconds = time.perf_counter() - start
-    again = simulate(body, params, stim, options=None)
+    again = simulate(body, params, stim)
     reference = subject.locked.alpha[:, 0]
     got = again.alpha[: len(reference), 0]
     e_rel = (math.inf if not np.all(np.isfinite(got))

@@ -5,7 +5,9 @@ Run:  .venv/bin/python benchmarks/why_raw_sway_fails.py
 
 A TIP subject with the default parameters, 6 cycles of the 80-state PRTS (120 s), motor
 noise scaled so that 15 % of its body COM sway's variance is stimulus-locked, 0.05° sensor
-noise. Both fits start from the defaults with the classes relaxed. Writes
+noise. Both fits start from the defaults with the classes relaxed. For the locked fit also
+its Gauss-Newton standard errors of Kp (normalised) and its χ² at its answer and at the
+truth. Writes
 docs/results/why_raw_sway_fails.{png,json}.
 """
 
@@ -50,16 +52,25 @@ def main() -> None:
                                   / np.linalg.norm(locked_com)),
             "raw_variance_explained": float(1 - np.var(com - fits[label]) / np.var(com)),
         }
+        if locked is not None:
+            # how well the data determine the gains, and whether the fit's answer explains
+            # the locked sway worse than the truth does (χ² in units of the noise)
+            weighted = LockedProjection.for_recording(
+                rec.tilt, np.degrees(rec.theta), rec.sample_rate_hz, stim.period_s,
+                stim.periodic_from_s, locked)
+            at_truth = weighted.apply(np.degrees(subject.locked.theta - rec.theta))
+            numbers[label].update(
+                kp_standard_error=fit.standard_errors_normalised[:, 0].tolist(),
+                chi2_at_fit=2 * fit.cost, chi2_at_truth=float((at_truth**2).sum()),
+                residuals=int(at_truth.size))
     projection = LockedProjection.for_recording(rec.tilt, com[:, None], rec.sample_rate_hz,
                                                 stim.period_s, options=LockedOptions(
                                                     max_frequency_hz=10.0))
-    spectrum = np.abs(projection._spectrum(com))
+    spectrum = np.abs(projection.all_harmonics(com))
     p = projection.period
     freqs = np.arange(1, p // 2 + 1) * rec.sample_rate_hz / p
-    excited = np.zeros(len(freqs), dtype=bool)
-    excited[projection.harmonics - 1] = True
     plot_locked_sway(rec.time, com, np.degrees(subject.locked.alpha[:, 0]), fits, freqs,
-                     spectrum, excited, projection.noise[:, 0],
+                     spectrum, projection.excited, projection.noise[:, 0],
                      path=OUT / "why_raw_sway_fails.png",
                      title=f"one subject, {100 * subject.locked_share:.0f} % of its sway "
                            "locked to the stimulus (80-state PRTS × 6)")

@@ -191,3 +191,17 @@ def test_a_stimulus_time_offset_is_found_and_fitted(tip):
     ignored = fit_recording(rec, tip, options=FitOptions(
         classes=FixedClasses(), locked=LockedOptions(weighted=False)), stimulus=named)
     assert np.abs(ignored.normalised[:, [0, 2, 3]]).max() > 0.05
+
+
+def test_a_batch_of_residuals_equals_them_one_by_one():
+    """The warm start's finite differences project every perturbed sway at once."""
+    from posture_id.fitting.evaluators import LockedResidual, SwayResidual
+
+    stim, t, tilt = _tilt(cycles=3)
+    rng = np.random.default_rng(2)
+    projection = LockedProjection.for_recording(tilt, rng.standard_normal((len(t), 3)), RATE,
+                                                stim.period_s)
+    batch = rng.standard_normal((5, len(t), 3))
+    for target in (LockedResidual(projection), SwayResidual()):
+        one_by_one = np.stack([target.values(d) for d in batch])
+        np.testing.assert_allclose(target.many(batch), one_by_one, rtol=0, atol=1e-12)

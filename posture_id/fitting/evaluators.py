@@ -11,16 +11,15 @@ simulator with forward differences: a cheap warm start). What is compared is a
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from posture_id.bodies.body import Body
-from posture_id.dec.parameters import DecParameters, denormalise_arrays
+from posture_id.dec.parameters import DecParameters
 from posture_id.fitting.problem import FitProblem
 from posture_id.fitting.result import StageResult
-from posture_id.fitting.unknowns import passive_from_qs, targets_from_qs
+from posture_id.fitting.unknowns import parameters_from_qs
 from posture_id.frf.locked import LockedProjection
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate_batch
@@ -40,6 +39,10 @@ class SwayResidual:
         """(S, N) deg → (R,) residual."""
         return difference_deg.ravel()
 
+    def many(self, differences_deg: np.ndarray) -> np.ndarray:
+        """(B, S, N) deg → (B, R): :meth:`values` of each, at once."""
+        return differences_deg.reshape(len(differences_deg), -1)
+
     def columns(self, jacobian_deg: np.ndarray) -> np.ndarray:
         """(S, N, P) ∂θ/∂q (deg) → (R, P) Jacobian of :meth:`values`."""
         return jacobian_deg.reshape(-1, jacobian_deg.shape[-1])
@@ -54,6 +57,11 @@ class LockedResidual(SwayResidual):
 
     def values(self, difference_deg):
         return self.projection.apply(difference_deg).ravel()
+
+    def many(self, differences_deg):
+        # the projection takes trailing channels: (S, N, B) → (2K, N, B)
+        out = self.projection.apply(np.moveaxis(differences_deg, 0, -1))
+        return np.moveaxis(out, -1, 0).reshape(len(differences_deg), -1)
 
     def columns(self, jacobian_deg):
         return self.projection.apply(jacobian_deg).reshape(-1, jacobian_deg.shape[-1])
@@ -148,10 +156,7 @@ class SimulatorEvaluator(Evaluator):
         self.limit = math.radians(MAX_SWAY_LIMIT_DEG)
 
     def _simulate_many(self, qs: np.ndarray) -> np.ndarray:
-        params = denormalise_arrays(targets_from_qs(qs), self.defaults)
-        passive = passive_from_qs(qs)
-        params = replace(params, kpas=params.kpas * (1 + passive[..., 0]),
-                         bpas=params.bpas * (1 + passive[..., 1]))
+        params = parameters_from_qs(qs, self.defaults)
         batch = simulate_batch(self.body, params, self.stimulus, self.options, workers=1)
         theta = batch.theta[:, : len(self.measured)]
         return np.where(np.isnan(theta), self.limit, theta)
@@ -169,7 +174,7 @@ class SimulatorEvaluator(Evaluator):
         qs[rows[over], free[over]] -= 2 * self.STEP
         steps = np.where(over, -self.STEP, self.STEP)
         theta = self._simulate_many(qs)
-        r = np.stack([self.target.values((t - self.measured) * _DEG) for t in theta])
+        r = self.target.many((theta - self.measured[None]) * _DEG)
         return ((r - residual[None]) / steps[:, None]).T
 
 

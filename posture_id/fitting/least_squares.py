@@ -39,7 +39,6 @@ from posture_id.bodies.body import Body
 from posture_id.dec.parameters import (
     TARGET_FIELDS,
     DecParameters,
-    denormalise,
     normalise,
 )
 from posture_id.dec.prior import relative_factors
@@ -61,7 +60,12 @@ from posture_id.fitting.prepare import prepare_recording
 from posture_id.fitting.problem import FitProblem
 from posture_id.fitting.result import FitResult, StageResult, class_names
 from posture_id.fitting.symbolic import step_inputs
-from posture_id.fitting.unknowns import passive_normalised, q_from_targets, targets_from_q
+from posture_id.fitting.unknowns import (
+    parameters_from_qs,
+    passive_normalised,
+    q_from_targets,
+    targets_from_q,
+)
 from posture_id.frf.locked import LockedProjection
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
@@ -189,10 +193,7 @@ def fit_recording(
                      options.polish_iterations if options.warm_start else options.max_iterations)
 
     normalised = targets_from_q(best.q)
-    params = denormalise(normalised, defaults)
-    for i, joint in enumerate(body.joint_names):
-        params = params.replace(joint, kpas=float(defaults[joint].kpas * (1 + best.q[5 * n + i])),
-                                bpas=float(defaults[joint].bpas * (1 + best.q[6 * n + i])))
+    params = parameters_from_qs(best.q[None], defaults).trial(0, body.joint_names)
     se_norm, se_phys, poorly = _standard_errors(best, params, defaults, options, n)
     fitted = problem.simulate(best.q, u)
     result = FitResult(

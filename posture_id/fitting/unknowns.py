@@ -9,10 +9,14 @@ classes q[4N:5N], the passive terms q[5N:].
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
+from posture_id.dec.parameters import DecParameters, ParameterArrays, denormalise_arrays
+
 __all__ = ["PER_MODULE", "q_from_targets", "targets_from_q", "targets_from_qs",
-           "passive_from_qs", "passive_normalised"]
+           "passive_from_qs", "passive_normalised", "parameters_from_qs"]
 
 #: Unknowns per module in q.
 PER_MODULE = 7
@@ -40,6 +44,15 @@ def passive_from_qs(qs: np.ndarray) -> np.ndarray:
     """(B, 7N) unknown vectors → (B, N, 2) normalised [K̃pas, B̃pas]."""
     qs = np.asarray(qs, dtype=float)
     return qs.reshape(len(qs), PER_MODULE, -1)[:, 5:].transpose(0, 2, 1)
+
+
+def parameters_from_qs(qs: np.ndarray, defaults: DecParameters) -> ParameterArrays:
+    """(B, 7N) unknown vectors → the parameters they stand for, passive terms included
+    (classes as they are: ±1, or a relaxed value in between)."""
+    params = denormalise_arrays(targets_from_qs(qs), defaults)
+    passive = passive_from_qs(qs)
+    return replace(params, kpas=params.kpas * (1 + passive[..., 0]),
+                   bpas=params.bpas * (1 + passive[..., 1]))
 
 
 def passive_normalised(params, defaults) -> np.ndarray:

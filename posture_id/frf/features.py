@@ -61,16 +61,11 @@ def frf_features(tilt: np.ndarray, sway: np.ndarray, sample_rate_hz: float, peri
     sway = np.asarray(sway, dtype=float)
     b, s, n = sway.shape
     projection = _projection(np.asarray(tilt, dtype=float), sample_rate_hz, period_s, start_s)
-    u = projection._spectrum(np.asarray(tilt, dtype=float))  # (P/2,)
-    y = projection._spectrum(np.moveaxis(sway, 1, 0).reshape(s, b * n))  # (P/2, B·N)
-    excited = np.zeros(len(u), dtype=bool)
-    excited[projection.harmonics - 1] = True
-    # every harmonic the stimulus excites is excited; the rest are empty (noise only)
-    amplitude = np.abs(u)
-    excited |= amplitude > _OPTIONS.excited_threshold * amplitude.max()
+    u = projection.all_harmonics(np.asarray(tilt, dtype=float))  # (P/2,)
+    y = projection.all_harmonics(np.moveaxis(sway, 1, 0).reshape(s, b * n))  # (P/2, B·N)
     rows = projection.harmonics - 1
     h = y[rows] / u[rows, None]  # (F, B·N)
-    noise = noise_levels(np.abs(y) ** 2, excited, rows, _OPTIONS.neighbours)
+    noise = noise_levels(np.abs(y) ** 2, projection.excited, rows, _OPTIONS.neighbours)
     with np.errstate(divide="ignore"):
         log_noise = np.log10(np.maximum(noise / np.abs(u[rows, None]), 1e-12))
     out = np.stack([h.real, h.imag, log_noise])  # (3, F, B·N)

@@ -32,7 +32,17 @@ from posture_id.errors import PostureIdError
 from posture_id.frf.cycles import cycle_average, cycle_spans
 from posture_id.frf.response import check_analysis_options, samples_per_cycle
 
-__all__ = ["LockedOptions", "LockedProjection", "noise_levels"]
+__all__ = ["LockedOptions", "LockedProjection", "noise_levels", "cycle_spectrum"]
+
+
+def cycle_spectrum(x: np.ndarray, start: int, period: int, cycles: int,
+                   drift_order: int) -> np.ndarray:
+    """(P/2, ...) complex DFT (÷P) at harmonics 1..P/2 of the cycle average of ``cycles``
+    cycles of ``period`` samples of ``x`` (S, ...) from ``start``, drift of
+    ``drift_order`` removed."""
+    span = x[start : start + cycles * period]
+    mean = cycle_average(span, period, 0, drift_order).mean
+    return np.fft.rfft(mean, axis=0)[1 : period // 2 + 1] / period
 
 
 def noise_levels(power: np.ndarray, excited: np.ndarray, rows: np.ndarray,
@@ -91,8 +101,9 @@ class LockedProjection:
 
     Attributes:
         start: first analysed sample. period: P, samples per cycle. cycles: C analysed.
-        drift_order: the drift removed. harmonics: (K,) indices k of the compared
-        harmonics (frequency k/(P·dt)). frequencies_hz: (K,). noise: (K, M) the noise
+        drift_order: the drift removed. excited: (P/2,) bool, the harmonics 1..P/2 the
+        stimulus excites. harmonics: (K,) indices k of the compared harmonics (frequency
+        k/(P·dt)). frequencies_hz: (K,). noise: (K, M) the noise
         level σ (SD of the real and of the imaginary part) of each harmonic of each of the
         M channels of the recording it was made for (ones when unweighted), in the
         recording's units.
@@ -102,6 +113,7 @@ class LockedProjection:
     period: int
     cycles: int
     drift_order: int
+    excited: np.ndarray
     harmonics: np.ndarray
     frequencies_hz: np.ndarray
     noise: np.ndarray
@@ -123,19 +135,22 @@ class LockedProjection:
         sway = np.asarray(sway, dtype=float)
         first = int(math.ceil(start_s * sample_rate_hz - 1e-9))
         offset, cycles = cycle_spans(len(sway) - first, p, options.skip_cycles, source)
-        drift = options.drift_order if cycles >= 2 else 0
-        base = cls(first + offset, p, cycles, drift, np.arange(1, p // 2 + 1),
-                   np.arange(1, p // 2 + 1) * sample_rate_hz / p, np.ones((p // 2, 1)))
-        u = np.abs(base._spectrum(np.asarray(tilt, dtype=float)))
+        start, drift = first + offset, options.drift_order if cycles >= 2 else 0
+
+        def spectrum(x: np.ndarray) -> np.ndarray:
+            return cycle_spectrum(x, start, p, cycles, drift)
+
+        u = np.abs(spectrum(np.asarray(tilt, dtype=float)))
         excited = u > options.excited_threshold * u.max()
-        keep = excited & (base.frequencies_hz <= options.max_frequency_hz)
+        frequencies = np.arange(1, p // 2 + 1) * sample_rate_hz / p
+        keep = excited & (frequencies <= options.max_frequency_hz)
         if not keep.any():
             raise PostureIdError(f"{source}: the tilt excites no frequency up to "
                                  f"{options.max_frequency_hz:g} Hz")
         channels = sway.reshape(len(sway), -1).shape[1]
         noise = np.ones((int(keep.sum()), channels))
         if options.weighted:
-            power = np.abs(base._spectrum(sway.reshape(len(sway), -1))) ** 2  # (P/2, M)
+            power = np.abs(spectrum(sway.reshape(len(sway), -1))) ** 2  # (P/2, M)
             if excited.all():
                 raise PostureIdError(f"{source}: the stimulus excites every harmonic; the "
                                      "noise cannot be told apart (use weighted=False)")
@@ -143,18 +158,17 @@ class LockedProjection:
             # a harmonic can never be trusted more than 100× the median one
             floor = 0.01 * np.median(noise, axis=0)
             noise = np.maximum(noise, np.where(floor > 0, floor, 1.0))
-        return cls(base.start, p, cycles, drift, np.flatnonzero(keep) + 1,
-                   base.frequencies_hz[keep], noise)
+        return cls(start, p, cycles, drift, excited, np.flatnonzero(keep) + 1,
+                   frequencies[keep], noise)
 
-    def _spectrum(self, x: np.ndarray) -> np.ndarray:
-        """(P/2, ...) complex DFT (÷P) of the drift-free cycle average at harmonics 1..P/2."""
-        span = x[self.start : self.start + self.cycles * self.period]
-        mean = cycle_average(span, self.period, 0, self.drift_order).mean
-        return np.fft.rfft(mean, axis=0)[1 : self.period // 2 + 1] / self.period
+    def all_harmonics(self, x: np.ndarray) -> np.ndarray:
+        """(P/2, ...) complex DFT (÷P) of the drift-free cycle average of ``x`` (S, ...) at
+        every harmonic 1..P/2, compared or not."""
+        return cycle_spectrum(x, self.start, self.period, self.cycles, self.drift_order)
 
     def spectrum(self, x: np.ndarray) -> np.ndarray:
         """(K, ...) complex: the compared harmonics of a sway (S, ...), not weighted."""
-        return self._spectrum(x)[self.harmonics - 1]
+        return self.all_harmonics(x)[self.harmonics - 1]
 
     def best_offset(self, fitted: np.ndarray, recorded: np.ndarray, max_offset_s: float,
                     step_s: float = 0.001) -> float:

@@ -37,13 +37,12 @@ from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError, NetworkConfig
 from posture_id.learning.prediction import predict_images
-from posture_id.learning.samples import SplitSamples
+from posture_id.learning.samples import SplitSamples, stimulus_of
 from posture_id.plotting import plot_identification_error, plot_parameter_errors
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.options import SimulationOptions
-from posture_id.simulation.stimulus import prts
 
 __all__ = ["SplitMetrics", "EvaluationReport", "evaluate", "split_metrics"]
 
@@ -299,7 +298,7 @@ def _identification(model, data: Dataset, samples: SplitSamples, predicted: np.n
         raise LearningError(f"{manifest['body']['urdf']}: the body file changed since the data "
                             "set was made; E_id needs the same body")
     stim = manifest["stimulus"]
-    stimulus = prts(stim["amplitude_deg"], stim["cycles"], stim["states"])
+    stimulus = stimulus_of(stim)
     options = SimulationOptions(**manifest["options"])
     truth = samples.trial_parameters()
     count = min(count, truth.n_trials)

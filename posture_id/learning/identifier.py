@@ -35,9 +35,10 @@ from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
 from posture_id.learning.prediction import predict_images
+from posture_id.learning.samples import stimulus_of
 from posture_id.provenance import body_identity, provenance
 from posture_id.recording import Recording
-from posture_id.simulation.stimulus import prts, recognise_prts, sample_rate_hint
+from posture_id.simulation.stimulus import recognise_prts, sample_rate_hint
 
 __all__ = ["CnnIdentifier", "CnnIdentification"]
 
@@ -108,7 +109,7 @@ class CnnIdentifier:
                              "body's m·g·h",)
         stim = sidecar.get("stimulus", {})
         self.stimulus = stim
-        self.profile = prts(stim["amplitude_deg"], stim["cycles"], stim["states"])
+        self.profile = stimulus_of(stim)
         self.n_samples = int(round(self.profile.duration * FS_HZ)) + 1
         self.defaults = default_parameters(body)
         #: the trained stimulus at the sample times (rad), what a recording's tilt must be

@@ -27,23 +27,22 @@ from posture_id.frf.features import frf_features
 from posture_id.learning.config import Layout, LearningError
 from posture_id.simulation.stimulus import TiltProfile, prts
 
-__all__ = ["Standardiser", "SplitSamples", "dataset_stimulus", "frf_inputs"]
+__all__ = ["Standardiser", "SplitSamples", "stimulus_of", "frf_inputs"]
 
 #: Second word of the seed of the sensor noise added to a shard's sway for FRF features.
 FRF_NOISE_STREAM = 0x465246
 
 
-def dataset_stimulus(data: Dataset) -> TiltProfile:
-    """The PRTS a data set was simulated with."""
-    s = data.manifest["stimulus"]
-    return prts(s["amplitude_deg"], s["cycles"], s["states"])
+def stimulus_of(entry: dict) -> TiltProfile:
+    """The PRTS of a data-set manifest's (or a model sidecar's) ``"stimulus"`` entry."""
+    return prts(entry["amplitude_deg"], entry["cycles"], entry["states"])
 
 
 def frf_inputs(data: Dataset, arrays: dict[str, np.ndarray], k: int) -> np.ndarray:
     """(K, 3N, 1, F) FRF features of every used trial of shard ``k`` (``arrays``): its
     stored sway plus white sensor noise of the trial's ``sensor_noise_deg``, drawn from
     ``SeedSequence([k, FRF_NOISE_STREAM])``."""
-    stimulus = dataset_stimulus(data)
+    stimulus = stimulus_of(data.manifest["stimulus"])
     rate = float(data.manifest["options"]["sample_rate_hz"])
     theta = arrays["theta"].astype(np.float64)
     rng = np.random.default_rng(np.random.SeedSequence([k, FRF_NOISE_STREAM]))

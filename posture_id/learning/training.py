@@ -42,7 +42,7 @@ from posture_id.learning.config import (
     TrainingConfig,
 )
 from posture_id.learning.network import IdentifierNetwork
-from posture_id.learning.samples import SplitSamples, Standardiser, dataset_stimulus
+from posture_id.learning.samples import SplitSamples, Standardiser, stimulus_of
 from posture_id.plotting import plot_loss_curves
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
@@ -182,7 +182,7 @@ def train(dataset: str | Path, out: str | Path, network: NetworkConfig | None = 
     data = Dataset.open(dataset)
     network_config = network or NetworkConfig.for_body(Layout.MODULAR, data.n_segments)
     if network_config.layout is Layout.FRF:  # the input's width follows the stimulus
-        stimulus = dataset_stimulus(data)
+        stimulus = stimulus_of(data.manifest["stimulus"])
         rate = float(data.manifest["options"]["sample_rate_hz"])
         tilt = stimulus.angle(np.arange(int(round(stimulus.duration * rate)) + 1) / rate)
         network_config = replace(network_config, image_size=frf_width(

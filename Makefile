@@ -5,8 +5,8 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-fast lint bench bodies models model examples real-like real-like-models \
-        real-like-model clean
+.PHONY: demo test test-fast lint bench bodies models model calibration examples real-like \
+        real-like-models real-like-model clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -59,7 +59,7 @@ MODELS_DIR   := posture_id/learning/models
 TWO_SEGMENT  := urdf/winter_1.75m_70kg_2seg.urdf
 
 models: $(STAMP)
-	$(MAKE) model NAME=tip_default URDF=urdf/tip_default.urdf
+	$(MAKE) model NAME=tip_default URDF=urdf/tip_default.urdf FITS=500
 	$(MAKE) model NAME=winter_1.75m_70kg_2seg URDF=$(TWO_SEGMENT)
 
 model: $(STAMP)
@@ -68,10 +68,27 @@ model: $(STAMP)
 	$(BIN)/posture-id train data/$(NAME) --out data/models/$(NAME) --epochs $(MODEL_EPOCHS) \
 	  --quiet
 	$(BIN)/posture-id evaluate data/models/$(NAME) data/$(NAME) --out docs/models/$(NAME)
+	$(BIN)/posture-id calibration data/models/$(NAME) data/$(NAME) \
+	  --out docs/models/$(NAME)/calibration --fits $(FITS) > /dev/null
 	mkdir -p $(MODELS_DIR)/$(NAME)
 	cp data/models/$(NAME)/model.json data/models/$(NAME)/log.jsonl \
 	  data/models/$(NAME)/loss.png docs/models/$(NAME)/
-	cp data/models/$(NAME)/model.safetensors data/models/$(NAME)/model.json $(MODELS_DIR)/$(NAME)/
+	cp data/models/$(NAME)/model.safetensors data/models/$(NAME)/model.json \
+	  data/models/$(NAME)/calibration.json $(MODELS_DIR)/$(NAME)/
+
+# The intervals (docs/uncertainty.md): the CNN's conformal calibration on the validation
+# split and its check on the test split; for the TIP also least squares refining the CNN's
+# answers on FITS test trials per noise level (about 1 h on 2 cores, resumable).
+FITS ?= 0
+calibration: $(STAMP)
+	$(BIN)/posture-id calibration data/models/tip_default data/tip_default \
+	  --out docs/models/tip_default/calibration --fits 500 > /dev/null
+	$(BIN)/posture-id calibration data/models/$(notdir $(TWO_SEGMENT:.urdf=)) \
+	  data/$(notdir $(TWO_SEGMENT:.urdf=)) \
+	  --out docs/models/$(notdir $(TWO_SEGMENT:.urdf=))/calibration > /dev/null
+	cp data/models/tip_default/calibration.json $(MODELS_DIR)/tip_default/
+	cp data/models/$(notdir $(TWO_SEGMENT:.urdf=))/calibration.json \
+	  $(MODELS_DIR)/$(notdir $(TWO_SEGMENT:.urdf=))/
 
 # People-like subjects (docs/real_recordings.md): per PRTS, a data set with motor noise
 # (level drawn per trial from [0, 0.8]°) and 0.05° sensor noise, a spectrogram CNN and an

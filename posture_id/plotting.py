@@ -15,7 +15,8 @@ import numpy as np
 
 from posture_id.fileio import atomic_write
 
-__all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit", "plot_locked_sway"]
+__all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit", "plot_locked_sway",
+           "plot_coverage", "plot_reliability", "plot_identifiability", "plot_intervals"]
 
 
 def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
@@ -320,6 +321,131 @@ def plot_locked_sway(time, recorded, locked, fits: dict, frequencies_hz, recorde
     bottom.legend(loc="lower left", fontsize=8)
     bottom.grid(alpha=0.3, which="both")
     fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_coverage(levels, curves: dict, labels, band, path=None, ax=None):
+    """Empirical against nominal coverage (left) and the 90 % coverage of every parameter
+    (right).
+
+    Args:
+        levels: (K,) nominal levels. curves: name → (K, P) coverage of P parameters.
+        labels: (P,) parameter names. band: (low, high) target band of the 90 % level.
+    """
+    fig, axes = _axes(ax, 1, 2, (13, 5), gridspec_kw={"width_ratios": [1, 2]})
+    left, right = axes[0, 0], axes[0, 1]
+    levels = np.asarray(levels)
+    left.plot([0.45, 1], [0.45, 1], color="0.5", lw=0.8, ls="--", label="ideal")
+    k90 = int(np.argmin(np.abs(levels - 0.9)))
+    width = 0.8 / max(len(curves), 1)
+    for i, (name, cov) in enumerate(curves.items()):
+        cov = np.asarray(cov)
+        mean = cov.mean(axis=1)
+        left.errorbar(levels, mean, yerr=np.clip([mean - cov.min(axis=1),
+                                                  cov.max(axis=1) - mean], 0, None),
+                      marker="o", capsize=3, label=name, color=f"C{i}")
+        right.plot(np.arange(cov.shape[1]) + (i - (len(curves) - 1) / 2) * width, cov[k90],
+                   "o", color=f"C{i}", label=name, zorder=3)
+    left.set_xlabel("nominal coverage")
+    left.set_ylabel("empirical coverage (mean, min–max over parameters)")
+    left.legend(fontsize=7)
+    left.grid(alpha=0.3)
+    right.axhspan(*band, color="0.88", label=f"target {band[0]:.0%}–{band[1]:.0%}", zorder=0)
+    right.axhline(levels[k90], color="0.5", lw=0.8, ls="--", zorder=1)
+    lowest = min((float(np.min(np.asarray(c)[k90])) for c in curves.values()), default=0.8)
+    right.set_ylim(max(0.0, min(0.8, lowest - 0.02)), 1.0)
+    right.set_xticks(np.arange(len(labels)), labels, rotation=60, ha="right", fontsize=7)
+    right.set_ylabel("coverage of the 90 % intervals")
+    right.legend(fontsize=7, loc="lower right")
+    right.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_reliability(diagrams: dict, path=None, ax=None):
+    """Reliability diagrams: observed frequency against mean predicted probability per bin.
+
+    Args:
+        diagrams: name → {"mean_probability", "frequency", "count"} (bins, NaN when empty).
+    """
+    fig, axes = _axes(ax, 1, 1, (6, 5.5))
+    a = axes[0, 0]
+    a.plot([0, 1], [0, 1], color="0.5", lw=0.8, ls="--", label="perfectly calibrated")
+    for i, (name, d) in enumerate(diagrams.items()):
+        p = np.asarray(d["mean_probability"], dtype=float)
+        f = np.asarray(d["frequency"], dtype=float)
+        n = np.asarray(d["count"], dtype=float)
+        used = n > 0
+        a.plot(p[used], f[used], marker="o", color=f"C{i}", label=name)
+        a.scatter(p[used], f[used], s=10 + 60 * n[used] / n.sum(), color=f"C{i}", alpha=0.4)
+    a.set_xlabel("predicted P(C = +1, controls the COM)")
+    a.set_ylabel("observed frequency of C = +1")
+    a.set_title("class probabilities (marker area: share of samples)")
+    a.legend(fontsize=7)
+    a.grid(alpha=0.3)
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_identifiability(ratios: dict, labels, path=None, ax=None):
+    """Width of the 90 % intervals against the prior's, per parameter.
+
+    Args:
+        ratios: name → (P,) ratios. labels: (P,) parameter names.
+    """
+    fig, axes = _axes(ax, 1, 1, (12, 4.5))
+    a = axes[0, 0]
+    width = 0.8 / max(len(ratios), 1)
+    for i, (name, r) in enumerate(ratios.items()):
+        a.bar(np.arange(len(labels)) + (i - (len(ratios) - 1) / 2) * width, r, width,
+              color=f"C{i}", label=name)
+    for y, text in ((0.25, "well determined below"), (0.75, "not determined above")):
+        a.axhline(y, color="0.4", lw=0.8, ls="--")
+        a.text(len(labels) - 0.5, y, text, ha="right", va="bottom", fontsize=7)
+    a.set_xticks(np.arange(len(labels)), labels, rotation=60, ha="right", fontsize=7)
+    a.set_ylabel("90 % interval width / prior's")
+    a.legend(fontsize=7)
+    a.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_intervals(joints, estimate, lower, upper, words, prior, level: float, method: str,
+                   path=None, ax=None):
+    """Each module's Kp, Ki, Kd, Δ with its interval, relative to the defaults (p̃), the
+    prior's interval shaded; colour by how well the recording determines it.
+
+    Args:
+        joints: (N,) module names. estimate, lower, upper: (N, 4) normalised p̃.
+        words: (N, 4) "well determined", "partly determined" or "not determined".
+        prior: (low, high) the prior's interval at ``level``. method: one line.
+    """
+    n = len(joints)
+    fig, axes = _axes(ax, 1, 1, (8, 1.8 * n + 1.5))
+    a = axes[0, 0]
+    a.axvspan(*prior, color="0.92", label=f"prior's {level:.0%} interval")
+    colours = {"well determined": "C0", "partly determined": "C1", "not determined": "C3"}
+    ticks = []
+    y = 0.0
+    for i, joint in enumerate(joints):
+        for k, name in enumerate(("Kp", "Ki", "Kd", "delay")):
+            a.plot([lower[i][k], upper[i][k]], [y, y], color=colours[words[i][k]], lw=3)
+            a.plot(estimate[i][k], y, "o", color="k", ms=4)
+            ticks.append((y, f"{joint} {name}"))
+            y -= 1
+        y -= 0.5
+    a.set_yticks([t for t, _ in ticks], [s for _, s in ticks], fontsize=8)
+    a.axvline(0, color="0.5", lw=0.8)
+    a.set_xlabel("p / p_default − 1")
+    a.set_title(f"{level:.0%} intervals ({method})\nblue: well determined, orange: partly, "
+                "red: not determined by this recording", fontsize=9)
+    a.legend(fontsize=7, loc="lower right")
+    a.grid(alpha=0.3, axis="x")
     fig.tight_layout()
     _save(fig, path)
     return fig

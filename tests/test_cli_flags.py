@@ -9,6 +9,7 @@ import pytest
 
 from posture_id.cli import build_parser, main
 from posture_id.cli.arguments import (
+    interval_level,
     non_negative_float,
     non_negative_int,
     positive_float,
@@ -16,7 +17,7 @@ from posture_id.cli.arguments import (
 )
 
 CHECKED = {positive_int: "≥ 1", positive_float: "> 0", non_negative_int: "≥ 0",
-           non_negative_float: "≥ 0"}
+           non_negative_float: "≥ 0", interval_level: "from 0.5 to 0.99"}
 #: Values that satisfy what every required option asks for, to reach the flag under test.
 REQUIRED = {"--out": "out.json", "--trials": "3"}
 
@@ -59,7 +60,7 @@ def test_the_flags_are_found():
     names = {a.option_strings[0] for _, _, a in FLAGS}
     assert {"--amplitude-deg", "--cycles", "--states", "--sway-limit-deg", "--deadband-rad-s",
             "--starts", "--seed", "--workers", "--shard-size", "--trials", "--height",
-            "--mass", "--segments"} <= names
+            "--mass", "--segments", "--level", "--fits"} <= names
 
 
 @pytest.mark.parametrize(("prefix", "parser", "action"), FLAGS,

@@ -1,4 +1,5 @@
-"""Command line: ``posture-id body | simulate | fit | dataset | train | evaluate | identify``,
+"""Command line: ``posture-id body | simulate | fit | frf | dataset | train | evaluate |
+calibration | identify | demo | benchmark``,
 one module per command.
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
@@ -16,6 +17,7 @@ import sys
 from posture_id.cli import (
     benchmark,
     body,
+    calibration,
     dataset,
     demo,
     evaluate,
@@ -37,7 +39,8 @@ def build_parser() -> Parser:
     parser.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for command in (body, simulate, fit, frf, dataset, train, evaluate, identify, demo, benchmark):
+    for command in (body, simulate, fit, frf, dataset, train, evaluate, calibration, identify,
+                    demo, benchmark):
         command.add_parser(sub)
     return parser
 

@@ -68,6 +68,8 @@ positive_int = _number(int, lambda x: x >= 1, "an integer ≥ 1")
 non_negative_int = _number(int, lambda x: x >= 0, "an integer ≥ 0")
 positive_float = _number(float, lambda x: x > 0, "a number > 0")
 non_negative_float = _number(float, lambda x: x >= 0, "a number ≥ 0")
+#: An interval's nominal coverage: the calibrations hold 0.50 to 0.99.
+interval_level = _number(float, lambda x: 0.5 <= x <= 0.99, "a level from 0.5 to 0.99")
 
 
 def say(message: str) -> None:
@@ -134,4 +136,8 @@ def write_result(result, out: Path, plot: Path | None = None) -> None:
     if plot:
         result.plot(plot)
         say(f"wrote {plot}")
+        if getattr(result, "plot_intervals", None) and result.intervals is not None:
+            beside = plot.with_name(plot.stem + ".intervals" + plot.suffix)
+            result.plot_intervals(beside)
+            say(f"wrote {beside}")
     print(result.summary())

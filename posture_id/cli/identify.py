@@ -11,6 +11,7 @@ from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
     check_output_file,
     check_output_folder,
+    interval_level,
     say,
     write_result,
 )
@@ -44,7 +45,11 @@ def add_parser(sub) -> None:
                    help="result JSON (its \"parameters\" object is a parameter file); for a "
                         "cohort, a folder: one JSON per recording and summary.csv")
     p.add_argument("--scheduler", help="cohort: Dask distributed scheduler (tcp://host:port)")
-    p.add_argument("--plot", type=Path, help="recorded versus re-simulated sway (PNG)")
+    p.add_argument("--plot", type=Path,
+                   help="recorded versus re-simulated sway (PNG), and each parameter's "
+                        "interval beside it (NAME.intervals.png)")
+    p.add_argument("--level", type=interval_level, default=0.9,
+                   help="the intervals' nominal coverage (default %(default)g)")
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recordings were made with")
     add_search_arguments(p)
     p.set_defaults(func=run)
@@ -77,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
         result = identify(recording, body, method, model,
                           fit_options=fit_options, progress=progress,
-                          source=str(args.recording), stimulus=stimulus)
+                          source=str(args.recording), stimulus=stimulus, level=args.level)
     write_result(result, args.out, args.plot)
     return 0 if np.isfinite(result.e_rel) else 1
 

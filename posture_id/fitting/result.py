@@ -5,11 +5,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.stats import norm
 
 from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
 from posture_id.fileio import JsonResult
 from posture_id.fitting.unknowns import PER_MODULE
 from posture_id.plotting import plot_fit
+from posture_id.uncertainty.conformal import ConformalCalibration
+from posture_id.uncertainty.intervals import ParameterIntervals
+from posture_id.uncertainty.noise import sensor_noise_deg
 
 __all__ = ["StageResult", "FitResult", "class_names"]
 
@@ -145,6 +149,24 @@ class FitResult(JsonResult):
                         if self.time_offset_s else ""))
         lines += [f"note: {n}" for n in self.notices]
         return "\n".join(lines)
+
+    def intervals(self, defaults: DecParameters, level: float = 0.9,
+                  scales: ConformalCalibration | None = None) -> ParameterIntervals:
+        """Intervals of Kp, Ki, Kd, Δ at ``level``: ±z·SE (Gauss-Newton) or, with the
+        ``scales`` of a calibration (:mod:`posture_id.identify.calibration`), ±scale·SE,
+        where scale is the conformal one at the recording's estimated sensor noise and
+        never below z: a calibrated interval is never narrower than the fit's noise allows.
+        ``defaults``: the body's default parameters (the normalisation's p_default)."""
+        z = float(norm.ppf((1 + level) / 2))
+        noise = sensor_noise_deg(self.recorded)
+        factor, method = z, "Gauss-Newton ±z·SE (coverage not checked)"
+        if scales is not None:
+            factor = np.maximum(scales.scale(level, noise), z)
+            method = "Gauss-Newton SE × calibrated scale"
+        si = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
+        return ParameterIntervals.around(self.normalised[:, :4],
+                                         factor * self.standard_errors_normalised, si,
+                                         level, method, noise, self.joints)
 
     def plot(self, path=None, ax=None):
         """Recorded versus fitted sway per segment (degrees); saved to ``path`` if given,

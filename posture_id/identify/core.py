@@ -30,9 +30,10 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
+from posture_id.dec.parameters import default_parameters
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.identify.result import IdentificationResult, SegmentFit
-from posture_id.learning.identifier import CnnIdentifier
+from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentifier
 from posture_id.progress import Progress
 from posture_id.provenance import provenance
 from posture_id.recording import Recording
@@ -65,8 +66,8 @@ class Method(enum.Enum):
 def identify(recording: Recording, body: Body | None = None, method: Method = Method.HYBRID,
              model: str | Path | CnnIdentifier | None = None,
              fit_options: FitOptions | None = None, progress: Progress | None = None,
-             source: str = "recording", stimulus: TiltProfile | None = None
-             ) -> IdentificationResult:
+             source: str = "recording", stimulus: TiltProfile | None = None,
+             level: float = DEFAULT_LEVEL) -> IdentificationResult:
     """Identify every module's Kp, Ki, Kd, Δ and class from one recording.
 
     Args:
@@ -78,6 +79,10 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
         stimulus: the tilt as the lab ran it (checked against the recording's tilt column;
             see :func:`~posture_id.fitting.least_squares.fit_recording`); default:
             recognised from the tilt column.
+        level: the intervals' nominal coverage (docs/uncertainty.md): the CNN's are
+            conformal; least squares' are its Gauss-Newton standard errors times the scale
+            calibrated for the hybrid (:mod:`.calibration`), or ±z·SE, unchecked, for a fit
+            from the defaults or a model without that calibration.
     """
     body = body or load_body()
     start = time.perf_counter()
@@ -89,7 +94,7 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
     if method in (Method.CNN, Method.HYBRID):
         identifier = CnnIdentifier.resolve(model, body)
         began = time.perf_counter()
-        cnn = identifier.identify(recording, source)
+        cnn = identifier.identify(recording, source, level)
         spent = time.perf_counter() - began
         notices += cnn.notices
     else:
@@ -107,8 +112,12 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
     if fit is not None:
         notices += [n for n in fit.notices if n not in notices]
         parameters, normalised = fit.parameters, fit.normalised
+        calibration = identifier.calibration if method is Method.HYBRID else None
+        intervals = fit.intervals(default_parameters(body), level, None if calibration is None
+                                  else calibration.least_squares)
     else:
         parameters, normalised = cnn.parameters, cnn.normalised
+        intervals = cnn.intervals
     checked = _resimulate(body, recording, parameters, options.simulation, stimulus)
     return IdentificationResult(
         method=method.value, parameters=parameters, normalised=np.asarray(normalised),
@@ -118,6 +127,7 @@ def identify(recording: Recording, body: Body | None = None, method: Method = Me
         cnn=None if cnn is None else cnn.to_dict(),
         fit=None if fit is None else {k: v for k, v in fit.to_dict().items()
                                       if k != "provenance"},
+        intervals=intervals,
         notices=tuple(notices),
         provenance=provenance(options if fit is not None else None, body, source=source,
                               method=method.value),

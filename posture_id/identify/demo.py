@@ -55,6 +55,15 @@ class DemoRow:
                          f"{true.delay_s:.4f} | {true.controls} |")
             lines.append("| | error | " + " | ".join(f"{100 * e:+.1f} %" for e in errors[i])
                          + f" | {'right' if got.controls == true.controls else 'WRONG'} |")
+            intervals = self.result.intervals
+            if intervals is not None:
+                cells = []
+                for k, field in enumerate(TARGET_FIELDS):
+                    low, high = intervals.lower_si[i, k], intervals.upper_si[i, k]
+                    inside = low <= getattr(true, field) <= high
+                    cells.append(f"{low:.4g}–{high:.4g}{'' if inside else ' (truth outside)'}")
+                lines.append(f"| | {100 * intervals.level:g} % interval | " + " | ".join(cells)
+                             + " | |")
         return "\n".join(lines)
 
 
@@ -73,6 +82,7 @@ def run_demo(out: str | Path, method: Method = Method.HYBRID,
                           progress=progress, source=str(csv))
         result.to_json(out / f"{name}.json")
         result.plot(out / f"{name}.png")
+        result.plot_intervals(out / f"{name}.intervals.png")
         rows.append(DemoRow(name, body_name, result, truth))
     atomic_write_text(out / "report.md", _markdown(rows, method))
     return rows
@@ -92,5 +102,10 @@ def _markdown(rows: list[DemoRow], method: Method) -> str:
                       f"{s.segment} {100 * s.variance_explained:.1f} % of variance"
                       for s in r.segments) + f"; {r.wall_time_s:.1f} s.", "",
                   f"![{row.name}]({row.name}.png)", ""]
+        if r.intervals is not None:
+            parts += [f"Intervals: {r.intervals.method}, at the recording's estimated sensor "
+                      f"noise {r.intervals.noise_deg:.3f}°. "
+                      + " ".join(s[0].upper() + s[1:] + "." for s in r.intervals.sentences()),
+                      "", f"![{row.name} intervals]({row.name}.intervals.png)", ""]
         parts += [f"Note: {n}" for n in r.notices] + [""]
     return "\n".join(parts)

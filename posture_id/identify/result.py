@@ -9,6 +9,7 @@ import numpy as np
 from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
 from posture_id.fileio import JsonResult
 from posture_id.plotting import plot_identification
+from posture_id.uncertainty.intervals import ParameterIntervals
 
 __all__ = ["SegmentFit", "IdentificationResult"]
 
@@ -42,6 +43,9 @@ class IdentificationResult(JsonResult):
             the checks and the re-simulation that every method shares.
         time (S,) s; recorded, resimulated (S, N) rad; sway_recorded, sway_resimulated (S,)
         rad (α_BS); joints. cnn, fit: the stages' own results (``to_dict()``), or None.
+        intervals: each parameter's interval and how well the recording determines it
+            (:class:`~posture_id.uncertainty.intervals.ParameterIntervals`), or None (a
+            CNN without a calibration).
         notices: things to know. provenance: version, options, body identity, source.
     """
 
@@ -62,6 +66,7 @@ class IdentificationResult(JsonResult):
     sway_resimulated: np.ndarray = field(repr=False)
     cnn: dict | None = field(default=None, repr=False)
     fit: dict | None = field(default=None, repr=False)
+    intervals: ParameterIntervals | None = None
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
 
@@ -84,6 +89,7 @@ class IdentificationResult(JsonResult):
                          for s in self.segments},
             "wall_time_s": self.wall_time_s,
             "identification_time_s": self.identification_time_s,
+            "intervals": None if self.intervals is None else self.intervals.to_dict(),
             "notices": list(self.notices),
             "cnn": self.cnn,
             "fit": self.fit,
@@ -99,9 +105,17 @@ class IdentificationResult(JsonResult):
         lines.append(f"body sway: E_id {self.e_id_deg:.2e}°, E_rel {100 * self.e_rel:.2f} %; "
                      f"{self.method} in {self.identification_time_s:.3g} s "
                      f"({self.wall_time_s:.3g} s with the checks)")
+        if self.intervals is not None:
+            lines += self.intervals.table()
         lines += [f"note: {n}" for n in self.notices]
         return "\n".join(lines)
 
     def plot(self, path=None, ax=None):
         """Recorded versus re-simulated sway per segment and of the body COM (Fig. 7)."""
         return plot_identification(self, path=path, ax=ax)
+
+    def plot_intervals(self, path=None, ax=None):
+        """Each parameter's interval against the prior's (None without intervals)."""
+        if self.intervals is None:
+            return None
+        return self.intervals.plot(self.normalised[:, :4], path=path, ax=ax)

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body
-from posture_id.datasets.features import FS_HZ, modular_images, monolithic_images, stft
+from posture_id.datasets.features import FS_HZ
 from posture_id.dec.parameters import (
     TARGET_FIELDS,
     DecParameters,
@@ -30,17 +30,23 @@ from posture_id.dec.parameters import (
 )
 from posture_id.errors import RecordingError
 from posture_id.fileio import JsonResult
-from posture_id.frf.features import frf_features
 from posture_id.learning.bundled import bundled_model_dir
+from posture_id.learning.calibration import CnnCalibration
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
+from posture_id.learning.inputs import sway_features
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import stimulus_of
 from posture_id.provenance import body_identity, provenance
 from posture_id.recording import Recording
 from posture_id.simulation.stimulus import recognise_prts, sample_rate_hint
+from posture_id.uncertainty.intervals import ParameterIntervals
+from posture_id.uncertainty.noise import sensor_noise_deg
 
-__all__ = ["CnnIdentifier", "CnnIdentification"]
+__all__ = ["CnnIdentifier", "CnnIdentification", "DEFAULT_LEVEL"]
+
+#: The intervals' nominal coverage unless asked otherwise.
+DEFAULT_LEVEL = 0.9
 
 
 @dataclass(frozen=True)
@@ -52,6 +58,8 @@ class CnnIdentification(JsonResult):
             defaults), SI units: the parameter-file format.
         normalised: (N, 5) [K̃p, K̃i, K̃d, Δ̃, C]. class_probability: (N,) P(C = +1, COM).
         joints: module names. model: the model directory and what made it.
+        intervals: conformal intervals of Kp, Ki, Kd, Δ (None for a model without a
+            calibration); the class probability is then temperature-scaled too.
         notices: things to know. provenance: version, body identity, recording name.
     """
 
@@ -60,6 +68,7 @@ class CnnIdentification(JsonResult):
     class_probability: np.ndarray
     joints: tuple[str, ...]
     model: dict
+    intervals: ParameterIntervals | None = None
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
 
@@ -76,6 +85,7 @@ class CnnIdentification(JsonResult):
                                               strict=True)),
             "method": "cnn",
             "model": self.model,
+            "intervals": None if self.intervals is None else self.intervals.to_dict(),
             "notices": list(self.notices),
             "provenance": self.provenance,
         }
@@ -83,6 +93,8 @@ class CnnIdentification(JsonResult):
     def summary(self) -> str:
         lines = self.parameters.identified_table(self.class_probability)
         lines.append(f"model: {self.model['path']} ({self.model['layout']})")
+        if self.intervals is not None:
+            lines += self.intervals.table()
         lines += [f"note: {n}" for n in self.notices]
         return "\n".join(lines)
 
@@ -103,6 +115,15 @@ class CnnIdentifier:
         if model.config.layout is not Layout.MODULAR and model.config.modules != body.n_segments:
             raise LearningError(f"{model.path}: {model.config.layout.value} model for "
                                 f"{model.config.modules} modules, body has {body.n_segments}")
+        self.calibration = CnnCalibration.load(model.path)
+        if (self.calibration is not None
+                and self.calibration.weights_sha256 != sidecar.get("weights_sha256")):
+            self.notices += (f"{model.path}: its calibration was made for other weights and is "
+                             "not used: no intervals (posture-id calibration makes one)",)
+            self.calibration = None
+        elif self.calibration is None:
+            self.notices += (f"{model.path}: the model has no calibration, so no intervals "
+                             "(posture-id calibration MODEL_DIR DATASET makes one)",)
         if trained.get("sha256") != body.sha256:
             self.notices += (f"the model was trained on body '{trained.get('name')}', not on "
                              f"this URDF ('{body.name}'); its gains are normalised by this "
@@ -156,13 +177,9 @@ class CnnIdentifier:
             if hint is None:
                 raise
             raise RecordingError(f"{error}; and {hint.removeprefix(source + ': ')}") from None
-        if self.model.config.layout is Layout.FRF:
-            return frf_features(self.expected_tilt, theta[None], FS_HZ, self.profile.period_s,
-                                self.profile.periodic_from_s)
-        spectra = stft(theta.T)[None]  # (1, N, 51, 51)
-        if self.model.config.layout is Layout.MODULAR:
-            return modular_images(stft(tilt), spectra)[0]
-        return monolithic_images(spectra)
+        out = sway_features(self.model.config.layout, self.profile, tilt, theta[None])
+        return out if self.model.config.layout is not Layout.MODULAR else out.reshape(
+            -1, *out.shape[2:])
 
     def _stimulus_text(self) -> str:
         s = self.stimulus
@@ -179,21 +196,38 @@ class CnnIdentifier:
             f"{source}: the tilt is {what}; the CNN was trained on {self._stimulus_text()} "
             "and is valid for that stimulus only: use posture-id fit, which takes any tilt")
 
-    def identify(self, recording: Recording, source: str = "recording") -> CnnIdentification:
-        """The CNN's parameters for one recording."""
+    def identify(self, recording: Recording, source: str = "recording",
+                 level: float = DEFAULT_LEVEL) -> CnnIdentification:
+        """The CNN's parameters for one recording, with intervals at ``level`` when the
+        model is calibrated."""
         images = self.features(recording, source)
         notices = self.notices
         if recording.resampled(FS_HZ) is not recording:
             notices += (f"{source}: resampled from {recording.sample_rate_hz:.4g} Hz to "
                         f"{FS_HZ:g} Hz by linear interpolation",)
-        if self.model.config.layout is Layout.MODULAR:
-            prediction = predict_images(self.model, images)
+        prediction = predict_images(self.model, images)
+        if self.model.config.layout is Layout.MODULAR:  # one sample per module
             normalised = prediction.targets[:, 0]
             probability = prediction.class_probability[:, 0]
+            logit = prediction.class_logit[:, 0]
         else:
-            prediction = predict_images(self.model, images)
             normalised = prediction.targets[0]
             probability = prediction.class_probability[0]
+            logit = prediction.class_logit[0]
+        intervals = None
+        if self.calibration is not None:
+            if self.calibration.temperature is not None:
+                probability = self.calibration.class_probability(logit)
+            noise = sensor_noise_deg(recording.resampled(FS_HZ).theta[: self.n_samples])
+            conformal = self.calibration.intervals
+            defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
+            intervals = ParameterIntervals.around(
+                normalised[:, :4], conformal.scale(level, noise), defaults, level,
+                "conformal, CNN (validation split)", noise, self.body.joint_names)
+            if conformal.beyond(noise):
+                notices += (f"{source}: its sensor noise (about {noise:.3f}°) is above the "
+                            f"{conformal.noise_deg[-1]:.3f}° the intervals were calibrated "
+                            "for: they are likely too narrow",)
         arrays = denormalise_arrays(normalised[None], self.defaults)
         params = arrays.trial(0, self.body.joint_names)
         model_info = {"path": str(self.model.path), "layout": self.model.config.layout.value,
@@ -202,6 +236,7 @@ class CnnIdentifier:
                       "package_version": self.model.sidecar.get("package_version")}
         return CnnIdentification(
             parameters=params, normalised=normalised, class_probability=probability,
-            joints=self.body.joint_names, model=model_info, notices=notices,
+            joints=self.body.joint_names, model=model_info, intervals=intervals,
+            notices=notices,
             provenance={**provenance(None, self.body, source=source),
                         "body": body_identity(self.body)})

@@ -28,11 +28,14 @@ class Prediction:
         class_probability: (B, M) probability of C = +1.
         standardised: (B, M, 5) the outputs in the training set's standardised units, the
             class column as the standardised value of E[C] (for the paper's RMSE).
+        class_logit: (B, M) the network's logit of P(C = +1) (NaN for the paper's
+            regression output).
     """
 
     targets: np.ndarray
     class_probability: np.ndarray
     standardised: np.ndarray
+    class_logit: np.ndarray
 
 
 def predict_images(model: LoadedModel, images: np.ndarray, batch_size: int = 512,
@@ -55,9 +58,11 @@ def predict_images(model: LoadedModel, images: np.ndarray, batch_size: int = 512
     scale = std.target_std.reshape(m, 5)
     raw = out * scale + mean
     if config.class_output is ClassOutput.LOGIT:
-        probability = 1.0 / (1.0 + np.exp(-out[..., 4]))
+        logit = out[..., 4].copy()
+        probability = 1.0 / (1.0 + np.exp(-logit))
         expected_c = 2.0 * probability - 1.0
     else:
+        logit = np.full(out.shape[:2], np.nan)
         probability = (raw[..., 4] >= 0).astype(float)
         expected_c = raw[..., 4]
     targets = raw.copy()
@@ -65,5 +70,5 @@ def predict_images(model: LoadedModel, images: np.ndarray, batch_size: int = 512
     targets[..., 4] = np.where(probability >= 0.5, 1.0, -1.0)
     standardised = out.copy()
     standardised[..., 4] = (expected_c - mean[:, 4]) / scale[:, 4]
-    return Prediction(targets, probability, standardised)
+    return Prediction(targets, probability, standardised, logit)
 

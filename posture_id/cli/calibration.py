@@ -1,0 +1,58 @@
+"""``posture-id calibration``: calibrate a model's intervals and check their coverage."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.cli.arguments import (
+    check_output_folder,
+    non_negative_float,
+    non_negative_int,
+    positive_int,
+    say,
+)
+from posture_id.cli.progress import TerminalProgress
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "calibration",
+        help="calibrate a model's intervals and class probabilities; check their coverage",
+        description="Calibrates the CNN's intervals (conformal) and class probabilities "
+                    "(temperature) on the data set's validation split, writes them to "
+                    "MODEL_DIR/calibration.json, and checks their coverage on the test "
+                    "split; with --fits, least squares too (docs/uncertainty.md).")
+    p.add_argument("model", type=Path, help="model directory (calibration.json goes here)")
+    p.add_argument("dataset", type=Path, help="the data set the model was trained on")
+    p.add_argument("--out", type=Path, required=True,
+                   help="report folder (calibration_report.md/.json, PNGs); an interrupted "
+                        "least-squares run goes on from its journal there")
+    p.add_argument("--noise-deg", type=non_negative_float, nargs="+",
+                   help="sensor-noise levels checked, degrees (default: 0 and the data "
+                        "set's training noise)")
+    p.add_argument("--calibration-noise-deg", type=non_negative_float, nargs="+",
+                   help="sensor-noise levels calibrated at (default: 5 from 0 to the data "
+                        "set's training noise)")
+    p.add_argument("--fits", type=non_negative_int, default=0,
+                   help="test trials per checked level refined by least squares (default 0: "
+                        "none; about 5 s each per core)")
+    p.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out", inputs=(args.model, args.dataset))
+    from posture_id.identify.calibration import run_calibration
+
+    with TerminalProgress(prefix="posture-id calibration") as progress:
+        report = run_calibration(
+            args.model, args.dataset, args.out,
+            tuple(args.noise_deg) if args.noise_deg else None,
+            tuple(sorted(args.calibration_noise_deg)) if args.calibration_noise_deg else None,
+            args.fits, args.workers, progress)
+    print(report.to_markdown())
+    say(f"wrote {args.model / 'calibration.json'} and the report in {args.out}")
+    return 0

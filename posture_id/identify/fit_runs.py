@@ -1,0 +1,139 @@
+"""Least squares on a data set's held-out trials, for checking its intervals.
+
+Each of ``count`` trials of a split is made a recording: the stored noise-free segment
+angles plus white sensor noise of a chosen SD (seeded by trial and level), on the data
+set's PRTS. The CNN identifies it and least squares refines the CNN's answer with its
+classes kept (the hybrid's usual route, :func:`posture_id.identify.core._refine`); the row
+keeps what coverage needs: the true and fitted normalised parameters, the Gauss-Newton
+standard errors (−1 where infinite), the residual RMS, the recording's estimated sensor
+noise and the CNN's answer. Trials run in parallel processes, one per core, each on one thread,
+and every finished trial is appended to a journal, so an interrupted run resumes.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.bodies.body import load_body
+from posture_id.datasets.store import Dataset
+from posture_id.fitting.least_squares import fit_recording
+from posture_id.fitting.options import FitOptions, FixedClasses
+from posture_id.identify.benchmark import append_journal, read_journal
+from posture_id.learning.checkpoint import SIDECAR
+from posture_id.learning.identifier import CnnIdentifier
+from posture_id.learning.samples import stimulus_of
+from posture_id.progress import Progress, report
+from posture_id.recording import Recording
+from posture_id.uncertainty.noise import sensor_noise_deg
+
+__all__ = ["FIT_JOURNAL", "held_out_recording", "run_fits", "split_trials"]
+
+#: The journal of finished fits, in the calibration report's folder.
+FIT_JOURNAL = "fits.journal.jsonl"
+_THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                     "NUMBA_NUM_THREADS")
+_LOADED: dict = {}
+
+
+def split_trials(data: Dataset, split: str, count: int) -> list[tuple[int, int]]:
+    """(shard, index among the shard's kept trials) of the first ``count`` trials of a
+    split, in data-set order."""
+    indices = data.split()[split][:count]
+    used = np.array([entry["used"] for entry in data.shards])
+    offsets = np.concatenate([[0], np.cumsum(used)])
+    shard = np.searchsorted(offsets, indices, side="right") - 1
+    return [(int(k), int(i - offsets[k])) for k, i in zip(shard, indices, strict=True)]
+
+
+def held_out_recording(data: Dataset, shard: int, local: int, noise_deg: float,
+                       seed: int) -> tuple[Recording, np.ndarray]:
+    """(recording with white sensor noise of ``noise_deg``°, true normalised targets (N, 5))
+    of one stored trial."""
+    arrays = data.load_shard(shard)
+    theta = arrays["theta"][local].astype(np.float64)
+    rate = float(data.manifest["options"]["sample_rate_hz"])
+    t = np.arange(len(theta)) / rate
+    stimulus = stimulus_of(data.manifest["stimulus"])
+    recording = Recording(t, stimulus.angle(t), theta, tuple(data.manifest["body"]["segments"]))
+    if noise_deg > 0:
+        recording = recording.with_sensor_noise(noise_deg, seed)
+    return recording, np.asarray(arrays["targets"][local], dtype=np.float64)
+
+
+def _loaded(model_dir: str, dataset_dir: str):
+    key = (model_dir, dataset_dir)
+    if key not in _LOADED:
+        data = Dataset.open(dataset_dir, verify=False)
+        body = load_body(data.manifest["body"]["urdf"])
+        _LOADED[key] = (data, body, CnnIdentifier.load(model_dir, body))
+    return _LOADED[key]
+
+
+def _one(task: tuple) -> dict:
+    """One trial identified by the hybrid (a worker process)."""
+    model_dir, dataset_dir, split, position, shard, local, noise_deg = task
+    data, body, identifier = _loaded(model_dir, dataset_dir)
+    seed = int(np.random.SeedSequence([shard, local, int(round(1e6 * noise_deg)), 0xC0FE])
+               .generate_state(1)[0])
+    recording, truth = held_out_recording(data, shard, local, noise_deg, seed)
+    start = time.perf_counter()
+    cnn = identifier.identify(recording, f"{split} trial {position}")
+    fit = fit_recording(recording, body, cnn.parameters,
+                        FitOptions(threads=1, classes=FixedClasses()),
+                        source=f"{split} trial {position}")
+    return {"split": split, "position": position, "noise_deg": noise_deg,
+            "seconds": time.perf_counter() - start, "truth": truth.tolist(),
+            "estimate": np.asarray(fit.normalised).tolist(),
+            "standard_errors": np.where(np.isfinite(fit.standard_errors_normalised),
+                                        fit.standard_errors_normalised, -1.0).tolist(),
+            "rms_deg": fit.rms_deg, "converged": fit.converged,
+            "noise_estimate_deg": sensor_noise_deg(recording.theta),
+            "cnn": np.asarray(cnn.normalised).tolist(),
+            "cnn_class_probability": np.asarray(cnn.class_probability).tolist()}
+
+
+def _key(row: dict) -> tuple:
+    return (row["split"], int(row["position"]), float(row["noise_deg"]))
+
+
+def run_fits(model_dir: str | Path, dataset_dir: str | Path, split: str, count: int,
+             noise_levels: tuple[float, ...], journal: str | Path,
+             workers: int | None = None, progress: Progress | None = None) -> list[dict]:
+    """Rows of the first ``count`` trials of ``split`` at every noise level (see the
+    module doc); finished rows are read back from ``journal`` (one of another model or data
+    set is refused)."""
+    data = Dataset.open(dataset_dir, verify=False)
+    weights = json.loads((Path(model_dir) / SIDECAR).read_text(encoding="utf-8"))[
+        "weights_sha256"]
+    header = {"format": "posture_id-fit-journal", "model_weights_sha256": weights,
+              "dataset": data.manifest["shards"][0]["sha256"]}
+    trials = split_trials(data, split, count)
+    tasks = [(str(model_dir), str(dataset_dir), split, p, k, i, float(noise))
+             for noise in noise_levels for p, (k, i) in enumerate(trials)]
+    done = read_journal(Path(journal), header, key=_key)
+    rows = [done[t] for t in ((s, p, n) for _, _, s, p, _, _, n in tasks) if t in done]
+    todo = [t for t in tasks if (t[2], t[3], t[6]) not in done]
+    report(progress, len(rows), len(tasks), "fit")
+    saved = {k: os.environ.get(k) for k in _THREAD_VARIABLES}
+    os.environ.update({k: "1" for k in _THREAD_VARIABLES})
+    try:
+        with ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1,
+                                 mp_context=multiprocessing.get_context("spawn")) as pool:
+            for row in pool.map(_one, todo, chunksize=1):
+                rows.append(row)
+                append_journal(Path(journal), header, row)
+                report(progress, len(rows), len(tasks), "fit")
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    return rows

@@ -1,0 +1,68 @@
+"""Checking uncertainty: interval coverage and the calibration of class probabilities.
+
+- :func:`coverage`: the share of true values inside their intervals;
+  :func:`coverage_interval`: its exact (Clopper-Pearson) 95 % confidence interval, from
+  ``scipy.stats.binomtest``, to tell sampling scatter from miscalibration;
+- :func:`reliability` and :func:`expected_calibration_error`: probabilities grouped in
+  equal-width bins; ECE = Σ_b (n_b / n)·|mean probability_b − frequency_b| (Guo et al. 2017);
+- :func:`fit_temperature`: the temperature T of logit/T that minimises the negative
+  log-likelihood on calibration data (temperature scaling, Guo et al. 2017).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+from scipy.stats import binomtest
+
+__all__ = ["coverage", "coverage_interval", "reliability", "expected_calibration_error",
+           "fit_temperature"]
+
+
+def coverage(truth: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Share of samples (axis 0) with lower ≤ truth ≤ upper; shape of one sample."""
+    inside = (np.asarray(lower) <= truth) & (truth <= np.asarray(upper))
+    return inside.mean(axis=0)
+
+
+def coverage_interval(share: float, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Clopper-Pearson interval of a coverage ``share`` measured on ``n`` samples."""
+    k = int(round(share * n))
+    ci = binomtest(k, n).proportion_ci(confidence_level=confidence, method="exact")
+    return float(ci.low), float(ci.high)
+
+
+def reliability(probability: np.ndarray, outcome: np.ndarray, bins: int = 10
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per equal-width probability bin: (mean predicted probability, observed frequency of
+    the outcome, count); empty bins give NaN and 0."""
+    p = np.ravel(probability).astype(float)
+    y = np.ravel(outcome).astype(float)
+    index = np.clip((p * bins).astype(int), 0, bins - 1)
+    count = np.bincount(index, minlength=bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_p = np.bincount(index, weights=p, minlength=bins) / count
+        freq = np.bincount(index, weights=y, minlength=bins) / count
+    return mean_p, freq, count
+
+
+def expected_calibration_error(probability: np.ndarray, outcome: np.ndarray,
+                               bins: int = 10) -> float:
+    """ECE of predicted probabilities of a binary ``outcome`` (see the module doc)."""
+    mean_p, freq, count = reliability(probability, outcome, bins)
+    used = count > 0
+    return float(np.sum(count[used] * np.abs(mean_p[used] - freq[used])) / count.sum())
+
+
+def fit_temperature(logits: np.ndarray, outcome: np.ndarray) -> float:
+    """T > 0 minimising the mean negative log-likelihood of sigmoid(logit / T)."""
+    z = np.ravel(logits).astype(float)
+    y = np.ravel(outcome).astype(float)
+
+    def nll(log_t: float) -> float:
+        s = z / np.exp(log_t)
+        return float(np.mean(np.logaddexp(0.0, s) - y * s))
+
+    best = minimize_scalar(nll, bounds=(np.log(0.05), np.log(50.0)), method="bounded",
+                           options={"xatol": 1e-6})
+    return float(np.exp(best.x))

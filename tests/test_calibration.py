@@ -1,0 +1,92 @@
+"""``posture-id calibration`` end to end on a tiny data set and network, and what the
+CNN identifier does with (and without) a calibration."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from posture_id.cli import main
+from posture_id.datasets import DatasetConfig, generate_dataset
+from posture_id.learning.calibration import CALIBRATION, CnnCalibration
+from posture_id.learning.config import Layout, LearningError, NetworkConfig, TrainingConfig
+from posture_id.learning.identifier import CnnIdentifier
+from posture_id.learning.training import train
+from posture_id.simulation.batch import simulate
+
+
+@pytest.fixture(scope="module")
+def calibrated(tmp_path_factory, tip):
+    root = tmp_path_factory.mktemp("calibration")
+    generate_dataset(DatasetConfig(trials=64, body=str(tip.urdf_path), shard_size=16, seed=5,
+                                   sensor_noise_deg=0.05), root / "set", workers=2)
+    network = NetworkConfig.for_body(Layout.MODULAR, 3, widths=(8, 8, 12, 12, 16),
+                                     head=(16,))
+    train(root / "set", root / "model", network,
+          TrainingConfig(threads=1, batch_size=16, epochs=1))
+    status = main(["calibration", str(root / "model"), str(root / "set"),
+                   "--out", str(root / "report")])
+    assert status == 0
+    return root
+
+
+def test_calibration_writes_the_calibration_and_its_report(calibrated):
+    model, report = calibrated / "model", calibrated / "report"
+    for name in ("calibration_report.md", "calibration_report.json", "coverage.png",
+                 "reliability.png", "identifiability.png"):
+        assert (report / name).stat().st_size > 0, name
+    data = json.loads((report / "calibration_report.json").read_text())
+    assert data["calibration"]["noise_levels_deg"] == [0.0, 0.0125, 0.025, 0.0375, 0.05]
+    assert sorted(data["cnn"]) == ["0", "0.05"]
+    block = data["cnn"]["0.05"]
+    cov = np.array(block["intervals"]["0.9"]["coverage"])
+    assert cov.shape == (3, 4) and np.all((0 <= cov) & (cov <= 1))
+    assert 0 <= block["classes"]["raw"]["ece"] <= 1
+    assert data["least_squares"] == {}
+    saved = CnnCalibration.load(model)
+    assert saved.intervals.scales.shape[:2] == (5, 50)
+    assert len(saved.temperature) == 3 and all(t > 0 for t in saved.temperature)
+    assert "Least squares was not run" in (report / "calibration_report.md").read_text()
+
+
+def test_the_identifier_gives_intervals_and_says_when_noise_is_beyond_them(calibrated, tip):
+    identifier = CnnIdentifier.load(calibrated / "model", tip)
+    recording = simulate(tip, _truth(tip)).to_recording()
+    quiet = identifier.identify(recording.with_sensor_noise(0.01, 1), "quiet", level=0.8)
+    iv = quiet.intervals
+    assert iv is not None and iv.level == 0.8 and iv.lower.shape == (3, 4)
+    assert np.all(iv.lower <= quiet.normalised[:, :4]) and np.all(
+        quiet.normalised[:, :4] <= iv.upper)
+    assert iv.noise_deg == pytest.approx(0.01, rel=0.1)
+    assert not any("calibrated for" in n for n in quiet.notices)
+    assert "intervals" in quiet.to_dict() and "80 % intervals" in quiet.summary()
+    noisy = identifier.identify(recording.with_sensor_noise(0.3, 2), "noisy")
+    assert any("noisy: its sensor noise (about 0.3" in n and "too narrow" in n
+               for n in noisy.notices)
+
+
+def test_a_calibration_of_other_weights_is_not_used(calibrated, tip, tmp_path):
+    model = tmp_path / "model"
+    shutil.copytree(calibrated / "model", model)
+    data = json.loads((model / CALIBRATION).read_text())
+    data["weights_sha256"] = "0" * 64
+    (model / CALIBRATION).write_text(json.dumps(data))
+    identifier = CnnIdentifier.load(model, tip)
+    result = identifier.identify(simulate(tip, _truth(tip)).to_recording())
+    assert result.intervals is None
+    assert any("made for other weights" in n for n in result.notices)
+    (model / CALIBRATION).write_text("{not json")
+    with pytest.raises(LearningError, match="calibration.json: unreadable calibration"):
+        CnnIdentifier.load(model, tip)
+    (model / CALIBRATION).unlink()
+    bare = CnnIdentifier.load(model, tip)
+    assert bare.calibration is None and any("no calibration" in n for n in bare.notices)
+
+
+def _truth(body):
+    from posture_id.dec.parameters import default_parameters
+
+    return default_parameters(body)

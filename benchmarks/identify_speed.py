@@ -5,14 +5,18 @@ Run:  .venv/bin/python benchmarks/identify_speed.py [--model DIR] [--recordings 
 Simulates ``--recordings`` 121 s TIP recordings (MODEL §5 random parameters, stable
 ones), loads the model once (default: the bundled TIP model), then times, per recording,
 ``CnnIdentifier.identify``: the checks of the recording and its stimulus, the STFT
-features, the network and the parameters. Reports the median and 90th percentile per
-recording, with the time of the features and of the network alone, for 1 and for all
-torch threads. Writes benchmarks/results/identify_speed.json.
+features, the network, the parameters and, for a calibrated model, the intervals (the
+sensor-noise estimate and the conformal half-widths). Reports the median and 90th
+percentile per recording, with the time of the features and of the network alone, and
+the same identifier with its calibration switched off, timed in turn with it, for the
+cost of the intervals as a ratio; for 1 and for all torch threads. Writes
+benchmarks/results/identify_speed.json.
 """
 
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import os
 import statistics
@@ -52,11 +56,16 @@ def main() -> None:
     recordings = [batch.trial(b).to_recording() for b in np.flatnonzero(batch.stable)]
     recordings = recordings[: args.recordings]
     identifier.identify(recordings[0])  # warm up (first call allocates)
+    plain = copy.copy(identifier)
+    plain.calibration = None  # the same network, without intervals
     results = {"package_version": __version__, "model": str(identifier.model.path),
                "recordings": len(recordings), "cpus": os.cpu_count(), "threads": {}}
     for threads in sorted({1, os.cpu_count() or 1}):
         torch.set_num_threads(threads)
-        whole = [t for r in recordings for t in timed(lambda r=r: identifier.identify(r), 3)]
+        whole, without = [], []
+        for r in recordings:  # in turn, so that both see the same machine state
+            whole += timed(lambda r=r: identifier.identify(r), 3)
+            without += timed(lambda r=r: plain.identify(r), 3)
         rec = recordings[0]
         theta = rec.theta[: identifier.n_samples]
         tilt = rec.tilt[: identifier.n_samples]
@@ -66,12 +75,17 @@ def main() -> None:
         row = {"identify_ms_median": 1e3 * statistics.median(whole),
                "identify_ms_p90": 1e3 * float(np.percentile(whole, 90)),
                "features_ms_median": 1e3 * statistics.median(features),
-               "network_ms_median": 1e3 * statistics.median(network)}
+               "network_ms_median": 1e3 * statistics.median(network),
+               "calibrated": identifier.calibration is not None,
+               "identify_without_intervals_ms_median": 1e3 * statistics.median(without),
+               "intervals_time_ratio": statistics.median(whole) / statistics.median(without)}
         results["threads"][str(threads)] = row
         print(f"{threads} thread(s): identify {row['identify_ms_median']:.2f} ms median "
               f"({row['identify_ms_p90']:.2f} ms 90th percentile) per {len(rec.time)}-sample "
               f"recording at {FS_HZ:g} Hz; of which STFT features "
-              f"{row['features_ms_median']:.2f} ms, network {row['network_ms_median']:.2f} ms")
+              f"{row['features_ms_median']:.2f} ms, network {row['network_ms_median']:.2f} ms; "
+              f"without the intervals {row['identify_without_intervals_ms_median']:.2f} ms "
+              f"(with them {row['intervals_time_ratio']:.2f}× that)")
     atomic_write_text(args.out, json.dumps(results, indent=2) + "\n")
     print(f"wrote {args.out}")
 

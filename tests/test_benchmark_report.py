@@ -30,6 +30,11 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
     assert "## Sensor noise 0.01°" in text and "| cnn |" in text
     assert "Ending far from the truth, all noise levels: cnn " in text
     assert paths[2].stat().st_size > 10_000
+    # the bundled model is calibrated: every row says whether its intervals held the truth
+    assert all(len(r["inside_interval"]) == 3 for r in report.rows)
+    assert clean["interval_recordings"] == 2 and 0 <= min(map(min, clean["interval_coverage"]))
+    assert "## Do the 90 % intervals hold the truth?" in text
+    assert "| 0° | cnn | conformal, CNN (validation split) | 2 |" in text
 
 
 def test_an_interrupted_benchmark_goes_on_from_its_journal(tip, tmp_path):

@@ -39,6 +39,16 @@ def test_cnn_result_is_checked_by_resimulation(tip, tmp_path):
     fig = result.plot(tmp_path / "cnn.png")
     assert len(fig.axes) == 4 and (tmp_path / "cnn.png").stat().st_size > 10_000
     assert "E_rel" in result.summary()
+    # the bundled model is calibrated: intervals around every answer, said in words
+    iv = result.intervals
+    assert iv.method == "conformal, CNN (validation split)" and iv.level == 0.9
+    assert np.all(iv.lower <= result.normalised[:, :4])
+    assert np.all(result.normalised[:, :4] <= iv.upper)
+    assert data["intervals"]["modules"]["ankle"]["kp"]["determination"] in (
+        "well determined", "partly determined", "not determined")
+    assert "90 % intervals" in result.summary()
+    result.plot_intervals(tmp_path / "intervals.png")
+    assert (tmp_path / "intervals.png").stat().st_size > 10_000
 
 
 @pytest.mark.slow
@@ -55,6 +65,13 @@ def test_hybrid_on_a_noisy_recording_recovers_classes_and_kp(tip, tmp_path):
         assert abs(data["parameters"][joint]["kp"] / truth[joint].kp - 1) <= 0.05, joint
     assert data["fit"]["status"]["converged"]
     assert data["cnn"]["parameters"].keys() == data["parameters"].keys()  # kept beside
+    # the fit's intervals, calibrated for the hybrid, hold every Kp; drawn beside the plot
+    intervals = data["intervals"]
+    assert intervals["method"] == "Gauss-Newton SE × calibrated scale"
+    for joint in tip.joint_names:
+        kp = intervals["modules"][joint]["kp"]
+        assert kp["lower_si"] <= truth[joint].kp <= kp["upper_si"], joint
+    assert (tmp_path / "hybrid.intervals.png").stat().st_size > 10_000
     cnn_only = identify(Recording.from_csv(csv, tip.segment_names), tip, Method.CNN)
     assert data["e_rel"] < cnn_only.e_rel  # refining reproduces the sway better
 
@@ -66,6 +83,7 @@ def test_fit_method_needs_no_model(tip):
     assert result.class_probability is None and result.cnn is None
     assert result.classes == tuple(truth[j].controls for j in tip.joint_names)
     assert result.e_rel < 1e-4
+    assert result.intervals.method == "Gauss-Newton ±z·SE (coverage not checked)"
 
 
 @pytest.mark.slow

@@ -11,8 +11,8 @@ from scipy.stats import norm
 
 from posture_id.dec.parameters import default_parameters
 from posture_id.errors import PostureIdError
-from posture_id.fitting.result import FitResult
-from posture_id.identify.calibration import _ls_check, least_squares_scales
+from posture_id.fitting.result import FitResult, noise_allows
+from posture_id.identify.calibration import _ls_check
 from posture_id.uncertainty import (
     ConformalCalibration,
     Determination,
@@ -148,7 +148,7 @@ def test_calibration_interpolates_between_noise_levels_and_round_trips():
         ConformalCalibration.from_dict({"scales": []}, "calibration.json")
 
 
-def _fit_result(body, se: np.ndarray, noise_deg: float) -> FitResult:
+def _fit_result(body, se: np.ndarray, noise_deg: float, residual_sd: float) -> FitResult:
     rng = np.random.default_rng(7)
     n = body.n_segments
     recorded = np.radians(noise_deg) * rng.standard_normal((6051, n))
@@ -160,28 +160,33 @@ def _fit_result(body, se: np.ndarray, noise_deg: float) -> FitResult:
         poorly_determined=np.zeros((n, 4), bool), converged=True, iterations=1,
         evaluations=1, wall_time_s=0.0, cost=0.0, rms_deg=noise_deg, stages=(),
         backend="", notices=(), time=np.arange(6051) / 50, recorded=recorded,
-        fitted=recorded, segments=body.segment_names, joints=body.joint_names)
+        fitted=recorded, segments=body.segment_names, joints=body.joint_names,
+        residual_sd=residual_sd, noise_floor_deg=0.001)
 
 
 def test_an_interval_is_never_narrower_than_the_fits_noise_allows(tip):
     se = np.full((3, 4), 0.02)
-    fit = _fit_result(tip, se, 0.05)
     z = norm.ppf(0.95)
-    gauss = fit.intervals(default_parameters(tip), 0.9)
+    defaults = default_parameters(tip)
+    noisy = _fit_result(tip, se, 0.05, residual_sd=0.05)
+    gauss = noisy.intervals(defaults, 0.9)
     assert gauss.upper - gauss.lower == pytest.approx(np.full((3, 4), 2 * z * 0.02))
     # a calibration whose scales are below z (the fits looked better than their noise)
-    # cannot narrow the interval below the Gauss-Newton one ...
-    narrow = _calibration([0.5, 0.5])
-    floored = fit.intervals(default_parameters(tip), 0.9, narrow)
+    # cannot narrow the interval below the Gauss-Newton one of the residual noise ...
+    floored = noisy.intervals(defaults, 0.9, _calibration([0.5, 0.5]))
     assert floored.upper - floored.lower == pytest.approx(gauss.upper - gauss.lower)
     # ... while one that says the errors are larger widens it
-    wide = _calibration([3.0, 3.0])
-    widened = fit.intervals(default_parameters(tip), 0.9, wide)
+    widened = noisy.intervals(defaults, 0.9, _calibration([3.0, 3.0]))
     assert widened.upper - widened.lower == pytest.approx(np.full((3, 4), 2 * 3.0 * 0.02))
-    # and the scales made from fits are floored at z as well
-    scores = np.full((1, 200, 3, 4), 0.01)
-    scales = least_squares_scales(scores, np.array([0.05]), np.array([0.05]))
-    assert np.allclose(scales.scales[0], norm.ppf((1 + scales.levels) / 2)[:, None, None])
+    # a noise-free fit: its standard errors assumed the 0.001° floor, 100× its residual
+    # noise; calibration may narrow them to what the fits showed, but never below z times
+    # the residual noise's own standard errors
+    exact = _fit_result(tip, se, 0.0, residual_sd=1e-5)
+    assert np.allclose(exact.intervals(defaults, 0.9, _calibration([0.5, 0.5])).upper, 0.5 * 0.02)
+    least = exact.intervals(defaults, 0.9, _calibration([1e-4, 1e-4]))
+    assert np.allclose(least.upper, z * 1e-5 / 1e-3 * 0.02)
+    assert noise_allows(0.9, 0.05, 0.001) == pytest.approx(z)
+    assert noise_allows(0.9, 1e-5, 0.001) == pytest.approx(z * 0.01)
 
 
 def test_intervals_are_cut_at_zero_and_say_what_is_not_determined(tip):
@@ -212,7 +217,8 @@ def _rows(n, noise, se_scale, rng):
         estimate[:, :4] += se_scale * se * rng.standard_normal((3, 4))
         rows.append({"split": "test", "position": i, "noise_deg": noise,
                      "truth": truth.tolist(), "estimate": estimate.tolist(),
-                     "standard_errors": se.tolist(), "noise_estimate_deg": noise})
+                     "standard_errors": se.tolist(), "noise_estimate_deg": noise,
+                     "rms_deg": noise})
     return rows
 
 

@@ -194,7 +194,8 @@ def fit_recording(
 
     normalised = targets_from_q(best.q)
     params = parameters_from_qs(best.q[None], defaults).trial(0, body.joint_names)
-    se_norm, se_phys, poorly = _standard_errors(best, params, defaults, options, n)
+    se_norm, se_phys, poorly, residual_sd = _standard_errors(best, params, defaults, options,
+                                                             n)
     fitted = problem.simulate(best.q, u)
     result = FitResult(
         parameters=params, normalised=normalised, standard_errors=se_phys,
@@ -207,6 +208,7 @@ def fit_recording(
         backend=str(problem.backend), notices=tuple(notices), time=recording.time,
         recorded=measured, fitted=fitted, segments=body.segment_names,
         joints=body.joint_names, provenance=provenance(options, body, source=source),
+        residual_sd=residual_sd, noise_floor_deg=options.noise_floor_deg,
     )
     if options.locked is None or options.locked.max_offset_s == 0:
         return result
@@ -252,11 +254,13 @@ def _target(recording: Recording, stimulus: TiltProfile, options: FitOptions,
 
 def _standard_errors(best: StageResult, params: DecParameters, defaults: DecParameters,
                      options: FitOptions, n: int):
-    """Gauss-Newton standard errors (N, 4) normalised and physical, and the flags."""
+    """Gauss-Newton standard errors (N, 4) normalised and physical, the flags, and the
+    residual SD before the floor."""
     jac = best.jacobian
     r = best.residual
     dof = max(len(r) - jac.shape[1], 1)
-    sigma = max(math.sqrt(float(r @ r) / dof), options.noise_floor_deg)
+    residual_sd = math.sqrt(float(r @ r) / dof)
+    sigma = max(residual_sd, options.noise_floor_deg)
     with np.errstate(divide="ignore", invalid="ignore"):
         try:
             cov = sigma**2 * np.linalg.inv(jac.T @ jac)
@@ -269,7 +273,7 @@ def _standard_errors(best: StageResult, params: DecParameters, defaults: DecPara
     values = np.column_stack([params.array(f) for f in TARGET_FIELDS])
     with np.errstate(divide="ignore", invalid="ignore"):
         poorly = ~(1.96 * se_phys <= options.precision_rel * np.abs(values))
-    return se_norm, se_phys, poorly
+    return se_norm, se_phys, poorly, residual_sd
 
 
 def _bounds(options: FitOptions, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,7 +16,7 @@ from posture_id.uncertainty.conformal import ConformalCalibration
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
 
-__all__ = ["StageResult", "FitResult", "class_names"]
+__all__ = ["StageResult", "FitResult", "class_names", "noise_allows"]
 
 
 def class_names(signs) -> str:
@@ -74,6 +75,9 @@ class FitResult(JsonResult):
         provenance: package version, options and the body's identity.
         time_offset_s: the stimulus's fitted time offset, s (0 unless
             ``LockedOptions.max_offset_s`` asked for one).
+        residual_sd: the residual's SD (its units: degrees, or noise levels for a locked
+            fit) and noise_floor_deg the least σ the standard errors assumed; the SEs use
+            σ = max(residual_sd, noise_floor_deg).
     """
 
     parameters: DecParameters
@@ -97,6 +101,8 @@ class FitResult(JsonResult):
     joints: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
     time_offset_s: float = 0.0
+    residual_sd: float = math.nan
+    noise_floor_deg: float = 0.0
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -155,13 +161,15 @@ class FitResult(JsonResult):
         """Intervals of Kp, Ki, Kd, Δ at ``level``: ±z·SE (Gauss-Newton) or, with the
         ``scales`` of a calibration (:mod:`posture_id.identify.calibration`), ±scale·SE,
         where scale is the conformal one at the recording's estimated sensor noise and
-        never below z: a calibrated interval is never narrower than the fit's noise allows.
+        never below :func:`noise_allows`: a calibrated interval is never narrower than the
+        Gauss-Newton interval of the fit's own residual noise.
         ``defaults``: the body's default parameters (the normalisation's p_default)."""
         z = float(norm.ppf((1 + level) / 2))
         noise = sensor_noise_deg(self.recorded)
         factor, method = z, "Gauss-Newton ±z·SE (coverage not checked)"
         if scales is not None:
-            factor = np.maximum(scales.scale(level, noise), z)
+            least = noise_allows(level, self.residual_sd, self.noise_floor_deg)
+            factor = np.maximum(scales.scale(level, noise), least)
             method = "Gauss-Newton SE × calibrated scale"
         si = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
         return ParameterIntervals.around(self.normalised[:, :4],
@@ -172,6 +180,16 @@ class FitResult(JsonResult):
         """Recorded versus fitted sway per segment (degrees); saved to ``path`` if given,
         drawn into ``ax`` (N axes) if given."""
         return plot_fit(self, path=path, ax=ax)
+
+
+def noise_allows(level: float, residual_sd: float, noise_floor: float) -> float:
+    """The least scale of the standard errors at ``level``: z·σ_residual/σ_SE, the
+    Gauss-Newton half-width of the fit's own residual noise (z when the residual is above
+    the standard errors' floor; less when the floor made them wider than the noise)."""
+    z = float(norm.ppf((1 + level) / 2))
+    if not (noise_floor > 0 and math.isfinite(residual_sd)):
+        return z
+    return z * min(1.0, residual_sd / noise_floor)
 
 
 def _finite(x) -> float | None:

@@ -15,7 +15,8 @@
    are refined by least squares from the CNN's answer (:mod:`.fit_runs`, parallel,
    resumable). Reported: the coverage of the Gauss-Newton intervals ±z·SE as they are,
    and of the calibrated ones, scale·SE with the conformal scale of |error|/SE, never
-   below z (an interval is never narrower than the fit's own noise allows). The
+   below z·σ_residual/σ_SE (:func:`~posture_id.fitting.result.noise_allows`: an interval
+   is never narrower than the Gauss-Newton one of the fit's own residual noise). The
    calibrated coverage is cross-validated: each trial's interval uses the scales of the
    other folds. The scales from all fits go into ``calibration.json`` for ``identify``.
 """
@@ -32,6 +33,8 @@ from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.errors import PostureIdError
 from posture_id.fileio import JsonResult, atomic_write_text
+from posture_id.fitting.options import FitOptions
+from posture_id.fitting.result import noise_allows
 from posture_id.identify.fit_runs import FIT_JOURNAL, run_fits
 from posture_id.learning.calibration import (
     CnnCalibration,
@@ -64,20 +67,21 @@ BINS = 10
 
 
 def _coverage_block(truth: np.ndarray, estimate: np.ndarray, half_widths: dict) -> dict:
-    """Coverage and mean width per level of (T, N, 4) truth/estimate with half-widths
-    {level: (T, N, 4) or (N, 4)}."""
+    """Coverage and median width per level of (T, N, 4) truth/estimate with half-widths
+    {level: (T, N, 4) or (N, 4)} (the median: a few fits with huge standard errors would
+    make a mean say little about the typical recording)."""
     out = {}
     for level, h in half_widths.items():
         lower = np.maximum(estimate - h, -1.0)
         upper = estimate + h
         share = coverage(truth, lower, upper)
-        width = np.mean(np.broadcast_to(upper - lower, truth.shape), axis=0)
+        width = np.median(np.broadcast_to(upper - lower, truth.shape), axis=0)
         ratio, words = determination(width, level)
         out[f"{level:g}"] = {
             "coverage": share.tolist(),
             "coverage_95ci": [[list(coverage_interval(c, len(truth))) for c in row]
                               for row in share],
-            "mean_width": width.tolist(), "width_to_prior": ratio.tolist(),
+            "median_width": width.tolist(), "width_to_prior": ratio.tolist(),
             "determination": [[w.value for w in row] for row in words]}
     return out
 
@@ -244,15 +248,6 @@ def _cnn_check(model, data: Dataset, calibration: CnnCalibration, noise: float,
             "classes": _classes(run.logit, run.truth[..., 4], calibration.temperature)}
 
 
-def least_squares_scales(scores: np.ndarray, noise: np.ndarray,
-                         nominal: np.ndarray) -> ConformalCalibration:
-    """Conformal scales of |error|/SE (L, n, N, 4), each at least the Gaussian z of its
-    level: the calibrated interval is never narrower than the Gauss-Newton one."""
-    raw = ConformalCalibration.from_scores(Normaliser.STANDARD_ERROR, scores, noise, nominal)
-    z = norm.ppf((1 + raw.levels) / 2)[None, :, None, None]
-    return replace(raw, scales=np.maximum(raw.scales, z))
-
-
 def _ls_check(rows: list[dict], noise_levels: tuple[float, ...]) -> tuple[dict, dict | None]:
     """(per-level coverage of Gauss-Newton and calibrated intervals, the scales from all
     fits as a dict)."""
@@ -269,20 +264,27 @@ def _ls_check(rows: list[dict], noise_levels: tuple[float, ...]) -> tuple[dict, 
         se = np.array([r["standard_errors"] for r in group])
         se = np.where(se < 0, np.inf, se)
         arrays[lv] = (truth, estimate, se,
-                      np.array([r["noise_estimate_deg"] for r in group]))
-    scores = np.stack([np.abs(t - e) / s for t, e, s, _ in arrays.values()])
+                      np.array([r["noise_estimate_deg"] for r in group]),
+                      np.array([r["rms_deg"] for r in group]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scores = np.stack([np.abs(t - e) / s for t, e, s, _, _ in arrays.values()])
     noise_est = np.array([np.median(a[3]) for a in arrays.values()])
     nominal = np.array(noise_levels, dtype=float)
     fold = np.arange(n) % FOLDS
     out = {}
-    for lv, (truth, estimate, se, noise) in arrays.items():
+    floor = FitOptions().noise_floor_deg  # what the fits' standard errors assumed
+    for lv, (truth, estimate, se, noise, rms) in arrays.items():
         gauss = {level: norm.ppf((1 + level) / 2) * se for level in CHECKED_LEVELS}
         calibrated = {level: np.empty_like(se) for level in CHECKED_LEVELS}
         for f in range(FOLDS):
-            scales = least_squares_scales(scores[:, fold != f], noise_est, nominal)
+            scales = ConformalCalibration.from_scores(
+                Normaliser.STANDARD_ERROR, scores[:, fold != f], noise_est, nominal)
             for level in CHECKED_LEVELS:
                 for t in np.flatnonzero(fold == f):
-                    calibrated[level][t] = scales.scale(level, noise[t]) * se[t]
+                    # the rows' fits compare every sample: their residual SD is the RMS
+                    least = noise_allows(level, rms[t], floor)
+                    calibrated[level][t] = np.maximum(scales.scale(level, noise[t]),
+                                                      least) * se[t]
         out[f"{lv:g}"] = {"trials": n, "noise_estimate_deg_median": float(np.median(noise)),
                           "gauss_newton": _coverage_block(truth, estimate, gauss),
                           "calibrated": _coverage_block(truth, estimate, calibrated),
@@ -290,7 +292,8 @@ def _ls_check(rows: list[dict], noise_levels: tuple[float, ...]) -> tuple[dict, 
                               [np.array_equal(np.array(r["truth"])[:, 4],
                                               np.array(r["estimate"])[:, 4])
                                for r in by_level[lv][:n]]))}
-    return out, least_squares_scales(scores, noise_est, nominal).to_dict()
+    return out, ConformalCalibration.from_scores(Normaliser.STANDARD_ERROR, scores, noise_est,
+                                                 nominal).to_dict()
 
 
 def run_calibration(model_dir: str | Path, dataset_dir: str | Path, out: str | Path,

@@ -90,3 +90,25 @@ def _truth(body):
     from posture_id.dec.parameters import default_parameters
 
     return default_parameters(body)
+
+
+@pytest.mark.slow
+def test_least_squares_runs_resume_from_their_journal(calibrated, tmp_path):
+    from posture_id.bodies.body import load_body
+    from posture_id.errors import PostureIdError
+    from posture_id.identify.fit_runs import run_fits
+    from posture_id.learning.bundled import bundled_model_dir
+
+    model, _ = bundled_model_dir(load_body())
+    journal = tmp_path / "fits.journal.jsonl"
+    first = run_fits(model, calibrated / "set", "test", 1, (0.05,), journal, workers=1)
+    assert len(first) == 1
+    row = first[0]
+    assert np.array(row["estimate"]).shape == (3, 5) and row["converged"]
+    assert np.all(np.array(row["standard_errors"]) > 0)
+    assert row["noise_estimate_deg"] == pytest.approx(0.05, rel=0.1)
+    again = run_fits(model, calibrated / "set", "test", 2, (0.05,), journal, workers=1)
+    assert len(again) == 2 and again[0] == row  # the first read back, one new fit
+    assert len(journal.read_text().splitlines()) == 3
+    with pytest.raises(PostureIdError, match="journal of another set-up"):
+        run_fits(calibrated / "model", calibrated / "set", "test", 2, (0.05,), journal)

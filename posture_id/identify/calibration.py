@@ -154,6 +154,13 @@ class CalibrationReport(JsonResult):
                                      self.least_squares, "calibrated")
         if not self.least_squares:
             lines += ["", "Least squares was not run (`--fits 0`)."]
+        else:
+            lines += ["", "Least squares refined the CNN's answer with its classes kept; every "
+                      "class was right in " + ", ".join(
+                          f"{100 * r['every_class_right']:.1f} % of the fits at {n}°"
+                          for n, r in self.least_squares.items())
+                      + " (a fit with a wrong class is far off; no interval of its width "
+                      "holds it)."]
         lines += ["", "Coverage at every checked level (mean over modules and parameters; "
                       "min–max):", "", "| method | sensor noise | "
                   + " | ".join(f"{100 * lv:g} %" for lv in CHECKED_LEVELS) + " |",

@@ -366,26 +366,35 @@ def plot_coverage(levels, curves: dict, labels, band, path=None, ax=None):
 
 
 def plot_reliability(diagrams: dict, path=None, ax=None):
-    """Reliability diagrams: observed frequency against mean predicted probability per bin.
+    """Reliability diagrams (top: observed frequency against mean predicted probability per
+    bin) and how many samples each bin holds (bottom, log scale: a bin of a handful of
+    samples scatters widely).
 
     Args:
         diagrams: name → {"mean_probability", "frequency", "count"} (bins, NaN when empty).
     """
-    fig, axes = _axes(ax, 1, 1, (6, 5.5))
-    a = axes[0, 0]
-    a.plot([0, 1], [0, 1], color="0.5", lw=0.8, ls="--", label="perfectly calibrated")
+    fig, axes = _axes(ax, 2, 1, (6.5, 7.5), gridspec_kw={"height_ratios": [3, 1.3]})
+    top, bottom = axes[0, 0], axes[1, 0]
+    top.plot([0, 1], [0, 1], color="0.5", lw=0.8, ls="--", label="perfectly calibrated")
+    width = 0.8 / max(len(diagrams), 1) / 10
     for i, (name, d) in enumerate(diagrams.items()):
         p = np.asarray(d["mean_probability"], dtype=float)
         f = np.asarray(d["frequency"], dtype=float)
         n = np.asarray(d["count"], dtype=float)
         used = n > 0
-        a.plot(p[used], f[used], marker="o", color=f"C{i}", label=name)
-        a.scatter(p[used], f[used], s=10 + 60 * n[used] / n.sum(), color=f"C{i}", alpha=0.4)
-    a.set_xlabel("predicted P(C = +1, controls the COM)")
-    a.set_ylabel("observed frequency of C = +1")
-    a.set_title("class probabilities (marker area: share of samples)")
-    a.legend(fontsize=7)
-    a.grid(alpha=0.3)
+        top.plot(p[used], f[used], marker="o", color=f"C{i}", label=name)
+        centres = (np.arange(len(n)) + 0.5) / len(n)
+        bottom.bar(centres + (i - (len(diagrams) - 1) / 2) * width, np.where(n > 0, n, np.nan),
+                   width, color=f"C{i}")
+    top.set_ylabel("observed frequency of C = +1")
+    top.set_title("class probabilities")
+    top.legend(fontsize=7)
+    top.grid(alpha=0.3)
+    bottom.set_yscale("log")
+    bottom.set_xlim(0, 1)
+    bottom.set_xlabel("predicted P(C = +1, controls the COM)")
+    bottom.set_ylabel("samples per bin")
+    bottom.grid(alpha=0.3, axis="y")
     fig.tight_layout()
     _save(fig, path)
     return fig

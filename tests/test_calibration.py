@@ -112,3 +112,13 @@ def test_least_squares_runs_resume_from_their_journal(calibrated, tmp_path):
     assert len(journal.read_text().splitlines()) == 3
     with pytest.raises(PostureIdError, match="journal of another set-up"):
         run_fits(calibrated / "model", calibrated / "set", "test", 2, (0.05,), journal)
+
+
+def test_an_unreadable_calibration_is_made_anew(calibrated, tmp_path):
+    model = tmp_path / "model"
+    shutil.copytree(calibrated / "model", model)
+    (model / CALIBRATION).write_text("{not json")
+    assert main(["calibration", str(model), str(calibrated / "set"), "--out",
+                 str(tmp_path / "report"), "--noise-deg", "0.05"]) == 0
+    assert CnnCalibration.load(model).weights_sha256 == CnnCalibration.load(
+        calibrated / "model").weights_sha256

@@ -43,6 +43,7 @@ from posture_id.learning.calibration import (
     noise_levels_of,
 )
 from posture_id.learning.checkpoint import load_model
+from posture_id.learning.config import LearningError
 from posture_id.plotting import plot_coverage, plot_identifiability, plot_reliability
 from posture_id.progress import Progress, report
 from posture_id.uncertainty.conformal import ConformalCalibration, Normaliser
@@ -310,7 +311,10 @@ def run_calibration(model_dir: str | Path, dataset_dir: str | Path, out: str | P
                     progress: Progress | None = None) -> CalibrationReport:
     """Calibrate and check (see the module doc); the report goes into ``out``."""
     model = load_model(model_dir)
-    previous = CnnCalibration.load(model_dir)
+    try:
+        previous = CnnCalibration.load(model_dir)
+    except LearningError:
+        previous = None  # an unreadable or older calibration is about to be made anew
     data = Dataset.open(dataset_dir)
     if data.n_segments != len(model.sidecar.get("body", {}).get("joints", [])):
         raise PostureIdError(f"{dataset_dir}: a {data.n_segments}-segment data set; the model "

@@ -137,7 +137,10 @@ def _calibration(scales_by_noise, noise=(0.0, 0.05), modules=3) -> ConformalCali
 def test_calibration_interpolates_between_noise_levels_and_round_trips():
     cal = _calibration([0.1, 0.3])
     assert cal.scale(0.9, 0.0) == pytest.approx(0.1)
-    assert cal.scale(0.9, 0.025) == pytest.approx(0.2)
+    # geometric between levels: a scale 1000× smaller at 0° stays small just above 0°
+    assert cal.scale(0.9, 0.025) == pytest.approx(np.sqrt(0.1 * 0.3))
+    steep = _calibration([1e-3, 1.0])
+    assert steep.scale(0.9, 0.0005) == pytest.approx(1e-3 * 1000 ** 0.01)
     assert cal.scale(0.9, 0.5) == pytest.approx(0.3)  # held beyond the noisiest level
     assert cal.beyond(0.5) and not cal.beyond(0.05)
     back = ConformalCalibration.from_dict(cal.to_dict(), "test")

@@ -13,8 +13,8 @@ so the quantiles are taken separately at several sensor-noise levels, each calib
 level labelled with the median *estimated* noise of its trials
 (:func:`~posture_id.uncertainty.noise.sensor_noise_deg`), and a recording gets the
 half-widths linearly interpolated at its own estimated noise (**[decision]**: a Mondrian
-split by noise, with interpolation between the calibrated levels; a recording noisier than
-the noisiest level gets that level's widths and a notice).
+split by noise, with geometric interpolation between the calibrated levels; a recording
+noisier than the noisiest level gets that level's widths and a notice).
 
 Quantiles are stored on :data:`LEVEL_GRID` (50 % to 99 % in steps of 1 %); a level
 between grid points takes the next higher one (conservative).
@@ -101,12 +101,16 @@ class ConformalCalibration:
         x = float(np.clip(noise_deg, self.noise_deg[0], self.noise_deg[-1]))
         j = int(np.clip(np.searchsorted(self.noise_deg, x) - 1, 0, len(self.noise_deg) - 2))
         w = (x - self.noise_deg[j]) / (self.noise_deg[j + 1] - self.noise_deg[j])
+        if w <= 0 or w >= 1:
+            return table[j + 1] if w >= 1 else table[j]
         low, high = table[j], table[j + 1]
-        with np.errstate(invalid="ignore"):
-            mixed = (1 - w) * low + w * high
+        with np.errstate(invalid="ignore", divide="ignore"):
+            # geometric: scales differ by orders of magnitude between a noise-free level
+            # and a noisy one, and a trial just above the former must keep its scale
+            mixed = np.where((low > 0) & (high > 0), low ** (1 - w) * high ** w,
+                             (1 - w) * low + w * high)
         # an infinite scale (too few calibration trials for the level) stays infinite
-        return np.where(np.isinf(low) | np.isinf(high), np.inf, mixed) if 0 < w < 1 else (
-            high if w >= 1 else low)
+        return np.where(np.isinf(low) | np.isinf(high), np.inf, mixed)
 
     def beyond(self, noise_deg: float) -> bool:
         """True when ``noise_deg`` is above the noisiest calibrated level (by 20 %)."""

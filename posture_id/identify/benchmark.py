@@ -22,10 +22,8 @@ from __future__ import annotations
 
 import json
 import math
-import multiprocessing
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,6 +36,7 @@ from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write_text, json_text, jsonable
 from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Method, identify
+from posture_id.identify.workers import one_thread_processes
 from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.checkpoint import SIDECAR
 from posture_id.learning.identifier import CnnIdentifier
@@ -54,8 +53,6 @@ FAR_E_REL = 0.10
 #: The file in the report folder that finished identifications are appended to.
 JOURNAL = "cnn_vs_optimizer.journal.jsonl"
 METHODS = (Method.CNN, Method.FIT, Method.HYBRID)
-_THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                     "NUMBA_NUM_THREADS")
 
 
 def _held_out(body: Body, trials: int, seed: int) -> ParameterArrays:
@@ -286,23 +283,12 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
     todo = [t for t in tasks if _task_key(t) not in done]
     report(progress, len(rows), len(tasks), "identification")
     workers = workers or os.cpu_count() or 1
-    # fresh processes (spawned: torch and fork do not mix), one thread of math each
-    saved = {k: os.environ.get(k) for k in _THREAD_VARIABLES}
-    os.environ.update({k: "1" for k in _THREAD_VARIABLES})
-    try:
-        with ProcessPoolExecutor(max_workers=workers,
-                                 mp_context=multiprocessing.get_context("spawn")) as pool:
-            for row in pool.map(_one, todo, chunksize=1):
-                rows.append(row)
-                if journal is not None:
-                    append_journal(Path(journal), header, row)
-                report(progress, len(rows), len(tasks), "identification")
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+    with one_thread_processes(workers) as pool:
+        for row in pool.map(_one, todo, chunksize=1):
+            rows.append(row)
+            if journal is not None:
+                append_journal(Path(journal), header, row)
+            report(progress, len(rows), len(tasks), "identification")
     rows.sort(key=lambda r: (noise_levels.index(r["noise_deg"]), r["index"],
                              [m.value for m in methods].index(r["method"])))
     return BenchmarkReport(body.name, body.joint_names, held_out.n_trials, tuple(noise_levels),
@@ -328,8 +314,8 @@ def read_journal(path: Path, header: dict, key=None) -> dict[tuple, dict]:
     except json.JSONDecodeError:
         found = None
     if found != header:
-        raise PostureIdError(f"{path}: a benchmark journal of another set-up (body, model, "
-                             "trials or seed differ); remove it or choose another --out")
+        raise PostureIdError(f"{path}: a journal of another set-up (the body, model, data "
+                             "set, trials or seed differ); remove it or choose another --out")
     rows, kept = {}, [lines[0]]
     for line in lines[1:]:
         try:

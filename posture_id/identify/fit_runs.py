@@ -13,10 +13,7 @@ and every finished trial is appended to a journal, so an interrupted run resumes
 from __future__ import annotations
 
 import json
-import multiprocessing
-import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +23,7 @@ from posture_id.datasets.store import Dataset
 from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import FitOptions, FixedClasses
 from posture_id.identify.benchmark import append_journal, read_journal
+from posture_id.identify.workers import one_thread_processes
 from posture_id.learning.checkpoint import SIDECAR
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.learning.samples import stimulus_of
@@ -37,8 +35,6 @@ __all__ = ["FIT_JOURNAL", "held_out_recording", "run_fits", "split_trials"]
 
 #: The journal of finished fits, in the calibration report's folder.
 FIT_JOURNAL = "fits.journal.jsonl"
-_THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                     "NUMBA_NUM_THREADS")
 _LOADED: dict = {}
 
 
@@ -121,19 +117,9 @@ def run_fits(model_dir: str | Path, dataset_dir: str | Path, split: str, count: 
     rows = [done[t] for t in ((s, p, n) for _, _, s, p, _, _, n in tasks) if t in done]
     todo = [t for t in tasks if (t[2], t[3], t[6]) not in done]
     report(progress, len(rows), len(tasks), "fit")
-    saved = {k: os.environ.get(k) for k in _THREAD_VARIABLES}
-    os.environ.update({k: "1" for k in _THREAD_VARIABLES})
-    try:
-        with ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1,
-                                 mp_context=multiprocessing.get_context("spawn")) as pool:
-            for row in pool.map(_one, todo, chunksize=1):
-                rows.append(row)
-                append_journal(Path(journal), header, row)
-                report(progress, len(rows), len(tasks), "fit")
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+    with one_thread_processes(workers) as pool:
+        for row in pool.map(_one, todo, chunksize=1):
+            rows.append(row)
+            append_journal(Path(journal), header, row)
+            report(progress, len(rows), len(tasks), "fit")
     return rows

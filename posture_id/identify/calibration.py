@@ -161,7 +161,9 @@ class CalibrationReport(JsonResult):
                           f"{100 * r['every_class_right']:.1f} % of the fits at {n}°"
                           for n, r in self.least_squares.items())
                       + " (a fit with a wrong class is far off; no interval of its width "
-                      "holds it)."]
+                      "holds it). Median residual RMS: " + ", ".join(
+                          f"{r['residual_rms_deg_median']:.2g}° at {n}°"
+                          for n, r in self.least_squares.items()) + "."]
         lines += ["", "Coverage at every checked level (mean over modules and parameters; "
                       "min–max):", "", "| method | sensor noise | "
                   + " | ".join(f"{100 * lv:g} %" for lv in CHECKED_LEVELS) + " |",
@@ -294,6 +296,7 @@ def _ls_check(rows: list[dict], noise_levels: tuple[float, ...]) -> tuple[dict, 
                     calibrated[level][t] = np.maximum(scales.scale(level, noise[t]),
                                                       least) * se[t]
         out[f"{lv:g}"] = {"trials": n, "noise_estimate_deg_median": float(np.median(noise)),
+                          "residual_rms_deg_median": float(np.median(rms)),
                           "gauss_newton": _coverage_block(truth, estimate, gauss),
                           "calibrated": _coverage_block(truth, estimate, calibrated),
                           "every_class_right": float(np.mean(

@@ -98,8 +98,8 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     truth, recording = _noisy_trial(tip, 12, 0.01)
     honest = CnnIdentifier.identify
 
-    def confidently_wrong(self, rec, source="recording"):
-        answer = honest(self, rec, source)
+    def confidently_wrong(self, rec, source="recording", level=0.9):
+        answer = honest(self, rec, source, level)
         wrong = "joint" if truth["knee"].controls == "com" else "com"
         probability = np.where(np.array(tip.joint_names) == "knee",
                                1.0 if wrong == "com" else 0.0,

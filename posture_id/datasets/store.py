@@ -75,27 +75,41 @@ class Dataset:
     def n_segments(self) -> int:
         return self.manifest["body"]["n_segments"]
 
-    def load_shard(self, k: int) -> dict[str, np.ndarray]:
-        """Arrays of shard k; the kept-trial arrays cut to the trials the set uses."""
+    def load_shard(self, k: int, keys: tuple[str, ...] | None = None
+                   ) -> dict[str, np.ndarray]:
+        """Arrays of shard k; the kept-trial arrays cut to the trials the set uses.
+        ``keys``: read only these (the images are most of a shard's bytes)."""
         entry = self.shards[k]
         file = self.path / entry["file"]
         try:
             with np.load(file, allow_pickle=False) as npz:
-                arrays = {key: npz[key] for key in npz.files}
+                arrays = {key: npz[key] for key in npz.files if keys is None or key in keys}
         except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
             raise DatasetError(f"{file}: cannot be read ({type(exc).__name__}: {exc}); check "
                                "the set without --no-verify") from None
-        missing = [key for key in SHARD_ARRAYS if key not in arrays]
+        missing = [key for key in (SHARD_ARRAYS if keys is None else keys)
+                   if key not in arrays and key not in ("sensor_noise_deg", "motor_noise_deg")]
         if missing:
             raise DatasetError(f"{file}: shard lacks {', '.join(missing)}")
-        # sets made before sensor noise existed are noise-free
-        arrays.setdefault("sensor_noise_deg", np.zeros(len(arrays["targets"])))
-        arrays.setdefault("motor_noise_deg", np.zeros(len(arrays["targets"])))
         used = entry["used"]
+        # sets made before sensor noise existed are noise-free
+        for key in ("sensor_noise_deg", "motor_noise_deg"):
+            if keys is None or key in keys:
+                arrays.setdefault(key, np.zeros(used))
         for key in ("theta", "alpha_bs", "modular", "monolithic", "targets", "sensor_noise_deg",
                     "motor_noise_deg"):
-            arrays[key] = arrays[key][:used]
+            if key in arrays:
+                arrays[key] = arrays[key][:used]
         return arrays
+
+    def split_local(self, split: str) -> list[np.ndarray]:
+        """Per shard, the indices among its used trials of the ``split``'s trials, in
+        data-set order."""
+        indices = self.split()[split]
+        used = np.array([entry["used"] for entry in self.shards])
+        offsets = np.concatenate([[0], np.cumsum(used)])
+        return [indices[(indices >= offsets[k]) & (indices < offsets[k + 1])] - offsets[k]
+                for k in range(len(used))]
 
     def iter_shards(self) -> Iterator[dict[str, np.ndarray]]:
         for k in range(len(self.shards)):

@@ -53,7 +53,7 @@ from posture_id.uncertainty.coverage import (
     expected_calibration_error,
     reliability,
 )
-from posture_id.uncertainty.identifiability import determination
+from posture_id.uncertainty.identifiability import PARTLY, WELL, determination, prior_interval
 
 __all__ = ["CalibrationReport", "run_calibration", "CHECKED_LEVELS", "TARGET_BAND"]
 
@@ -137,6 +137,8 @@ class CalibrationReport(JsonResult):
 
     def to_markdown(self) -> str:
         names = " | ".join(TARGET_FIELDS)
+        low, high = prior_interval(0.9)
+        prior_width = high - low
         lines = ["# Calibration of the intervals and class probabilities", "",
                  f"Model `{self.model_dir}`, data set `{self.dataset_dir}`. CNN intervals: "
                  f"conformal on the validation split at sensor noise "
@@ -193,9 +195,9 @@ class CalibrationReport(JsonResult):
                                      zip(self.joints, after["ece_per_module"], strict=True))
                          + " |")
         lines += ["", "## Identifiability: 90 % interval width against the prior's", "",
-                  "The prior's 90 % interval of p̃ = p/p_default − 1 is 1.61 wide "
-                  "(MODEL §5). Below 0.25: well determined; below 0.75: partly; otherwise "
-                  "not determined by the recording.", "",
+                  f"The prior's 90 % interval of p̃ = p/p_default − 1 is {prior_width:.2f} wide "
+                  f"(MODEL §5). Below {WELL:g}: well determined; below {PARTLY:g}: partly; "
+                  "otherwise not determined by the recording.", "",
                   f"| method | sensor noise | module | {names} |",
                   "|---|---|---|" + "---|" * len(TARGET_FIELDS)]
         for method, block, key in (("CNN", self.cnn, "intervals"),

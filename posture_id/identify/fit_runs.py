@@ -41,18 +41,15 @@ _LOADED: dict = {}
 def split_trials(data: Dataset, split: str, count: int) -> list[tuple[int, int]]:
     """(shard, index among the shard's kept trials) of the first ``count`` trials of a
     split, in data-set order."""
-    indices = data.split()[split][:count]
-    used = np.array([entry["used"] for entry in data.shards])
-    offsets = np.concatenate([[0], np.cumsum(used)])
-    shard = np.searchsorted(offsets, indices, side="right") - 1
-    return [(int(k), int(i - offsets[k])) for k, i in zip(shard, indices, strict=True)]
+    places = [(k, int(i)) for k, local in enumerate(data.split_local(split)) for i in local]
+    return places[:count]
 
 
 def held_out_recording(data: Dataset, shard: int, local: int, noise_deg: float,
                        seed: int) -> tuple[Recording, np.ndarray]:
     """(recording with white sensor noise of ``noise_deg``°, true normalised targets (N, 5))
     of one stored trial."""
-    arrays = data.load_shard(shard)
+    arrays = data.load_shard(shard, keys=("theta", "targets"))
     theta = arrays["theta"][local].astype(np.float64)
     rate = float(data.manifest["options"]["sample_rate_hz"])
     t = np.arange(len(theta)) / rate

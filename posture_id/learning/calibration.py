@@ -27,7 +27,7 @@ from posture_id.learning.checkpoint import LoadedModel
 from posture_id.learning.config import ClassOutput, Layout, LearningError
 from posture_id.learning.inputs import sway_features
 from posture_id.learning.prediction import predict_images
-from posture_id.learning.samples import SplitSamples, stimulus_of
+from posture_id.learning.samples import stimulus_of
 from posture_id.progress import Progress, report
 from posture_id.uncertainty.conformal import ConformalCalibration, Normaliser
 from posture_id.uncertainty.coverage import fit_temperature
@@ -62,15 +62,15 @@ def held_out_predictions(model: LoadedModel, data: Dataset, split: str, noise_de
     """The CNN's answers on every trial of ``split`` with white sensor noise of
     ``noise_deg``° added to the stored noise-free sway (seeded by shard and level)."""
     layout = model.config.layout
-    samples = SplitSamples(data, split, Layout.MONOLITHIC, model.standardiser)
+    locals_ = data.split_local(split)
     profile = stimulus_of(data.manifest["stimulus"])
     rate = float(data.manifest["options"]["sample_rate_hz"])
     estimate, truth, logit, noise = [], [], [], []
-    shards = [k for k, local in enumerate(samples.local) if len(local)]
+    shards = [k for k, local in enumerate(locals_) if len(local)]
     for done, k in enumerate(shards):
         report(progress, done, len(shards), f"{split} split at {noise_deg:g}°")
-        arrays = data.load_shard(k)
-        local = samples.local[k]
+        arrays = data.load_shard(k, keys=("theta", "targets"))
+        local = locals_[k]
         theta = arrays["theta"][local].astype(np.float64)
         rng = np.random.default_rng(np.random.SeedSequence(
             [k, int(round(1e6 * noise_deg)), _NOISE_STREAM]))

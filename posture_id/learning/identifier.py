@@ -157,6 +157,19 @@ class CnnIdentifier:
     def features(self, recording: Recording, source: str = "recording") -> np.ndarray:
         """(M, C, 51, 51) images of a recording, or (1, 3N, 1, F) FRF features for an FRF
         model: checked against the model's stimulus."""
+        tilt, theta, _ = self._window(recording, source)
+        return self._features(tilt, theta)
+
+    def _features(self, tilt: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        out = sway_features(self.model.config.layout, self.profile, tilt, theta[None])
+        return out if self.model.config.layout is not Layout.MODULAR else out.reshape(
+            -1, *out.shape[2:])
+
+    def _window(self, recording: Recording, source: str
+                ) -> tuple[np.ndarray, np.ndarray, bool]:
+        """(tilt (S,), segment angles (S, N)) rad of the model's window at 50 Hz, and
+        whether the recording had to be resampled; checked against the model's body and
+        stimulus."""
         recording.check_segments(self.body.segment_names, source)
         if not recording.evenly_sampled():
             raise RecordingError(f"{source}: samples are not evenly spaced in time")
@@ -177,9 +190,7 @@ class CnnIdentifier:
             if hint is None:
                 raise
             raise RecordingError(f"{error}; and {hint.removeprefix(source + ': ')}") from None
-        out = sway_features(self.model.config.layout, self.profile, tilt, theta[None])
-        return out if self.model.config.layout is not Layout.MODULAR else out.reshape(
-            -1, *out.shape[2:])
+        return tilt, theta, recording is not as_given
 
     def _stimulus_text(self) -> str:
         s = self.stimulus
@@ -200,9 +211,10 @@ class CnnIdentifier:
                  level: float = DEFAULT_LEVEL) -> CnnIdentification:
         """The CNN's parameters for one recording, with intervals at ``level`` when the
         model is calibrated."""
-        images = self.features(recording, source)
+        tilt, theta, resampled = self._window(recording, source)
+        images = self._features(tilt, theta)
         notices = self.notices
-        if recording.resampled(FS_HZ) is not recording:
+        if resampled:
             notices += (f"{source}: resampled from {recording.sample_rate_hz:.4g} Hz to "
                         f"{FS_HZ:g} Hz by linear interpolation",)
         prediction = predict_images(self.model, images)
@@ -218,7 +230,7 @@ class CnnIdentifier:
         if self.calibration is not None:
             if self.calibration.temperature is not None:
                 probability = self.calibration.class_probability(logit)
-            noise = sensor_noise_deg(recording.resampled(FS_HZ).theta[: self.n_samples])
+            noise = sensor_noise_deg(theta)
             conformal = self.calibration.intervals
             defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
             intervals = ParameterIntervals.around(

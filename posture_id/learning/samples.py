@@ -121,13 +121,9 @@ class SplitSamples:
         self.standardiser = standardiser
         self.buffer_shards = buffer_shards
         self.n_modules = data.n_segments
-        indices = data.split()[split]
-        used = np.array([entry["used"] for entry in data.shards])
-        offsets = np.concatenate([[0], np.cumsum(used)])
         #: per shard, the local indices of this split's trials in it
-        self.local = [indices[(indices >= offsets[k]) & (indices < offsets[k + 1])] - offsets[k]
-                      for k in range(len(used))]
-        self.trials = int(len(indices))
+        self.local = data.split_local(split)
+        self.trials = int(sum(len(local) for local in self.local))
         if self.trials == 0:
             raise LearningError(f"{data.path}: the {split} split holds no trials")
         self._memory: tuple[np.ndarray, np.ndarray] | None = None

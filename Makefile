@@ -24,7 +24,7 @@ demo: $(STAMP)
 
 # The example recordings shipped for the demo: simulated subjects (their true parameters
 # in *.truth.json) with 0.01° white sensor noise.
-EXAMPLES := posture_id/identify/examples
+EXAMPLES := posture_id/studies/examples
 examples: $(STAMP)
 	$(BIN)/posture-id simulate --params $(EXAMPLES)/tip_subject.truth.json \
 	  --noise-deg 0.01 --seed 1 --out $(EXAMPLES)/tip_subject.csv
@@ -69,7 +69,7 @@ model: $(STAMP)
 	  --quiet
 	$(BIN)/posture-id evaluate data/models/$(NAME) data/$(NAME) --out docs/models/$(NAME)
 	$(BIN)/posture-id calibration data/models/$(NAME) data/$(NAME) \
-	  --out docs/models/$(NAME)/calibration --fits $(FITS) > /dev/null
+	  --out docs/models/$(NAME)/calibration --fits $(FITS) --install > /dev/null
 	mkdir -p $(MODELS_DIR)/$(NAME)
 	cp data/models/$(NAME)/model.json data/models/$(NAME)/log.jsonl \
 	  data/models/$(NAME)/loss.png docs/models/$(NAME)/
@@ -82,10 +82,10 @@ model: $(STAMP)
 FITS ?= 0
 calibration: $(STAMP)
 	$(BIN)/posture-id calibration data/models/tip_default data/tip_default \
-	  --out docs/models/tip_default/calibration --fits 500 > /dev/null
+	  --out docs/models/tip_default/calibration --fits 500 --install > /dev/null
 	$(BIN)/posture-id calibration data/models/$(notdir $(TWO_SEGMENT:.urdf=)) \
 	  data/$(notdir $(TWO_SEGMENT:.urdf=)) \
-	  --out docs/models/$(notdir $(TWO_SEGMENT:.urdf=))/calibration > /dev/null
+	  --out docs/models/$(notdir $(TWO_SEGMENT:.urdf=))/calibration --install > /dev/null
 	cp data/models/tip_default/calibration.json $(MODELS_DIR)/tip_default/
 	cp data/models/$(notdir $(TWO_SEGMENT:.urdf=))/calibration.json \
 	  $(MODELS_DIR)/$(notdir $(TWO_SEGMENT:.urdf=))/

@@ -20,6 +20,7 @@ import numpy as np
 from posture_id import __version__, load_body, sample_parameters, simulate_batch
 from posture_id.fileio import atomic_write_text
 from posture_id.learning.identifier import CnnIdentifier
+from posture_id.trials import prepare_trial
 
 
 def main() -> None:
@@ -41,7 +42,7 @@ def main() -> None:
             recording = batch.trial(b).to_recording()
             if noise:
                 recording = recording.with_sensor_noise(noise, int(b))
-            got = identifier.identify(recording).classes
+            got = identifier.identify(prepare_trial(recording)).classes
             right = [g == truth[j].controls for g, j in zip(got, body.joint_names, strict=True)]
             trials.append(all(right))
             modules += right

@@ -30,6 +30,7 @@ from posture_id.dec.prior import sample_parameters
 from posture_id.fileio import atomic_write_text
 from posture_id.fitting import ExhaustiveClasses, FitOptions, FitProblem, fit_recording
 from posture_id.recording import Recording
+from posture_id.trials import prepare_trial
 
 FIELDS = ("kp", "ki", "kd", "delay_s")
 
@@ -89,7 +90,7 @@ def main() -> None:
     for i, (truth, rec) in enumerate(data):
         for start, init in (("defaults", None), ("truth_30pct", perturbed(truth, rng))):
             t0 = time.perf_counter()
-            fit = fit_recording(rec, body, init, problem=problem)
+            fit = fit_recording(prepare_trial(rec), body, init, problem=problem)
             row = summarise(fit, truth, body)
             rows[start].append(row)
             print(f"recording {i} from {start:<11}: {time.perf_counter() - t0:5.1f} s, "
@@ -97,7 +98,7 @@ def main() -> None:
                   f"max rel. error of determined parameters "
                   f"{np.max(np.where(fit.poorly_determined, 0, np.abs(row['rel_error']))):.2e}")
         if i < args.exhaustive:
-            fit = fit_recording(rec, body, None, exhaustive, problem=problem)
+            fit = fit_recording(prepare_trial(rec), body, None, exhaustive, problem=problem)
             row = summarise(fit, truth, body)
             rows["exhaustive"].append(row)
             print(f"recording {i} exhaustive  : {fit.wall_time_s:5.1f} s, classes "

@@ -31,6 +31,7 @@ from posture_id.datasets.features import FS_HZ, modular_images, stft
 from posture_id.fileio import atomic_write_text
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.learning.prediction import predict_images
+from posture_id.trials import prepare_trial
 
 
 def timed(fn, repeats: int) -> list[float]:
@@ -55,7 +56,7 @@ def main() -> None:
     batch = simulate_batch(body, params)
     recordings = [batch.trial(b).to_recording() for b in np.flatnonzero(batch.stable)]
     recordings = recordings[: args.recordings]
-    identifier.identify(recordings[0])  # warm up (first call allocates)
+    identifier.identify(prepare_trial(recordings[0]))  # warm up (first call allocates)
     plain = copy.copy(identifier)
     plain.calibration = None  # the same network, without intervals
     results = {"package_version": __version__, "model": str(identifier.model.path),
@@ -64,13 +65,13 @@ def main() -> None:
         torch.set_num_threads(threads)
         whole, without = [], []
         for r in recordings:  # in turn, so that both see the same machine state
-            whole += timed(lambda r=r: identifier.identify(r), 3)
-            without += timed(lambda r=r: plain.identify(r), 3)
+            whole += timed(lambda r=r: identifier.identify(prepare_trial(r)), 3)
+            without += timed(lambda r=r: plain.identify(prepare_trial(r)), 3)
         rec = recordings[0]
         theta = rec.theta[: identifier.n_samples]
         tilt = rec.tilt[: identifier.n_samples]
         features = timed(lambda t=tilt, th=theta: modular_images(stft(t), stft(th.T)[None]), 50)
-        images = identifier.features(rec)
+        images = identifier.features(prepare_trial(rec))
         network = timed(lambda x=images: predict_images(identifier.model, x), 50)
         row = {"identify_ms_median": 1e3 * statistics.median(whole),
                "identify_ms_p90": 1e3 * float(np.percentile(whole, 90)),

@@ -44,11 +44,13 @@ from posture_id.errors import SimulationError
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.fitting import FitOptions, fit_recording
 from posture_id.frf.locked import LockedOptions
-from posture_id.identify.benchmark import append_journal, read_journal
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.plotting import plot_benchmark
 from posture_id.simulation import prts, simulate
+from posture_id.simulation.metrics import sway_errors
 from posture_id.simulation.subjects import people_like
+from posture_id.studies.journal import Journal
+from posture_id.trials import prepare_trial
 
 ROOT = Path(__file__).resolve().parent.parent
 STIMULI = {"242": dict(states=242, cycles=2), "80": dict(states=80, cycles=6)}
@@ -96,19 +98,19 @@ def _one(task: tuple) -> dict:
     locked_fit = FitOptions(threads=1, locked=LockedOptions())
     start = time.perf_counter()
     if method == "raw LS":
-        params = fit_recording(rec, body, options=FitOptions(threads=1), stimulus=stim).parameters
+        params = fit_recording(prepare_trial(rec, stim), body,
+                               options=FitOptions(threads=1)).parameters
     elif method == "locked LS":
-        params = fit_recording(rec, body, options=locked_fit, stimulus=stim).parameters
+        params = fit_recording(prepare_trial(rec, stim), body, options=locked_fit).parameters
     elif method == "CNN":
-        params = nets["cnn"].identify(rec).parameters
+        params = nets["cnn"].identify(prepare_trial(rec, stim)).parameters
     else:
-        params = nets["frf"].identify(rec).parameters
+        params = nets["frf"].identify(prepare_trial(rec, stim)).parameters
     seconds = time.perf_counter() - start
     again = simulate(body, params, stim)
     reference = subject.locked.alpha[:, 0]
     got = again.alpha[: len(reference), 0]
-    e_rel = (math.inf if not np.all(np.isfinite(got))
-             else float(np.linalg.norm(got - reference) / np.linalg.norm(reference)))
+    e_rel = float(sway_errors(reference, got)[1])
     rel = np.column_stack([params.array(f) / truth.array(f) - 1 for f in FIELDS])
     return {"stimulus": stimulus_key, "index": index, "method": method, "seconds": seconds,
             "share": subject.locked_share, "motor_noise_deg": subject.motor_noise.sd_deg,
@@ -205,7 +207,8 @@ def main() -> None:
               "seed": args.seed, "body_sha256": body.sha256, "stimuli": args.stimuli,
               "methods": args.methods}
     key = lambda r: (r["stimulus"], int(r["index"]), r["method"])  # noqa: E731
-    done = read_journal(journal, header, key)
+    book = Journal(journal, header, key)
+    done = book.read()
     tasks = []
     specs = subjects(body, args.subjects, args.seed)
     for stimulus_key in args.stimuli:
@@ -232,7 +235,7 @@ def main() -> None:
     with ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) as pool:
         for row in pool.map(_one, tasks, chunksize=1):
             rows.append(row)
-            append_journal(journal, header, row)
+            book.append(row)
             print(f"[{len(rows)}/{total}] "
                   f"{row['stimulus']} #{row['index']} {row['method']}: classes "
                   f"{sum(row['classes_correct'])}/{len(row['classes_correct'])}, Kp "

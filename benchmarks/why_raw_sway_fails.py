@@ -26,6 +26,7 @@ from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.plotting import plot_locked_sway
 from posture_id.simulation import prts, simulate
 from posture_id.simulation.subjects import people_like
+from posture_id.trials import prepare_trial
 
 OUT = Path(__file__).resolve().parent.parent / "docs" / "results"
 
@@ -41,7 +42,7 @@ def main() -> None:
                          "motor_noise_deg": subject.motor_noise.sd_deg}
     for label, locked in (("raw-sway least squares", None),
                           ("locked least squares", LockedOptions())):
-        fit = fit_recording(rec, body, options=FitOptions(locked=locked), stimulus=stim)
+        fit = fit_recording(prepare_trial(rec, stim), body, options=FitOptions(locked=locked))
         again = simulate(body, fit.parameters, stim)
         fits[label] = np.degrees(again.alpha[:, 0])
         locked_com = np.degrees(subject.locked.alpha[:, 0])

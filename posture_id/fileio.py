@@ -139,7 +139,7 @@ def check_time_column(path: Path, time_s: np.ndarray, error: type[Exception]) ->
 
 def jsonable(value: Any) -> Any:
     """``value`` as JSON-ready data: dataclasses as dicts (with a ``"type"``), enums by
-    value, tuples as lists, paths as strings, non-finite floats as None."""
+    value, tuples and arrays as lists, paths as strings, non-finite floats as None."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         fields = {f.name: jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)
                   if f.repr}
@@ -154,6 +154,8 @@ def jsonable(value: Any) -> Any:
         return str(value)
     if isinstance(value, float) and not math.isfinite(value):
         return None
+    if hasattr(value, "tolist") and getattr(value, "ndim", 0) > 0:  # numpy arrays
+        return jsonable(value.tolist())
     if hasattr(value, "item") and callable(value.item):  # numpy scalars
         return jsonable(value.item())
     return value

@@ -279,7 +279,7 @@ def plot_frf(result, path=None, ax=None):
     for a in axes[:, 0]:
         a.grid(alpha=0.3, which="both")
     axes[0, 0].legend(fontsize=8)
-    fig.suptitle(f"FRF of {result.source} relative to the tilt ({result.cycles} cycle(s) "
+    fig.suptitle(f"FRF of {result.name} relative to the tilt ({result.cycles} cycle(s) "
                  f"of {result.period_s:g} s)")
     fig.tight_layout()
     _save(fig, path)

@@ -10,7 +10,7 @@ import csv
 import io
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -27,17 +27,50 @@ RADIANS_SUSPECT_DEG = 0.1
 
 @dataclass(frozen=True)
 class Recording:
-    """Recorded or simulated sway.
+    """Recorded or simulated sway, checked when made.
 
     Attributes:
-        time: (S,) s, from 0. tilt: (S,) rad, platform tilt α_FS.
-        theta: (S, N) rad, segment angles in space. segments: (N,) link names.
+        time: (S,) s, from 0, strictly increasing. tilt: (S,) rad, platform tilt α_FS.
+        theta: (S, N) rad, segment angles in space (NaN after a simulated fall).
+        segments: (N,) link names.
+        name: what messages call it (the file it was read from, "trial 3", ...).
+
+    Raises:
+        RecordingError: shapes that disagree, fewer than 2 samples, a time column that
+            does not start at 0 or does not increase, no segments.
     """
 
     time: np.ndarray
     tilt: np.ndarray
     theta: np.ndarray
     segments: tuple[str, ...]
+    name: str = "recording"
+
+    def __post_init__(self) -> None:
+        time = np.asarray(self.time, dtype=float)
+        tilt = np.asarray(self.tilt, dtype=float)
+        theta = np.asarray(self.theta, dtype=float)
+        segments = tuple(self.segments)
+        if time.ndim != 1 or len(time) < 2:
+            raise RecordingError(f"{self.name}: time must be 1-D with at least 2 samples, "
+                                 f"got shape {time.shape}")
+        if tilt.shape != time.shape:
+            raise RecordingError(f"{self.name}: tilt has shape {tilt.shape}, time {time.shape}")
+        if not segments or theta.shape != (len(time), len(segments)):
+            raise RecordingError(f"{self.name}: segment angles have shape {theta.shape}, "
+                                 f"expected ({len(time)}, {len(segments)}) for the segments "
+                                 f"{','.join(segments) or '(none)'}")
+        if not np.all(np.isfinite(time)) or abs(time[0]) > 1e-9:
+            raise RecordingError(f"{self.name}: time must be finite and start at 0, starts "
+                                 f"at {time[0]}")
+        step = np.flatnonzero(np.diff(time) <= 0)
+        if step.size:
+            raise RecordingError(f"{self.name}: sample {step[0] + 1}: time does not increase "
+                                 f"({time[step[0] + 1]} s)")
+        object.__setattr__(self, "time", time)
+        object.__setattr__(self, "tilt", tilt)
+        object.__setattr__(self, "theta", theta)
+        object.__setattr__(self, "segments", segments)
 
     @property
     def sample_rate_hz(self) -> float:
@@ -64,12 +97,12 @@ class Recording:
         t = np.arange(n) / rate_hz
         theta = np.stack([np.interp(t, self.time, self.theta[:, j])
                           for j in range(self.theta.shape[1])], axis=1)
-        return Recording(t, np.interp(t, self.time, self.tilt), theta, self.segments)
+        return replace(self, time=t, tilt=np.interp(t, self.time, self.tilt), theta=theta)
 
-    def check_segments(self, segments: tuple[str, ...], source: str) -> None:
+    def check_segments(self, segments: tuple[str, ...]) -> None:
         """Refuse a recording whose segment columns are not ``segments`` (a body's), in
-        order; ``source`` names it in the message."""
-        _check_segment_names(self.segments, segments, source)
+        order."""
+        _check_segment_names(self.segments, segments, self.name)
 
     def with_sensor_noise(self, sd_deg: float, seed: int) -> Recording:
         """A copy with white Gaussian noise of ``sd_deg`` degrees added to every segment
@@ -78,7 +111,7 @@ class Recording:
             raise RecordingError(f"sensor noise must be a finite number ≥ 0 degrees, got {sd_deg}")
         rng = np.random.default_rng(seed)
         noise = math.radians(sd_deg) * rng.standard_normal(self.theta.shape)
-        return Recording(self.time, self.tilt, self.theta + noise, self.segments)
+        return replace(self, theta=self.theta + noise)
 
     def to_csv(self, path: str | Path) -> Path:
         """Write atomically. Rows after the first NaN (an aborted trial) are left out."""
@@ -142,10 +175,11 @@ class Recording:
             tilt=np.radians(values[:, 1]),
             theta=np.radians(values[:, 2:]),
             segments=tuple(names),
+            name=str(path),
         )
 
 
-def _check_segment_names(names, segments, source: str) -> None:
+def _check_segment_names(names, segments, name: str) -> None:
     if tuple(names) != tuple(segments):
-        raise RecordingError(f"{source}: segment columns {','.join(names)} do not match the "
+        raise RecordingError(f"{name}: segment columns {','.join(names)} do not match the "
                              f"body's segments {','.join(segments)}")

@@ -3,12 +3,50 @@
 from __future__ import annotations
 
 import json
+import math
 
+import numpy as np
 import pytest
 
 from posture_id.errors import PostureIdError
 from posture_id.identify import Method
-from posture_id.identify.benchmark import run_benchmark
+from posture_id.studies.benchmark import (
+    FAR_E_REL,
+    BenchmarkReport,
+    MethodStatistics,
+    run_benchmark,
+)
+
+
+def _row(e_rel, correct, error, inside, seconds):
+    return {"index": 0, "noise_deg": 0.05, "method": "hybrid", "e_rel": e_rel,
+            "classes_correct": correct, "abs_error": error, "inside_interval": inside,
+            "interval_method": "m", "seconds": seconds, "identification_seconds": seconds / 2}
+
+
+def test_statistics_of_known_rows():
+    """Three recordings whose statistics are known by hand: far = a wrong class or E_rel
+    above FAR_E_REL (a fallen one, E_rel ∞, included); the 90th percentile is the
+    higher neighbour; coverage is per module and parameter."""
+    ones, zeros = np.ones((2, 4)), np.zeros((2, 4))
+    rows = [_row(0.01, [True, True], 1 * ones, ones.astype(bool), 1.0),
+            _row(FAR_E_REL + 0.01, [True, True], 2 * ones, ones.astype(bool), 2.0),
+            _row(math.inf, [True, False], 6 * ones, zeros.astype(bool), 6.0)]
+    s = MethodStatistics.of_rows(0.05, Method.HYBRID, rows)
+    assert s.recordings == 3 and s.far_from_truth == 2
+    assert s.class_accuracy == pytest.approx(5 / 6)
+    assert s.e_rel_median == FAR_E_REL + 0.01 and s.e_rel_p90 == math.inf
+    np.testing.assert_array_equal(s.mean_abs_error, 3 * ones)
+    np.testing.assert_array_equal(s.median_abs_error, 2 * ones)
+    np.testing.assert_allclose(s.interval_coverage, 2 / 3 * ones)
+    assert (s.seconds_median, s.seconds_mean) == (2.0, 3.0)
+    assert s.identification_seconds_median == 1.0
+    data = s.to_dict()
+    assert data["method"] == "hybrid" and data["e_rel_p90"] is None  # strict JSON: ∞ → null
+    report = BenchmarkReport("tip", ("a", "b"), 3, (0.05,), tuple(rows), 1)
+    text = report.to_markdown()
+    assert "Ending far from the truth, all noise levels: hybrid 2/3." in text
+    assert "| hybrid | 83.3 % | 11.00 % | inf % | 2/3 | 1 | 2 | 3.000, 3.000" in text
 
 
 def test_tiny_benchmark_writes_its_report(tip, tmp_path):
@@ -16,13 +54,14 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
                            methods=(Method.CNN,))
     assert len(report.rows) == 4
     stats = report.statistics()
-    assert set(stats) == {"0|cnn", "0.01|cnn"}
-    clean = stats["0|cnn"]
-    assert clean["recordings"] == 2 and 0 <= clean["class_accuracy"] <= 1
-    assert clean["seconds_median"] > 0
+    assert list(stats) == [(0.0, Method.CNN), (0.01, Method.CNN)]
+    clean = stats[(0.0, Method.CNN)]
+    rows = [r for r in report.rows if r["noise_deg"] == 0.0]
+    assert clean.recordings == 2
+    assert clean.class_accuracy == np.mean([r["classes_correct"] for r in rows])
     # the CNN's own time excludes the checks and the re-simulation every method shares
     assert all(0 < r["identification_seconds"] < r["seconds"] for r in report.rows)
-    assert len(clean["mean_abs_error"]) == 3 and len(clean["mean_abs_error"][0]) == 4
+    assert clean.mean_abs_error.shape == (3, 4)
     paths = report.write(tmp_path)
     data = json.loads(paths[0].read_text())
     assert data["trials"] == 2 and len(data["rows"]) == 4
@@ -32,7 +71,7 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
     assert paths[2].stat().st_size > 10_000
     # the bundled model is calibrated: every row says whether its intervals held the truth
     assert all(len(r["inside_interval"]) == 3 for r in report.rows)
-    assert clean["interval_recordings"] == 2 and 0 <= min(map(min, clean["interval_coverage"]))
+    assert clean.interval_recordings == 2
     assert "## Do the 90 % intervals hold the truth?" in text
     assert "| 0° | cnn | conformal, CNN (validation split) | 2 |" in text
 

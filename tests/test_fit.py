@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,9 +13,10 @@ import pytest
 from posture_id.cli import main
 from posture_id.dec.prior import sample_parameters
 from posture_id.errors import RecordingError
-from posture_id.fitting import FitOptions, fit_recording, prepare_recording
+from posture_id.fitting import FitOptions, fit_recording
 from posture_id.recording import Recording
 from posture_id.simulation import SimulationOptions, simulate
+from posture_id.trials import prepare_trial
 
 pytestmark = pytest.mark.slow
 
@@ -77,7 +79,8 @@ def test_noise_free_fit_recovers_the_truth(noise_free, tip):
 def test_noisy_fit_within_ten_percent_or_flagged(tip):
     truth, result, rng = _stable_trial(tip, seed=12)
     noisy = result.theta + np.radians(0.01) * rng.standard_normal(result.theta.shape)
-    fitted = fit_recording(Recording(result.time, result.tilt, noisy, result.segments), tip)
+    noisy_rec = Recording(result.time, result.tilt, noisy, result.segments)
+    fitted = fit_recording(prepare_trial(noisy_rec), tip)
     assert fitted.converged
     assert 0.008 < fitted.rms_deg < 0.012  # the fit reaches the noise, not below
     _check_recovery(fitted, truth, 0.10, max_flagged=6)
@@ -91,20 +94,22 @@ def test_short_recording_is_refused(tip):
     short = Recording(result.time[:1500], result.tilt[:1500], result.theta[:1500],
                       result.segments)
     with pytest.raises(RecordingError, match="shorter than one whole cycle of its stimulus"):
-        fit_recording(short, tip, source="short.csv")
+        fit_recording(prepare_trial(short), tip)
 
 
 def test_segment_mismatch_is_refused(tip, winter2):
     result = simulate(tip)
     rec = Recording(result.time, result.tilt, result.theta, result.segments)
     with pytest.raises(RecordingError, match="do not match the body's segments leg,trunk"):
-        fit_recording(rec, winter2)
+        fit_recording(prepare_trial(rec), winter2)
 
 
 def test_other_rates_are_resampled_with_a_notice(tip):
     fine = simulate(tip, options=SimulationOptions(sample_rate_hz=100.0))
     rec = Recording(fine.time, fine.tilt, fine.theta, fine.segments)
-    resampled, _, notices = prepare_recording(rec, "rec100.csv", FitOptions())
+    prepared = prepare_trial(replace(rec, name="rec100.csv"))
+    resampled, notices = prepared.recording, prepared.notices
+    assert all(n.startswith("rec100.csv: ") for n in notices)
     assert any("resampled from 100 Hz to 50 Hz" in n for n in notices)
     assert not any("time column says" in n for n in notices)  # a right time column: no hint
     at50 = simulate(tip)
@@ -135,7 +140,7 @@ def test_two_fits_at_once_equal_the_same_fits_one_after_the_other(tip, winter2):
 
     def run(job):
         body, recording = job
-        return fit_recording(recording, body, options=options)
+        return fit_recording(prepare_trial(recording), body, options=options)
 
     one_by_one = [run(job) for job in jobs]
     with ThreadPoolExecutor(max_workers=3) as pool:
@@ -159,7 +164,7 @@ def test_any_robot_name_fits(tmp_path, winter2):
     body = load_body(path)
     assert body.name == "lab robot-v1.2 (left)"
     truth, trial, _ = _stable_trial(body, 4)
-    fitted = fit_recording(trial.to_recording(), body)
+    fitted = fit_recording(prepare_trial(trial.to_recording()), body)
     assert fitted.converged and fitted.rms_deg < 1e-6
     _check_recovery(fitted, truth, 0.02, 4)
 
@@ -175,7 +180,8 @@ def test_known_classes_end_with_one_exact_jacobian(tip):
     start = truth  # the truth's classes, gains 10 % off
     for joint in tip.joint_names:
         start = start.replace(joint, kp=1.1 * truth[joint].kp, kd=0.9 * truth[joint].kd)
-    fitted = fit_recording(trial.to_recording(), tip, start, FitOptions(classes=FixedClasses()))
+    fitted = fit_recording(prepare_trial(trial.to_recording()), tip, start,
+                           FitOptions(classes=FixedClasses()))
     assert [s.name for s in fitted.stages][-1] == "exact Jacobian at the optimum"
     assert fitted.stages[-1].evaluations == 1 and fitted.converged
     assert fitted.rms_deg < 1e-6

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from posture_id.errors import PostureIdError
 from posture_id.frf import FrfOptions, cycle_average, frequency_response, frequency_response_arrays
 from posture_id.recording import Recording
 from posture_id.simulation import prts, simulate
+from posture_id.trials import prepare_trial
 
 RATE = 50.0
 
@@ -134,7 +136,8 @@ def test_locked_share_and_coherence_of_a_noisy_response():
 def test_frf_of_a_simulated_recording(tip, tmp_path):
     trial = simulate(tip)  # default parameters, 2 cycles of the 242-state PRTS
     recording = trial.to_recording()
-    result = frequency_response(recording, tip, FrfOptions(drift_order=0))
+    result = frequency_response(prepare_trial(recording, rate_hz=None), tip,
+                                FrfOptions(drift_order=0))
     assert result.channels == (*tip.segment_names, "body COM")
     assert result.cycles == 2 and result.period_s == pytest.approx(60.5)
     assert np.all(np.isfinite(result.response))
@@ -180,15 +183,16 @@ def test_bad_input_is_refused(tip):
     recording = simulate(tip).to_recording()
     noise = Recording(recording.time, recording.tilt + 1e-4 * np.sin(recording.time),
                       recording.theta, recording.segments)
-    with pytest.raises(PostureIdError, match="not a PRTS"):
-        frequency_response(noise, tip, source="rec.csv")
+    with pytest.raises(PostureIdError, match="^rec.csv: .*not a PRTS"):
+        frequency_response(prepare_trial(replace(noise, name="rec.csv"), rate_hz=None), tip)
     uneven = Recording(recording.time * (1 + 0.05 * (recording.time / recording.time[-1])),
-                       recording.tilt, recording.theta, recording.segments)
+                       recording.tilt, recording.theta, recording.segments, "rec.csv")
     with pytest.raises(PostureIdError, match="not evenly spaced"):
-        frequency_response(uneven, tip, source="rec.csv")
+        frequency_response(prepare_trial(uneven, rate_hz=None), tip)
+    trial = prepare_trial(replace(recording, name="rec.csv"), rate_hz=None)
     with pytest.raises(PostureIdError, match="leaves none to analyse"):
-        frequency_response(recording, tip, FrfOptions(skip_cycles=2), source="rec.csv")
+        frequency_response(trial, tip, FrfOptions(skip_cycles=2))
     with pytest.raises(PostureIdError, match="whole number of samples"):
-        frequency_response(recording, tip, period_s=60.51, source="rec.csv")
+        frequency_response(trial, tip, period_s=60.51)
     with pytest.raises(PostureIdError, match="bands must be an integer"):
         FrfOptions(bands=-1)

@@ -16,6 +16,7 @@ from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.recording import Recording
 from posture_id.simulation import prts, simulate
+from posture_id.trials import prepare_trial
 
 
 def test_identify_recovers_the_classes_of_a_simulated_recording(tip, tmp_path, capsys):
@@ -44,7 +45,7 @@ def test_identify_recovers_random_classes(tip):
         trial = simulate(tip, truth)
         if not trial.stable:
             continue
-        result = identifier.identify(trial.to_recording())
+        result = identifier.identify(prepare_trial(trial.to_recording()))
         assert result.classes == tuple(truth[j].controls for j in tip.joint_names), b
         checked += 1
     assert checked >= 6
@@ -54,7 +55,7 @@ def test_the_two_segment_body_has_its_own_model():
     body = load_body(TWO_SEGMENT)
     folder, notices = bundled_model_dir(body)
     assert folder.name == "winter_1.75m_70kg_2seg" and not notices
-    result = CnnIdentifier.for_body(body).identify(simulate(body).to_recording())
+    result = CnnIdentifier.for_body(body).identify(prepare_trial(simulate(body).to_recording()))
     assert result.classes == ("com", "com")  # the defaults of a 2-segment body
 
 
@@ -86,7 +87,7 @@ def test_a_resampled_recording_gives_the_same_classes(tip):
 
     fine = simulate(tip, options=SimulationOptions(sample_rate_hz=100.0))
     rec = Recording(fine.time, fine.tilt, fine.theta, fine.segments)
-    result = CnnIdentifier.for_body(tip).identify(rec)
+    result = CnnIdentifier.for_body(tip).identify(prepare_trial(rec))
     assert result.classes == ("com", "joint", "com")
 
 

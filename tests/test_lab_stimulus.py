@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,10 +13,10 @@ import pytest
 from posture_id.cli import main
 from posture_id.dec import sample_parameters
 from posture_id.errors import RecordingError, StimulusError
-from posture_id.fitting import FitOptions, prepare_recording
 from posture_id.recording import Recording
 from posture_id.simulation import prts, simulate
 from posture_id.simulation.stimulus import prts_symbols, recognise_prts
+from posture_id.trials import prepare_trial
 
 LAB = {"states": 80, "cycles": 3, "onset_s": 2.0, "start_state": 17, "sign": -1,
        "lag_s": 0.04}
@@ -62,24 +63,25 @@ def test_lengths_follow_the_sequence(tip):
     trial = simulate(tip, stimulus=stimulus)
     recording = trial.to_recording()
     assert recording.duration_s == pytest.approx(60.0)
-    _, found, _ = prepare_recording(recording, "lab.csv", FitOptions())
+    found = prepare_trial(recording).stimulus
     assert found.period_s == 20.0 and found.whole_cycles_s == 20.0
     short = Recording(recording.time[:750], recording.tilt[:750], recording.theta[:750],
                       recording.segments)
     assert recognise_prts(short.time, short.tilt).whole_cycles_s == 20.0
     with pytest.raises(RecordingError, match=r"shorter than one whole cycle of its stimulus "
                                              r"\(PRTS 80 states.*20 s\)"):
-        prepare_recording(short, "lab.csv", FitOptions())
+        prepare_trial(replace(short, name="lab.csv")).require_whole_cycle()
 
 
 def test_a_tilt_column_that_is_not_the_named_stimulus_is_refused(tip):
     lab = prts(1.0, **LAB)
     recording = simulate(tip, stimulus=lab).to_recording()
-    prepare_recording(recording, "lab.csv", FitOptions(), lab)  # the right one passes
+    recording = replace(recording, name="lab.csv")
+    prepare_trial(recording, lab)  # the right one passes
     other = prts(1.0, **{**LAB, "start_state": 5})
     with pytest.raises(StimulusError, match="lab.csv: the tilt column is not the named "
                                             "stimulus .*starting state"):
-        prepare_recording(recording, "lab.csv", FitOptions(), other)
+        prepare_trial(recording, other)
 
 
 def _write_without_tilt(recording: Recording, path):

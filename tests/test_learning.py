@@ -27,6 +27,7 @@ from posture_id.learning.config import (
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import SplitSamples
 from posture_id.learning.training import train
+from posture_id.trials import prepare_trial
 
 SMALL = (8, 8, 12, 12, 16)
 
@@ -188,7 +189,7 @@ def test_frf_network_round_trips_and_identifies(tiny_set, tmp_path, tip):
     time = np.arange(arrays["theta"].shape[1]) / 50.0
     recording = Recording(time, identifier.expected_tilt, arrays["theta"][0].astype(float),
                           tip.segment_names)
-    np.testing.assert_allclose(identifier.features(recording)[0], features, rtol=1e-5,
-                               atol=1e-5)
-    result = identifier.identify(recording)
+    np.testing.assert_allclose(identifier.features(prepare_trial(recording))[0], features,
+                               rtol=1e-5, atol=1e-5)
+    result = identifier.identify(prepare_trial(recording))
     assert result.parameters.joints == tip.joint_names

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from posture_id.cli import main
-from posture_id.fitting import FitOptions, prepare_recording
 from posture_id.recording import Recording
 from posture_id.simulation import prts, simulate
 from posture_id.simulation.stimulus import sample_rate_hint
+from posture_id.trials import prepare_trial
 
 
 def _lab_tilt(states, true_rate, rng):
@@ -47,8 +47,9 @@ def test_fit_and_identify_say_it(tip, tmp_path, capsys):
     trial = simulate(tip)
     recording = trial.to_recording()
     # 50 Hz samples written with a time column of 25 Hz (a lab's mistake)
-    wrong = Recording(recording.time * 2, recording.tilt, recording.theta, recording.segments)
-    _, _, notices = prepare_recording(wrong, "lab.csv", FitOptions())
+    wrong = Recording(recording.time * 2, recording.tilt, recording.theta, recording.segments,
+                      "lab.csv")
+    notices = prepare_trial(wrong).notices
     assert any("sampled at 50 Hz" in n and "25 Hz the time column" in n for n in notices)
     csv = tmp_path / "lab.csv"
     wrong.to_csv(csv)

@@ -12,7 +12,7 @@ from scipy.stats import norm
 from posture_id.dec.parameters import default_parameters
 from posture_id.errors import PostureIdError
 from posture_id.fitting.result import FitResult, noise_allows
-from posture_id.identify.calibration import _ls_check
+from posture_id.studies.calibration import least_squares_check
 from posture_id.uncertainty import (
     ConformalCalibration,
     Determination,
@@ -229,20 +229,19 @@ def test_least_squares_coverage_known_answers():
     rng = np.random.default_rng(8)
     # standard errors right: both readings cover about 90 %
     rows = _rows(3000, 0.05, 1.0, rng)
-    right, _ = _ls_check(rows, (0.05,))
+    right, _ = least_squares_check(rows, (0.05,))
     for key in ("gauss_newton", "calibrated"):
-        cov = np.array(right["0.05"][key]["0.9"]["coverage"])
+        cov = getattr(right[0.05], key)[0.9].coverage
         assert np.all(np.abs(cov - 0.9) < 0.025), (key, cov)
     # standard errors half the truth: Gauss-Newton covers P(|N(0,1)| ≤ 0.82) ≈ 59 %, the
     # calibrated intervals still 90 %
     rows = _rows(3000, 0.05, 2.0, rng)
-    wrong, scales = _ls_check(rows, (0.05,))
-    gauss = np.array(wrong["0.05"]["gauss_newton"]["0.9"]["coverage"])
-    calibrated = np.array(wrong["0.05"]["calibrated"]["0.9"]["coverage"])
+    wrong, cal = least_squares_check(rows, (0.05,))
+    gauss = wrong[0.05].gauss_newton[0.9].coverage
+    calibrated = wrong[0.05].calibrated[0.9].coverage
     assert np.all(np.abs(gauss - (2 * norm.cdf(norm.ppf(0.95) / 2) - 1)) < 0.03)
     assert np.all(np.abs(calibrated - 0.9) < 0.025)
-    cal = ConformalCalibration.from_dict(scales, "test")
     assert cal.scale(0.9, 0.05) == pytest.approx(np.full((3, 4), 2 * norm.ppf(0.95)),
                                                  rel=0.08)
     # too few fits for cross-validated coverage: said, not faked
-    assert _ls_check(_rows(5, 0.05, 1.0, rng), (0.05,)) == ({}, None)
+    assert least_squares_check(_rows(5, 0.05, 1.0, rng), (0.05,)) == ({}, None)

@@ -35,7 +35,7 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
-    from posture_id.identify.benchmark import JOURNAL, run_benchmark
+    from posture_id.studies.benchmark import JOURNAL, run_benchmark
 
     body = load_body(args.body or DEFAULT_URDF)
     journal = args.out / JOURNAL

@@ -22,10 +22,11 @@ def add_parser(sub) -> None:
         "calibration",
         help="calibrate a model's intervals and class probabilities; check their coverage",
         description="Calibrates the CNN's intervals (conformal) and class probabilities "
-                    "(temperature) on the data set's validation split, writes them to "
-                    "MODEL_DIR/calibration.json, and checks their coverage on the test "
-                    "split; with --fits, least squares too (docs/uncertainty.md).")
-    p.add_argument("model", type=Path, help="model directory (calibration.json goes here)")
+                    "(temperature) on the data set's validation split and checks their "
+                    "coverage on the test split; with --fits, least squares too. The "
+                    "calibration (calibration.json) and its report go into --out; --install "
+                    "also puts the calibration beside the model (docs/uncertainty.md).")
+    p.add_argument("model", type=Path, help="model directory")
     p.add_argument("dataset", type=Path, help="the data set the model was trained on")
     p.add_argument("--out", type=Path, required=True,
                    help="report folder (calibration_report.md/.json, PNGs); an interrupted "
@@ -40,12 +41,15 @@ def add_parser(sub) -> None:
                    help="test trials per checked level refined by least squares (default 0: "
                         "none; about 5 s each per core)")
     p.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
+    p.add_argument("--install", action="store_true",
+                   help="also write calibration.json into the model directory, where "
+                        "identify reads it")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=(args.model, args.dataset))
-    from posture_id.identify.calibration import run_calibration
+    from posture_id.studies.calibration import install_calibration, run_calibration
 
     with TerminalProgress(prefix="posture-id calibration") as progress:
         report = run_calibration(
@@ -54,5 +58,7 @@ def run(args: argparse.Namespace) -> int:
             tuple(sorted(args.calibration_noise_deg)) if args.calibration_noise_deg else None,
             args.fits, args.workers, progress)
     print(report.to_markdown())
-    say(f"wrote {args.model / 'calibration.json'} and the report in {args.out}")
+    say(f"wrote the calibration and its report in {args.out}")
+    if args.install:
+        say(f"installed {install_calibration(report)}")
     return 0

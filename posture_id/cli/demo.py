@@ -24,7 +24,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     # torch and CasADi load here, not when the parser is built
     from posture_id.identify import Method
-    from posture_id.identify.demo import run_demo
+    from posture_id.studies.demo import run_demo
 
     with TerminalProgress(prefix="posture-id demo", quiet=True) as progress:
         rows = run_demo(args.out, Method(args.method), progress)

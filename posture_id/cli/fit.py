@@ -19,7 +19,6 @@ from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import add_lab_stimulus_arguments, recording_and_stimulus
 from posture_id.dec.parameters import DecParameters
 from posture_id.errors import PostureIdError
-from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import (
     Compilation,
     ExhaustiveClasses,
@@ -28,6 +27,7 @@ from posture_id.fitting.options import (
     RelaxedClasses,
 )
 from posture_id.frf.locked import LockedOptions
+from posture_id.trials import prepare_trial
 
 __all__ = ["add_parser", "run", "add_search_arguments", "search_keywords"]
 
@@ -119,8 +119,11 @@ def run(args: argparse.Namespace) -> int:
     body = load_body(args.body or DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)
     init = DecParameters.from_json(args.init, body) if args.init else None
+    from posture_id.fitting.least_squares import fit_recording  # CasADi loads here
+
+    recording.check_segments(body.segment_names)
+    trial = prepare_trial(recording, stimulus, options.simulation.sample_rate_hz)
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
-        result = fit_recording(recording, body, init, options, progress=progress,
-                               source=str(args.recording), stimulus=stimulus)
+        result = fit_recording(trial, body, init, options, progress=progress)
     write_result(result, args.out, args.plot)
     return 0 if result.converged else 1

@@ -15,6 +15,7 @@ from posture_id.cli.arguments import (
 )
 from posture_id.cli.stimulus import add_lab_stimulus_arguments, recording_and_stimulus
 from posture_id.frf import FrfOptions, frequency_response
+from posture_id.trials import prepare_trial
 
 __all__ = ["add_parser", "run"]
 
@@ -57,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     recording, stimulus = recording_and_stimulus(args, body)
     options = FrfOptions(skip_cycles=args.skip_cycles, drift_order=args.drift_order,
                          bands=args.bands, max_frequency_hz=args.max_frequency_hz)
-    result = frequency_response(recording, body, options, args.period_s,
-                                source=str(args.recording), stimulus=stimulus)
+    result = frequency_response(prepare_trial(recording, stimulus, rate_hz=None), body,
+                                options, args.period_s)
     write_result(result, args.out, args.plot)
     return 0

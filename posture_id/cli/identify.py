@@ -28,6 +28,8 @@ from posture_id.fitting.options import FitOptions
 __all__ = ["add_parser"]
 
 METHODS = ("cnn", "fit", "hybrid")
+#: identify.core.DEFAULT_METHOD, named here without importing torch (a test keeps them equal)
+DEFAULT_METHOD_NAME = "cnn"
 
 
 def add_parser(sub) -> None:
@@ -38,9 +40,10 @@ def add_parser(sub) -> None:
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     p.add_argument("--model", type=Path,
                    help="model directory (default: the bundled model for the body)")
-    p.add_argument("--method", choices=METHODS, default="cnn",
-                   help="cnn: the network alone, milliseconds (default); fit: least squares "
-                        "from the defaults; hybrid: least squares from the CNN's answer")
+    p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD_NAME,
+                   help="cnn: the network alone, milliseconds; fit: least squares "
+                        "from the defaults; hybrid: least squares from the CNN's answer "
+                        "(default %(default)s)")
     p.add_argument("--out", type=Path, required=True,
                    help="result JSON (its \"parameters\" object is a parameter file); for a "
                         "cohort, a folder: one JSON per recording and summary.csv")
@@ -70,25 +73,19 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     # torch and CasADi load here, not when the parser is built: other commands start fast
-    from posture_id.identify import Method, identify
-    from posture_id.learning.identifier import CnnIdentifier
+    from posture_id.identify import Identifier, Method
 
     body = load_body(args.body or DEFAULT_URDF)
-    method = Method(args.method)
-    model = None
-    if method is not Method.FIT:
-        model = CnnIdentifier.resolve(args.model, body)
+    identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
     recording, stimulus = recording_and_stimulus(args, body)
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
-        result = identify(recording, body, method, model,
-                          fit_options=fit_options, progress=progress,
-                          source=str(args.recording), stimulus=stimulus, level=args.level)
+        result = identifier.identify(recording, stimulus, progress)
     write_result(result, args.out, args.plot)
     return 0 if np.isfinite(result.e_rel) else 1
 
 
 def run_cohort(args: argparse.Namespace) -> int:
-    from posture_id.identify import Method
+    from posture_id.identify import Identifier, Method
     from posture_id.identify.cohort import find_recordings, identify_cohort
 
     if args.plot:
@@ -98,8 +95,9 @@ def run_cohort(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=(*recordings, args.body, args.tilt))
     body = load_body(args.body or DEFAULT_URDF)
     stimulus = stimulus_from_args(args, default=None)
+    identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
     with TerminalProgress("recordings", prefix="posture-id identify") as progress:
-        result = identify_cohort(recordings, args.out, body, Method(args.method), args.model,
-                                 args.scheduler, progress, stimulus, fit_options)
+        result = identify_cohort(recordings, args.out, identifier, args.scheduler, progress,
+                                 stimulus, args.model)
     say(result.summary())
     return 1 if result.failed else 0

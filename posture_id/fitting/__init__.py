@@ -3,7 +3,7 @@
 Modules: :mod:`.symbolic` (the plant and DEC in CasADi), :mod:`.build` (C generation and
 its cache), :mod:`.problem` (the compiled problem you can hold and reuse),
 :mod:`.evaluators` (residuals, Jacobians, one stage), :mod:`.options`, :mod:`.result`,
-:mod:`.prepare` (recordings in) and :mod:`.least_squares` (:func:`fit_recording`).
+:mod:`.least_squares` (:func:`fit_recording`).
 """
 
 from posture_id._lazy import lazy_getattr
@@ -19,7 +19,6 @@ __all__ = [
     "FitProblem",
     "FitResult",
     "StageResult",
-    "prepare_recording",
 ]
 
 # Names load on first use: the options (imported by the command line and by identify) must
@@ -28,7 +27,7 @@ _WHERE = {
     "fit_recording": "least_squares", "FitOptions": "options", "FitError": "options",
     "Compilation": "options", "RelaxedClasses": "options", "ExhaustiveClasses": "options",
     "FixedClasses": "options", "FitProblem": "problem", "FitResult": "result",
-    "StageResult": "result", "prepare_recording": "prepare",
+    "StageResult": "result",
 }
 
 

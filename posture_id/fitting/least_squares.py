@@ -28,7 +28,6 @@ interval is wider than ±``precision_rel`` of its value is flagged as poorly det
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from dataclasses import replace
@@ -41,26 +40,20 @@ from posture_id.dec.parameters import (
     DecParameters,
     normalise,
 )
-from posture_id.dec.prior import relative_factors
 from posture_id.fitting.evaluators import (
+    Evaluator,
     ExactEvaluator,
     LockedResidual,
     SimulatorEvaluator,
     SwayResidual,
     run_stage,
 )
-from posture_id.fitting.options import (
-    ExhaustiveClasses,
-    FitError,
-    FitOptions,
-    FixedClasses,
-    RelaxedClasses,
-)
-from posture_id.fitting.prepare import prepare_recording
+from posture_id.fitting.options import FitError, FitOptions, FixedClasses
 from posture_id.fitting.problem import FitProblem
-from posture_id.fitting.result import FitResult, StageResult, class_names
+from posture_id.fitting.result import FitResult, StageResult
 from posture_id.fitting.symbolic import step_inputs
 from posture_id.fitting.unknowns import (
+    UnknownLayout,
     parameters_from_qs,
     passive_normalised,
     q_from_targets,
@@ -69,191 +62,215 @@ from posture_id.fitting.unknowns import (
 from posture_id.frf.locked import LockedProjection
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
-from posture_id.recording import Recording
-from posture_id.simulation.stimulus import TiltProfile
+from posture_id.trials import PreparedTrial
 
-__all__ = ["fit_recording"]
+__all__ = ["fit_recording", "FitRun"]
+
+#: The offset search: at most this many re-fits, stopping when the offset moves by less
+#: than this, s.
+OFFSET_ROUNDS, OFFSET_SETTLED_S = 4, 1e-3
 
 
 def fit_recording(
-    recording: Recording,
+    trial: PreparedTrial,
     body: Body,
     init: DecParameters | None = None,
     options: FitOptions | None = None,
     progress: Progress | None = None,
-    source: str = "recording",
     problem: FitProblem | None = None,
-    stimulus: TiltProfile | None = None,
 ) -> FitResult:
-    """Fit every module's Kp, Ki, Kd, Δ and class to one recording.
+    """Fit every module's Kp, Ki, Kd, Δ and class to one prepared recording.
 
     Args:
-        recording: tilt and segment angles in space (segments must be the body's).
+        trial: the recording at the model's rate with its stimulus
+            (:func:`~posture_id.trials.prepare_trial`); its segments must be the body's.
         body: the body. init: initial guess (default: the body's defaults).
         options: see :class:`~.options.FitOptions`. progress: told each stage's status.
-        source: the recording's name in messages.
         problem: a :class:`~.problem.FitProblem` to reuse (default: the cached one for
             this body, recording length and options).
-        stimulus: the tilt as the lab ran it (:func:`~posture_id.simulation.prts` with its
-            onset, starting state, sign and lag, or a tilt file); the recording's tilt
-            column is checked against it. Default: recognised from the tilt column.
+
+    Returns:
+        The fit; its ``trial`` is the one fitted: with a fitted stimulus time offset
+        (``LockedOptions.max_offset_s``), the trial shifted by it.
     """
     options = options or FitOptions()
-    recording.check_segments(body.segment_names, source)
-
-    def say(message: str) -> None:
-        report(progress, 0, None, "message", message)
-
     start = time.perf_counter()
-    recording, stim, notices = prepare_recording(recording, source, options, stimulus)
-    for notice in notices:
-        say(notice)
-    n = body.n_segments
-    n_samples = len(recording.time)
-    if problem is None:
-        problem = FitProblem.get(body, n_samples, options, notify=say)
-    elif problem.key.n_samples != n_samples or problem.key.body != body:
-        raise ValueError("the given FitProblem was built for another body or recording length")
-    if not problem.backend.compiled:
-        notices.append(f"CasADi runs in its virtual machine ({problem.backend.reason}): slower")
-    sim = options.simulation
-    tilt, tilt_vel = stim.on_grid(sim.dt, problem.n_steps_u)
-    u = step_inputs(tilt, tilt_vel, problem.n_steps_u)
-    measured = recording.theta
-    defaults = problem.defaults
-    start_params = init or defaults
-    guess = q_from_targets(normalise(start_params, defaults),
-                           passive_normalised(start_params, defaults))
-    lower, upper = _bounds(options, n)
-    guess = np.where(np.arange(len(guess)) // n == 4, guess, np.clip(guess, lower, upper))
-    passive = guess[5 * n :]  # kept, or fitted with the continuous parameters
+    run = FitRun.start(trial, body, options, progress, problem)
+    result = run.fit(init or run.problem.defaults)
+    if options.locked is not None and options.locked.max_offset_s > 0:
+        result = _search_offset(run, result)
+    return replace(result, wall_time_s=time.perf_counter() - start)
 
-    def assemble(gains_delays: np.ndarray, classes: np.ndarray) -> np.ndarray:
-        return np.concatenate([np.clip(gains_delays, lower[: 4 * n], upper[: 4 * n]), classes,
-                               passive])
 
-    fitted_passive = list(range(5 * n, 7 * n)) if options.fit_passive else []
-    continuous = list(range(4 * n)) + fitted_passive
-    everything = list(range(5 * n)) + fitted_passive
-    target = _target(recording, stim, options, source)
-    prior_sd = (None if options.prior_sd is None
-                else np.array([options.prior_sd] * 4 * n + [np.inf] * n
-                              + [options.prior_sd] * 2 * n))
-    exact = ExactEvaluator(problem, u, measured, target)
-    warm = SimulatorEvaluator(body, defaults, stim, sim, measured, target)
-    first_evaluator, first_tolerance, first_limit = (
-        (warm, options.warm_tolerance, options.max_iterations) if options.warm_start
-        else (exact, options.tolerance, options.max_iterations))
-    stages: list[StageResult] = []
+class FitRun:
+    """One prepared trial against one compiled problem: the stages of a fit.
 
-    def stage(name, evaluator, q0, free, tolerance, limit) -> StageResult:
-        result = run_stage(name, evaluator, q0, free, lower, upper, tolerance, limit, progress,
-                           prior_sd)
-        stages.append(result)
+    Built by :meth:`start` (checks, the compiled problem, the residual's target); :meth:`fit`
+    runs the class strategy's first stages, then the polish, and assembles the result.
+    """
+
+    def __init__(self, trial: PreparedTrial, body: Body, options: FitOptions,
+                 progress: Progress | None, problem: FitProblem, notices: list[str]) -> None:
+        self.trial, self.body, self.options, self.progress = trial, body, options, progress
+        self.problem, self.notices = problem, notices
+        self.layout = UnknownLayout(body.n_segments)
+        self.lower, self.upper = _bounds(options, self.layout)
+        sim = options.simulation
+        tilt, tilt_vel = trial.stimulus.on_grid(sim.dt, problem.n_steps_u)
+        self.u = step_inputs(tilt, tilt_vel, problem.n_steps_u)
+        self.measured = trial.recording.theta
+        self.target = _target(trial, options)
+        self.prior_sd = None if options.prior_sd is None else self.layout.per_unknown(
+            options.prior_sd, np.inf, options.prior_sd)
+        self.exact = ExactEvaluator(problem, self.u, self.measured, self.target)
+        self.warm = SimulatorEvaluator(body, problem.defaults, trial.stimulus, sim,
+                                       self.measured, self.target)
+        self.stages: list[StageResult] = []
+
+    @classmethod
+    def start(cls, trial: PreparedTrial, body: Body, options: FitOptions,
+              progress: Progress | None, problem: FitProblem | None = None) -> FitRun:
+        trial.require_segments(body.segment_names)
+        if options.min_duration_s is not None:
+            trial.require_duration(options.min_duration_s, "the least duration asked for "
+                                                          f"({options.min_duration_s:g} s)")
+        else:
+            trial.require_whole_cycle()
+
+        def say(message: str) -> None:
+            report(progress, 0, None, "message", message)
+
+        notices = list(trial.notices)
+        for notice in notices:
+            say(notice)
+        n_samples = len(trial.recording.time)
+        if problem is None:
+            problem = FitProblem.get(body, n_samples, options, notify=say)
+        elif problem.key.n_samples != n_samples or problem.key.body != body:
+            raise ValueError("the given FitProblem was built for another body or recording "
+                             "length")
+        if not problem.backend.compiled:
+            notices.append(f"CasADi runs in its virtual machine ({problem.backend.reason}): "
+                           "slower")
+        return cls(trial, body, options, progress, problem, notices)
+
+    def say(self, message: str) -> None:
+        report(self.progress, 0, None, "message", message)
+
+    # what the class strategies call (options.ClassStrategy.first_stages)
+    @property
+    def first_evaluator(self) -> tuple[Evaluator, float, int]:
+        """The evaluator of the first stages, their tolerance and iteration limit."""
+        if self.options.warm_start:
+            return self.warm, self.options.warm_tolerance, self.options.max_iterations
+        return self.exact, self.options.tolerance, self.options.max_iterations
+
+    @property
+    def suffix(self) -> str:
+        return " (simulator)" if self.options.warm_start else ""
+
+    def assemble(self, guess: np.ndarray, gains_delays: np.ndarray,
+                 classes: np.ndarray) -> np.ndarray:
+        """q with these gains and delays (clipped to the bounds) and classes, and the
+        passive terms of ``guess``."""
+        q = guess.copy()
+        lay = self.layout
+        q[lay.gains_delays] = np.clip(gains_delays, self.lower[lay.gains_delays],
+                                      self.upper[lay.gains_delays])
+        q[lay.classes] = classes
+        return q
+
+    def stage(self, name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
+              tolerance: float, limit: int) -> StageResult:
+        """Run one bounded stage and keep it."""
+        result = run_stage(name, evaluator, q0, free, self.lower, self.upper, tolerance,
+                           limit, self.progress, self.prior_sd)
+        self.stages.append(result)
         return result
 
-    suffix = " (simulator)" if options.warm_start else ""
-    chosen = None  # the warm fit with the classes fixed, when they are
-    if isinstance(options.classes, RelaxedClasses):
-        # the guess (classes half-way to their values), then draws of the MODEL §5 prior
-        rng = np.random.default_rng(options.classes.seed)
-        starts = [assemble(guess[: 4 * n], 0.5 * guess[4 * n : 5 * n])]
-        for _ in range(options.classes.starts - 1):
-            starts.append(assemble(relative_factors(rng, 4 * n) - 1, np.zeros(n)))
-        tries = []
-        for k, q0 in enumerate(starts):
-            label = "relaxed classes" + (f", start {k + 1}/{len(starts)}" if k else "")
-            tries.append(stage(label + suffix, first_evaluator, q0, everything,
-                               first_tolerance, first_limit))
-        best_relaxed = min(tries, key=lambda t: t.cost)
-        signs = np.where(best_relaxed.q[4 * n : 5 * n] >= 0, 1.0, -1.0)
-        say(f"classes from the relaxed fit: {class_names(signs)}")
-        start_q = best_relaxed.q.copy()
-        start_q[4 * n : 5 * n] = signs
-    else:
-        combos = (itertools.product((1.0, -1.0), repeat=n)
-                  if isinstance(options.classes, ExhaustiveClasses) else [guess[4 * n : 5 * n]])
-        candidates = []
-        for combo in combos:
-            q0 = assemble(guess[: 4 * n], np.asarray(combo, dtype=float))
-            candidates.append(stage(f"classes {class_names(combo)}{suffix}", first_evaluator,
-                                    q0, continuous, first_tolerance, first_limit))
-        chosen = min(candidates, key=lambda s: s.cost)
-        start_q = chosen.q
-    if chosen is not None and options.warm_start and chosen.converged:
-        # the warm start solved the final problem (classes fixed): the exact model only
-        # gives the Jacobian at its optimum, for the standard errors (docs/fit.md)
-        best = stage("exact Jacobian at the optimum", exact, start_q, continuous,
-                     options.tolerance, 1)
-        best = replace(best, converged=True, status=chosen.status)
-        stages[-1] = best
-    else:
-        best = stage("polish (exact derivatives)", exact, start_q, continuous,
-                     options.tolerance,
-                     options.polish_iterations if options.warm_start else options.max_iterations)
+    def fit(self, init: DecParameters) -> FitResult:
+        """The strategy's first stages from ``init``, the polish, and the result."""
+        self.stages = []
+        start = time.perf_counter()
+        defaults, lay, options = self.problem.defaults, self.layout, self.options
+        guess = q_from_targets(normalise(init, defaults), passive_normalised(init, defaults))
+        free = np.ones(lay.size, bool)
+        free[lay.classes] = False  # classes are never clipped: ±1, or relaxed in between
+        guess = np.where(free, np.clip(guess, self.lower, self.upper), guess)
+        start_q, chosen = options.classes.first_stages(self, guess)
+        continuous = lay.continuous(options.fit_passive)
+        if chosen is not None and options.warm_start and chosen.converged:
+            # the warm start solved the final problem (classes fixed): the exact model only
+            # gives the Jacobian at its optimum, for the standard errors (docs/fit.md)
+            best = self.stage("exact Jacobian at the optimum", self.exact, start_q,
+                              continuous, options.tolerance, 1)
+            best = replace(best, converged=True, status=chosen.status)
+            self.stages[-1] = best
+        else:
+            best = self.stage("polish (exact derivatives)", self.exact, start_q, continuous,
+                              options.tolerance, options.polish_iterations
+                              if options.warm_start else options.max_iterations)
+        return self._result(best, time.perf_counter() - start)
 
-    normalised = targets_from_q(best.q)
-    params = parameters_from_qs(best.q[None], defaults).trial(0, body.joint_names)
-    se_norm, se_phys, poorly, residual_sd = _standard_errors(best, params, defaults, options,
-                                                             n)
-    fitted = problem.simulate(best.q, u)
-    result = FitResult(
-        parameters=params, normalised=normalised, standard_errors=se_phys,
-        standard_errors_normalised=se_norm, poorly_determined=poorly,
-        converged=best.converged, iterations=sum(s.iterations for s in stages),
-        evaluations=sum(s.evaluations for s in stages),
-        wall_time_s=time.perf_counter() - start, cost=best.cost,
-        rms_deg=float(np.degrees(np.sqrt(np.mean((exact.simulated(best.q) - measured) ** 2)))),
-        stages=tuple(stages),
-        backend=str(problem.backend), notices=tuple(notices), time=recording.time,
-        recorded=measured, fitted=fitted, segments=body.segment_names,
-        joints=body.joint_names, provenance=provenance(options, body, source=source),
-        residual_sd=residual_sd, noise_floor_deg=options.noise_floor_deg,
-    )
-    if options.locked is None or options.locked.max_offset_s == 0:
-        return result
-    # the stimulus's time offset: the one that best aligns the fitted locked sway with the
-    # recorded one, then the fit again with the stimulus shifted by it (classes kept);
-    # repeated while the offset still moves by a millisecond or more (at most 4 times)
-    offset, fit = 0.0, result
-    fixed = replace(options, classes=FixedClasses(),
-                    locked=replace(options.locked, max_offset_s=0.0))
-    for _ in range(4):
-        step = target.projection.best_offset(np.degrees(fit.fitted), np.degrees(measured),
-                                             options.locked.max_offset_s)
-        if abs(step) < 1e-3 or abs(offset + step) > options.locked.max_offset_s:
+    def _result(self, best: StageResult, seconds: float) -> FitResult:
+        defaults, body = self.problem.defaults, self.body
+        params = parameters_from_qs(best.q[None], defaults).trial(0, body.joint_names)
+        se_norm, se_phys, poorly, residual_sd = _standard_errors(best, params, defaults,
+                                                                 self.options, self.layout)
+        rms = np.sqrt(np.mean((self.exact.simulated(best.q) - self.measured) ** 2))
+        return FitResult(
+            parameters=params, normalised=targets_from_q(best.q), standard_errors=se_phys,
+            standard_errors_normalised=se_norm, poorly_determined=poorly,
+            converged=best.converged, iterations=sum(s.iterations for s in self.stages),
+            evaluations=sum(s.evaluations for s in self.stages), wall_time_s=seconds,
+            cost=best.cost, rms_deg=float(np.degrees(rms)), stages=tuple(self.stages),
+            backend=str(self.problem.backend), notices=tuple(self.notices),
+            time=self.trial.recording.time, recorded=self.measured,
+            fitted=self.problem.simulate(best.q, self.u), segments=body.segment_names,
+            joints=body.joint_names,
+            provenance=provenance(self.options, body, source=self.trial.name),
+            residual_sd=residual_sd, noise_floor_deg=self.options.noise_floor_deg,
+            time_offset_s=self.trial.time_offset_s, trial=self.trial)
+
+
+def _search_offset(run: FitRun, result: FitResult) -> FitResult:
+    """The stimulus's time offset: the one that best aligns the fitted locked sway with the
+    recorded one, then the fit again with the stimulus shifted by it (classes kept);
+    repeated while the offset still moves (at most :data:`OFFSET_ROUNDS` times). The
+    result's trial is the shifted one, so that what re-simulates it uses the offset."""
+    limit = run.options.locked.max_offset_s
+    fixed = replace(run.options, classes=FixedClasses(),
+                    locked=replace(run.options.locked, max_offset_s=0.0))
+    projection = run.target.projection
+    measured = np.degrees(run.measured)
+    trial, fit, stages = run.trial, result, result.stages
+    for _ in range(OFFSET_ROUNDS):
+        step = projection.best_offset(np.degrees(fit.fitted), measured, limit)
+        if abs(step) < OFFSET_SETTLED_S or abs(trial.time_offset_s + step) > limit:
             break
-        offset += step
-        say(f"stimulus time offset {1000 * offset:+.0f} ms; fitting again with it")
-        shifted = stim.delayed(offset)
-        aligned = Recording(recording.time, shifted.angle(recording.time), recording.theta,
-                            recording.segments)
-        again = fit_recording(aligned, body, fit.parameters, fixed, progress, source,
-                              stimulus=shifted)
-        fit = replace(again, stages=fit.stages + again.stages,
-                      iterations=fit.iterations + again.iterations,
-                      evaluations=fit.evaluations + again.evaluations)
-    return replace(fit, time_offset_s=offset, wall_time_s=time.perf_counter() - start,
-                   notices=tuple(dict.fromkeys(result.notices + fit.notices)),
-                   time=result.time, recorded=result.recorded, provenance=result.provenance)
+        trial = trial.shifted(step)
+        run.say(f"stimulus time offset {1000 * trial.time_offset_s:+.0f} ms; fitting again "
+                "with it")
+        again = FitRun(trial, run.body, fixed, run.progress, run.problem, list(run.notices))
+        fit = again.fit(fit.parameters)
+        stages += fit.stages
+    return replace(fit, stages=stages, iterations=sum(s.iterations for s in stages),
+                   evaluations=sum(s.evaluations for s in stages),
+                   provenance=result.provenance)
 
 
-def _target(recording: Recording, stimulus: TiltProfile, options: FitOptions,
-            source: str) -> SwayResidual:
+def _target(trial: PreparedTrial, options: FitOptions) -> SwayResidual:
     """What the fit compares: every sample, or the weighted stimulus-locked harmonics."""
     if options.locked is None:
         return SwayResidual()
-    if stimulus.period_s is None:
-        raise FitError(f"{source}: the locked fit compares stimulus cycles, and this tilt is "
+    if trial.stimulus.period_s is None:
+        raise FitError(f"{trial.name}: the locked fit compares stimulus cycles, and this tilt is "
                        "not periodic (name the PRTS the lab ran, or fit the raw sway)")
-    projection = LockedProjection.for_recording(
-        recording.tilt, np.degrees(recording.theta), recording.sample_rate_hz,
-        stimulus.period_s, stimulus.periodic_from_s, options.locked, source)
-    return LockedResidual(projection)
+    return LockedResidual(LockedProjection.for_trial(trial, options.locked))
 
 
 def _standard_errors(best: StageResult, params: DecParameters, defaults: DecParameters,
-                     options: FitOptions, n: int):
+                     options: FitOptions, layout: UnknownLayout):
     """Gauss-Newton standard errors (N, 4) normalised and physical, the flags, and the
     residual SD before the floor."""
     jac = best.jacobian
@@ -267,7 +284,7 @@ def _standard_errors(best: StageResult, params: DecParameters, defaults: DecPara
             se_z = np.sqrt(np.clip(np.diag(cov), 0, None))
         except np.linalg.LinAlgError:
             se_z = np.full(jac.shape[1], np.inf)
-    se_norm = se_z[: 4 * n].reshape(4, n).T  # the passive terms, when fitted, follow
+    se_norm = se_z[layout.gains_delays].reshape(4, layout.n).T  # the passive terms follow
     default_values = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
     se_phys = se_norm * default_values
     values = np.column_stack([params.array(f) for f in TARGET_FIELDS])
@@ -276,11 +293,13 @@ def _standard_errors(best: StageResult, params: DecParameters, defaults: DecPara
     return se_norm, se_phys, poorly, residual_sd
 
 
-def _bounds(options: FitOptions, n: int) -> tuple[np.ndarray, np.ndarray]:
+def _bounds(options: FitOptions, layout: UnknownLayout) -> tuple[np.ndarray, np.ndarray]:
     """(7N,) lower and upper bounds of q: gains, delays, classes in [−1, 1], and the
     passive terms within the gains' bounds."""
-    lo = ([options.gain_bounds[0]] * 3 * n + [options.delay_bounds[0]] * n + [-1.0] * n
-          + [options.gain_bounds[0]] * 2 * n)
-    hi = ([options.gain_bounds[1]] * 3 * n + [options.delay_bounds[1]] * n + [1.0] * n
-          + [options.gain_bounds[1]] * 2 * n)
-    return np.array(lo), np.array(hi)
+    bounds = []
+    for side in (0, 1):
+        b = layout.per_unknown(options.gain_bounds[side], (-1.0, 1.0)[side],
+                               options.gain_bounds[side])
+        b[3 * layout.n : 4 * layout.n] = options.delay_bounds[side]  # Δ̃ after the gains
+        bounds.append(b)
+    return bounds[0], bounds[1]

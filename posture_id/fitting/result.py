@@ -10,18 +10,14 @@ from scipy.stats import norm
 
 from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
 from posture_id.fileio import JsonResult
-from posture_id.fitting.unknowns import PER_MODULE
+from posture_id.fitting.unknowns import PER_MODULE, class_names
 from posture_id.plotting import plot_fit
+from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.conformal import ConformalCalibration
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
 
 __all__ = ["StageResult", "FitResult", "class_names", "noise_allows"]
-
-
-def class_names(signs) -> str:
-    """"com/joint/com" from class values (≥ 0 is COM in space)."""
-    return "/".join("com" if s >= 0 else "joint" for s in signs)
 
 
 @dataclass(frozen=True)
@@ -75,6 +71,7 @@ class FitResult(JsonResult):
         provenance: package version, options and the body's identity.
         time_offset_s: the stimulus's fitted time offset, s (0 unless
             ``LockedOptions.max_offset_s`` asked for one).
+        trial: the prepared trial fitted (with a fitted offset, the shifted one).
         residual_sd: the residual's SD (its units: degrees, or noise levels for a locked
             fit) and noise_floor_deg the least σ the standard errors assumed; the SEs use
             σ = max(residual_sd, noise_floor_deg).
@@ -103,6 +100,7 @@ class FitResult(JsonResult):
     time_offset_s: float = 0.0
     residual_sd: float = math.nan
     noise_floor_deg: float = 0.0
+    trial: PreparedTrial | None = field(default=None, repr=False, compare=False)
 
     @property
     def classes(self) -> tuple[str, ...]:

@@ -9,17 +9,22 @@ classes q[4N:5N], the passive terms q[5N:].
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from posture_id.dec.parameters import DecParameters, ParameterArrays, denormalise_arrays
 
-__all__ = ["PER_MODULE", "q_from_targets", "targets_from_q", "targets_from_qs",
-           "passive_from_qs", "passive_normalised", "parameters_from_qs"]
+__all__ = ["PER_MODULE", "class_names", "UnknownLayout", "q_from_targets", "targets_from_q",
+           "targets_from_qs", "passive_from_qs", "passive_normalised", "parameters_from_qs"]
 
 #: Unknowns per module in q.
 PER_MODULE = 7
+
+
+def class_names(signs) -> str:
+    """"com/joint/com" from class values (≥ 0 is COM in space)."""
+    return "/".join("com" if s >= 0 else "joint" for s in signs)
 
 
 def q_from_targets(targets: np.ndarray, passive: np.ndarray | None = None) -> np.ndarray:
@@ -58,3 +63,49 @@ def parameters_from_qs(qs: np.ndarray, defaults: DecParameters) -> ParameterArra
 def passive_normalised(params, defaults) -> np.ndarray:
     """(N, 2) [K̃pas, B̃pas] of :class:`~posture_id.dec.parameters.DecParameters`."""
     return np.column_stack([params.array(f) / defaults.array(f) - 1 for f in ("kpas", "bpas")])
+
+
+@dataclass(frozen=True)
+class UnknownLayout:
+    """Where each kind of unknown sits in q (7N,) for a body of ``n`` modules."""
+
+    n: int
+
+    @property
+    def gains_delays(self) -> slice:
+        """K̃p, K̃i, K̃d of every module, then Δ̃: q[:4N]."""
+        return slice(0, 4 * self.n)
+
+    @property
+    def classes(self) -> slice:
+        """The class values c: q[4N:5N]."""
+        return slice(4 * self.n, 5 * self.n)
+
+    @property
+    def passive(self) -> slice:
+        """K̃pas then B̃pas of every module: q[5N:7N]."""
+        return slice(5 * self.n, 7 * self.n)
+
+    @property
+    def size(self) -> int:
+        return PER_MODULE * self.n
+
+    def _indices(self, part: slice) -> list[int]:
+        return list(range(part.start, part.stop))
+
+    def continuous(self, fit_passive: bool) -> list[int]:
+        """Indices fitted with the classes fixed: gains, delays (and passive terms)."""
+        return self._indices(self.gains_delays) + (self._indices(self.passive)
+                                                  if fit_passive else [])
+
+    def everything(self, fit_passive: bool) -> list[int]:
+        """Indices fitted with the classes relaxed: the continuous ones and the classes."""
+        return self._indices(self.gains_delays) + self._indices(self.classes) + (
+            self._indices(self.passive) if fit_passive else [])
+
+    def per_unknown(self, gains_delays: float, classes: float, passive: float) -> np.ndarray:
+        """(7N,) with one value for each kind of unknown (bounds, prior SDs)."""
+        out = np.empty(self.size)
+        out[self.gains_delays], out[self.classes], out[self.passive] = (
+            gains_delays, classes, passive)
+        return out

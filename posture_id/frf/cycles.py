@@ -43,22 +43,22 @@ class CycleAverage:
 
 
 def cycle_spans(n_samples: int, samples_per_cycle: int, skip_cycles: int = 0,
-                source: str = "signal") -> tuple[int, int]:
+                name: str = "signal") -> tuple[int, int]:
     """(first sample, number of whole cycles) analysed in ``n_samples`` samples."""
     if samples_per_cycle < 2:
-        raise PostureIdError(f"{source}: a stimulus cycle must span ≥ 2 samples, "
+        raise PostureIdError(f"{name}: a stimulus cycle must span ≥ 2 samples, "
                              f"got {samples_per_cycle}")
     cycles = n_samples // samples_per_cycle - skip_cycles
     if cycles < 1:
         raise PostureIdError(
-            f"{source}: {n_samples} samples hold {n_samples // samples_per_cycle} whole "
+            f"{name}: {n_samples} samples hold {n_samples // samples_per_cycle} whole "
             f"stimulus cycle(s) of {samples_per_cycle} samples; skipping {skip_cycles} leaves "
             "none to analyse")
     return skip_cycles * samples_per_cycle, cycles
 
 
 def cycle_average(signal: np.ndarray, samples_per_cycle: int, skip_cycles: int = 0,
-                  drift_order: int = 0, source: str = "signal") -> CycleAverage:
+                  drift_order: int = 0, name: str = "signal") -> CycleAverage:
     """Separate the stimulus-locked cycle average from a polynomial drift.
 
     Args:
@@ -68,14 +68,14 @@ def cycle_average(signal: np.ndarray, samples_per_cycle: int, skip_cycles: int =
         skip_cycles: whole cycles left out at the start (the transient).
         drift_order: d ≥ 0, the order of the drift polynomial (d > 0 needs ≥ 2 analysed
             cycles).
-        source: names the signal in errors.
+        name: names the signal in errors.
     """
     x = np.asarray(signal, dtype=float)
-    start, cycles = cycle_spans(len(x), samples_per_cycle, skip_cycles, source)
+    start, cycles = cycle_spans(len(x), samples_per_cycle, skip_cycles, name)
     if drift_order < 0:
-        raise PostureIdError(f"{source}: drift order must be ≥ 0, got {drift_order}")
+        raise PostureIdError(f"{name}: drift order must be ≥ 0, got {drift_order}")
     if drift_order > 0 and cycles < 2:
-        raise PostureIdError(f"{source}: a drift can only be told from the response with ≥ 2 "
+        raise PostureIdError(f"{name}: a drift can only be told from the response with ≥ 2 "
                              "analysed cycles")
     p = samples_per_cycle
     span = x[start : start + cycles * p]

@@ -31,6 +31,7 @@ import numpy as np
 from posture_id.errors import PostureIdError
 from posture_id.frf.cycles import cycle_average, cycle_spans
 from posture_id.frf.response import check_analysis_options, samples_per_cycle
+from posture_id.trials import PreparedTrial
 
 __all__ = ["LockedOptions", "LockedProjection", "noise_levels", "cycle_spectrum"]
 
@@ -122,7 +123,7 @@ class LockedProjection:
     def for_recording(cls, tilt: np.ndarray, sway: np.ndarray, sample_rate_hz: float,
                       period_s: float, start_s: float = 0.0,
                       options: LockedOptions | None = None,
-                      source: str = "recording") -> LockedProjection:
+                      name: str = "recording") -> LockedProjection:
         """The projection for one recording.
 
         Args:
@@ -131,10 +132,10 @@ class LockedProjection:
             start_s: where the periodic stimulus starts (after a lead-in), s.
         """
         options = options or LockedOptions()
-        p = samples_per_cycle(period_s, sample_rate_hz, source)
+        p = samples_per_cycle(period_s, sample_rate_hz, name)
         sway = np.asarray(sway, dtype=float)
         first = int(math.ceil(start_s * sample_rate_hz - 1e-9))
-        offset, cycles = cycle_spans(len(sway) - first, p, options.skip_cycles, source)
+        offset, cycles = cycle_spans(len(sway) - first, p, options.skip_cycles, name)
         start, drift = first + offset, options.drift_order if cycles >= 2 else 0
 
         def spectrum(x: np.ndarray) -> np.ndarray:
@@ -145,14 +146,14 @@ class LockedProjection:
         frequencies = np.arange(1, p // 2 + 1) * sample_rate_hz / p
         keep = excited & (frequencies <= options.max_frequency_hz)
         if not keep.any():
-            raise PostureIdError(f"{source}: the tilt excites no frequency up to "
+            raise PostureIdError(f"{name}: the tilt excites no frequency up to "
                                  f"{options.max_frequency_hz:g} Hz")
         channels = sway.reshape(len(sway), -1).shape[1]
         noise = np.ones((int(keep.sum()), channels))
         if options.weighted:
             power = np.abs(spectrum(sway.reshape(len(sway), -1))) ** 2  # (P/2, M)
             if excited.all():
-                raise PostureIdError(f"{source}: the stimulus excites every harmonic; the "
+                raise PostureIdError(f"{name}: the stimulus excites every harmonic; the "
                                      "noise cannot be told apart (use weighted=False)")
             noise = noise_levels(power, excited, np.flatnonzero(keep), options.neighbours)
             # a harmonic can never be trusted more than 100× the median one
@@ -160,6 +161,16 @@ class LockedProjection:
             noise = np.maximum(noise, np.where(floor > 0, floor, 1.0))
         return cls(start, p, cycles, drift, excited, np.flatnonzero(keep) + 1,
                    frequencies[keep], noise)
+
+    @classmethod
+    def for_trial(cls, trial: PreparedTrial, options: LockedOptions | None = None
+                  ) -> LockedProjection:
+        """The projection for a prepared trial's segment angles (degrees), from where its
+        stimulus's periodic part starts; the stimulus must be periodic."""
+        rec = trial.recording
+        return cls.for_recording(rec.tilt, np.degrees(rec.theta), rec.sample_rate_hz,
+                                 trial.stimulus.period_s, trial.stimulus.periodic_from_s,
+                                 options, trial.name)
 
     def all_harmonics(self, x: np.ndarray) -> np.ndarray:
         """(P/2, ...) complex DFT (÷P) of the drift-free cycle average of ``x`` (S, ...) at

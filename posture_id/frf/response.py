@@ -29,12 +29,12 @@ __all__ = ["FrfOptions", "FrequencyResponse", "frequency_response_arrays",
            "check_analysis_options", "samples_per_cycle"]
 
 
-def samples_per_cycle(period_s: float, sample_rate_hz: float, source: str) -> int:
+def samples_per_cycle(period_s: float, sample_rate_hz: float, name: str) -> int:
     """P, the samples in one stimulus cycle; refused unless a whole number."""
     samples = period_s * sample_rate_hz
     p = int(round(samples))
     if abs(samples - p) > 1e-6 * max(samples, 1.0):
-        raise PostureIdError(f"{source}: a stimulus cycle of {period_s:g} s is not a whole "
+        raise PostureIdError(f"{name}: a stimulus cycle of {period_s:g} s is not a whole "
                              f"number of samples at {sample_rate_hz:g} Hz")
     return p
 
@@ -88,7 +88,7 @@ class FrequencyResponse(JsonResult):
             None when nothing was averaged (one cycle, no bands).
         channels: (M,) names. cycles: analysed cycles. period_s: one stimulus cycle.
         locked_share: (M,) share of each channel's variance that is stimulus-locked.
-        options: how it was computed. source: the recording's name.
+        options: how it was computed. name: the recording's name.
     """
 
     frequencies_hz: np.ndarray
@@ -99,7 +99,7 @@ class FrequencyResponse(JsonResult):
     period_s: float
     locked_share: np.ndarray
     options: FrfOptions
-    source: str = "recording"
+    name: str = "recording"
 
     @property
     def gain(self) -> np.ndarray:
@@ -124,10 +124,10 @@ class FrequencyResponse(JsonResult):
             }
         return {"frequencies_hz": self.frequencies_hz.tolist(), "channels": channels,
                 "cycles": self.cycles, "period_s": self.period_s,
-                "provenance": provenance(self.options, source=self.source)}
+                "provenance": provenance(self.options, source=self.name)}
 
     def summary(self) -> str:
-        lines = [f"FRF of {self.source}: {self.cycles} cycle(s) of {self.period_s:g} s, "
+        lines = [f"FRF of {self.name}: {self.cycles} cycle(s) of {self.period_s:g} s, "
                  f"{len(self.frequencies_hz)} frequencies "
                  f"{self.frequencies_hz[0]:.3g}–{self.frequencies_hz[-1]:.3g} Hz",
                  f"{'channel':<12} {'locked':>7} {'gain@f1':>8} {'phase@f1':>9} "
@@ -148,18 +148,18 @@ class FrequencyResponse(JsonResult):
 def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate_hz: float,
                               period_s: float, channels: tuple[str, ...],
                               options: FrfOptions | None = None,
-                              source: str = "recording") -> FrequencyResponse:
+                              name: str = "recording") -> FrequencyResponse:
     """FRFs of ``outputs`` (S, M) relative to ``tilt`` (S,), both rad, sampled evenly at
     ``sample_rate_hz`` from the stimulus's start; ``period_s``: one stimulus cycle."""
     options = options or FrfOptions()
-    p = samples_per_cycle(period_s, sample_rate_hz, source)
+    p = samples_per_cycle(period_s, sample_rate_hz, name)
     y = np.asarray(outputs, dtype=float)
     u = np.asarray(tilt, dtype=float)
     if y.ndim != 2 or len(u) != len(y) or y.shape[1] != len(channels):
-        raise PostureIdError(f"{source}: tilt (S,) and outputs (S, {len(channels)}) must have "
+        raise PostureIdError(f"{name}: tilt (S,) and outputs (S, {len(channels)}) must have "
                              f"the same S; got {u.shape} and {y.shape}")
-    u_cycles = cycle_average(u, p, options.skip_cycles, 0, source)
-    y_cycles = cycle_average(y, p, options.skip_cycles, options.drift_order, source)
+    u_cycles = cycle_average(u, p, options.skip_cycles, 0, name)
+    y_cycles = cycle_average(y, p, options.skip_cycles, options.drift_order, name)
     n_cycles = y_cycles.cycles.shape[0]
     uf = np.fft.rfft(u_cycles.cycles, axis=1)  # (C, K)
     yf = np.fft.rfft(y_cycles.cycles, axis=1)  # (C, K, M)
@@ -168,7 +168,7 @@ def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate
     excited = ((amplitude > options.excited_threshold * amplitude[1:].max()) & (freqs > 0)
                & (freqs <= options.max_frequency_hz))
     if not excited.any():
-        raise PostureIdError(f"{source}: the tilt excites no frequency up to "
+        raise PostureIdError(f"{name}: the tilt excites no frequency up to "
                              f"{options.max_frequency_hz:g} Hz")
     idx = np.flatnonzero(excited)
     cross = (np.conj(uf[:, idx, None]) * yf[:, idx, :]).sum(axis=0)  # (F, M)
@@ -194,4 +194,4 @@ def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate
         coherence=np.clip(coherence, 0.0, 1.0) if averaged else None,
         channels=tuple(channels), cycles=n_cycles, period_s=float(period_s),
         locked_share=np.asarray(y_cycles.locked_share, dtype=float), options=options,
-        source=source)
+        name=name)

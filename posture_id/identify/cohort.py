@@ -20,15 +20,15 @@ import glob
 import io
 import json
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
-from posture_id.bodies.body import Body, load_body
+from posture_id.bodies.body import load_body
 from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.fitting.options import FitOptions
-from posture_id.identify.core import Method, identify
-from posture_id.learning.identifier import CnnIdentifier
+from posture_id.identify.core import Identifier, Method
+from posture_id.learning.identifier import DEFAULT_LEVEL
 from posture_id.progress import Progress, report
 from posture_id.recording import Recording
 from posture_id.simulation.stimulus import TiltProfile
@@ -68,45 +68,48 @@ class CohortResult:
 
 def _identify_text(csv_text: str, name: str, urdf_text: str, urdf_name: str, method: str,
                    model: str | None, stimulus: TiltProfile | None = None,
-                   fit_options: FitOptions | None = None) -> dict:
+                   fit_options: FitOptions | None = None, level: float = DEFAULT_LEVEL
+                   ) -> dict:
     """One recording from its text (a cluster task): the result as a dict, or the error."""
     with tempfile.TemporaryDirectory() as tmp:
         urdf = Path(tmp) / urdf_name
         urdf.write_text(urdf_text)
         rec_path = Path(tmp) / name
         rec_path.write_text(csv_text)
-        body = load_body(urdf)
-        return _identify_file(rec_path, body, method, model, source=name, stimulus=stimulus,
-                              fit_options=fit_options)
+        try:
+            identifier = Identifier(load_body(urdf), Method(method), model, fit_options, level)
+        except PostureIdError as exc:
+            return {"error": str(exc)}
+        return _identify_file(rec_path, identifier, stimulus, name)
 
 
-def _identify_file(path: Path, body: Body, method: str, model, source: str,
-                   stimulus: TiltProfile | None = None,
-                   fit_options: FitOptions | None = None) -> dict:
+def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | None = None,
+                   name: str | None = None) -> dict:
+    """One recording file through ``identifier``: the result as a dict, or the error;
+    ``name``: what messages call it (default the path)."""
     try:
-        recording = Recording.from_csv(path, body.segment_names,
+        recording = Recording.from_csv(path, identifier.body.segment_names,
                                        None if stimulus is None else stimulus.angle)
-        return identify(recording, body, Method(method), model, fit_options=fit_options,
-                        source=source, stimulus=stimulus).to_dict()
+        if name is not None:
+            recording = replace(recording, name=name)
+        return identifier.identify(recording, stimulus).to_dict()
     except PostureIdError as exc:
         return {"error": str(exc)}
 
 
-def identify_cohort(recordings: list[Path], out: str | Path, body: Body | None = None,
-                    method: Method = Method.CNN, model: str | Path | None = None,
+def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identifier,
                     scheduler: str | None = None, progress: Progress | None = None,
-                    stimulus: TiltProfile | None = None,
-                    fit_options: FitOptions | None = None) -> CohortResult:
-    """Identify ``recordings`` into ``out`` (see the module doc).
+                    stimulus: TiltProfile | None = None, model: str | Path | None = None
+                    ) -> CohortResult:
+    """Identify ``recordings`` into ``out`` (see the module doc) with ``identifier``.
 
     Args:
-        model: a model directory (default: the bundled model for the body).
         scheduler: a Dask distributed scheduler address, or None for this process.
         stimulus: the stimulus every recording was made with (default: each one's tilt).
-        fit_options: for the least squares of ``fit`` and ``hybrid``.
+        model: the identifier's model directory, for the cluster's workers (default: the
+            bundled model for the body).
     """
     out = Path(out)
-    body = body or load_body()
     status: dict[str, str] = {}
     todo = []
     for path in recordings:
@@ -130,21 +133,16 @@ def identify_cohort(recordings: list[Path], out: str | Path, body: Body | None =
         report(progress, done, len(recordings), "recording")
 
     if scheduler:
-        _run_on_cluster(scheduler, todo, body, method, model, record, stimulus, fit_options)
+        _run_on_cluster(scheduler, todo, identifier, model, record, stimulus)
     else:
-        identifier = None
-        if method is not Method.FIT and todo:  # load the network once for the cohort
-            identifier = CnnIdentifier.resolve(model, body)
         for path in todo:
-            record(path, _identify_file(path, body, method.value, identifier, str(path),
-                                        stimulus, fit_options))
+            record(path, _identify_file(path, identifier, stimulus))
     _write_summary(out, recordings, status)
     return CohortResult(out, status)
 
 
-def _run_on_cluster(address: str, todo: list[Path], body: Body, method: Method, model,
-                    record, stimulus: TiltProfile | None = None,
-                    fit_options: FitOptions | None = None) -> None:
+def _run_on_cluster(address: str, todo: list[Path], identifier: Identifier, model,
+                    record, stimulus: TiltProfile | None = None) -> None:
     try:
         from distributed import Client, as_completed
     except ImportError:
@@ -153,12 +151,14 @@ def _run_on_cluster(address: str, todo: list[Path], body: Body, method: Method, 
         client = Client(address, timeout=30)
     except OSError as exc:
         raise PostureIdError(f"cannot reach the Dask scheduler at {address} ({exc})") from None
+    body = identifier.body
     urdf_text = Path(body.urdf_path).read_text()
     model_path = None if model is None else str(model)
     try:
         futures = {client.submit(_identify_text, path.read_text(), path.name, urdf_text,
-                                 Path(body.urdf_path).name, method.value, model_path,
-                                 stimulus, fit_options, pure=False): path for path in todo}
+                                 Path(body.urdf_path).name, identifier.method.value,
+                                 model_path, stimulus, identifier.fit_options,
+                                 identifier.level, pure=False): path for path in todo}
         for future in as_completed(futures):
             record(futures[future], future.result())
             future.release()

@@ -38,15 +38,12 @@ from posture_id.progress import Progress
 from posture_id.provenance import provenance
 from posture_id.recording import Recording
 from posture_id.simulation.batch import simulate
+from posture_id.simulation.metrics import sway_errors
 from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG, SimulationOptions
-from posture_id.simulation.stimulus import (
-    TiltProfile,
-    check_recorded_tilt,
-    recognise_prts,
-    tilt_from_array,
-)
+from posture_id.simulation.stimulus import TiltProfile
+from posture_id.trials import PreparedTrial, prepare_trial
 
-__all__ = ["Method", "identify"]
+__all__ = ["Method", "identify", "Identifier", "DEFAULT_METHOD"]
 
 #: The CNN is said to be unsure of a class when P(C = +1) is inside this band.
 UNSURE_CLASS = (0.05, 0.95)
@@ -63,81 +60,128 @@ class Method(enum.Enum):
     HYBRID = "hybrid"
 
 
-def identify(recording: Recording, body: Body | None = None, method: Method = Method.HYBRID,
+#: The one default method of :func:`identify`, :class:`Identifier`, the command line and
+#: cohorts: the CNN alone (milliseconds, calibrated intervals); the hybrid, least squares
+#: from the CNN's answer, on request when seconds per recording are worth its precision
+#: (docs/identify.md).
+DEFAULT_METHOD = Method.CNN
+
+
+def identify(recording: Recording, body: Body | None = None, method: Method = DEFAULT_METHOD,
              model: str | Path | CnnIdentifier | None = None,
              fit_options: FitOptions | None = None, progress: Progress | None = None,
-             source: str = "recording", stimulus: TiltProfile | None = None,
+             stimulus: TiltProfile | None = None,
              level: float = DEFAULT_LEVEL) -> IdentificationResult:
-    """Identify every module's Kp, Ki, Kd, Δ and class from one recording.
+    """Identify every module's Kp, Ki, Kd, Δ and class from one recording: a one-off
+    :class:`Identifier` (build one to identify many recordings).
 
     Args:
-        recording: tilt and segment angles (the body's segments). body: default the TIP.
-        method: :class:`Method`. model: a model directory or a loaded
-            :class:`~posture_id.learning.identifier.CnnIdentifier` (default: the bundled
-            model for the body). fit_options: for the least-squares stage.
-        progress: told the fit's stages. source: the recording's name in messages.
-        stimulus: the tilt as the lab ran it (checked against the recording's tilt column;
-            see :func:`~posture_id.fitting.least_squares.fit_recording`); default:
-            recognised from the tilt column.
+        recording: tilt and segment angles (the body's segments); its ``name`` names it
+            in messages. body: default the TIP.
+        method: :class:`Method` (default :data:`DEFAULT_METHOD`). model: a model
+            directory or a loaded :class:`~posture_id.learning.identifier.CnnIdentifier`
+            (default: the bundled model for the body). fit_options: for least squares.
+        progress: told the fit's stages.
+        stimulus: the tilt as the lab ran it (checked against the recording's tilt column);
+            default: recognised from the tilt column.
         level: the intervals' nominal coverage (docs/uncertainty.md): the CNN's are
             conformal; least squares' are its Gauss-Newton standard errors times the scale
-            calibrated for the hybrid (:mod:`.calibration`), or ±z·SE, unchecked, for a fit
-            from the defaults or a model without that calibration.
+            calibrated for the hybrid, or ±z·SE, unchecked, for a fit from the defaults or
+            a model without that calibration.
     """
-    body = body or load_body()
-    start = time.perf_counter()
-    options = fit_options or FitOptions()
-    notices: list[str] = []
-    cnn = fit = None
-    if stimulus is not None and method is Method.CNN:  # least squares checks it itself
-        check_recorded_tilt(recording.time, recording.tilt, stimulus, source)
-    if method in (Method.CNN, Method.HYBRID):
-        identifier = CnnIdentifier.resolve(model, body)
-        began = time.perf_counter()
-        cnn = identifier.identify(recording, source, level)
-        spent = time.perf_counter() - began
-        notices += cnn.notices
-    else:
+    identifier = Identifier(body or load_body(), method, model, fit_options, level)
+    return identifier.identify(recording, stimulus, progress)
+
+
+class Identifier:
+    """Built once for a body, a method and a model; identifies many recordings.
+
+        >>> identifier = Identifier(load_body("subject.urdf"), Method.HYBRID)
+        >>> results = [identifier.identify(Recording.from_csv(p)) for p in paths]
+
+    Attributes:
+        body, method, fit_options, level: as given. cnn: the loaded
+            :class:`~posture_id.learning.identifier.CnnIdentifier` (None for
+            :attr:`Method.FIT`).
+    """
+
+    def __init__(self, body: Body, method: Method = DEFAULT_METHOD,
+                 model: str | Path | CnnIdentifier | None = None,
+                 fit_options: FitOptions | None = None,
+                 level: float = DEFAULT_LEVEL) -> None:
+        self.body = body
+        self.method = Method(method)
+        self.fit_options = fit_options or FitOptions()
+        self.level = level
+        self.cnn = None if self.method is Method.FIT else CnnIdentifier.resolve(model, body)
+
+    def prepare(self, recording: Recording, stimulus: TiltProfile | None = None
+                ) -> PreparedTrial:
+        """The entrance: the recording checked against the body, its stimulus found or
+        checked, at the model's rate."""
+        recording.check_segments(self.body.segment_names)
+        return prepare_trial(recording, stimulus, self.fit_options.simulation.sample_rate_hz)
+
+    def identify(self, recording: Recording, stimulus: TiltProfile | None = None,
+                 progress: Progress | None = None) -> IdentificationResult:
+        """Identify one recording (see :func:`identify`)."""
+        start = time.perf_counter()
+        trial = self.prepare(recording, stimulus)
+        return self.identify_trial(trial, progress, start)
+
+    def identify_trial(self, trial: PreparedTrial, progress: Progress | None = None,
+                       start: float | None = None) -> IdentificationResult:
+        """Identify a trial already prepared by :meth:`prepare`."""
+        start = time.perf_counter() if start is None else start
+        method, body, options = self.method, self.body, self.fit_options
+        notices: list[str] = []
+        cnn = fit = None
         spent = 0.0
-    began = time.perf_counter()
-    if method is Method.FIT:
-        # CasADi loads only when least squares runs: the CNN alone starts half a second sooner
-        from posture_id.fitting.least_squares import fit_recording
+        if self.cnn is not None:
+            began = time.perf_counter()
+            cnn = self.cnn.identify(trial, self.level)
+            spent = time.perf_counter() - began
+            notices += cnn.notices
+        began = time.perf_counter()
+        if method is Method.FIT:
+            # CasADi loads only when least squares runs: the CNN alone starts sooner
+            from posture_id.fitting.least_squares import fit_recording
 
-        fit = fit_recording(recording, body, None, options, progress, source,
-                            stimulus=stimulus)
-    elif method is Method.HYBRID:
-        fit = _refine(recording, body, cnn, options, progress, source, notices, stimulus)
-    spent += time.perf_counter() - began if fit is not None else 0.0
-    if fit is not None:
-        notices += [n for n in fit.notices if n not in notices]
-        parameters, normalised = fit.parameters, fit.normalised
-        calibration = identifier.calibration if method is Method.HYBRID else None
-        intervals = fit.intervals(default_parameters(body), level, None if calibration is None
-                                  else calibration.least_squares)
-    else:
-        parameters, normalised = cnn.parameters, cnn.normalised
-        intervals = cnn.intervals
-    checked = _resimulate(body, recording, parameters, options.simulation, stimulus)
-    return IdentificationResult(
-        method=method.value, parameters=parameters, normalised=np.asarray(normalised),
-        class_probability=None if cnn is None else np.asarray(cnn.class_probability),
-        wall_time_s=time.perf_counter() - start, identification_time_s=spent,
-        joints=body.joint_names,
-        cnn=None if cnn is None else cnn.to_dict(),
-        fit=None if fit is None else {k: v for k, v in fit.to_dict().items()
-                                      if k != "provenance"},
-        intervals=intervals,
-        notices=tuple(notices),
-        provenance=provenance(options if fit is not None else None, body, source=source,
-                              method=method.value),
-        **checked,
-    )
+            fit = fit_recording(trial, body, None, options, progress)
+        elif method is Method.HYBRID:
+            fit = _refine(trial, body, cnn, options, progress, notices)
+        if fit is not None:
+            spent += time.perf_counter() - began
+            notices += fit.notices
+            parameters, normalised = fit.parameters, fit.normalised
+            calibration = self.cnn.calibration if method is Method.HYBRID else None
+            intervals = fit.intervals(default_parameters(body), self.level,
+                                      None if calibration is None
+                                      else calibration.least_squares)
+            trial = fit.trial  # with a fitted stimulus offset: the shifted trial
+        else:
+            parameters, normalised = cnn.parameters, cnn.normalised
+            intervals = cnn.intervals
+            notices += trial.notices
+        checked = _resimulate(body, trial, parameters, options.simulation)
+        return IdentificationResult(
+            method=method.value, parameters=parameters, normalised=np.asarray(normalised),
+            class_probability=None if cnn is None else np.asarray(cnn.class_probability),
+            wall_time_s=time.perf_counter() - start, identification_time_s=spent,
+            joints=body.joint_names,
+            cnn=None if cnn is None else cnn.to_dict(),
+            fit=None if fit is None else {k: v for k, v in fit.to_dict().items()
+                                          if k != "provenance"},
+            intervals=intervals,
+            notices=tuple(dict.fromkeys(notices)),
+            provenance=provenance(options if fit is not None else None, body,
+                                  source=trial.name, method=method.value),
+            **checked,
+        )
 
 
-def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
-            progress: Progress | None, source: str, notices: list[str],
-            stimulus: TiltProfile | None = None):
+def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,
+            progress: Progress | None, notices: list[str]):
     """The hybrid's least squares from the CNN's answer.
 
     Classes the CNN is sure of (P(C = +1) outside :data:`UNSURE_CLASS` for every module)
@@ -157,9 +201,8 @@ def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
         notices.append(f"the CNN is unsure of the class of {', '.join(unsure)}: "
                        "least squares decides it")
     else:
-        fit = fit_recording(recording, body, cnn.parameters,
-                            replace(options, classes=FixedClasses()), progress, source,
-                            stimulus=stimulus)
+        fit = fit_recording(trial, body, cnn.parameters,
+                            replace(options, classes=FixedClasses()), progress)
         explained = _explained(fit.recorded, fit.fitted)
         if explained < MIN_EXPLAINED:
             notices.append(f"with the CNN's classes the fit explains {100 * explained:.0f} % "
@@ -167,9 +210,8 @@ def _refine(recording: Recording, body: Body, cnn, options: FitOptions,
     if fit is None or explained < MIN_EXPLAINED:
         relaxed = options.classes if isinstance(options.classes, RelaxedClasses) \
             else RelaxedClasses()
-        again = fit_recording(recording, body, cnn.parameters,
-                              replace(options, classes=relaxed), progress, source,
-                              stimulus=stimulus)
+        again = fit_recording(trial, body, cnn.parameters,
+                              replace(options, classes=relaxed), progress)
         if fit is None or again.cost < fit.cost:
             fit = again
     changed = [j for j in body.joint_names
@@ -188,23 +230,19 @@ def _explained(recorded: np.ndarray, fitted: np.ndarray) -> float:
     return float(1.0 - residual.var(axis=0).sum() / recorded.var(axis=0).sum())
 
 
-def _resimulate(body: Body, recording: Recording, parameters, simulation: SimulationOptions,
-                stimulus: TiltProfile | None = None) -> dict:
-    """Simulate the identified model on the recording's tilt (or the named stimulus);
+def _resimulate(body: Body, trial: PreparedTrial, parameters,
+                simulation: SimulationOptions) -> dict:
+    """Simulate the identified model on the trial's stimulus (with any fitted offset);
     E_id, E_rel, segment fits."""
-    rec = recording.resampled(simulation.sample_rate_hz)
-    stimulus = stimulus or recognise_prts(rec.time, rec.tilt) or tilt_from_array(
-        rec.time, rec.tilt, "the recording's tilt")
+    rec = trial.recording
     wide = replace(simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
-    trial = simulate(body, parameters, stimulus, wide)
+    trial = simulate(body, parameters, trial.stimulus, wide)
     n = len(rec.time)
     theta = trial.theta[:n]
     sway_recorded = body.com_angles(rec.theta)[:, 0]
     sway_simulated = trial.alpha[:n, 0]
-    diff = sway_recorded - sway_simulated
-    fell = not np.all(np.isfinite(diff))
-    e_id = math.inf if fell else math.degrees(float(np.linalg.norm(diff))) / n
-    e_rel = math.inf if fell else float(np.linalg.norm(diff) / np.linalg.norm(sway_recorded))
+    e_id, e_rel = map(float, sway_errors(sway_recorded, sway_simulated))
+    fell = math.isinf(e_rel)
     segments = []
     for j, name in enumerate(rec.segments):
         residual = rec.theta[:, j] - theta[:, j]

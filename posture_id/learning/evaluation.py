@@ -42,6 +42,7 @@ from posture_id.plotting import plot_identification_error, plot_parameter_errors
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 from posture_id.simulation.batch import simulate_batch
+from posture_id.simulation.metrics import sway_errors
 from posture_id.simulation.options import SimulationOptions
 
 __all__ = ["SplitMetrics", "EvaluationReport", "evaluate", "split_metrics"]
@@ -313,12 +314,7 @@ def _identification(model, data: Dataset, samples: SplitSamples, predicted: np.n
     alpha_true = both.alpha[:count, :, 0]
     alpha_pred = both.alpha[count:, :, 0]
     fell = ~both.stable[count:]
-    diff = alpha_true - alpha_pred
-    n_samples = alpha_true.shape[1]
-    e_id = np.degrees(np.linalg.norm(diff, axis=1)) / n_samples
-    e_rel = np.linalg.norm(diff, axis=1) / np.linalg.norm(alpha_true, axis=1)
-    e_id = np.where(fell, np.inf, e_id)
-    e_rel = np.where(fell, np.inf, e_rel)
+    e_id, e_rel = sway_errors(alpha_true, alpha_pred, fell)
     n = predicted.shape[1]
     per_trial_mse = np.mean(error.reshape(-1, n, 5)[pick] ** 2, axis=(1, 2))
     finite = np.isfinite(e_rel)

@@ -4,7 +4,8 @@
     >>> from posture_id.learning import CnnIdentifier
     >>> body = load_body()
     >>> identifier = CnnIdentifier.for_body(body)          # the bundled model
-    >>> result = identifier.identify(Recording.from_csv("rec.csv", body.segment_names))
+    >>> trial = prepare_trial(Recording.from_csv("rec.csv", body.segment_names))
+    >>> result = identifier.identify(trial)
     >>> result.parameters                                  # DecParameters, SI units
 
 A CNN is only valid for the stimulus and body it was trained on: the recording's tilt
@@ -38,8 +39,8 @@ from posture_id.learning.inputs import sway_features
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import stimulus_of
 from posture_id.provenance import body_identity, provenance
-from posture_id.recording import Recording
-from posture_id.simulation.stimulus import recognise_prts, sample_rate_hint
+from posture_id.simulation.stimulus import TiltProfile
+from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
 
@@ -154,10 +155,10 @@ class CnnIdentifier:
         folder, notices = bundled_model_dir(body)
         return cls(load_model(folder), body, notices)
 
-    def features(self, recording: Recording, source: str = "recording") -> np.ndarray:
-        """(M, C, 51, 51) images of a recording, or (1, 3N, 1, F) FRF features for an FRF
-        model: checked against the model's stimulus."""
-        tilt, theta, _ = self._window(recording, source)
+    def features(self, trial: PreparedTrial) -> np.ndarray:
+        """(M, C, 51, 51) images of a prepared trial, or (1, 3N, 1, F) FRF features for an
+        FRF model: checked against the model's stimulus."""
+        tilt, theta = self._window(trial)
         return self._features(tilt, theta)
 
     def _features(self, tilt: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -165,58 +166,53 @@ class CnnIdentifier:
         return out if self.model.config.layout is not Layout.MODULAR else out.reshape(
             -1, *out.shape[2:])
 
-    def _window(self, recording: Recording, source: str
-                ) -> tuple[np.ndarray, np.ndarray, bool]:
-        """(tilt (S,), segment angles (S, N)) rad of the model's window at 50 Hz, and
-        whether the recording had to be resampled; checked against the model's body and
-        stimulus."""
-        recording.check_segments(self.body.segment_names, source)
-        if not recording.evenly_sampled():
-            raise RecordingError(f"{source}: samples are not evenly spaced in time")
-        as_given = recording
-        recording = recording.resampled(FS_HZ)
+    def _window(self, trial: PreparedTrial) -> tuple[np.ndarray, np.ndarray]:
+        """(tilt (S,), segment angles (S, N)) rad of the model's window at 50 Hz, checked
+        against the model's body and stimulus."""
+        trial.require_segments(self.body.segment_names)
+        recording = trial.recording
+        if abs(trial.rate_hz - FS_HZ) > 1e-6 * FS_HZ:
+            raise LearningError(f"{trial.name}: prepared at {trial.rate_hz:g} Hz; the CNN "
+                                f"reads {FS_HZ:g} Hz (prepare_trial(..., rate_hz={FS_HZ:g}))")
         try:
             if len(recording.time) < self.n_samples:
                 raise RecordingError(
-                    f"{source}: {recording.duration_s:.2f} s of sway; the CNN was trained on "
-                    f"{(self.n_samples - 1) / FS_HZ:g} s ({self._stimulus_text()}): use "
+                    f"{trial.name}: {recording.duration_s:.2f} s of sway; the CNN was trained "
+                    f"on {(self.n_samples - 1) / FS_HZ:g} s ({self._stimulus_text()}): use "
                     "posture-id fit for other lengths")
             cut = slice(0, self.n_samples)
-            time, tilt, theta = recording.time[cut], recording.tilt[cut], recording.theta[cut]
-            self._check_stimulus(time, tilt, source)
+            self._check_stimulus(trial.stimulus, recording.tilt[cut], trial.name)
         except RecordingError as error:
             # a wrong time column shows as a wrong stimulus: say so when it is that
-            hint = sample_rate_hint(as_given.time, as_given.tilt, source)
-            if hint is None:
+            if trial.rate_hint is None:
                 raise
-            raise RecordingError(f"{error}; and {hint.removeprefix(source + ': ')}") from None
-        return tilt, theta, recording is not as_given
+            raise RecordingError(
+                f"{error}; and {trial.rate_hint.removeprefix(trial.name + ': ')}") from None
+        return recording.tilt[cut], recording.theta[cut]
 
     def _stimulus_text(self) -> str:
         s = self.stimulus
         return f"PRTS {s['states']} states ×{s['cycles']}, {s['amplitude_deg']:g}° p-p"
 
-    def _check_stimulus(self, time: np.ndarray, tilt: np.ndarray, source: str) -> None:
-        """Refuse a tilt that is not the trained PRTS (within 1 % of its amplitude)."""
+    def _check_stimulus(self, stimulus: TiltProfile, tilt: np.ndarray, name: str) -> None:
+        """Refuse a tilt that is not the trained PRTS (within 1 % of its amplitude);
+        ``stimulus`` is the one the trial was prepared with, named in the message."""
         tolerance = 0.01 * math.radians(self.stimulus["amplitude_deg"])
         if np.max(np.abs(self.expected_tilt - tilt)) <= tolerance:
             return
-        found = recognise_prts(time, tilt)
-        what = f"a {found.description}" if found is not None else "not a PRTS"
+        what = (f"a {stimulus.description}" if stimulus.description.startswith("PRTS")
+                else "not a PRTS")
         raise RecordingError(
-            f"{source}: the tilt is {what}; the CNN was trained on {self._stimulus_text()} "
+            f"{name}: the tilt is {what}; the CNN was trained on {self._stimulus_text()} "
             "and is valid for that stimulus only: use posture-id fit, which takes any tilt")
 
-    def identify(self, recording: Recording, source: str = "recording",
-                 level: float = DEFAULT_LEVEL) -> CnnIdentification:
-        """The CNN's parameters for one recording, with intervals at ``level`` when the
-        model is calibrated."""
-        tilt, theta, resampled = self._window(recording, source)
+    def identify(self, trial: PreparedTrial, level: float = DEFAULT_LEVEL
+                 ) -> CnnIdentification:
+        """The CNN's parameters for one prepared trial (at 50 Hz), with intervals at
+        ``level`` when the model is calibrated."""
+        tilt, theta = self._window(trial)
         images = self._features(tilt, theta)
-        notices = self.notices
-        if resampled:
-            notices += (f"{source}: resampled from {recording.sample_rate_hz:.4g} Hz to "
-                        f"{FS_HZ:g} Hz by linear interpolation",)
+        notices = self.notices + trial.notices
         prediction = predict_images(self.model, images)
         if self.model.config.layout is Layout.MODULAR:  # one sample per module
             normalised = prediction.targets[:, 0]
@@ -237,7 +233,7 @@ class CnnIdentifier:
                 normalised[:, :4], conformal.scale(level, noise), defaults, level,
                 "conformal, CNN (validation split)", noise, self.body.joint_names)
             if conformal.beyond(noise):
-                notices += (f"{source}: its sensor noise (about {noise:.3f}°) is above the "
+                notices += (f"{trial.name}: its sensor noise (about {noise:.3f}°) is above the "
                             f"{conformal.noise_deg[-1]:.3f}° the intervals were calibrated "
                             "for: they are likely too narrow",)
         arrays = denormalise_arrays(normalised[None], self.defaults)
@@ -250,5 +246,5 @@ class CnnIdentifier:
             parameters=params, normalised=normalised, class_probability=probability,
             joints=self.body.joint_names, model=model_info, intervals=intervals,
             notices=notices,
-            provenance={**provenance(None, self.body, source=source),
+            provenance={**provenance(None, self.body, source=trial.name),
                         "body": body_identity(self.body)})

@@ -32,7 +32,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 
 from posture_id.errors import SimulationError
 
@@ -94,6 +93,8 @@ class MotorNoise:
         a = self.pole(dt)
         start = rng.standard_normal(n_joints)  # the stationary distribution
         white = rng.standard_normal((n_steps, n_joints))
+        from scipy.signal import lfilter  # 1.2 s of import: only where motor noise is drawn
+
         eta, _ = lfilter([math.sqrt(1.0 - a * a)], [1.0, -a], white, axis=0,
                          zi=(a * start)[None, :])
         return eta

@@ -24,7 +24,7 @@ import json
 import math
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -32,20 +32,20 @@ import numpy as np
 from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise
 from posture_id.dec.prior import sample_parameters
-from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write_text, json_text, jsonable
 from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Method, identify
-from posture_id.identify.workers import one_thread_processes
 from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.checkpoint import SIDECAR
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.plotting import plot_benchmark
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate, simulate_batch
+from posture_id.simulation.metrics import sway_errors
+from posture_id.studies.journal import Journal
+from posture_id.studies.workers import one_thread_processes
 
-__all__ = ["BenchmarkReport", "run_benchmark", "FAR_E_REL", "JOURNAL", "read_journal",
-           "append_journal"]
+__all__ = ["BenchmarkReport", "MethodStatistics", "run_benchmark", "FAR_E_REL", "JOURNAL"]
 
 #: A result whose re-simulated body sway differs from the truth's by more than this
 #: (relative) is counted as ending far from the truth.
@@ -86,14 +86,12 @@ def _one(task: tuple) -> dict:
     if noise_deg > 0:
         recording = recording.with_sensor_noise(noise_deg, seed)
     start = time.perf_counter()
-    result = identify(recording, body, Method(method), identifier, fit_options=_ONE_THREAD,
-                      source=f"trial {index}")
+    result = identify(replace(recording, name=f"trial {index}"), body, Method(method),
+                      identifier, fit_options=_ONE_THREAD)
     seconds = time.perf_counter() - start
     # E_rel against the noise-free truth's sway, on the same tilt
     sway_truth = clean.alpha[:, 0]
-    diff = sway_truth - result.sway_resimulated[: len(sway_truth)]
-    e_rel = (math.inf if not np.all(np.isfinite(diff))
-             else float(np.linalg.norm(diff) / np.linalg.norm(sway_truth)))
+    e_rel = float(sway_errors(sway_truth, result.sway_resimulated[: len(sway_truth)])[1])
     defaults_norm = normalise(truth, default_parameters(body))
     error = np.abs(result.normalised[:, :4] - defaults_norm[:, :4])
     correct = [result.parameters[j].controls == truth[j].controls for j in body.joint_names]
@@ -106,6 +104,66 @@ def _one(task: tuple) -> dict:
         row["inside_interval"] = ((iv.lower <= true) & (true <= iv.upper)).tolist()
         row["interval_method"] = iv.method
     return row
+
+
+@dataclass(frozen=True)
+class MethodStatistics:
+    """One method at one sensor-noise level over the benchmark's recordings.
+
+    Attributes:
+        noise_deg: sensor noise SD, degrees. method: the method. recordings: how many.
+        mean_abs_error, median_abs_error: (N, 4) |error| of K̃p, K̃i, K̃d, Δ̃ per module.
+        class_accuracy: share of classes right. e_rel_median, e_rel_p90: E_rel (fraction).
+        far_from_truth: recordings with a wrong class or E_rel above :data:`FAR_E_REL`.
+        seconds_median, seconds_mean: the whole call, s. identification_seconds_median,
+        identification_seconds_mean: identifying alone, s.
+        interval_coverage: (N, 4) share of truths inside the 90 % intervals (None without
+            intervals); interval_method, interval_recordings: their kind and count.
+    """
+
+    noise_deg: float
+    method: Method
+    recordings: int
+    mean_abs_error: np.ndarray
+    median_abs_error: np.ndarray
+    class_accuracy: float
+    e_rel_median: float
+    e_rel_p90: float
+    far_from_truth: int
+    seconds_median: float
+    seconds_mean: float
+    identification_seconds_median: float
+    identification_seconds_mean: float
+    interval_coverage: np.ndarray | None = None
+    interval_method: str | None = None
+    interval_recordings: int = 0
+
+    @classmethod
+    def of_rows(cls, noise: float, method: Method, rows: list[dict]) -> MethodStatistics:
+        err = np.array([r["abs_error"] for r in rows])  # (R, N, 4)
+        e_rel = np.array([r["e_rel"] for r in rows])
+        correct = np.array([r["classes_correct"] for r in rows])
+        far = (~correct.all(axis=1)) | ~(e_rel <= FAR_E_REL)
+        seconds = [r["seconds"] for r in rows]
+        identifying = [r["identification_seconds"] for r in rows]
+        inside = [r["inside_interval"] for r in rows if "inside_interval" in r]
+        return cls(
+            noise_deg=noise, method=method, recordings=len(rows),
+            mean_abs_error=err.mean(axis=0), median_abs_error=np.median(err, axis=0),
+            class_accuracy=float(correct.mean()), e_rel_median=float(np.median(e_rel)),
+            e_rel_p90=float(np.percentile(e_rel, 90, method="higher")),
+            far_from_truth=int(far.sum()), seconds_median=float(np.median(seconds)),
+            seconds_mean=float(np.mean(seconds)),
+            identification_seconds_median=float(np.median(identifying)),
+            identification_seconds_mean=float(np.mean(identifying)),
+            interval_coverage=np.mean(inside, axis=0) if inside else None,
+            interval_method=rows[0].get("interval_method") if inside else None,
+            interval_recordings=len(inside))
+
+    def to_dict(self) -> dict:
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out["method"] = self.method.value
+        return jsonable(out)
 
 
 @dataclass(frozen=True)
@@ -122,44 +180,17 @@ class BenchmarkReport:
     def _rows(self, noise: float, method: Method) -> list[dict]:
         return [r for r in self.rows if r["noise_deg"] == noise and r["method"] == method.value]
 
-    def statistics(self) -> dict:
-        out: dict = {}
-        for noise in self.noise_levels:
-            for method in METHODS:
-                rows = self._rows(noise, method)
-                if not rows:
-                    continue
-                err = np.array([r["abs_error"] for r in rows])  # (R, N, 4)
-                e_rel = np.array([r["e_rel"] for r in rows])
-                correct = np.array([r["classes_correct"] for r in rows])
-                far = (~correct.all(axis=1)) | ~(e_rel <= FAR_E_REL)
-                out[f"{noise:g}|{method.value}"] = {
-                    "noise_deg": noise, "method": method.value, "recordings": len(rows),
-                    "mean_abs_error": err.mean(axis=0).tolist(),
-                    "median_abs_error": np.median(err, axis=0).tolist(),
-                    "class_accuracy": float(correct.mean()),
-                    "e_rel_median": float(np.median(e_rel)),
-                    "e_rel_p90": float(np.percentile(e_rel, 90, method="higher")),
-                    "far_from_truth": int(far.sum()),
-                    "seconds_median": float(np.median([r["seconds"] for r in rows])),
-                    "seconds_mean": float(np.mean([r["seconds"] for r in rows])),
-                    "identification_seconds_median": float(np.median(
-                        [r["identification_seconds"] for r in rows])),
-                    "identification_seconds_mean": float(np.mean(
-                        [r["identification_seconds"] for r in rows])),
-                }
-                inside = [r["inside_interval"] for r in rows if "inside_interval" in r]
-                if inside:
-                    out[f"{noise:g}|{method.value}"].update(
-                        interval_coverage=np.mean(inside, axis=0).tolist(),
-                        interval_method=rows[0].get("interval_method"),
-                        interval_recordings=len(inside))
-        return out
+    def statistics(self) -> dict[tuple[float, Method], MethodStatistics]:
+        """Every (noise level, method) that has rows, in the order of the report."""
+        return {(noise, method): MethodStatistics.of_rows(noise, method, rows)
+                for noise in self.noise_levels for method in METHODS
+                if (rows := self._rows(noise, method))}
 
     def to_dict(self) -> dict:
         return {"body": self.body, "joints": list(self.joints), "trials": self.trials,
                 "noise_levels": list(self.noise_levels), "workers": self.workers,
-                "far_e_rel": FAR_E_REL, "statistics": self.statistics(),
+                "far_e_rel": FAR_E_REL,
+                "statistics": [s.to_dict() for s in self.statistics().values()],
                 "rows": list(self.rows)}
 
     def to_markdown(self) -> str:
@@ -175,10 +206,10 @@ class BenchmarkReport:
                  "whole `identify` call, with the checks and the re-simulation every method "
                  "shares; each worker process on one thread. Made by `posture-id benchmark` "
                  "(`benchmarks/cnn_vs_optimizer.py`).", ""]
-        far = {m.value: sum(s["far_from_truth"] for k, s in stats.items()
-                            if k.endswith("|" + m.value)) for m in METHODS}
-        total = {m.value: sum(s["recordings"] for k, s in stats.items()
-                              if k.endswith("|" + m.value)) for m in METHODS}
+        far = {m.value: sum(s.far_from_truth for (_, method), s in stats.items()
+                            if method is m) for m in METHODS}
+        total = {m.value: sum(s.recordings for (_, method), s in stats.items()
+                              if method is m) for m in METHODS}
         lines += ["Ending far from the truth, all noise levels: " + ", ".join(
             f"{m} {far[m]}/{total[m]}" for m in far if total[m]) + ".", ""]
         for noise in self.noise_levels:
@@ -188,35 +219,37 @@ class BenchmarkReport:
                       "(per module) |",
                       "|---|---|---|---|---|---|---|---|"]
             for method in METHODS:
-                s = stats.get(f"{noise:g}|{method.value}")
+                s = stats.get((noise, method))
                 if s is None:
                     continue
                 errors = "; ".join(", ".join(f"{e:.3f}" for e in module)
-                                   for module in s["mean_abs_error"])
-                lines.append(f"| {method.value} | {100 * s['class_accuracy']:.1f} % | "
-                             f"{100 * s['e_rel_median']:.2f} % | {100 * s['e_rel_p90']:.1f} % | "
-                             f"{s['far_from_truth']}/{s['recordings']} | "
-                             f"{s['identification_seconds_median']:.3g} | "
-                             f"{s['seconds_median']:.3g} | {errors} |")
-            cnn, fit, hybrid = (stats.get(f"{noise:g}|{m}") for m in ("cnn", "fit", "hybrid"))
+                                   for module in s.mean_abs_error)
+                lines.append(f"| {method.value} | {100 * s.class_accuracy:.1f} % | "
+                             f"{100 * s.e_rel_median:.2f} % | {100 * s.e_rel_p90:.1f} % | "
+                             f"{s.far_from_truth}/{s.recordings} | "
+                             f"{s.identification_seconds_median:.3g} | "
+                             f"{s.seconds_median:.3g} | {errors} |")
+            cnn, fit, hybrid = (stats.get((noise, m)) for m in (Method.CNN, Method.FIT,
+                                                                  Method.HYBRID))
             if cnn and fit and hybrid:
-                t_cnn, t_fit, t_hybrid = (x["identification_seconds_median"]
+                t_cnn, t_fit, t_hybrid = (x.identification_seconds_median
                                           for x in (cnn, fit, hybrid))
                 lines += ["", f"Ratios (identifying, medians): least squares from the defaults "
                               f"takes {t_fit / t_cnn:.0f}× the CNN's time "
-                              f"({fit['seconds_median'] / cnn['seconds_median']:.0f}× for the "
+                              f"({fit.seconds_median / cnn.seconds_median:.0f}× for the "
                               f"whole call); the hybrid is {t_fit / t_hybrid:.2f}× "
                               f"faster than least squares from the defaults; its median E_rel "
-                              f"is {_ratio(hybrid['e_rel_median'], cnn['e_rel_median'])} of "
+                              f"is {_ratio(hybrid.e_rel_median, cnn.e_rel_median)} of "
                               "the CNN's."]
             lines.append("")
         lines += self._coverage_markdown(stats)
         lines += ["![E_rel per method](cnn_vs_optimizer.png)", ""]
         return "\n".join(lines)
 
-    def _coverage_markdown(self, stats: dict) -> list[str]:
+    def _coverage_markdown(self, stats: dict[tuple[float, Method], MethodStatistics]
+                           ) -> list[str]:
         """How often each method's 90 % intervals held the truth on these recordings."""
-        rows = [s for s in stats.values() if "interval_coverage" in s]
+        rows = [s for s in stats.values() if s.interval_coverage is not None]
         if not rows:
             return []
         lines = ["## Do the 90 % intervals hold the truth?", "",
@@ -228,9 +261,9 @@ class BenchmarkReport:
                  "| sensor noise | method | intervals | recordings | all | Kp | Ki | Kd | Δ |",
                  "|---|---|---|---|---|---|---|---|---|"]
         for s in rows:
-            cov = np.array(s["interval_coverage"])
-            lines.append(f"| {s['noise_deg']:g}° | {s['method']} | {s['interval_method']} | "
-                         f"{s['interval_recordings']} | {100 * cov.mean():.1f} % | "
+            cov = s.interval_coverage
+            lines.append(f"| {s.noise_deg:g}° | {s.method.value} | {s.interval_method} | "
+                         f"{s.interval_recordings} | {100 * cov.mean():.1f} % | "
                          + " | ".join(f"{100 * c:.1f} %" for c in cov.mean(axis=0)) + " |")
         return lines + [""]
 
@@ -278,7 +311,8 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
     weights = json.loads((model_dir / SIDECAR).read_text(encoding="utf-8"))["weights_sha256"]
     header = {"format": "posture_id-benchmark-journal", "body_sha256": body.sha256,
               "model_weights_sha256": weights, "trials": trials, "seed": seed}
-    done = read_journal(Path(journal), header) if journal is not None else {}
+    book = None if journal is None else Journal(Path(journal), header, _task_key)
+    done = {} if book is None else book.read()
     rows = [done[_task_key(t)] for t in tasks if _task_key(t) in done]
     todo = [t for t in tasks if _task_key(t) not in done]
     report(progress, len(rows), len(tasks), "identification")
@@ -286,8 +320,8 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
     with one_thread_processes(workers) as pool:
         for row in pool.map(_one, todo, chunksize=1):
             rows.append(row)
-            if journal is not None:
-                append_journal(Path(journal), header, row)
+            if book is not None:
+                book.append(row)
             report(progress, len(rows), len(tasks), "identification")
     rows.sort(key=lambda r: (noise_levels.index(r["noise_deg"]), r["index"],
                              [m.value for m in methods].index(r["method"])))
@@ -300,46 +334,6 @@ def _task_key(task_or_row) -> tuple:
         return (float(task_or_row["noise_deg"]), int(task_or_row["index"]), task_or_row["method"])
     _, _, index, noise, method, _ = task_or_row
     return (float(noise), int(index), method)
-
-
-def read_journal(path: Path, header: dict, key=None) -> dict[tuple, dict]:
-    """Rows of a journal written for ``header`` (a torn last line is ignored), by
-    ``key(row)`` (default: noise level, trial, method)."""
-    key = key or _task_key
-    if not path.exists():
-        return {}
-    lines = path.read_text(encoding="utf-8").splitlines()
-    try:
-        found = json.loads(lines[0]) if lines else None
-    except json.JSONDecodeError:
-        found = None
-    if found != header:
-        raise PostureIdError(f"{path}: a journal of another set-up (the body, model, data "
-                             "set, trials or seed differ); remove it or choose another --out")
-    rows, kept = {}, [lines[0]]
-    for line in lines[1:]:
-        try:
-            row = json.loads(line)
-        except json.JSONDecodeError:
-            continue  # the line being written when the run stopped
-        kept.append(line)
-        if "e_rel" in row:
-            row["e_rel"] = math.inf if row["e_rel"] is None else row["e_rel"]
-        rows[key(row)] = row
-    if len(kept) < len(lines) or not path.read_bytes().endswith(b"\n"):
-        atomic_write_text(path, "\n".join(kept) + "\n")  # the torn line out
-    return rows
-
-
-def append_journal(path: Path, header: dict, row: dict) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    new = not path.exists() or path.stat().st_size == 0
-    with path.open("a", encoding="utf-8") as f:
-        if new:
-            f.write(json.dumps(header) + "\n")
-        f.write(json.dumps(jsonable(row), allow_nan=False) + "\n")
-        f.flush()
-        os.fsync(f.fileno())
 
 
 def _ratio(a: float, b: float) -> str:

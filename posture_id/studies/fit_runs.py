@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,13 +23,14 @@ from posture_id.bodies.body import load_body
 from posture_id.datasets.store import Dataset
 from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import FitOptions, FixedClasses
-from posture_id.identify.benchmark import append_journal, read_journal
-from posture_id.identify.workers import one_thread_processes
 from posture_id.learning.checkpoint import SIDECAR
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.learning.samples import stimulus_of
 from posture_id.progress import Progress, report
 from posture_id.recording import Recording
+from posture_id.studies.journal import Journal
+from posture_id.studies.workers import one_thread_processes
+from posture_id.trials import prepare_trial
 from posture_id.uncertainty.noise import sensor_noise_deg
 
 __all__ = ["FIT_JOURNAL", "held_out_recording", "run_fits", "split_trials"]
@@ -54,7 +56,8 @@ def held_out_recording(data: Dataset, shard: int, local: int, noise_deg: float,
     rate = float(data.manifest["options"]["sample_rate_hz"])
     t = np.arange(len(theta)) / rate
     stimulus = stimulus_of(data.manifest["stimulus"])
-    recording = Recording(t, stimulus.angle(t), theta, tuple(data.manifest["body"]["segments"]))
+    recording = Recording(t, stimulus.angle(t), theta, tuple(data.manifest["body"]["segments"]),
+                          f"trial {shard}:{local}")
     if noise_deg > 0:
         recording = recording.with_sensor_noise(noise_deg, seed)
     return recording, np.asarray(arrays["targets"][local], dtype=np.float64)
@@ -77,10 +80,10 @@ def _one(task: tuple) -> dict:
                .generate_state(1)[0])
     recording, truth = held_out_recording(data, shard, local, noise_deg, seed)
     start = time.perf_counter()
-    cnn = identifier.identify(recording, f"{split} trial {position}")
-    fit = fit_recording(recording, body, cnn.parameters,
-                        FitOptions(threads=1, classes=FixedClasses()),
-                        source=f"{split} trial {position}")
+    trial = prepare_trial(replace(recording, name=f"{split} trial {position}"))
+    cnn = identifier.identify(trial)
+    fit = fit_recording(trial, body, cnn.parameters,
+                        FitOptions(threads=1, classes=FixedClasses()))
     return {"split": split, "position": position, "noise_deg": noise_deg,
             "seconds": time.perf_counter() - start, "truth": truth.tolist(),
             "estimate": np.asarray(fit.normalised).tolist(),
@@ -110,13 +113,14 @@ def run_fits(model_dir: str | Path, dataset_dir: str | Path, split: str, count: 
     trials = split_trials(data, split, count)
     tasks = [(str(model_dir), str(dataset_dir), split, p, k, i, float(noise))
              for noise in noise_levels for p, (k, i) in enumerate(trials)]
-    done = read_journal(Path(journal), header, key=_key)
+    book = Journal(Path(journal), header, _key)
+    done = book.read()
     rows = [done[t] for t in ((s, p, n) for _, _, s, p, _, _, n in tasks) if t in done]
     todo = [t for t in tasks if (t[2], t[3], t[6]) not in done]
     report(progress, len(rows), len(tasks), "fit")
     with one_thread_processes(workers) as pool:
         for row in pool.map(_one, todo, chunksize=1):
             rows.append(row)
-            append_journal(Path(journal), header, row)
+            book.append(row)
             report(progress, len(rows), len(tasks), "fit")
     return rows

@@ -1,7 +1,7 @@
 """The demo: identify the example recordings shipped with the package and compare with the
 parameters they were simulated with.
 
-The examples (``posture_id/identify/examples/``, made by ``make examples``) are simulated
+The examples (``posture_id/studies/examples/``, made by ``make examples``) are simulated
 subjects with 0.01° white sensor noise: a TIP and a straight-leg 2-segment body (the
 paper's human experiment). ``posture-id demo --out DIR`` identifies each with the bundled
 model and the hybrid (the CNN's answer refined by least squares), prints identified
@@ -79,7 +79,7 @@ def run_demo(out: str | Path, method: Method = Method.HYBRID,
         report(progress, len(rows), len(EXAMPLES), "recording", f"identifying {csv.name} "
                f"({body_name}, {method.value})")
         result = identify(Recording.from_csv(csv, body.segment_names), body, method,
-                          progress=progress, source=str(csv))
+                          progress=progress)
         result.to_json(out / f"{name}.json")
         result.plot(out / f"{name}.png")
         result.plot_intervals(out / f"{name}.intervals.png")

@@ -1,0 +1,152 @@
+"""The entrance: a recording and its stimulus, checked once, at the rate the model needs.
+
+Everything past the entrance (least squares, the CNN, the FRF, the re-simulation check,
+cohorts) takes a :class:`PreparedTrial` and checks nothing of the recording again.
+
+    >>> trial = prepare_trial(Recording.from_csv("rec.csv"), rate_hz=50.0)
+    >>> trial.stimulus.description, trial.notices
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from posture_id.errors import RecordingError, StimulusError
+from posture_id.recording import Recording
+from posture_id.simulation.stimulus import (
+    TiltProfile,
+    check_recorded_tilt,
+    recognise_prts,
+    sample_rate_hint,
+    tilt_from_array,
+)
+
+__all__ = ["PreparedTrial", "prepare_trial", "MIN_ANY_TILT_S"]
+
+#: Shortest recording of a tilt that is not periodic, s.
+MIN_ANY_TILT_S = 20.0
+
+
+@dataclass(frozen=True)
+class PreparedTrial:
+    """A recording ready for identification.
+
+    Attributes:
+        recording: finite, evenly sampled, at ``rate_hz`` (resampled when it was not).
+        stimulus: the tilt as it was run: named and checked against the tilt column,
+            recognised as a PRTS, or the tilt column itself interpolated.
+        notices: what was noticed on the way in (resampling, a recognised stimulus, a
+            time column that gives the wrong rate), each naming the recording.
+        original_rate_hz: Hz, the rate of the recording as given.
+        time_offset_s: s, how far the stimulus has been shifted from the one named or
+            recognised (:meth:`shifted`; a fitted platform lag).
+        rate_hint: the notice that the tilt is a PRTS at another rate than the time column
+            says (also among ``notices``), or None.
+    """
+
+    recording: Recording
+    stimulus: TiltProfile
+    notices: tuple[str, ...] = ()
+    original_rate_hz: float = math.nan
+    time_offset_s: float = 0.0
+    rate_hint: str | None = None
+
+    @property
+    def name(self) -> str:
+        return self.recording.name
+
+    @property
+    def rate_hz(self) -> float:
+        return self.recording.sample_rate_hz
+
+    @property
+    def resampled(self) -> bool:
+        """Whether the recording was brought to another rate on the way in."""
+        return abs(self.original_rate_hz / self.rate_hz - 1.0) > 1e-6
+
+    def shifted(self, offset_s: float) -> PreparedTrial:
+        """The same sway with the stimulus ``offset_s`` later than the one prepared (the
+        tilt column follows it); offsets add up in :attr:`time_offset_s`."""
+        stimulus = self.stimulus.delayed(offset_s)
+        recording = replace(self.recording, tilt=stimulus.angle(self.recording.time))
+        return replace(self, recording=recording, stimulus=stimulus,
+                       time_offset_s=self.time_offset_s + offset_s)
+
+    def require_segments(self, segments: tuple[str, ...]) -> None:
+        """Refuse a trial whose segment columns are not ``segments`` (a body's)."""
+        self.recording.check_segments(segments)
+
+    def require_duration(self, needed_s: float, what: str) -> None:
+        """Refuse a trial shorter than ``needed_s`` seconds; ``what`` says why that long."""
+        if self.recording.duration_s < needed_s - 1e-9:
+            raise RecordingError(f"{self.name}: the recording lasts "
+                                 f"{self.recording.duration_s:.2f} s, shorter than {what}")
+
+    def require_whole_cycle(self) -> None:
+        """Refuse a trial shorter than one whole cycle of its stimulus (after its lead-in),
+        or than :data:`MIN_ANY_TILT_S` for a tilt that is not periodic."""
+        needed = self.stimulus.whole_cycles_s
+        if needed is None:
+            self.require_duration(MIN_ANY_TILT_S,
+                                  f"{MIN_ANY_TILT_S:g} s (the least for a tilt that is not "
+                                  "periodic)")
+        else:
+            self.require_duration(needed, f"one whole cycle of its stimulus "
+                                          f"({self.stimulus.description}: {needed:g} s)")
+
+
+def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
+                  rate_hz: float | None = 50.0) -> PreparedTrial:
+    """Check a recording once, find its stimulus, and bring it to ``rate_hz``.
+
+    Args:
+        recording: as read or simulated; its ``name`` names it in every message.
+        stimulus: the stimulus as the lab ran it; the tilt column must follow it.
+            Default: a PRTS recognised in the tilt, else the tilt itself, interpolated.
+        rate_hz: the rate the consumer needs (the model's output rate; 50 Hz); None
+            keeps the recording's own rate (the FRF).
+
+    Raises:
+        RecordingError: a constant tilt, angles that are not finite, irregular sampling,
+            a tilt column that is not the named stimulus.
+    """
+    name = recording.name
+    if np.ptp(recording.tilt) == 0:
+        raise RecordingError(f"{name}: the tilt is constant: there is no stimulus, so the "
+                             "controller's parameters cannot be identified from it")
+    bad = ~np.isfinite(recording.theta).all(axis=1) | ~np.isfinite(recording.tilt)
+    if bad.any():
+        first = int(np.argmax(bad))
+        raise RecordingError(f"{name}: angles are not finite (NaN or ∞) from sample {first} "
+                             f"(t = {recording.time[first]:g} s) in {int(bad.sum())} samples; "
+                             "a simulated body that fell stops there: cut the recording")
+    if not recording.evenly_sampled():
+        raise RecordingError(f"{name}: samples are not evenly spaced in time")
+    hint = sample_rate_hint(recording.time, recording.tilt, name)
+    notices = [] if hint is None else [hint]
+    if stimulus is not None:
+        try:
+            check_recorded_tilt(recording.time, recording.tilt, stimulus, name)
+        except StimulusError as error:  # a wrong time column shows as a wrong stimulus
+            if hint is None:
+                raise
+            raise StimulusError(f"{error}; and {hint.removeprefix(name + ': ')}") from None
+    else:
+        stimulus = recognise_prts(recording.time, recording.tilt)
+        if stimulus is not None:
+            notices.append(f"{name}: the tilt is a {stimulus.description}; the exact profile "
+                           "is used (samples miss its corners)")
+        else:
+            stimulus = tilt_from_array(recording.time, recording.tilt, description=name)
+            notices.append(f"{name}: the tilt is not a PRTS from the start of its cycle; it "
+                           "is interpolated linearly between samples (name the stimulus to "
+                           "use its exact profile)")
+    original = recording.sample_rate_hz
+    resampled = recording if rate_hz is None else recording.resampled(rate_hz)
+    if resampled is not recording:
+        notices.append(f"{name}: resampled from {original:.4g} Hz to {rate_hz:g} Hz "
+                       "by linear interpolation")
+    return PreparedTrial(resampled, stimulus, tuple(notices), original, rate_hint=hint)

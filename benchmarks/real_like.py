@@ -28,10 +28,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import multiprocessing
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +39,7 @@ from posture_id.bodies.body import load_body
 from posture_id.dec.parameters import DecParameters
 from posture_id.dec.prior import sample_parameters
 from posture_id.errors import SimulationError
+from posture_id.executors import LocalExecutor
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.fitting import FitOptions, fit_recording
 from posture_id.frf.locked import LockedOptions
@@ -57,7 +56,6 @@ STIMULI = {"242": dict(states=242, cycles=2), "80": dict(states=80, cycles=6)}
 METHODS = ("raw LS", "locked LS", "CNN", "FRF net")
 FIELDS = ("kp", "ki", "kd", "delay_s")
 SHARE_RANGE = (0.10, 0.30)
-_THREADS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS")
 _LOADED: dict = {}
 
 
@@ -230,10 +228,9 @@ def main() -> None:
         rows += reused
     total = len(rows) + len(tasks)
     print(f"{len(rows)} identifications journalled, {len(tasks)} to do", flush=True)
-    os.environ.update({k: "1" for k in _THREADS})
     began = time.perf_counter()
-    with ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        for row in pool.map(_one, tasks, chunksize=1):
+    with LocalExecutor(args.workers, processes=True) as pool:
+        for _, row in pool.unordered(_one, tasks):
             rows.append(row)
             book.append(row)
             print(f"[{len(rows)}/{total}] "

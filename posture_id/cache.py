@@ -1,6 +1,7 @@
 """Where posture_id keeps compiled code between processes.
 
-``$POSTURE_ID_CACHE`` when set, else ``~/.cache/posture_id``; when that folder cannot be
+``$POSTURE_ID_CACHE`` when set, else the platform's user cache folder for posture_id
+(platformdirs: ``~/.cache/posture_id`` on Linux); when that folder cannot be
 written, a private temporary folder for this process (slower: nothing is reused).
 Subfolders: ``kernels/`` (the generated simulator modules and numba's cache of them) and
 ``casadi/`` (the fit's compiled C libraries).
@@ -19,7 +20,11 @@ __all__ = ["cache_root", "cache_folder"]
 def cache_root() -> Path:
     """The configured cache folder (it may not exist yet)."""
     root = os.environ.get("POSTURE_ID_CACHE")
-    return Path(root) if root else Path.home() / ".cache" / "posture_id"
+    if root:
+        return Path(root)
+    from platformdirs import user_cache_dir
+
+    return Path(user_cache_dir("posture_id", appauthor=False))
 
 
 def cache_folder(name: str) -> Path:

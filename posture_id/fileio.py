@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["atomic_write", "atomic_write_text", "file_sha256", "read_numeric_csv",
-           "jsonable", "json_text", "JsonResult",
+           "jsonable", "json_text", "Result",
            "check_time_column", "PLAUSIBLE_INTERVAL_S"]
 
 
@@ -167,10 +167,21 @@ def json_text(data: Any) -> str:
 
 
 
-class JsonResult:
-    """Mixin for results with ``to_dict()``: strict JSON text, written atomically."""
+class Result:
+    """The result family: every result of posture_id (a simulation, a fit, an
+    identification, an FRF, a cohort, a training run, an evaluation, a benchmark, a
+    calibration) has ``to_dict()`` (JSON-ready, strings for enums), ``to_json()`` (strict
+    JSON, written atomically), ``summary()`` (printable text) and ``plot(path=None,
+    ax=None)`` (its principal figure: saved to ``path``, drawn into ``ax`` when given;
+    reports with several figures write the rest with ``write(folder)``)."""
 
-    def to_dict(self) -> dict:  # pragma: no cover - every user defines it
+    def to_dict(self) -> dict:  # pragma: no cover - every result defines it
+        raise NotImplementedError
+
+    def summary(self) -> str:  # pragma: no cover - every result defines it
+        raise NotImplementedError
+
+    def plot(self, path: str | Path | None = None, ax=None):  # pragma: no cover
         raise NotImplementedError
 
     def to_json(self, path: str | Path | None = None) -> str:

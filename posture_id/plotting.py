@@ -31,7 +31,7 @@ def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
     return fig, axes
 
 
-def plot_trial(result, path: str | Path | None = None, title: str | None = None, ax=None):
+def plot_trial(result, path: str | Path | None = None, ax=None, title: str | None = None):
     """Tilt (top) and segment sway with the body COM sway α_BS (bottom), in degrees.
 
     Args:
@@ -228,7 +228,7 @@ def plot_identification(result, path=None, ax=None):
         a.grid(alpha=0.3)
         a.legend(loc="upper right", fontsize=8)
     axes[-1, 0].set_xlabel("time (s)")
-    fig.suptitle(f"{result.method}: classes {'/'.join(result.classes)}, E_rel "
+    fig.suptitle(f"{result.method.value}: classes {'/'.join(result.classes)}, E_rel "
                  f"{100 * result.e_rel:.2f} %")
     fig.tight_layout()
     _save(fig, path)
@@ -443,7 +443,8 @@ def plot_intervals(joints, estimate, lower, upper, words, prior, level: float, m
     y = 0.0
     for i, joint in enumerate(joints):
         for k, name in enumerate(("Kp", "Ki", "Kd", "delay")):
-            a.plot([lower[i][k], upper[i][k]], [y, y], color=colours[words[i][k]], lw=3)
+            a.plot([lower[i][k], upper[i][k]], [y, y], color=colours.get(words[i][k], "0.5"),
+                   lw=3)
             a.plot(estimate[i][k], y, "o", color="k", ms=4)
             ticks.append((y, f"{joint} {name}"))
             y -= 1
@@ -455,6 +456,58 @@ def plot_intervals(joints, estimate, lower, upper, words, prior, level: float, m
                 "red: not determined by this recording", fontsize=9)
     a.legend(fontsize=7, loc="lower right")
     a.grid(alpha=0.3, axis="x")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_batch(time, tilt, alpha_bs, stable, description: str = "", path=None, ax=None):
+    """Tilt (top) and every trial's body COM sway α_BS (bottom), in degrees; trials that
+    left the sway limit in red.
+
+    Args:
+        time: (S,) s. tilt: (S,) rad. alpha_bs: (B, S) rad, NaN after an abort.
+        stable: (B,) bool.
+    """
+    fig, axes = _axes(ax, 2, 1, (10, 6), sharex=True, gridspec_kw={"height_ratios": [1, 2]})
+    ax_tilt, ax_sway = axes[:, 0]
+    ax_tilt.plot(time, np.degrees(tilt), color="0.3", lw=1)
+    ax_tilt.set_ylabel("platform tilt (°)")
+    for sway, kept in zip(alpha_bs, stable, strict=True):
+        ax_sway.plot(time, np.degrees(sway), lw=0.6, alpha=0.5, color="C0" if kept else "C3")
+    ax_sway.set_xlabel("time (s)")
+    ax_sway.set_ylabel("body COM sway α_BS (°)")
+    for a in (ax_tilt, ax_sway):
+        a.grid(alpha=0.3)
+    fig.suptitle(f"{description}: {len(stable)} trials, {int(np.sum(stable))} stable "
+                 "(blue), the others red")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_cohort(names, joints, kp, e_rel, path=None, ax=None):
+    """Each identified recording's Kp per module (left) and E_rel (right).
+
+    Args:
+        names: (R,) recordings. joints: (N,) modules. kp: (R, N) N·m/rad.
+        e_rel: (R,) fraction (∞ drawn at the top: the re-simulation fell).
+    """
+    fig, axes = _axes(ax, 1, 2, (11, 0.3 * len(names) + 2.5))
+    a_kp, a_rel = axes[0]
+    y = np.arange(len(names))
+    for j, joint in enumerate(joints):
+        a_kp.plot(np.asarray(kp)[:, j], y, "o", label=joint)
+    a_kp.set_yticks(y, names, fontsize=7)
+    a_kp.set_xlabel("Kp (N·m/rad)")
+    a_kp.legend(fontsize=8)
+    shown = np.minimum(np.asarray(e_rel, dtype=float), 1.0) * 100
+    a_rel.barh(y, shown, color=["C3" if not np.isfinite(e) else "C0" for e in e_rel])
+    a_rel.set_yticks(y, [""] * len(names))
+    a_rel.set_xlabel("E_rel (%; fallen re-simulations red, at 100)")
+    for a in (a_kp, a_rel):
+        a.grid(alpha=0.3, axis="x")
+        a.invert_yaxis()
     fig.tight_layout()
     _save(fig, path)
     return fig

@@ -98,8 +98,8 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     truth, recording = _noisy_trial(tip, 12, 0.01)
     honest = CnnIdentifier.identify
 
-    def confidently_wrong(self, rec, source="recording", level=0.9):
-        answer = honest(self, rec, source, level)
+    def confidently_wrong(self, trial, level=0.9):
+        answer = honest(self, trial, level)
         wrong = "joint" if truth["knee"].controls == "com" else "com"
         probability = np.where(np.array(tip.joint_names) == "knee",
                                1.0 if wrong == "com" else 0.0,
@@ -110,7 +110,7 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
 
     monkeypatch.setattr(CnnIdentifier, "identify", confidently_wrong)
     result = identify(recording, tip, Method.HYBRID)
-    assert result.cnn["parameters"]["knee"]["controls"] != truth["knee"].controls
+    assert result.cnn.parameters["knee"].controls != truth["knee"].controls
     assert any("fitted again with the classes relaxed" in n for n in result.notices)
     assert any("overturned the CNN's class of knee" in n for n in result.notices)
     assert result.classes == tuple(truth[j].controls for j in tip.joint_names)

@@ -64,6 +64,7 @@ def test_tiny_training_reduces_the_loss(tiny_set, tmp_path, layout, optimiser):
                    _one_thread(epochs=4, optimiser=optimiser))
     losses = [r["train_loss"] for r in result.history]
     assert len(losses) == 4 and losses[-1] < losses[0]
+    assert result.plot(tmp_path / "m" / "loss.png") is not None
     assert (tmp_path / "m" / "loss.png").stat().st_size > 5_000
     log = [json.loads(line) for line in (tmp_path / "m" / "log.jsonl").read_text().splitlines()]
     assert [r["epoch"] for r in log] == [1, 2, 3, 4]

@@ -226,6 +226,6 @@ def test_the_resimulation_check_uses_the_fitted_offset(tip):
     own = np.linalg.norm(recorded - tip.com_angles(fit.fitted)[:, 0]) / np.linalg.norm(recorded)
     assert fit.trial.time_offset_s == fit.time_offset_s == pytest.approx(0.06, abs=0.002)
     result = identify(rec, tip, Method.FIT, fit_options=options, stimulus=named)
-    assert result.fit["status"]["time_offset_s"] == fit.time_offset_s
+    assert result.fit.time_offset_s == fit.time_offset_s
     assert result.e_rel == pytest.approx(own, rel=1e-3)
     assert result.e_rel < 0.005

@@ -47,3 +47,40 @@ print("ok")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "ok"
+
+
+def _every_result_class() -> list[type]:
+    import importlib
+    import pkgutil
+
+    import posture_id
+    from posture_id.fileio import Result
+
+    for info in pkgutil.walk_packages(posture_id.__path__, "posture_id."):
+        if not info.name.endswith("__main__"):  # the console entry runs on import
+            importlib.import_module(info.name)
+    found, todo = [], [Result]
+    while todo:
+        for sub in todo.pop().__subclasses__():
+            found.append(sub)
+            todo.append(sub)
+    return found
+
+
+def test_every_result_belongs_to_one_family():
+    """Every result class has to_dict(), to_json(), summary() and plot(path=None,
+    ax=None) of its own; none takes a folder where the others take a file."""
+    import inspect
+
+    from posture_id.fileio import Result
+
+    classes = _every_result_class()
+    names = {c.__name__ for c in classes}
+    assert {"SimulationResult", "BatchResult", "FitResult", "FrequencyResponse",
+            "IdentificationResult", "CnnIdentification", "CohortResult", "TrainingResult",
+            "EvaluationReport", "BenchmarkReport", "CalibrationReport"} <= names, names
+    for cls in classes:
+        for method in ("to_dict", "summary", "plot"):
+            assert getattr(cls, method) is not getattr(Result, method), (cls, method)
+        parameters = list(inspect.signature(cls.plot).parameters.values())[1:3]
+        assert [(p.name, p.default) for p in parameters] == [("path", None), ("ax", None)], cls

@@ -164,29 +164,29 @@ def _fit_result(body, se: np.ndarray, noise_deg: float, residual_sd: float) -> F
         evaluations=1, wall_time_s=0.0, cost=0.0, rms_deg=noise_deg, stages=(),
         backend="", notices=(), time=np.arange(6051) / 50, recorded=recorded,
         fitted=recorded, segments=body.segment_names, joints=body.joint_names,
-        residual_sd=residual_sd, noise_floor_deg=0.001)
+        residual_sd=residual_sd, noise_floor_deg=0.001, defaults=default_parameters(body))
 
 
 def test_an_interval_is_never_narrower_than_the_fits_noise_allows(tip):
     se = np.full((3, 4), 0.02)
     z = norm.ppf(0.95)
-    defaults = default_parameters(tip)
     noisy = _fit_result(tip, se, 0.05, residual_sd=0.05)
-    gauss = noisy.intervals(defaults, 0.9)
+    gauss = noisy.intervals_at(0.9)
+    np.testing.assert_array_equal(noisy.intervals.upper, gauss.upper)  # 90 % by default
     assert gauss.upper - gauss.lower == pytest.approx(np.full((3, 4), 2 * z * 0.02))
     # a calibration whose scales are below z (the fits looked better than their noise)
     # cannot narrow the interval below the Gauss-Newton one of the residual noise ...
-    floored = noisy.intervals(defaults, 0.9, _calibration([0.5, 0.5]))
+    floored = noisy.intervals_at(0.9, _calibration([0.5, 0.5]))
     assert floored.upper - floored.lower == pytest.approx(gauss.upper - gauss.lower)
     # ... while one that says the errors are larger widens it
-    widened = noisy.intervals(defaults, 0.9, _calibration([3.0, 3.0]))
+    widened = noisy.intervals_at(0.9, _calibration([3.0, 3.0]))
     assert widened.upper - widened.lower == pytest.approx(np.full((3, 4), 2 * 3.0 * 0.02))
     # a noise-free fit: its standard errors assumed the 0.001° floor, 100× its residual
     # noise; calibration may narrow them to what the fits showed, but never below z times
     # the residual noise's own standard errors
     exact = _fit_result(tip, se, 0.0, residual_sd=1e-5)
-    assert np.allclose(exact.intervals(defaults, 0.9, _calibration([0.5, 0.5])).upper, 0.5 * 0.02)
-    least = exact.intervals(defaults, 0.9, _calibration([1e-4, 1e-4]))
+    assert np.allclose(exact.intervals_at(0.9, _calibration([0.5, 0.5])).upper, 0.5 * 0.02)
+    least = exact.intervals_at(0.9, _calibration([1e-4, 1e-4]))
     assert np.allclose(least.upper, z * 1e-5 / 1e-3 * 0.02)
     assert noise_allows(0.9, 0.05, 0.001) == pytest.approx(z)
     assert noise_allows(0.9, 1e-5, 0.001) == pytest.approx(z * 0.01)

@@ -79,6 +79,6 @@ def run_info(args: argparse.Namespace) -> int:
         check_output_folder(args.figures, "--figures")
     data = Dataset.open(args.dir, verify=not args.no_verify)
     print(data.summary())
-    overview, images = data.plot(args.figures)
+    overview, images = data.write_figures(args.figures)
     print(f"wrote {overview} and {images}")
     return 0

@@ -90,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
                               buffer_shards=args.buffer_shards)
     with TerminalProgress("epoch", prefix="posture-id train", quiet=args.quiet) as progress:
         result = train(args.dataset, args.out, network, training, progress)
+    result.plot(args.out / "loss.png")
     say(result.summary())
     say(f"wrote {args.out / 'model.safetensors'}, model.json, log.jsonl and loss.png")
     return 0

@@ -33,7 +33,7 @@ from posture_id._version import __version__
 from posture_id.bodies.body import Body, load_body
 from posture_id.datasets.config import DatasetConfig, DatasetError
 from posture_id.datasets.features import FEATURE_DEFINITION
-from posture_id.datasets.runners import DaskRunner, LocalRunner
+from posture_id.datasets.runners import shard_runner
 from posture_id.datasets.store import (
     FORMAT,
     FORMAT_VERSION,
@@ -204,7 +204,7 @@ def generate_dataset(
 
     write_manifest(out, manifest)
     report(progress, min(kept_total(), config.trials), config.trials, "trial")
-    runner = DaskRunner(scheduler, config) if scheduler else LocalRunner(workers, config, body)
+    runner, executor = shard_runner(config, body, workers, scheduler)
     try:
         next_k = 0
         while needed_shards() is None:
@@ -223,9 +223,7 @@ def generate_dataset(
             for k, arrays in runner(todo):
                 record(k, arrays)
     finally:
-        close = getattr(runner, "close", None)
-        if close is not None:
-            close()
+        executor.close()
     return _finish(config, out, manifest, entries, needed_shards())
 
 

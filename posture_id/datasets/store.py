@@ -159,18 +159,30 @@ class Dataset:
         return {"kp_normalised": np.concatenate(kp), "max_sway_deg": np.concatenate(sway),
                 "kept": np.concatenate(kept), **first}
 
-    def plot(self, folder: str | Path | None = None) -> tuple[Path, Path]:
-        """Write ``dataset_overview.png`` (Fig. 2 analogue) and ``dataset_images.png`` (one
-        trial's images) into ``folder`` (default: the data-set directory)."""
+    def plot(self, path=None, ax=None, overview: dict | None = None):
+        """The sampled K̃p and every simulated trial's largest sway, kept or rejected
+        (Fig. 2 analogue); ``overview``: :meth:`overview`, when already gathered."""
+        data = overview or self.overview()
+        return plot_dataset_overview(data["kp_normalised"], self.manifest["body"]["joints"],
+                                     data["max_sway_deg"], data["kept"],
+                                     self.manifest["options"]["sway_limit_deg"], path=path,
+                                     ax=ax)
+
+    def plot_images(self, path=None, ax=None, overview: dict | None = None):
+        """The first used trial's modular and monolithic images."""
+        data = overview or self.overview()
+        return plot_images(data["modular"], data["monolithic"],
+                           self.manifest["body"]["joints"], path=path, ax=ax)
+
+    def write_figures(self, folder: str | Path | None = None) -> tuple[Path, Path]:
+        """``dataset_overview.png`` and ``dataset_images.png`` into ``folder`` (default:
+        the data-set directory)."""
         folder = Path(folder) if folder is not None else self.path
-        data = self.overview()
-        joints = self.manifest["body"]["joints"]
-        limit = self.manifest["options"]["sway_limit_deg"]
         overview = folder / "dataset_overview.png"
         images = folder / "dataset_images.png"
-        plot_dataset_overview(data["kp_normalised"], joints, data["max_sway_deg"],
-                              data["kept"], limit, path=overview)
-        plot_images(data["modular"], data["monolithic"], joints, path=images)
+        data = self.overview()
+        self.plot(overview, overview=data)
+        self.plot_images(images, overview=data)
         return overview, images
 
 

@@ -12,6 +12,7 @@ default to the body's defaults.
 
 from __future__ import annotations
 
+import enum
 import json
 import math
 from collections.abc import Mapping
@@ -25,6 +26,8 @@ from posture_id.errors import ParameterError
 from posture_id.fileio import atomic_write_text, json_text
 
 __all__ = [
+    "Controls",
+    "parameter_block",
     "ModuleParameters",
     "DecParameters",
     "PAPER_TABLE",
@@ -46,9 +49,36 @@ PAPER_TABLE = {
     "knee": {"kd": 18.394, "ki": 6.1312, "kpas": 61.25, "bpas": 11.25, "delay_s": 0.070},
     "hip": {"kd": 18.394, "ki": 1.8394, "kpas": 36.5, "bpas": 11.25, "delay_s": 0.121},
 }
+class Controls(str, enum.Enum):
+    """A module's class C: the variable it controls. A string enum: it compares equal to,
+    prints and writes to JSON as its value ("com", "joint")."""
+
+    COM = "com"  # C = +1: the COM-above angle in space
+    JOINT = "joint"  # C = −1: the joint angle
+
+    def __str__(self) -> str:
+        return self.value
+
+    def __format__(self, spec: str) -> str:
+        return format(self.value, spec)
+
+    def __hash__(self) -> int:
+        return hash(self.value)
+
+    @property
+    def sign(self) -> int:
+        """C: +1 for the COM in space, −1 for the joint angle."""
+        return 1 if self is Controls.COM else -1
+
+    @classmethod
+    def of_sign(cls, c: float) -> Controls:
+        """The class of a class value (≥ 0: COM)."""
+        return cls.COM if c >= 0 else cls.JOINT
+
+
 #: Default class per column **[decision]**: lowest +1 (COM), middle −1 (joint), top +1.
-DEFAULT_CLASSES = {"ankle": "com", "knee": "joint", "hip": "com"}
-_CONTROLS = {"com": 1, "joint": -1}
+DEFAULT_CLASSES = {"ankle": Controls.COM, "knee": Controls.JOINT, "hip": Controls.COM}
+_CONTROLS = {c.value: c.sign for c in Controls}
 #: Longest lumped delay accepted, s (sizes the simulator's delay buffers).
 MAX_DELAY_S = 2.0
 _REQUIRED = ("kp", "ki", "kd", "delay_s", "controls")
@@ -62,7 +92,8 @@ class ModuleParameters:
     Attributes:
         kp: N·m/rad, proportional gain. ki: N·m/(rad·s), integral gain.
         kd: N·m·s/rad, derivative gain. delay_s: s, lumped delay Δ of the servo term.
-        controls: ``"com"`` (C = +1, COM-above angle in space) or ``"joint"`` (C = −1).
+        controls: :class:`Controls` (given as one or as its string, ``"com"``: C = +1,
+            COM-above angle in space; ``"joint"``: C = −1).
         kpas: N·m/rad, passive stiffness. bpas: N·m·s/rad, passive damping.
     """
 
@@ -70,9 +101,13 @@ class ModuleParameters:
     ki: float
     kd: float
     delay_s: float
-    controls: str
+    controls: Controls
     kpas: float
     bpas: float
+
+    def __post_init__(self) -> None:
+        if isinstance(self.controls, str) and self.controls in _CONTROLS:
+            object.__setattr__(self, "controls", Controls(self.controls))
 
     @property
     def sign(self) -> int:
@@ -119,7 +154,7 @@ class DecParameters:
 
     def to_dict(self) -> dict:
         """The parameter-file format: one object per module keyed by joint (SI units)."""
-        return {j: asdict(m) for j, m in self.modules.items()}
+        return {j: {**asdict(m), "controls": m.controls.value} for j, m in self.modules.items()}
 
     def identified_table(self, class_probability=None) -> list[str]:
         """Lines of a table of the identified values, with P(C = +1) when given."""
@@ -271,6 +306,25 @@ def default_parameters(body) -> DecParameters:
 TARGET_FIELDS = ("kp", "ki", "kd", "delay_s")
 
 
+def parameter_block(parameters: DecParameters, normalised: np.ndarray,
+                    class_probability: np.ndarray | None = None) -> dict:
+    """The identified parameters as every result writes them to JSON: ``parameters`` (the
+    parameter-file format, SI units), ``normalised`` ([K̃p, K̃i, K̃d, Δ̃, C] per module) and
+    ``class_probability_com`` (P(C = +1) per module, or None).
+
+    Args:
+        normalised: (N, 5), modules in ``parameters``' order. class_probability: (N,).
+    """
+    joints = parameters.joints
+    return {
+        "parameters": parameters.to_dict(),
+        "normalised": {j: dict(zip((*TARGET_FIELDS, "class"), map(float, row), strict=True))
+                       for j, row in zip(joints, np.asarray(normalised), strict=True)},
+        "class_probability_com": None if class_probability is None else dict(
+            zip(joints, map(float, class_probability), strict=True)),
+    }
+
+
 def normalise(params: DecParameters, defaults: DecParameters) -> np.ndarray:
     """(N, 5) targets [K̃p, K̃i, K̃d, Δ̃, C] with p̃ = (p − p_default)/p_default."""
     return normalise_arrays(params.arrays(), defaults)[0]
@@ -363,7 +417,7 @@ class ParameterArrays:
             mods[joint] = ModuleParameters(
                 kp=float(self.kp[b, i]), ki=float(self.ki[b, i]), kd=float(self.kd[b, i]),
                 delay_s=float(self.delay_s[b, i]),
-                controls="com" if self.sign[b, i] >= 0 else "joint",
+                controls=Controls.of_sign(self.sign[b, i]),
                 kpas=float(self.kpas[b, i]), bpas=float(self.bpas[b, i]),
             )
         return DecParameters(mods)

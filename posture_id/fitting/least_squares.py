@@ -230,7 +230,7 @@ class FitRun:
             joints=body.joint_names,
             provenance=provenance(self.options, body, source=self.trial.name),
             residual_sd=residual_sd, noise_floor_deg=self.options.noise_floor_deg,
-            time_offset_s=self.trial.time_offset_s, trial=self.trial)
+            time_offset_s=self.trial.time_offset_s, trial=self.trial, defaults=defaults)
 
 
 def _search_offset(run: FitRun, result: FitResult) -> FitResult:

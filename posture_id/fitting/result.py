@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import norm
 
-from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
-from posture_id.fileio import JsonResult
+from posture_id.dec.parameters import TARGET_FIELDS, DecParameters, parameter_block
+from posture_id.fileio import Result
 from posture_id.fitting.unknowns import PER_MODULE, class_names
 from posture_id.plotting import plot_fit
 from posture_id.trials import PreparedTrial
@@ -54,7 +54,7 @@ class StageResult:
 
 
 @dataclass(frozen=True)
-class FitResult(JsonResult):
+class FitResult(Result):
     """The identified parameters and how the fit went.
 
     Attributes:
@@ -72,6 +72,7 @@ class FitResult(JsonResult):
         time_offset_s: the stimulus's fitted time offset, s (0 unless
             ``LockedOptions.max_offset_s`` asked for one).
         trial: the prepared trial fitted (with a fitted offset, the shifted one).
+        defaults: the body's default parameters (p_default of the normalisation).
         residual_sd: the residual's SD (its units: degrees, or noise levels for a locked
             fit) and noise_floor_deg the least σ the standard errors assumed; the SEs use
             σ = max(residual_sd, noise_floor_deg).
@@ -101,6 +102,7 @@ class FitResult(JsonResult):
     residual_sd: float = math.nan
     noise_floor_deg: float = 0.0
     trial: PreparedTrial | None = field(default=None, repr=False, compare=False)
+    defaults: DecParameters | None = field(default=None, repr=False, compare=False)
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -108,10 +110,10 @@ class FitResult(JsonResult):
 
     def to_dict(self) -> dict:
         fields = TARGET_FIELDS
+        block = parameter_block(self.parameters, self.normalised)
+        del block["class_probability_com"]  # least squares has no class probability
         return {
-            "parameters": self.parameters.to_dict(),
-            "normalised": {j: dict(zip((*fields, "class"), map(float, row), strict=True))
-                           for j, row in zip(self.joints, self.normalised, strict=True)},
+            **block,
             "standard_errors": {j: dict(zip(fields, map(_finite, row), strict=True))
                                 for j, row in zip(self.joints, self.standard_errors,
                                                   strict=True)},
@@ -154,14 +156,22 @@ class FitResult(JsonResult):
         lines += [f"note: {n}" for n in self.notices]
         return "\n".join(lines)
 
-    def intervals(self, defaults: DecParameters, level: float = 0.9,
-                  scales: ConformalCalibration | None = None) -> ParameterIntervals:
+    @property
+    def intervals(self) -> ParameterIntervals:
+        """The 90 % Gauss-Newton intervals, ±z·SE (:meth:`intervals_at` for another level
+        or calibrated scales)."""
+        return self.intervals_at(0.9)
+
+    def intervals_at(self, level: float = 0.9, scales: ConformalCalibration | None = None
+                     ) -> ParameterIntervals:
         """Intervals of Kp, Ki, Kd, Δ at ``level``: ±z·SE (Gauss-Newton) or, with the
-        ``scales`` of a calibration (:mod:`posture_id.identify.calibration`), ±scale·SE,
+        ``scales`` of a calibration (:mod:`posture_id.studies.calibration`), ±scale·SE,
         where scale is the conformal one at the recording's estimated sensor noise and
         never below :func:`noise_allows`: a calibrated interval is never narrower than the
-        Gauss-Newton interval of the fit's own residual noise.
-        ``defaults``: the body's default parameters (the normalisation's p_default)."""
+        Gauss-Newton interval of the fit's own residual noise."""
+        if self.defaults is None:
+            raise ValueError("intervals need the body's defaults (FitResult.defaults)")
+        defaults = self.defaults
         z = float(norm.ppf((1 + level) / 2))
         noise = sensor_noise_deg(self.recorded)
         factor, method = z, "Gauss-Newton ±z·SE (coverage not checked)"

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posture_id.errors import PostureIdError
-from posture_id.fileio import JsonResult
+from posture_id.fileio import Result
 from posture_id.frf.cycles import cycle_average
 
 __all__ = ["FrfOptions", "FrequencyResponse", "frequency_response_arrays",
@@ -79,7 +79,7 @@ class FrfOptions:
 
 
 @dataclass(frozen=True)
-class FrequencyResponse(JsonResult):
+class FrequencyResponse(Result):
     """FRFs of several channels relative to the tilt.
 
     Attributes:

@@ -19,16 +19,19 @@ import csv
 import glob
 import io
 import json
+import math
 import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from posture_id.bodies.body import load_body
 from posture_id.errors import PostureIdError
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.executors import DaskExecutor
+from posture_id.fileio import Result, atomic_write_text, json_text
 from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Identifier, Method
 from posture_id.learning.identifier import DEFAULT_LEVEL
+from posture_id.plotting import plot_cohort
 from posture_id.progress import Progress, report
 from posture_id.recording import Recording
 from posture_id.simulation.stimulus import TiltProfile
@@ -49,11 +52,30 @@ def find_recordings(pattern: str | Path) -> list[Path]:
 
 
 @dataclass(frozen=True)
-class CohortResult:
-    """What a cohort run did: per recording, "done", "skipped" (already done) or the error."""
+class CohortResult(Result):
+    """What a cohort run did.
+
+    Attributes:
+        out: the results folder. status: per recording, "done", "skipped" (already done)
+            or the error. rows: ``summary.csv``'s rows (recording, status, method,
+            classes, e_rel and every module's parameters).
+    """
 
     out: Path
     status: dict[str, str]
+    rows: tuple[dict, ...] = ()
+
+    def to_dict(self) -> dict:
+        return {"out": str(self.out), "status": dict(self.status), "rows": list(self.rows)}
+
+    def plot(self, path=None, ax=None):
+        """Each identified recording's Kp per module and its E_rel."""
+        done = [r for r in self.rows if "e_rel" in r]
+        joints = [k[: -len("_kp")] for k in (done[0] if done else {}) if k.endswith("_kp")]
+        return plot_cohort([r["recording"] for r in done], joints,
+                           [[r[f"{j}_kp"] for j in joints] for r in done],
+                           [math.inf if r["e_rel"] is None else r["e_rel"] for r in done],
+                           path=path, ax=ax)
 
     @property
     def failed(self) -> dict[str, str]:
@@ -66,11 +88,13 @@ class CohortResult:
                 + "".join(f"\n  {k}: {v}" for k, v in self.failed.items()))
 
 
-def _identify_text(csv_text: str, name: str, urdf_text: str, urdf_name: str, method: str,
+def _identify_text(recording: tuple[str, str], urdf_text: str, urdf_name: str, method: str,
                    model: str | None, stimulus: TiltProfile | None = None,
                    fit_options: FitOptions | None = None, level: float = DEFAULT_LEVEL
                    ) -> dict:
-    """One recording from its text (a cluster task): the result as a dict, or the error."""
+    """One recording (its name and CSV text) on a cluster worker: the result as a dict, or
+    the error."""
+    name, csv_text = recording
     with tempfile.TemporaryDirectory() as tmp:
         urdf = Path(tmp) / urdf_name
         urdf.write_text(urdf_text)
@@ -137,33 +161,22 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
     else:
         for path in todo:
             record(path, _identify_file(path, identifier, stimulus))
-    _write_summary(out, recordings, status)
-    return CohortResult(out, status)
+    rows = _write_summary(out, recordings, status)
+    return CohortResult(out, status, tuple(rows))
 
 
 def _run_on_cluster(address: str, todo: list[Path], identifier: Identifier, model,
                     record, stimulus: TiltProfile | None = None) -> None:
-    try:
-        from distributed import Client, as_completed
-    except ImportError:
-        raise PostureIdError("--scheduler needs dask.distributed") from None
-    try:
-        client = Client(address, timeout=30)
-    except OSError as exc:
-        raise PostureIdError(f"cannot reach the Dask scheduler at {address} ({exc})") from None
+    """The recordings as tasks that carry their CSV text and the body's URDF text."""
     body = identifier.body
-    urdf_text = Path(body.urdf_path).read_text()
-    model_path = None if model is None else str(model)
-    try:
-        futures = {client.submit(_identify_text, path.read_text(), path.name, urdf_text,
-                                 Path(body.urdf_path).name, identifier.method.value,
-                                 model_path, stimulus, identifier.fit_options,
-                                 identifier.level, pure=False): path for path in todo}
-        for future in as_completed(futures):
-            record(futures[future], future.result())
-            future.release()
-    finally:
-        client.close()
+    by_name = {path.name: path for path in todo}
+    with DaskExecutor(address) as cluster:
+        for (name, _), result in cluster.unordered(
+                _identify_text, [(p.name, p.read_text()) for p in todo],
+                Path(body.urdf_path).read_text(), Path(body.urdf_path).name,
+                identifier.method.value, None if model is None else str(model), stimulus,
+                identifier.fit_options, identifier.level):
+            record(by_name[name], result)
 
 
 def _finished(target: Path) -> bool:
@@ -173,7 +186,7 @@ def _finished(target: Path) -> bool:
         return False
 
 
-def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) -> None:
+def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) -> list[dict]:
     rows, fields = [], ["recording", "status", "method", "classes", "e_rel"]
     for path in recordings:
         row = {"recording": path.name, "status": status.get(path.name, "")}
@@ -194,3 +207,4 @@ def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) ->
     writer.writeheader()
     writer.writerows(rows)
     atomic_write_text(out / "summary.csv", text.getvalue())
+    return rows

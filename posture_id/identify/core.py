@@ -21,7 +21,6 @@ body-sway errors E_id and E_rel (MODEL §7) and each segment's residual.
 
 from __future__ import annotations
 
-import enum
 import math
 import time
 from dataclasses import replace
@@ -30,8 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
-from posture_id.dec.parameters import default_parameters
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
+from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentifier
 from posture_id.progress import Progress
@@ -50,21 +49,6 @@ UNSURE_CLASS = (0.05, 0.95)
 #: The hybrid's fit with the CNN's classes must explain this share of the recorded sway's
 #: variance, or it is done again with the classes relaxed.
 MIN_EXPLAINED = 0.9
-
-
-class Method(enum.Enum):
-    """How to identify (see the module doc)."""
-
-    CNN = "cnn"
-    FIT = "fit"
-    HYBRID = "hybrid"
-
-
-#: The one default method of :func:`identify`, :class:`Identifier`, the command line and
-#: cohorts: the CNN alone (milliseconds, calibrated intervals); the hybrid, least squares
-#: from the CNN's answer, on request when seconds per recording are worth its precision
-#: (docs/identify.md).
-DEFAULT_METHOD = Method.CNN
 
 
 def identify(recording: Recording, body: Body | None = None, method: Method = DEFAULT_METHOD,
@@ -155,9 +139,8 @@ class Identifier:
             notices += fit.notices
             parameters, normalised = fit.parameters, fit.normalised
             calibration = self.cnn.calibration if method is Method.HYBRID else None
-            intervals = fit.intervals(default_parameters(body), self.level,
-                                      None if calibration is None
-                                      else calibration.least_squares)
+            intervals = fit.intervals_at(self.level, None if calibration is None
+                                         else calibration.least_squares)
             trial = fit.trial  # with a fitted stimulus offset: the shifted trial
         else:
             parameters, normalised = cnn.parameters, cnn.normalised
@@ -165,14 +148,10 @@ class Identifier:
             notices += trial.notices
         checked = _resimulate(body, trial, parameters, options.simulation)
         return IdentificationResult(
-            method=method.value, parameters=parameters, normalised=np.asarray(normalised),
+            method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
             wall_time_s=time.perf_counter() - start, identification_time_s=spent,
-            joints=body.joint_names,
-            cnn=None if cnn is None else cnn.to_dict(),
-            fit=None if fit is None else {k: v for k, v in fit.to_dict().items()
-                                          if k != "provenance"},
-            intervals=intervals,
+            joints=body.joint_names, cnn=cnn, fit=fit, intervals=intervals,
             notices=tuple(dict.fromkeys(notices)),
             provenance=provenance(options if fit is not None else None, body,
                                   source=trial.name, method=method.value),

@@ -3,13 +3,19 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
-from posture_id.fileio import JsonResult
+from posture_id.dec.parameters import Controls, DecParameters, parameter_block
+from posture_id.fileio import Result
+from posture_id.identify.method import Method
 from posture_id.plotting import plot_identification
 from posture_id.uncertainty.intervals import ParameterIntervals
+
+if TYPE_CHECKING:  # CasADi and torch load only with the methods that need them
+    from posture_id.fitting.result import FitResult
+    from posture_id.learning.identifier import CnnIdentification
 
 __all__ = ["SegmentFit", "IdentificationResult"]
 
@@ -29,11 +35,11 @@ class SegmentFit:
 
 
 @dataclass(frozen=True)
-class IdentificationResult(JsonResult):
+class IdentificationResult(Result):
     """Identified DEC parameters of one recording and the evidence for them.
 
     Attributes:
-        method: "cnn", "fit" or "hybrid". parameters: every module, SI units (the
+        method: :class:`Method`. parameters: every module, SI units (the
             parameter-file format). normalised: (N, 5) [K̃p, K̃i, K̃d, Δ̃, C].
         class_probability: (N,) P(C = +1) from the CNN, or None (least squares alone).
         e_id_deg, e_rel: MODEL §7 of the body sway α_BS, recorded against re-simulated
@@ -42,14 +48,16 @@ class IdentificationResult(JsonResult):
         identification_time_s: s spent identifying (the CNN and/or least squares), without
             the checks and the re-simulation that every method shares.
         time (S,) s; recorded, resimulated (S, N) rad; sway_recorded, sway_resimulated (S,)
-        rad (α_BS); joints. cnn, fit: the stages' own results (``to_dict()``), or None.
+        rad (α_BS); joints. cnn, fit: the stages' own results
+        (:class:`~posture_id.learning.identifier.CnnIdentification`,
+        :class:`~posture_id.fitting.result.FitResult`), or None.
         intervals: each parameter's interval and how well the recording determines it
             (:class:`~posture_id.uncertainty.intervals.ParameterIntervals`), or None (a
             CNN without a calibration).
         notices: things to know. provenance: version, options, body identity, source.
     """
 
-    method: str
+    method: Method
     parameters: DecParameters
     normalised: np.ndarray
     class_probability: np.ndarray | None
@@ -64,24 +72,20 @@ class IdentificationResult(JsonResult):
     resimulated: np.ndarray = field(repr=False)
     sway_recorded: np.ndarray = field(repr=False)
     sway_resimulated: np.ndarray = field(repr=False)
-    cnn: dict | None = field(default=None, repr=False)
-    fit: dict | None = field(default=None, repr=False)
+    cnn: CnnIdentification | None = field(default=None, repr=False)
+    fit: FitResult | None = field(default=None, repr=False)
     intervals: ParameterIntervals | None = None
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
 
     @property
-    def classes(self) -> tuple[str, ...]:
+    def classes(self) -> tuple[Controls, ...]:
         return tuple(self.parameters[j].controls for j in self.joints)
 
     def to_dict(self) -> dict:
         out = {
-            "method": self.method,
-            "parameters": self.parameters.to_dict(),
-            "normalised": {j: dict(zip((*TARGET_FIELDS, "class"), map(float, row), strict=True))
-                           for j, row in zip(self.joints, self.normalised, strict=True)},
-            "class_probability_com": (None if self.class_probability is None else dict(
-                zip(self.joints, map(float, self.class_probability), strict=True))),
+            "method": self.method.value,
+            **parameter_block(self.parameters, self.normalised, self.class_probability),
             "e_id_deg": self.e_id_deg,
             "e_rel": self.e_rel,
             "segments": {s.segment: {"rms_deg": s.rms_deg,
@@ -91,8 +95,9 @@ class IdentificationResult(JsonResult):
             "identification_time_s": self.identification_time_s,
             "intervals": None if self.intervals is None else self.intervals.to_dict(),
             "notices": list(self.notices),
-            "cnn": self.cnn,
-            "fit": self.fit,
+            "cnn": None if self.cnn is None else self.cnn.to_dict(),
+            "fit": None if self.fit is None else {k: v for k, v in self.fit.to_dict().items()
+                                                  if k != "provenance"},
             "provenance": self.provenance,
         }
         return out
@@ -103,7 +108,7 @@ class IdentificationResult(JsonResult):
             f"{s.segment} RMS {s.rms_deg:.4f}° ({100 * s.variance_explained:.1f} % of variance)"
             for s in self.segments))
         lines.append(f"body sway: E_id {self.e_id_deg:.2e}°, E_rel {100 * self.e_rel:.2f} %; "
-                     f"{self.method} in {self.identification_time_s:.3g} s "
+                     f"{self.method.value} in {self.identification_time_s:.3g} s "
                      f"({self.wall_time_s:.3g} s with the checks)")
         if self.intervals is not None:
             lines += self.intervals.table()

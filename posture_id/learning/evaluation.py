@@ -33,7 +33,7 @@ from scipy.stats import spearmanr
 from posture_id.bodies.body import load_body
 from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import TARGET_FIELDS, default_parameters, denormalise_arrays
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import Result, atomic_write_text, json_text
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError, NetworkConfig
 from posture_id.learning.prediction import predict_images
@@ -86,7 +86,7 @@ def split_metrics(error: np.ndarray, correct: np.ndarray) -> SplitMetrics:
 
 
 @dataclass(frozen=True)
-class EvaluationReport:
+class EvaluationReport(Result):
     """The evaluation of one model on one data set.
 
     Attributes:
@@ -191,27 +191,28 @@ class EvaluationReport:
                         f"Spearman {i['spearman_e_rel_vs_parameter_mse']:.3f}."]
         return "\n".join(out) + "\n"
 
-    def plot(self, folder: str | Path) -> list[Path]:
-        """parameter_errors.png (Fig. 5) and, with re-simulations, identification_error.png
-        (Fig. 6) in ``folder``."""
-        folder = Path(folder)
+    def plot(self, path=None, ax=None):
+        """|error| of every normalised parameter on the test split (Fig. 5)."""
         names = [f"{j} {n}" for j in self.joints for n in TARGET_FIELDS]
-        paths = [folder / "parameter_errors.png"]
-        plot_parameter_errors(names, self.parameter_error_mean[:, :4].ravel(),
-                              self.parameter_error_std[:, :4].ravel(), path=paths[0],
-                              title=f"{self.layout}: |error| of normalised parameters (test)")
+        return plot_parameter_errors(
+            names, self.parameter_error_mean[:, :4].ravel(),
+            self.parameter_error_std[:, :4].ravel(), path=path, ax=ax,
+            title=f"{self.layout}: |error| of normalised parameters (test)")
+
+    def plot_identification(self, path=None, ax=None):
+        """E_rel of the re-simulated test trials against their parameter MSE (Fig. 6);
+        None without re-simulations."""
         ident = self.identification
-        if ident:
-            paths.append(folder / "identification_error.png")
-            per_trial = ident["per_trial"]
-            kept = [i for i, e in enumerate(per_trial["e_rel"]) if e is not None]
-            plot_identification_error(
-                [per_trial["parameter_mse"][i] for i in kept],
-                [per_trial["e_rel"][i] for i in kept],
-                path=paths[1], ylabel="E_rel = ‖α_BS − α̃_BS‖ / ‖α_BS‖",
-                title=f"re-simulated test trials: correlation "
-                      f"{ident['correlation_e_rel_vs_parameter_mse']:.3f}")
-        return paths
+        if not ident:
+            return None
+        per_trial = ident["per_trial"]
+        kept = [i for i, e in enumerate(per_trial["e_rel"]) if e is not None]
+        return plot_identification_error(
+            [per_trial["parameter_mse"][i] for i in kept],
+            [per_trial["e_rel"][i] for i in kept],
+            path=path, ax=ax, ylabel="E_rel = ‖α_BS − α̃_BS‖ / ‖α_BS‖",
+            title=f"re-simulated test trials: correlation "
+                  f"{ident['correlation_e_rel_vs_parameter_mse']:.3f}")
 
     def write(self, folder: str | Path) -> list[Path]:
         """report.json, report.md and the plots, into ``folder``."""
@@ -219,7 +220,12 @@ class EvaluationReport:
         json_path = atomic_write_text(folder / "report.json",
                                       json_text(self.to_dict()))
         md_path = atomic_write_text(folder / "report.md", self.to_markdown())
-        return [json_path, md_path, *self.plot(folder)]
+        paths = [json_path, md_path, folder / "parameter_errors.png"]
+        self.plot(paths[-1])
+        if self.identification:
+            paths.append(folder / "identification_error.png")
+            self.plot_identification(paths[-1])
+        return paths
 
 
 def _split_predictions(model: LoadedModel, samples: SplitSamples):

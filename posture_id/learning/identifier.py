@@ -28,9 +28,10 @@ from posture_id.dec.parameters import (
     DecParameters,
     default_parameters,
     denormalise_arrays,
+    parameter_block,
 )
 from posture_id.errors import RecordingError
-from posture_id.fileio import JsonResult
+from posture_id.fileio import Result
 from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.calibration import CnnCalibration
 from posture_id.learning.checkpoint import LoadedModel, load_model
@@ -38,9 +39,11 @@ from posture_id.learning.config import Layout, LearningError
 from posture_id.learning.inputs import sway_features
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import stimulus_of
+from posture_id.plotting import plot_intervals
 from posture_id.provenance import body_identity, provenance
 from posture_id.simulation.stimulus import TiltProfile
 from posture_id.trials import PreparedTrial
+from posture_id.uncertainty.identifiability import prior_interval
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
 
@@ -51,7 +54,7 @@ DEFAULT_LEVEL = 0.9
 
 
 @dataclass(frozen=True)
-class CnnIdentification(JsonResult):
+class CnnIdentification(Result):
     """What the CNN says about one recording.
 
     Attributes:
@@ -79,17 +82,24 @@ class CnnIdentification(JsonResult):
 
     def to_dict(self) -> dict:
         return {
-            "parameters": self.parameters.to_dict(),
-            "normalised": {j: dict(zip((*TARGET_FIELDS, "class"), map(float, row), strict=True))
-                           for j, row in zip(self.joints, self.normalised, strict=True)},
-            "class_probability_com": dict(zip(self.joints, map(float, self.class_probability),
-                                              strict=True)),
+            **parameter_block(self.parameters, self.normalised, self.class_probability),
             "method": "cnn",
             "model": self.model,
             "intervals": None if self.intervals is None else self.intervals.to_dict(),
             "notices": list(self.notices),
             "provenance": self.provenance,
         }
+
+    def plot(self, path=None, ax=None):
+        """Each parameter's estimate relative to the defaults with its interval against
+        the prior's (estimates alone for a model without a calibration)."""
+        estimate = np.asarray(self.normalised)[:, :4]
+        if self.intervals is not None:
+            return self.intervals.plot(estimate, path=path, ax=ax)
+        unknown = [["no interval"] * estimate.shape[1]] * len(self.joints)
+        return plot_intervals(self.joints, estimate, estimate, estimate, unknown,
+                              prior_interval(DEFAULT_LEVEL), DEFAULT_LEVEL,
+                              "the model has no calibration: estimates only", path, ax)
 
     def summary(self) -> str:
         lines = self.parameters.identified_table(self.class_probability)

@@ -4,7 +4,6 @@ A model directory while training::
 
     model.safetensors, model.json     the best network so far (see :mod:`.checkpoint`)
     log.jsonl                         one line per epoch: losses, learning rate, time
-    loss.png                          the loss curves
     training/state.json               what was asked (must match to resume), the history
     training/epoch-NNNN.safetensors   weights and optimiser state after the last epoch
 
@@ -29,7 +28,14 @@ import torch.nn.functional as F  # noqa: N812 - torch's convention
 from safetensors.torch import load_file, save_file
 
 from posture_id.datasets.store import Dataset
-from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text, jsonable
+from posture_id.fileio import (
+    Result,
+    atomic_write,
+    atomic_write_text,
+    file_sha256,
+    json_text,
+    jsonable,
+)
 from posture_id.frf.features import frf_width
 from posture_id.learning.checkpoint import save_model
 from posture_id.learning.config import (
@@ -47,7 +53,7 @@ from posture_id.plotting import plot_loss_curves
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 
-__all__ = ["train", "TrainingResult", "Objective"]
+__all__ = ["train", "Trainer", "TrainingResult", "Objective"]
 
 STATE = "training/state.json"
 
@@ -78,7 +84,7 @@ class Objective:
 
 
 @dataclass(frozen=True)
-class TrainingResult:
+class TrainingResult(Result):
     """How a training run went.
 
     Attributes:
@@ -169,7 +175,8 @@ def _identity(data: Dataset, network: NetworkConfig, training: TrainingConfig) -
 def train(dataset: str | Path, out: str | Path, network: NetworkConfig | None = None,
           training: TrainingConfig | None = None, progress: Progress | None = None
           ) -> TrainingResult:
-    """Train (or finish training) a CNN identifier on a data set.
+    """Train (or finish training) a CNN identifier on a data set: a :class:`Trainer`
+    configured, resumed and run to the end.
 
     Args:
         dataset: a finished data-set directory. out: the model directory.
@@ -177,93 +184,151 @@ def train(dataset: str | Path, out: str | Path, network: NetworkConfig | None = 
         training: optimiser, epochs, batches, early stopping, seed, threads.
         progress: told the samples done in each epoch and a line per epoch.
     """
-    start_time = time.perf_counter()
-    training = training or TrainingConfig()
-    data = Dataset.open(dataset)
-    network_config = network or NetworkConfig.for_body(Layout.MODULAR, data.n_segments)
-    if network_config.layout is Layout.FRF:  # the input's width follows the stimulus
-        stimulus = stimulus_of(data.manifest["stimulus"])
-        rate = float(data.manifest["options"]["sample_rate_hz"])
-        tilt = stimulus.angle(np.arange(int(round(stimulus.duration * rate)) + 1) / rate)
-        network_config = replace(network_config, image_size=frf_width(
-            tilt, rate, stimulus.period_s, stimulus.periodic_from_s))
-    expected = NetworkConfig.for_body(network_config.layout, data.n_segments)
-    if (network_config.in_channels, network_config.modules) != (expected.in_channels,
-                                                               expected.modules):
-        raise LearningError(
-            f"a {network_config.layout.value} network for this {data.n_segments}-segment "
-            f"data set takes {expected.in_channels} channels and {expected.modules} modules, "
-            f"not {network_config.in_channels} and {network_config.modules}")
-    out = Path(out)
-    identity = _identity(data, network_config, training)
-    state = _read_state(out, identity)
-    torch.set_num_threads(training.threads or os.cpu_count() or 1)
-    torch.manual_seed(training.seed)
-    net = IdentifierNetwork(network_config).to(memory_format=torch.channels_last)
-    standardiser = Standardiser.from_dataset(data, network_config.layout)
-    objective = Objective(network_config, standardiser)
-    train_set = SplitSamples(data, "train", network_config.layout, standardiser,
-                             training.buffer_shards)
-    validation_set = SplitSamples(data, "validation", network_config.layout, standardiser,
-                                  training.buffer_shards)
-    steps = math.ceil(len(train_set) / training.batch_size)
-    optimiser, schedule, per_batch = _optimiser(net, training, steps)
-    history: list[dict] = []
-    best = (math.inf, 0)
-    if state is not None:
-        tensors = load_file(str(out / state["weights"]))
-        net.load_state_dict({k[len("network."):]: v for k, v in tensors.items()
-                             if k.startswith("network.")})
-        _restore_optimiser(optimiser, tensors, state["optimiser"])
-        schedule.load_state_dict(state["schedule"])
-        history = state["history"]
-        best = (state["best_validation_loss"], state["best_epoch"])
-    sidecar = _sidecar(data, training)
-    stopped_early = False
-    for epoch in range(len(history) + 1, training.epochs + 1):
-        if epoch - best[1] > training.patience and best[1] > 0:
-            stopped_early = True
-            break
+    trainer = Trainer(dataset, out, network, training)
+    trainer.resume()
+    return trainer.run(progress)
+
+
+class Trainer:
+    """One training run, in steps (in the manner of sbi's trainers):
+
+    1. **configure** (the constructor): the data set, the network (an FRF network's input
+       width follows the stimulus), its standardiser, loss, samples and optimiser;
+    2. :meth:`resume` from the model directory's state (refusing one made with other
+       arguments);
+    3. :meth:`run`: :meth:`run_epoch` while :meth:`should_stop` does not say stop, each
+       epoch :meth:`checkpoint`-ed (the best model, and the state to resume from).
+
+    Attributes:
+        data, out, network_config, training: what it trains on, where, and how.
+        net, objective, optimiser, schedule: the torch side. history: one row per epoch
+        (epoch, train_loss, validation_loss, learning_rate, seconds). best: (validation
+        loss, epoch) of the best epoch so far (epoch 0: none yet).
+    """
+
+    def __init__(self, dataset: str | Path, out: str | Path,
+                 network: NetworkConfig | None = None,
+                 training: TrainingConfig | None = None) -> None:
+        self.started = time.perf_counter()
+        self.training = training = training or TrainingConfig()
+        self.data = data = Dataset.open(dataset)
+        self.network_config = self._network(network)
+        self.out = Path(out)
+        self.identity = _identity(data, self.network_config, training)
+        torch.set_num_threads(training.threads or os.cpu_count() or 1)
+        torch.manual_seed(training.seed)
+        self.net = IdentifierNetwork(self.network_config).to(memory_format=torch.channels_last)
+        self.standardiser = Standardiser.from_dataset(data, self.network_config.layout)
+        self.objective = Objective(self.network_config, self.standardiser)
+        self.train_set = SplitSamples(data, "train", self.network_config.layout,
+                                      self.standardiser, training.buffer_shards)
+        self.validation_set = SplitSamples(data, "validation", self.network_config.layout,
+                                           self.standardiser, training.buffer_shards)
+        steps = math.ceil(len(self.train_set) / training.batch_size)
+        self.optimiser, self.schedule, self.per_batch = _optimiser(self.net, training, steps)
+        self.history: list[dict] = []
+        self.best: tuple[float, int] = (math.inf, 0)
+        self.sidecar = _sidecar(data, training)
+
+    def _network(self, network: NetworkConfig | None) -> NetworkConfig:
+        """The architecture, checked against the data set's body (and, for the FRF
+        layout, sized to its stimulus)."""
+        data = self.data
+        config = network or NetworkConfig.for_body(Layout.MODULAR, data.n_segments)
+        if config.layout is Layout.FRF:  # the input's width follows the stimulus
+            stimulus = stimulus_of(data.manifest["stimulus"])
+            rate = float(data.manifest["options"]["sample_rate_hz"])
+            tilt = stimulus.angle(np.arange(int(round(stimulus.duration * rate)) + 1) / rate)
+            config = replace(config, image_size=frf_width(
+                tilt, rate, stimulus.period_s, stimulus.periodic_from_s))
+        expected = NetworkConfig.for_body(config.layout, data.n_segments)
+        if (config.in_channels, config.modules) != (expected.in_channels, expected.modules):
+            raise LearningError(
+                f"a {config.layout.value} network for this {data.n_segments}-segment "
+                f"data set takes {expected.in_channels} channels and {expected.modules} "
+                f"modules, not {config.in_channels} and {config.modules}")
+        return config
+
+    def resume(self) -> bool:
+        """Load the last epoch's state from the model directory, if there is one (True)."""
+        state = _read_state(self.out, self.identity)
+        if state is None:
+            return False
+        tensors = load_file(str(self.out / state["weights"]))
+        self.net.load_state_dict({k[len("network."):]: v for k, v in tensors.items()
+                                  if k.startswith("network.")})
+        _restore_optimiser(self.optimiser, tensors, state["optimiser"])
+        self.schedule.load_state_dict(state["schedule"])
+        self.history = state["history"]
+        self.best = (state["best_validation_loss"], state["best_epoch"])
+        return True
+
+    def should_stop(self, epoch: int) -> bool:
+        """Early stopping: no better validation loss for ``patience`` epochs."""
+        return self.best[1] > 0 and epoch - self.best[1] > self.training.patience
+
+    def run_epoch(self, epoch: int, progress: Progress | None = None) -> dict:
+        """One pass over the training split (batches shuffled by the seed and the epoch),
+        then the validation loss; the epoch's row."""
         began = time.perf_counter()
-        rng = np.random.default_rng(np.random.SeedSequence([training.seed, epoch]))
-        net.train()
+        rng = np.random.default_rng(np.random.SeedSequence([self.training.seed, epoch]))
+        self.net.train()
         total, done = 0.0, 0
-        for images, targets in train_set.batches(training.batch_size, rng):
-            loss = objective(net(images), targets)
-            optimiser.zero_grad(set_to_none=True)
+        for images, targets in self.train_set.batches(self.training.batch_size, rng):
+            loss = self.objective(self.net(images), targets)
+            self.optimiser.zero_grad(set_to_none=True)
             loss.backward()
-            optimiser.step()
-            if per_batch:
-                schedule.step()
+            self.optimiser.step()
+            if self.per_batch:
+                self.schedule.step()
             total += float(loss.detach()) * len(images)
             done += len(images)
-            report(progress, done, len(train_set), "sample")
-        if not per_batch:
-            schedule.step()
-        validation = evaluate_loss(net, objective, validation_set)
-        row = {"epoch": epoch, "train_loss": total / done, "validation_loss": validation,
-               "learning_rate": optimiser.param_groups[0]["lr"],
-               "seconds": time.perf_counter() - began}
-        history.append(row)
-        improved = validation < best[0]
+            report(progress, done, len(self.train_set), "sample")
+        if not self.per_batch:
+            self.schedule.step()
+        validation = evaluate_loss(self.net, self.objective, self.validation_set)
+        return {"epoch": epoch, "train_loss": total / done, "validation_loss": validation,
+                "learning_rate": self.optimiser.param_groups[0]["lr"],
+                "seconds": time.perf_counter() - began}
+
+    def checkpoint(self, row: dict) -> bool:
+        """Keep the epoch: the model when it is the best so far (True), and the state to
+        resume from."""
+        self.history.append(row)
+        epoch, validation = row["epoch"], row["validation_loss"]
+        improved = validation < self.best[0]
         if improved:
-            best = (validation, epoch)
-            save_model(out, net, standardiser,
-                       {**sidecar, "training": {**sidecar["training"], "best_epoch": epoch,
-                                                "best_validation_loss": validation,
-                                                "epochs_run": epoch}})
-        _write_state(out, identity, net, optimiser, schedule, history, best)
-        report(progress, done, len(train_set), "sample",
-               f"epoch {epoch}/{training.epochs}: train loss {row['train_loss']:.4f}, "
-               f"validation {validation:.4f}{' (best)' if improved else ''}, "
-               f"{row['seconds']:.0f} s")
-    else:
-        stopped_early = len(history) < training.epochs
-    result = TrainingResult(out, len(history), best[1], best[0], stopped_early,
-                            time.perf_counter() - start_time, tuple(history),
-                            provenance(training, dataset=str(data.path)))
-    result.plot(out / "loss.png")
-    return result
+            self.best = (validation, epoch)
+            save_model(self.out, self.net, self.standardiser,
+                       {**self.sidecar, "training": {**self.sidecar["training"],
+                                                     "best_epoch": epoch,
+                                                     "best_validation_loss": validation,
+                                                     "epochs_run": epoch}})
+        _write_state(self.out, self.identity, self.net, self.optimiser, self.schedule,
+                     self.history, self.best)
+        return improved
+
+    def run(self, progress: Progress | None = None) -> TrainingResult:
+        """Epochs from where the run stands to the configured number, or until early
+        stopping."""
+        epochs = self.training.epochs
+        stopped_early = False
+        for epoch in range(len(self.history) + 1, epochs + 1):
+            if self.should_stop(epoch):
+                stopped_early = True
+                break
+            row = self.run_epoch(epoch, progress)
+            improved = self.checkpoint(row)
+            report(progress, len(self.train_set), len(self.train_set), "sample",
+                   f"epoch {epoch}/{epochs}: train loss {row['train_loss']:.4f}, "
+                   f"validation {row['validation_loss']:.4f}{' (best)' if improved else ''}, "
+                   f"{row['seconds']:.0f} s")
+        else:
+            stopped_early = len(self.history) < epochs
+        return TrainingResult(self.out, len(self.history), self.best[1], self.best[0],
+                              stopped_early, time.perf_counter() - self.started,
+                              tuple(self.history),
+                              provenance(self.training, dataset=str(self.data.path)))
 
 
 def evaluate_loss(net: IdentifierNetwork, objective: Objective, samples: SplitSamples,

@@ -1,5 +1,5 @@
 """Results of simulations: one trial (:class:`SimulationResult`) or a batch
-(:class:`BatchResult`), each with ``to_dict()``, ``summary()`` and ``plot()``."""
+(:class:`BatchResult`), each a :class:`~posture_id.fileio.Result`."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from posture_id.dec.parameters import DecParameters, ParameterArrays
-from posture_id.plotting import plot_trial
+from posture_id.fileio import Result
+from posture_id.plotting import plot_batch, plot_trial
 from posture_id.provenance import provenance
 from posture_id.recording import Recording
 from posture_id.simulation.options import SimulationOptions
@@ -17,7 +18,7 @@ __all__ = ["SimulationResult", "BatchResult"]
 
 
 @dataclass(frozen=True)
-class SimulationResult:
+class SimulationResult(Result):
     """One simulated trial, sampled at ``sample_rate_hz``.
 
     Attributes:
@@ -78,14 +79,14 @@ class SimulationResult:
         return (f"{self.description}: {len(self.time)} samples at "
                 f"{self.options.sample_rate_hz:g} Hz, {outcome}, largest sway {sway:.3f}°")
 
-    def plot(self, path=None, title: str | None = None, ax=None):
+    def plot(self, path=None, ax=None, title: str | None = None):
         """Tilt and segment sway against time; saved to ``path`` when given. With ``ax``
         (a pair of axes) it draws into them."""
-        return plot_trial(self, path=path, title=title, ax=ax)
+        return plot_trial(self, path=path, ax=ax, title=title)
 
 
 @dataclass(frozen=True)
-class BatchResult:
+class BatchResult(Result):
     """B simulated trials with the same stimulus.
 
     Attributes:
@@ -141,3 +142,8 @@ class BatchResult:
         """One line: trials, how many stayed within the sway limit."""
         return (f"{self.description}: {len(self)} trials, {int(self.stable.sum())} stable, "
                 f"{len(self.time)} samples each")
+
+    def plot(self, path=None, ax=None):
+        """Tilt and every trial's body COM sway α_BS against time (a pair of axes)."""
+        return plot_batch(self.time, self.tilt, self.alpha[:, :, 0], self.stable,
+                          self.description, path=path, ax=ax)

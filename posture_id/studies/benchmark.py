@@ -32,18 +32,17 @@ import numpy as np
 from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise
 from posture_id.dec.prior import sample_parameters
-from posture_id.fileio import atomic_write_text, json_text, jsonable
-from posture_id.fitting.options import FitOptions
-from posture_id.identify.core import Method, identify
+from posture_id.executors import LocalExecutor
+from posture_id.fileio import Result, atomic_write_text, json_text, jsonable
+from posture_id.identify import Method
 from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.checkpoint import SIDECAR
-from posture_id.learning.identifier import CnnIdentifier
 from posture_id.plotting import plot_benchmark
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate, simulate_batch
 from posture_id.simulation.metrics import sway_errors
 from posture_id.studies.journal import Journal
-from posture_id.studies.workers import one_thread_processes
+from posture_id.studies.workers import worker_identifier
 
 __all__ = ["BenchmarkReport", "MethodStatistics", "run_benchmark", "FAR_E_REL", "JOURNAL"]
 
@@ -63,31 +62,18 @@ def _held_out(body: Body, trials: int, seed: int) -> ParameterArrays:
     return type(params)(**{f: getattr(params, f)[keep] for f in params.FIELDS})
 
 
-_LOADED: dict = {}
-#: Least squares in a worker on one thread: the workers fill the cores, one each.
-_ONE_THREAD = FitOptions(threads=1)
-
-
-def _loaded(urdf: str):
-    """(body, CNN identifier) of a worker process, loaded once."""
-    if urdf not in _LOADED:
-        body = load_body(urdf)
-        _LOADED[urdf] = (body, CnnIdentifier.for_body(body))
-    return _LOADED[urdf]
-
-
 def _one(task: tuple) -> dict:
     """Identify one recording with one method (a worker process)."""
     urdf, arrays, index, noise_deg, method, seed = task
-    body, identifier = _loaded(urdf)
+    identifier = worker_identifier(urdf, method)
+    body = identifier.body
     truth = ParameterArrays(**arrays).trial(0, body.joint_names)
     clean = simulate(body, truth)
     recording = clean.to_recording()
     if noise_deg > 0:
         recording = recording.with_sensor_noise(noise_deg, seed)
     start = time.perf_counter()
-    result = identify(replace(recording, name=f"trial {index}"), body, Method(method),
-                      identifier, fit_options=_ONE_THREAD)
+    result = identifier.identify(replace(recording, name=f"trial {index}"))
     seconds = time.perf_counter() - start
     # E_rel against the noise-free truth's sway, on the same tilt
     sway_truth = clean.alpha[:, 0]
@@ -167,7 +153,7 @@ class MethodStatistics:
 
 
 @dataclass(frozen=True)
-class BenchmarkReport:
+class BenchmarkReport(Result):
     """Per-recording rows and their statistics (see the module doc)."""
 
     body: str
@@ -185,6 +171,16 @@ class BenchmarkReport:
         return {(noise, method): MethodStatistics.of_rows(noise, method, rows)
                 for noise in self.noise_levels for method in METHODS
                 if (rows := self._rows(noise, method))}
+
+    def summary(self) -> str:
+        """Per noise level and method: classes, median E_rel, far ones, median time."""
+        lines = [f"CNN against the optimiser on {self.body}, {self.trials} recordings"]
+        for (noise, method), s in self.statistics().items():
+            lines.append(f"  {noise:g}° {method.value}: classes {100 * s.class_accuracy:.1f} %, "
+                         f"E_rel median {100 * s.e_rel_median:.2f} %, far "
+                         f"{s.far_from_truth}/{s.recordings}, "
+                         f"{s.identification_seconds_median:.3g} s")
+        return "\n".join(lines)
 
     def to_dict(self) -> dict:
         return {"body": self.body, "joints": list(self.joints), "trials": self.trials,
@@ -317,8 +313,8 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
     todo = [t for t in tasks if _task_key(t) not in done]
     report(progress, len(rows), len(tasks), "identification")
     workers = workers or os.cpu_count() or 1
-    with one_thread_processes(workers) as pool:
-        for row in pool.map(_one, todo, chunksize=1):
+    with LocalExecutor(workers, processes=True) as pool:
+        for _, row in pool.unordered(_one, todo):
             rows.append(row)
             if book is not None:
                 book.append(row)

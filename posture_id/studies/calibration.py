@@ -34,7 +34,7 @@ from scipy.stats import norm
 from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.errors import PostureIdError
-from posture_id.fileio import JsonResult, atomic_write_text
+from posture_id.fileio import Result, atomic_write_text
 from posture_id.fitting.options import FitOptions
 from posture_id.fitting.result import noise_allows
 from posture_id.learning.calibration import (
@@ -214,7 +214,7 @@ class LeastSquaresCheck:
 
 
 @dataclass(frozen=True)
-class CalibrationReport(JsonResult):
+class CalibrationReport(Result):
     """See the module doc.
 
     Attributes:
@@ -337,21 +337,21 @@ class CalibrationReport(JsonResult):
                   "![identifiability](identifiability.png)", ""]
         return "\n".join(lines)
 
-    def plot(self, path: str | Path | None = None, ax=None) -> list[Path]:
-        """coverage.png, reliability.png and identifiability.png in the folder ``path``
-        (three figures: ``ax`` is not taken)."""
-        if path is None or ax is not None:
-            raise ValueError("the calibration report draws three figures into a folder: "
-                             "give path=FOLDER and no ax")
-        folder = Path(path)
-        labels = [f"{j} {f}" for j in self.joints for f in TARGET_FIELDS]
+    @property
+    def _labels(self) -> list[str]:
+        return [f"{j} {f}" for j in self.joints for f in TARGET_FIELDS]
+
+    def plot(self, path=None, ax=None):
+        """Coverage against the nominal level, per method and noise level."""
         short = {"cnn": "CNN", "gauss_newton": "LS Gauss-Newton", "calibrated": "LS calibrated"}
         curves = {f"{short[what]}, {noise:g}°": np.array(
                       [np.ravel(block[lv].coverage) for lv in CHECKED_LEVELS])
                   for what in short for _, noise, _, block in self._readings(what)}
-        paths = [folder / "coverage.png", folder / "reliability.png",
-                 folder / "identifiability.png"]
-        plot_coverage(CHECKED_LEVELS, curves, labels, TARGET_BAND, path=paths[0])
+        return plot_coverage(CHECKED_LEVELS, curves, self._labels, TARGET_BAND, path=path,
+                             ax=ax)
+
+    def plot_reliability(self, path=None, ax=None):
+        """The class probabilities' reliability diagrams, raw and temperature-scaled."""
         diagrams = {}
         for noise, result in self.cnn.items():
             for name, r in (("raw", result.classes.raw),
@@ -359,20 +359,37 @@ class CalibrationReport(JsonResult):
                 if r is not None:
                     diagrams[f"{noise:g}°, {name} (ECE {r.ece:.3f})"] = r.to_dict()[
                         "reliability"]
-        plot_reliability(diagrams, path=paths[1])
+        return plot_reliability(diagrams, path=path, ax=ax)
+
+    def plot_identifiability(self, path=None, ax=None):
+        """Each parameter's 90 % interval width against the prior's."""
         ratios = {f"{'LS' if what == 'calibrated' else 'CNN'}, {noise:g}°":
                   np.ravel(block[0.9].width_to_prior)
                   for what in ("cnn", "calibrated") for _, noise, _, block in self._readings(what)}
-        plot_identifiability(ratios, labels, path=paths[2])
-        return paths
+        return plot_identifiability(ratios, self._labels, path=path, ax=ax)
+
+    def summary(self) -> str:
+        """The 90 % intervals' coverage range per method and noise level."""
+        lines = [f"calibration of {self.model_dir} on {self.dataset_dir}: 90 % coverage"]
+        for what in ("cnn", "gauss_newton", "calibrated"):
+            for method, noise, trials, block in self._readings(what):
+                c = block[0.9].coverage
+                lines.append(f"  {method}, {noise:g}° ({trials} trials): "
+                             f"{100 * c.min():.1f}–{100 * c.max():.1f} %")
+        return "\n".join(lines)
 
     def write(self, folder: str | Path) -> list[Path]:
         """The report (JSON, Markdown, PNGs) and the calibration itself
         (:data:`~posture_id.learning.calibration.CALIBRATION`) into ``folder``."""
         folder = Path(folder)
+        paths = [folder / "coverage.png", folder / "reliability.png",
+                 folder / "identifiability.png"]
+        self.plot(paths[0])
+        self.plot_reliability(paths[1])
+        self.plot_identifiability(paths[2])
         return [self.to_json(folder / "calibration_report.json"),
                 atomic_write_text(folder / "calibration_report.md", self.to_markdown()),
-                self.calibration.save(folder), *self.plot(folder)]
+                self.calibration.save(folder), *paths]
 
 
 def _cnn_check(model, data: Dataset, calibration: CnnCalibration, noise: float,

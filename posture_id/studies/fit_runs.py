@@ -12,6 +12,7 @@ and every finished trial is appended to a journal, so an interrupted run resumes
 
 from __future__ import annotations
 
+import functools
 import json
 import time
 from dataclasses import replace
@@ -19,17 +20,17 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.bodies.body import load_body
 from posture_id.datasets.store import Dataset
+from posture_id.executors import LocalExecutor
 from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import FitOptions, FixedClasses
+from posture_id.identify import Method
 from posture_id.learning.checkpoint import SIDECAR
-from posture_id.learning.identifier import CnnIdentifier
 from posture_id.learning.samples import stimulus_of
 from posture_id.progress import Progress, report
 from posture_id.recording import Recording
 from posture_id.studies.journal import Journal
-from posture_id.studies.workers import one_thread_processes
+from posture_id.studies.workers import worker_identifier
 from posture_id.trials import prepare_trial
 from posture_id.uncertainty.noise import sensor_noise_deg
 
@@ -37,7 +38,6 @@ __all__ = ["FIT_JOURNAL", "held_out_recording", "run_fits", "split_trials"]
 
 #: The journal of finished fits, in the calibration report's folder.
 FIT_JOURNAL = "fits.journal.jsonl"
-_LOADED: dict = {}
 
 
 def split_trials(data: Dataset, split: str, count: int) -> list[tuple[int, int]]:
@@ -63,25 +63,24 @@ def held_out_recording(data: Dataset, shard: int, local: int, noise_deg: float,
     return recording, np.asarray(arrays["targets"][local], dtype=np.float64)
 
 
-def _loaded(model_dir: str, dataset_dir: str):
-    key = (model_dir, dataset_dir)
-    if key not in _LOADED:
-        data = Dataset.open(dataset_dir, verify=False)
-        body = load_body(data.manifest["body"]["urdf"])
-        _LOADED[key] = (data, body, CnnIdentifier.load(model_dir, body))
-    return _LOADED[key]
+@functools.cache
+def _dataset(dataset_dir: str) -> Dataset:
+    """A worker's data set, opened once."""
+    return Dataset.open(dataset_dir, verify=False)
 
 
 def _one(task: tuple) -> dict:
     """One trial identified by the hybrid (a worker process)."""
     model_dir, dataset_dir, split, position, shard, local, noise_deg = task
-    data, body, identifier = _loaded(model_dir, dataset_dir)
+    data = _dataset(dataset_dir)
+    identifier = worker_identifier(data.manifest["body"]["urdf"], Method.CNN.value, model_dir)
+    body = identifier.body
     seed = int(np.random.SeedSequence([shard, local, int(round(1e6 * noise_deg)), 0xC0FE])
                .generate_state(1)[0])
     recording, truth = held_out_recording(data, shard, local, noise_deg, seed)
     start = time.perf_counter()
     trial = prepare_trial(replace(recording, name=f"{split} trial {position}"))
-    cnn = identifier.identify(trial)
+    cnn = identifier.cnn.identify(trial)
     fit = fit_recording(trial, body, cnn.parameters,
                         FitOptions(threads=1, classes=FixedClasses()))
     return {"split": split, "position": position, "noise_deg": noise_deg,
@@ -118,8 +117,8 @@ def run_fits(model_dir: str | Path, dataset_dir: str | Path, split: str, count: 
     rows = [done[t] for t in ((s, p, n) for _, _, s, p, _, _, n in tasks) if t in done]
     todo = [t for t in tasks if (t[2], t[3], t[6]) not in done]
     report(progress, len(rows), len(tasks), "fit")
-    with one_thread_processes(workers) as pool:
-        for row in pool.map(_one, todo, chunksize=1):
+    with LocalExecutor(workers, processes=True) as pool:
+        for _, row in pool.unordered(_one, todo):
             rows.append(row)
             book.append(row)
             report(progress, len(rows), len(tasks), "fit")

@@ -1,33 +1,31 @@
-"""Worker processes for identifying many recordings: one per core, each on one thread."""
+"""Worker processes for identifying many recordings: one per core, each on one thread
+(:class:`~posture_id.executors.LocalExecutor`), each building its
+:class:`~posture_id.identify.Identifier` once."""
 
 from __future__ import annotations
 
-import multiprocessing
-import os
-from collections.abc import Iterator
-from concurrent.futures import ProcessPoolExecutor
-from contextlib import contextmanager
+import functools
 
-__all__ = ["one_thread_processes"]
+from posture_id.bodies.body import load_body
+from posture_id.fitting.options import FitOptions
+from posture_id.identify import Identifier, Method
+from posture_id.learning.identifier import CnnIdentifier
 
-_THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                     "NUMBA_NUM_THREADS")
+__all__ = ["worker_identifier"]
 
 
-@contextmanager
-def one_thread_processes(workers: int | None = None) -> Iterator[ProcessPoolExecutor]:
-    """A pool of ``workers`` fresh processes (default: one per core), spawned (torch and
-    fork do not mix), each with one thread of math; this process's environment is put
-    back afterwards."""
-    saved = {k: os.environ.get(k) for k in _THREAD_VARIABLES}
-    os.environ.update({k: "1" for k in _THREAD_VARIABLES})
-    try:
-        with ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1,
-                                 mp_context=multiprocessing.get_context("spawn")) as pool:
-            yield pool
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+@functools.cache
+def _cnn(urdf: str, model: str | None) -> CnnIdentifier:
+    return CnnIdentifier.resolve(model, load_body(urdf))
+
+
+@functools.cache
+def worker_identifier(urdf: str, method: str, model: str | None = None) -> Identifier:
+    """The identifier of a worker process for a body (URDF path), a method and a model
+    (None: the bundled one), built on its first task and kept for the rest (the pool's
+    processes live for the whole run); its least squares runs on one thread, since the
+    workers fill the cores. The identifiers of one body share one loaded network."""
+    method = Method(method)
+    cnn = None if method is Method.FIT else _cnn(urdf, model)
+    body = load_body(urdf) if cnn is None else cnn.body
+    return Identifier(body, method, cnn, FitOptions(threads=1))

@@ -1,0 +1,22 @@
+"""How to identify a recording, and the one default everywhere."""
+
+from __future__ import annotations
+
+import enum
+
+__all__ = ["Method", "DEFAULT_METHOD"]
+
+
+class Method(enum.Enum):
+    """How to identify (see :mod:`posture_id.identify.core`)."""
+
+    CNN = "cnn"
+    FIT = "fit"
+    HYBRID = "hybrid"
+
+
+#: The one default method of :func:`~posture_id.identify.identify`,
+#: :class:`~posture_id.identify.Identifier`, the command line and cohorts: the CNN alone
+#: (milliseconds, calibrated intervals); the hybrid, least squares from the CNN's answer, on
+#: request when seconds per recording are worth its precision (docs/identify.md).
+DEFAULT_METHOD = Method.CNN

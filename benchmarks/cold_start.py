@@ -10,7 +10,7 @@ processes (medians of ``--repeats``):
   3. ``posture-id identify --method cnn`` of that recording (the bundled model), whole
      command;
   4. ``posture-id fit`` of a 121 s TIP recording, wall time of the whole command;
-and 2 and 4 again for revision ``--before`` (default: the last commit before the package
+and 2, 3 and 4 again for revision ``--before`` (default: the last commit before the package
 layout), checked out into a temporary git worktree and run with the same interpreter,
 side by side in this one run.
 Writes benchmarks/results/cold_start.json.
@@ -130,6 +130,9 @@ def main() -> None:
                                    args.repeats, env)
             sim_before_s = median_wall([sys.executable, "-c", CLI_BEFORE, "simulate", "--out",
                                         str(tmp / "trial_before.csv")], args.repeats, env)
+            identify_before_s = median_wall(
+                [sys.executable, "-c", CLI_BEFORE, "identify", str(recording), "--method",
+                 "cnn", "--out", str(tmp / "cnn_before.json")], args.repeats, env)
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
                             str(worktree)], check=True, capture_output=True)
@@ -137,6 +140,8 @@ def main() -> None:
               f"(this checkout takes {after_s / before_s:.2f}× as long)")
         print(f"posture-id simulate, {args.before}: {sim_before_s:.2f} s wall "
               f"(this checkout takes {sim_s / sim_before_s:.2f}× as long)")
+        print(f"posture-id identify --method cnn, {args.before}: {identify_before_s:.2f} s "
+              f"wall (this checkout takes {identify_s / identify_before_s:.2f}× as long)")
 
     results = {
         "package_version": __version__,
@@ -147,7 +152,9 @@ def main() -> None:
         "import_and_load_s": import_s,
         "cli_simulate_wall_s": {"this_checkout": sim_s, args.before: sim_before_s,
                                 "ratio": sim_s / sim_before_s},
-        "cli_identify_cnn_wall_s": identify_s,
+        "cli_identify_cnn_wall_s": {"this_checkout": identify_s,
+                                    args.before: identify_before_s,
+                                    "ratio": identify_s / identify_before_s},
         "cli_fit_wall_s": {"this_checkout": after_s, args.before: before_s,
                            "ratio": after_s / before_s},
     }

@@ -7,6 +7,7 @@ angles are segment angles in space, positive = forward lean (MODEL §1).
 from __future__ import annotations
 
 import csv
+import enum
 import io
 import math
 from collections.abc import Callable
@@ -18,11 +19,52 @@ import numpy as np
 from posture_id.errors import RecordingError
 from posture_id.fileio import atomic_write_text, check_time_column, read_numeric_csv
 
-__all__ = ["Recording", "RADIANS_SUSPECT_DEG"]
+__all__ = ["Recording", "RecordingColumns", "AngleUnit", "RADIANS_SUSPECT_DEG"]
 
 #: A recording whose every angle (tilt and segments, "degrees") stays below this is taken
 #: to be in radians by mistake: 0.1° of sway and tilt at most is below any stimulus used.
 RADIANS_SUSPECT_DEG = 0.1
+
+
+class AngleUnit(enum.Enum):
+    """The unit of a file's angle columns."""
+
+    DEGREES = "deg"
+    RADIANS = "rad"
+
+
+@dataclass(frozen=True)
+class RecordingColumns:
+    """Which columns of a lab's CSV file hold what, and in which units: the file read as it
+    is, whatever its header says.
+
+    Attributes:
+        time: the time column (seconds), or None: samples at ``sample_rate_hz``.
+        tilt: the platform-tilt column, or None: the file has none (the tilt is taken from
+            the named stimulus).
+        angles: the angle columns, support upward, one per body segment; their segment
+            names are the body's (``Recording.from_csv``'s ``segments``).
+        unit: of the tilt and angle columns.
+        sample_rate_hz: the true sampling rate: overrides a wrong time column (and is
+            needed without one).
+    """
+
+    time: str | None = "time_s"
+    tilt: str | None = "tilt_deg"
+    angles: tuple[str, ...] = ()
+    unit: AngleUnit = AngleUnit.DEGREES
+    sample_rate_hz: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.angles:
+            raise RecordingError("name the angle columns (one per body segment)")
+        if not isinstance(self.unit, AngleUnit):
+            raise RecordingError(f"unit must be an AngleUnit, got {self.unit!r}")
+        rate = self.sample_rate_hz
+        if rate is not None and not (math.isfinite(rate) and rate > 0):
+            raise RecordingError(f"sample rate must be a finite number > 0 Hz, got {rate}")
+        if self.time is None and rate is None:
+            raise RecordingError("without a time column, give the sample rate")
 
 
 @dataclass(frozen=True)
@@ -127,6 +169,63 @@ class Recording:
                 [f"{self.time[k]:.6f}", f"{deg_tilt[k]:.12g}", *(f"{x:.12g}" for x in deg[k])]
             )
         return atomic_write_text(Path(path), out.getvalue())
+
+    @classmethod
+    def read(cls, path: str | Path, segments: tuple[str, ...] | None = None,
+             tilt_of: Callable[[np.ndarray], np.ndarray] | None = None,
+             columns: RecordingColumns | None = None) -> Recording:
+        """A recording file with the standard header (:meth:`from_csv`), or a lab's file
+        read by its ``columns`` (:meth:`from_lab_csv`; without ``segments`` the angle
+        columns name the segments, ``_deg`` left out)."""
+        if columns is None:
+            return cls.from_csv(path, segments, tilt_of)
+        names = tuple(segments) if segments is not None else tuple(
+            c.removesuffix("_deg") for c in columns.angles)
+        return cls.from_lab_csv(path, columns, names, tilt_of)
+
+    @classmethod
+    def from_lab_csv(cls, path: str | Path, columns: RecordingColumns,
+                     segments: tuple[str, ...],
+                     tilt_of: Callable[[np.ndarray], np.ndarray] | None = None) -> Recording:
+        """Read a lab's file as it is: the columns ``columns`` names, in its units, with
+        the angle columns taken for the body's ``segments`` (in order).
+
+        Raises:
+            RecordingError: naming the file, the missing column or the problem.
+        """
+        path = Path(path)
+        header, values = read_numeric_csv(path, RecordingError, "recording")
+        wanted = [c for c in (columns.time, columns.tilt, *columns.angles) if c is not None]
+        missing = [c for c in wanted if c not in header]
+        if missing:
+            raise RecordingError(f"{path}: no column {', '.join(repr(c) for c in missing)} "
+                                 f"(the header is {','.join(header)})")
+        if len(columns.angles) != len(segments):
+            raise RecordingError(
+                f"{path}: {len(columns.angles)} angle column(s) "
+                f"({','.join(columns.angles)}) for a body of {len(segments)} segment(s) "
+                f"({','.join(segments)}): give one per segment, support upward")
+        column = {name: values[:, header.index(name)] for name in wanted}
+        if columns.sample_rate_hz is not None:
+            time = np.arange(len(values)) / columns.sample_rate_hz
+        else:
+            check_time_column(path, column[columns.time], RecordingError)
+            time = column[columns.time] - column[columns.time][0]
+        to_rad = np.radians if columns.unit is AngleUnit.DEGREES else np.asarray
+        theta = np.column_stack([to_rad(column[c]) for c in columns.angles])
+        if columns.tilt is not None:
+            tilt = to_rad(column[columns.tilt])
+        elif tilt_of is not None:
+            tilt = tilt_of(time)
+        else:
+            raise RecordingError(f"{path}: no tilt column named; name the stimulus the "
+                                 "recording was made with (the PRTS flags, or --tilt FILE)")
+        largest = float(np.degrees(np.abs(theta).max()))
+        if columns.unit is AngleUnit.DEGREES and 0 < largest < RADIANS_SUSPECT_DEG:
+            raise RecordingError(
+                f"{path}: every angle is below {RADIANS_SUSPECT_DEG}° (largest |value| "
+                f"{largest:.3g}); the columns look like radians: give their unit (--units rad)")
+        return cls(time, tilt, theta, tuple(segments), str(path))
 
     @classmethod
     def from_csv(cls, path: str | Path, segments: tuple[str, ...] | None = None,

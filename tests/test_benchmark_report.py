@@ -49,6 +49,7 @@ def test_statistics_of_known_rows():
     assert "| hybrid | 83.3 % | 11.00 % | inf % | 2/3 | 1 | 2 | 3.000, 3.000" in text
 
 
+@pytest.mark.slow
 def test_tiny_benchmark_writes_its_report(tip, tmp_path):
     report = run_benchmark(tip, trials=2, noise_levels=(0.0, 0.01), seed=3, workers=1,
                            methods=(Method.CNN,))
@@ -76,6 +77,7 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
     assert "| 0° | cnn | conformal, CNN (validation split) | 2 |" in text
 
 
+@pytest.mark.slow
 def test_an_interrupted_benchmark_goes_on_from_its_journal(tip, tmp_path):
     journal = tmp_path / "journal.jsonl"
     args = dict(trials=2, noise_levels=(0.0,), seed=3, workers=1, methods=(Method.CNN,))

@@ -21,14 +21,13 @@ def _threads(_: int) -> tuple[int, int]:
     return max(pools, default=1), numba.get_num_threads()
 
 
-@pytest.mark.parametrize("processes", [False, pytest.param(True, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("processes", [False, True])
 def test_every_item_comes_back_once_with_its_result(processes):
     with LocalExecutor(2, processes=processes) as run:
         out = dict(run.unordered(_square, range(25), 3))
     assert out == {x: x * x + 3 for x in range(25)}
 
 
-@pytest.mark.slow
 def test_worker_processes_do_their_math_on_one_thread():
     with LocalExecutor(2, processes=True) as run:
         seen = {result for _, result in run.unordered(_threads, range(4))}

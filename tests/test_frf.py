@@ -181,7 +181,7 @@ def test_frf_command_line(tip, tmp_path, capsys):
 
 def test_bad_input_is_refused(tip):
     recording = simulate(tip).to_recording()
-    noise = Recording(recording.time, recording.tilt + 1e-4 * np.sin(recording.time),
+    noise = Recording(recording.time, recording.tilt + 2e-3 * np.sin(recording.time),
                       recording.theta, recording.segments)
     with pytest.raises(PostureIdError, match="^rec.csv: .*not a PRTS"):
         frequency_response(prepare_trial(replace(noise, name="rec.csv"), rate_hz=None), tip)

@@ -6,6 +6,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 CODE = """
 from posture_id import load_body, simulate
 from posture_id.simulation.kernel import kernels
@@ -23,6 +25,7 @@ def _run(cache) -> tuple[int, int]:
     return hits, misses
 
 
+@pytest.mark.slow
 def test_second_process_loads_the_compiled_kernel(tmp_path):
     hits, misses = _run(tmp_path)
     assert misses >= 1 and hits == 0  # an empty cache: compiled, and saved

@@ -48,7 +48,8 @@ def test_a_lab_prts_is_the_sequence_shifted_delayed_and_signed():
 @pytest.mark.parametrize("kwargs, message", [
     ({"onset_s": -1.0}, "onset_s must be a finite time"),
     ({"lag_s": math.nan}, "lag_s must be a finite time"),
-    ({"start_state": 80, "states": 80}, "start state must be an integer in"),
+    ({"start_state": 80, "states": 80}, r"start state must be a number in \[0, 80\)"),
+    ({"start_state": -0.5, "states": 80}, "start state must be a number in"),
     ({"sign": 0}, "sign must be"),
     ({"state_s": 0.0}, "state duration must be"),
 ])

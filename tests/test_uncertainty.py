@@ -225,6 +225,7 @@ def _rows(n, noise, se_scale, rng):
     return rows
 
 
+@pytest.mark.slow
 def test_least_squares_coverage_known_answers():
     rng = np.random.default_rng(8)
     # standard errors right: both readings cover about 90 %

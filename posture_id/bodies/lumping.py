@@ -106,17 +106,17 @@ class LumpedBody:
     Attributes:
         name: robot name. links: segments, support upward. foot: (mass, com, inertia) of
         the support. joints: (3,) world positions of the lumped joints (m).
-        source: a line saying which model and posture it was lumped from.
+        origin: a line saying which model and posture it was lumped from.
     """
 
     name: str
     links: list[LinkSpec]
     foot: tuple
     joint_points: np.ndarray = field(repr=False)
-    source: str = ""
+    origin: str = ""
 
     def urdf(self) -> str:
-        return chain_urdf(self.name, self.links, foot=self.foot, comment=self.source)
+        return chain_urdf(self.name, self.links, foot=self.foot, comment=self.origin)
 
     def write(self, path: str | Path) -> Path:
         """Write the lumped URDF atomically."""
@@ -328,7 +328,7 @@ def lump_robot(
         links=links,
         foot=(foot_mass, tuple(foot_com - ankle_point), foot_tensor),
         joint_points=np.array(points),
-        source=(
+        origin=(
             f"lumped by posture-id from {urdf.name} at the {label}: {segments} segments, "
             f"joints {', '.join(f'{r}={p[0]}/{p[1]}' for r, p in roles.items())}"
         ),

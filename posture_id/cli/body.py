@@ -79,7 +79,7 @@ def _write(args: argparse.Namespace) -> Path | None:
         lumped = None
     if lumped is not None:
         path = lumped.write(args.out)
-        say(f"wrote {path} ({lumped.source})")
+        say(f"wrote {path} ({lumped.origin})")
         return path
     if args.default_tip:
         segments, name = default_tip_segments(), "tip_default"

@@ -16,7 +16,11 @@ from posture_id.cli.arguments import (
     write_result,
 )
 from posture_id.cli.progress import TerminalProgress
-from posture_id.cli.stimulus import add_lab_stimulus_arguments, recording_and_stimulus
+from posture_id.cli.stimulus import (
+    add_column_arguments,
+    add_lab_stimulus_arguments,
+    recording_and_stimulus,
+)
 from posture_id.dec.parameters import DecParameters
 from posture_id.errors import PostureIdError
 from posture_id.fitting.options import (
@@ -50,6 +54,7 @@ def add_parser(sub) -> None:
                      help="run CasADi in its virtual machine (no C compiler)")
     add_search_arguments(fit)
     add_lab_stimulus_arguments(fit, "tilt CSV (time_s,tilt_deg) the recording was made with")
+    add_column_arguments(fit)
     fit.set_defaults(func=run)
 
 
@@ -66,8 +71,9 @@ def add_search_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--locked: highest stimulated frequency compared "
                              "(default %(default)g Hz)")
     parser.add_argument("--max-offset-s", type=non_negative_float, default=0.0,
-                        help="--locked: also fit a time offset of the stimulus within ±this "
-                             "(a platform lag nobody measured; default 0: none)")
+                        help="--locked: also fit a time offset of the stimulus within ±this, "
+                             "at most half a cycle (a platform lag nobody measured, or a "
+                             "lab's onset off its nominal one; default 0: none)")
     parser.add_argument("--prior-sd", type=positive_float,
                         help="--locked: maximum a posteriori with a Gaussian prior of this SD "
                              "on every normalised gain and delay, centred on the defaults "

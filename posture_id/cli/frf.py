@@ -13,7 +13,11 @@ from posture_id.cli.arguments import (
     positive_float,
     write_result,
 )
-from posture_id.cli.stimulus import add_lab_stimulus_arguments, recording_and_stimulus
+from posture_id.cli.stimulus import (
+    add_column_arguments,
+    add_lab_stimulus_arguments,
+    recording_and_stimulus,
+)
 from posture_id.frf import FrfOptions, frequency_response
 from posture_id.trials import prepare_trial
 
@@ -47,6 +51,7 @@ def add_parser(sub) -> None:
                    help="highest frequency kept (default %(default)g Hz)")
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with; "
                                   "give --period-s with it")
+    add_column_arguments(p)
     p.set_defaults(func=run)
 
 

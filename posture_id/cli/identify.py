@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
     check_output_file,
@@ -18,7 +16,9 @@ from posture_id.cli.arguments import (
 from posture_id.cli.fit import add_search_arguments, search_keywords
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
+    add_column_arguments,
     add_lab_stimulus_arguments,
+    columns_from_args,
     recording_and_stimulus,
     stimulus_from_args,
 )
@@ -54,6 +54,7 @@ def add_parser(sub) -> None:
     p.add_argument("--level", type=interval_level, default=0.9,
                    help="the intervals' nominal coverage (default %(default)g)")
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recordings were made with")
+    add_column_arguments(p)
     add_search_arguments(p)
     p.set_defaults(func=run)
 
@@ -74,6 +75,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     # torch and CasADi load here, not when the parser is built: other commands start fast
     from posture_id.identify import Identifier, Method
+    from posture_id.identify.result import FELL
 
     body = load_body(args.body or DEFAULT_URDF)
     identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
@@ -81,7 +83,11 @@ def run(args: argparse.Namespace) -> int:
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
         result = identifier.identify(recording, stimulus, progress)
     write_result(result, args.out, args.plot)
-    return 0 if np.isfinite(result.e_rel) else 1
+    if result.fell:  # exit status 1: identified, but the model does not balance the body
+        say(FELL.format(at="" if result.fell_at_s is None else f" at t = "
+                                                                 f"{result.fell_at_s:.2f} s"))
+        return 1
+    return 0
 
 
 def run_cohort(args: argparse.Namespace) -> int:
@@ -98,6 +104,6 @@ def run_cohort(args: argparse.Namespace) -> int:
     identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
     with TerminalProgress("recordings", prefix="posture-id identify") as progress:
         result = identify_cohort(recordings, args.out, identifier, args.scheduler, progress,
-                                 stimulus, args.model)
+                                 stimulus, args.model, columns_from_args(args))
     say(result.summary())
     return 1 if result.failed else 0

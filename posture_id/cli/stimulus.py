@@ -1,5 +1,6 @@
 """Stimulus flags shared by the commands: the PRTS as MODEL §4 defines it, as a lab ran
-it (state duration, lead-in, starting state, sign, platform lag), or a tilt file."""
+it (state duration, lead-in, starting state, sign, platform lag), or a tilt file; and the
+column flags that read a lab's recording as it is."""
 
 from __future__ import annotations
 
@@ -9,12 +10,11 @@ from pathlib import Path
 from posture_id.cli.arguments import (
     default_of,
     non_negative_float,
-    non_negative_int,
     positive_float,
     positive_int,
 )
 from posture_id.errors import PostureIdError
-from posture_id.recording import Recording
+from posture_id.recording import AngleUnit, Recording, RecordingColumns
 from posture_id.simulation.stimulus import (
     PRTS_REGISTERS,
     PRTS_STATE_S,
@@ -24,7 +24,8 @@ from posture_id.simulation.stimulus import (
 )
 
 __all__ = ["add_stimulus_arguments", "add_lab_stimulus_arguments", "prts_arguments",
-           "stimulus_from_args", "recording_and_stimulus"]
+           "stimulus_from_args", "recording_and_stimulus", "add_column_arguments",
+           "columns_from_args"]
 
 _PRTS_FLAGS = {"amplitude_deg": "--amplitude-deg", "cycles": "--cycles", "states": "--states"}
 _LAB_FLAGS = {"state_s": "--state-s", "onset_s": "--onset-s", "start_state": "--start-state",
@@ -51,8 +52,9 @@ def add_lab_stimulus_arguments(parser: argparse.ArgumentParser, tilt_help: str) 
                         help=f"PRTS state duration, s (default {PRTS_STATE_S:g})")
     parser.add_argument("--onset-s", type=non_negative_float,
                         help="level platform before the sequence starts, s (default 0)")
-    parser.add_argument("--start-state", type=non_negative_int,
-                        help="the sequence starts at this state of its cycle (default 0)")
+    parser.add_argument("--start-state", type=non_negative_float,
+                        help="the sequence starts this many states into its cycle, "
+                             "fractional for a start part-way through a state (default 0)")
     parser.add_argument("--sign", choices=("+1", "-1"),
                         help="-1 when the platform's positive tilt is the other way")
     parser.add_argument("--lag-s", type=non_negative_float,
@@ -85,12 +87,44 @@ def stimulus_from_args(args: argparse.Namespace, default: TiltProfile | None
     return default
 
 
+def add_column_arguments(parser: argparse.ArgumentParser) -> None:
+    """Flags that read a lab's file as it is: which column is what, and in which unit."""
+    group = parser.add_argument_group(
+        "a lab's columns", "read the file as it is (default: time_s,tilt_deg,<segment>_deg)")
+    group.add_argument("--angle-columns", nargs="+", metavar="COLUMN",
+                       help="the sway columns, one per body segment, support upward (a "
+                            "body-COM column with a 1-segment body); the other column flags "
+                            "apply with it")
+    group.add_argument("--time-column", default="time_s",
+                       help="the time column, seconds (default %(default)s)")
+    group.add_argument("--tilt-column", default="tilt_deg",
+                       help="the platform-tilt column, or 'none' (the tilt is then the named "
+                            "stimulus's; default %(default)s)")
+    group.add_argument("--units", choices=[u.value for u in AngleUnit], default="deg",
+                       help="unit of the tilt and angle columns (default %(default)s)")
+    group.add_argument("--sample-rate-hz", type=positive_float,
+                       help="the true sampling rate: overrides a wrong time column")
+
+
+def columns_from_args(args: argparse.Namespace) -> RecordingColumns | None:
+    """The columns the flags name, or None for the standard header."""
+    if not getattr(args, "angle_columns", None):
+        if getattr(args, "sample_rate_hz", None) is not None or \
+                getattr(args, "units", "deg") != "deg":
+            raise PostureIdError("--sample-rate-hz and --units go with --angle-columns "
+                                 "(name the file's columns)")
+        return None
+    tilt = None if args.tilt_column.lower() == "none" else args.tilt_column
+    return RecordingColumns(time=args.time_column, tilt=tilt, angles=tuple(args.angle_columns),
+                            unit=AngleUnit(args.units), sample_rate_hz=args.sample_rate_hz)
+
+
 def recording_and_stimulus(args: argparse.Namespace, body) -> tuple[Recording,
                                                                     TiltProfile | None]:
     """The recording ``args.recording`` for ``body`` (None: any angle columns) and the
     stimulus the flags name (its tilt fills in a recording without a tilt column)."""
     stimulus = stimulus_from_args(args, default=None)
-    recording = Recording.from_csv(args.recording,
-                                   None if body is None else body.segment_names,
-                                   None if stimulus is None else stimulus.angle)
+    recording = Recording.read(args.recording, None if body is None else body.segment_names,
+                               None if stimulus is None else stimulus.angle,
+                               columns_from_args(args))
     return recording, stimulus

@@ -184,31 +184,31 @@ class DecParameters:
         return text
 
     @classmethod
-    def from_dict(cls, data: Mapping, body, source: str = "parameters") -> DecParameters:
+    def from_dict(cls, data: Mapping, body, name: str = "parameters") -> DecParameters:
         """Validate a mapping against a body; missing passive terms take the defaults.
 
         Raises:
-            ParameterError: naming ``source``, the module, the field and the problem.
+            ParameterError: naming ``name``, the module, the field and the problem.
         """
         if not isinstance(data, Mapping):
-            raise ParameterError(f"{source}: expected a JSON object keyed by joint name")
+            raise ParameterError(f"{name}: expected a JSON object keyed by joint name")
         defaults = default_parameters(body)
         expected = body.joint_names
         for joint in expected:
             if joint not in data:
                 raise ParameterError(
-                    f"{source}: module '{joint}' is missing (body joints: {', '.join(expected)})"
+                    f"{name}: module '{joint}' is missing (body joints: {', '.join(expected)})"
                 )
         for joint in data:
             if joint not in expected:
                 raise ParameterError(
-                    f"{source}: module '{joint}' is not a joint of body '{body.name}' "
+                    f"{name}: module '{joint}' is not a joint of body '{body.name}' "
                     f"(body joints: {', '.join(expected)})"
                 )
         mods = {}
         for joint in expected:
             entry = data[joint]
-            where = f"{source}: module '{joint}'"
+            where = f"{name}: module '{joint}'"
             if not isinstance(entry, Mapping):
                 raise ParameterError(f"{where}: expected an object with {', '.join(_REQUIRED)}")
             for key in entry:
@@ -250,7 +250,7 @@ class DecParameters:
             raise ParameterError(f"{path}: cannot be read ({exc.strerror})") from None
         except json.JSONDecodeError as exc:
             raise ParameterError(f"{path}: not valid JSON ({exc})") from None
-        return cls.from_dict(data, body, source=str(path))
+        return cls.from_dict(data, body, name=str(path))
 
 
 def _validate_module(m: ModuleParameters, where: str) -> None:

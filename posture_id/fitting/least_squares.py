@@ -66,9 +66,9 @@ from posture_id.trials import PreparedTrial
 
 __all__ = ["fit_recording", "FitRun"]
 
-#: The offset search: at most this many re-fits, stopping when the offset moves by less
-#: than this, s.
-OFFSET_ROUNDS, OFFSET_SETTLED_S = 4, 1e-3
+#: The offset search: the candidate offsets fitted first, then at most this many re-fits,
+#: stopping when the offset moves by less than this, s.
+OFFSET_TRIES, OFFSET_ROUNDS, OFFSET_SETTLED_S = 3, 4, 1e-3
 
 
 def fit_recording(
@@ -228,33 +228,56 @@ class FitRun:
             time=self.trial.recording.time, recorded=self.measured,
             fitted=self.problem.simulate(best.q, self.u), segments=body.segment_names,
             joints=body.joint_names,
-            provenance=provenance(self.options, body, source=self.trial.name),
+            provenance=provenance(self.options, body, recording=self.trial.name),
             residual_sd=residual_sd, noise_floor_deg=self.options.noise_floor_deg,
             time_offset_s=self.trial.time_offset_s, trial=self.trial, defaults=defaults)
 
 
 def _search_offset(run: FitRun, result: FitResult) -> FitResult:
-    """The stimulus's time offset: the one that best aligns the fitted locked sway with the
-    recorded one, then the fit again with the stimulus shifted by it (classes kept);
-    repeated while the offset still moves (at most :data:`OFFSET_ROUNDS` times). The
-    result's trial is the shifted one, so that what re-simulates it uses the offset."""
+    """The stimulus's time offset. First the offsets at the deepest minima of the distance
+    between the fitted locked sway, shifted, and the recorded one (:data:`OFFSET_TRIES`:
+    over a wide range that distance has a minimum every stimulated period), each fitted
+    again with the stimulus shifted by it (classes kept), the best fit kept; then, from
+    it, the best offset again while it still moves (at most :data:`OFFSET_ROUNDS` times).
+    The result's trial is the shifted one, so that what re-simulates it uses the offset.
+
+    Raises:
+        FitError: ``max_offset_s`` is more than half a stimulus cycle.
+    """
     limit = run.options.locked.max_offset_s
+    period = run.trial.stimulus.period_s
+    if limit > period / 2 + 1e-9:
+        raise FitError(f"{run.trial.name}: max_offset_s {limit:g} s is more than half a "
+                       f"stimulus cycle ({period / 2:g} s): an offset of a whole cycle "
+                       "cannot be told from none")
     fixed = replace(run.options, classes=FixedClasses(),
                     locked=replace(run.options.locked, max_offset_s=0.0))
     projection = run.target.projection
     measured = np.degrees(run.measured)
-    trial, fit, stages = run.trial, result, result.stages
+    stages = list(result.stages)
+
+    def fit_shifted(trial: PreparedTrial, start: FitResult) -> FitResult:
+        run.say(f"stimulus time offset {1000 * trial.time_offset_s:+.0f} ms; fitting again "
+                "with it")
+        again = FitRun(trial, run.body, fixed, run.progress, run.problem, list(run.notices))
+        fitted = again.fit(start.parameters)
+        stages.extend(fitted.stages)
+        return fitted
+
+    candidates = [result] + [
+        fit_shifted(run.trial.shifted(offset), result)
+        for offset in projection.best_offsets(np.degrees(result.fitted), measured, limit,
+                                              OFFSET_TRIES)
+        if abs(offset) >= OFFSET_SETTLED_S]
+    fit = min(candidates, key=lambda f: f.cost)
+    trial = fit.trial
     for _ in range(OFFSET_ROUNDS):
         step = projection.best_offset(np.degrees(fit.fitted), measured, limit)
         if abs(step) < OFFSET_SETTLED_S or abs(trial.time_offset_s + step) > limit:
             break
         trial = trial.shifted(step)
-        run.say(f"stimulus time offset {1000 * trial.time_offset_s:+.0f} ms; fitting again "
-                "with it")
-        again = FitRun(trial, run.body, fixed, run.progress, run.problem, list(run.notices))
-        fit = again.fit(fit.parameters)
-        stages += fit.stages
-    return replace(fit, stages=stages, iterations=sum(s.iterations for s in stages),
+        fit = fit_shifted(trial, fit)
+    return replace(fit, stages=tuple(stages), iterations=sum(s.iterations for s in stages),
                    evaluations=sum(s.evaluations for s in stages),
                    provenance=result.provenance)
 

@@ -73,10 +73,12 @@ class LockedOptions:
             noise level of a harmonic.
         excited_threshold: a harmonic is excited when the tilt's amplitude there exceeds
             this share of its largest.
-        max_offset_s: > 0: also fit a time offset of the stimulus within ±this (a
-            platform lag, or clocks that are not in step): after the fit the offset that
-            best aligns the fitted and the recorded locked sway is found, and the fit is
-            repeated with the stimulus shifted by it. 0 (default): none.
+        max_offset_s: > 0: also fit a time offset of the stimulus within ±this, at most
+            half a stimulus cycle (a platform lag, a lab's onset off its nominal one, or
+            clocks that are not in step): after the fit the offsets that best align the
+            fitted and the recorded locked sway are found, the fit is repeated with the
+            stimulus shifted by each of the best few, and the best fit is kept. 0
+            (default): none.
     """
 
     drift_order: int = 1
@@ -89,8 +91,8 @@ class LockedOptions:
 
     def __post_init__(self) -> None:
         check_analysis_options(self, "locked", ("drift_order", "skip_cycles", "neighbours"))
-        if not (math.isfinite(self.max_offset_s) and 0 <= self.max_offset_s <= 1.0):
-            raise PostureIdError(f"locked max_offset_s must be in [0, 1] s, got "
+        if not (math.isfinite(self.max_offset_s) and self.max_offset_s >= 0):
+            raise PostureIdError(f"locked max_offset_s must be a finite time ≥ 0 s, got "
                                  f"{self.max_offset_s}")
         if self.neighbours < 1:
             raise PostureIdError("locked neighbours must be ≥ 1")
@@ -172,6 +174,28 @@ class LockedProjection:
                                  trial.stimulus.period_s, trial.stimulus.periodic_from_s,
                                  options, trial.name)
 
+    def locked_share(self, x: np.ndarray) -> np.ndarray:
+        """(M,) share of each channel's variance (over the analysed cycles) that is its
+        drift-free cycle average: the stimulus-locked part of ``x`` (S, M)."""
+        c = self.all_harmonics(x)  # (P/2, M), DFT ÷ P
+        power = 2 * np.sum(np.abs(c) ** 2, axis=0)
+        if self.period % 2 == 0:  # the Nyquist harmonic counts once
+            power -= np.abs(c[-1]) ** 2
+        span = x[self.start : self.start + self.cycles * self.period]
+        total = np.var(span, axis=0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(total > 0, power / total, np.nan)
+
+    def explained(self, recorded: np.ndarray, simulated: np.ndarray) -> np.ndarray:
+        """(M,) share of the recorded locked sway (its compared harmonics, unweighted) that
+        the simulated one explains: 1 − Σ|R_k − S_k|² / Σ|R_k|²; −∞ for a simulation
+        that is not finite (it fell)."""
+        if not np.all(np.isfinite(simulated)):
+            return np.full(recorded.shape[1], -np.inf)
+        r, s = self.spectrum(recorded), self.spectrum(simulated)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return 1.0 - np.sum(np.abs(r - s) ** 2, axis=0) / np.sum(np.abs(r) ** 2, axis=0)
+
     def all_harmonics(self, x: np.ndarray) -> np.ndarray:
         """(P/2, ...) complex DFT (÷P) of the drift-free cycle average of ``x`` (S, ...) at
         every harmonic 1..P/2, compared or not."""
@@ -181,16 +205,36 @@ class LockedProjection:
         """(K, ...) complex: the compared harmonics of a sway (S, ...), not weighted."""
         return self.all_harmonics(x)[self.harmonics - 1]
 
+    def best_offsets(self, fitted: np.ndarray, recorded: np.ndarray, max_offset_s: float,
+                     count: int = 3, step_s: float = 0.001) -> list[float]:
+        """s, up to ``count`` offsets τ in [−max, max] at the deepest local minima of the
+        weighted distance of :meth:`best_offset`, best first: the candidates of a wide
+        search, whose cost has a minimum every stimulated period."""
+        taus, cost = self._offset_cost(fitted, recorded, max_offset_s, step_s)
+        inner = (cost[1:-1] <= cost[:-2]) & (cost[1:-1] <= cost[2:])
+        minima = np.concatenate([[0] if cost[0] <= cost[1] else [],
+                                 np.flatnonzero(inner) + 1,
+                                 [len(cost) - 1] if cost[-1] <= cost[-2] else []]).astype(int)
+        order = minima[np.argsort(cost[minima], kind="stable")]
+        return [float(taus[k]) for k in order[:count]]
+
+    def _offset_cost(self, fitted, recorded, max_offset_s, step_s):
+        a, b = self.spectrum(fitted), self.spectrum(recorded)  # (K, M)
+        taus = np.arange(-max_offset_s, max_offset_s + step_s / 2, step_s)
+        cost = np.empty(len(taus))
+        for start in range(0, len(taus), 512):  # bounded memory for a wide search
+            shift = np.exp(-2j * np.pi * np.outer(taus[start:start + 512], self.frequencies_hz))
+            cost[start:start + 512] = (np.abs((shift[:, :, None] * a[None] - b[None])
+                                              / self.noise[None]) ** 2).sum(axis=(1, 2))
+        return taus, cost
+
     def best_offset(self, fitted: np.ndarray, recorded: np.ndarray, max_offset_s: float,
                     step_s: float = 0.001) -> float:
         """s, the stimulus offset τ in [−max, max] that minimises the weighted distance of
         the fitted locked sway delayed by τ (its harmonics times e^{−2πifτ}) from the
         recorded one; ``fitted``, ``recorded``: (S, M) in the recording's units."""
-        a, b = self.spectrum(fitted), self.spectrum(recorded)  # (K, M)
-        taus = np.arange(-max_offset_s, max_offset_s + step_s / 2, step_s)
-        shift = np.exp(-2j * np.pi * np.outer(taus, self.frequencies_hz))  # (T, K)
-        cost = (np.abs((shift[:, :, None] * a[None] - b[None]) / self.noise[None]) ** 2)
-        return float(taus[np.argmin(cost.sum(axis=(1, 2)))])
+        taus, cost = self._offset_cost(fitted, recorded, max_offset_s, step_s)
+        return float(taus[np.argmin(cost)])
 
     def apply(self, x: np.ndarray) -> np.ndarray:
         """(2K, ...) real: the weighted stimulus-locked harmonics of ``x`` (S, M, ...)

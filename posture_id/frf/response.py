@@ -124,7 +124,7 @@ class FrequencyResponse(Result):
             }
         return {"frequencies_hz": self.frequencies_hz.tolist(), "channels": channels,
                 "cycles": self.cycles, "period_s": self.period_s,
-                "provenance": provenance(self.options, source=self.name)}
+                "provenance": provenance(self.options, recording=self.name)}
 
     def summary(self) -> str:
         lines = [f"FRF of {self.name}: {self.cycles} cycle(s) of {self.period_s:g} s, "

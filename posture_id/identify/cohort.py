@@ -33,7 +33,7 @@ from posture_id.identify.core import Identifier, Method
 from posture_id.learning.identifier import DEFAULT_LEVEL
 from posture_id.plotting import plot_cohort
 from posture_id.progress import Progress, report
-from posture_id.recording import Recording
+from posture_id.recording import Recording, RecordingColumns
 from posture_id.simulation.stimulus import TiltProfile
 
 __all__ = ["CohortResult", "find_recordings", "identify_cohort"]
@@ -90,8 +90,8 @@ class CohortResult(Result):
 
 def _identify_text(recording: tuple[str, str], urdf_text: str, urdf_name: str, method: str,
                    model: str | None, stimulus: TiltProfile | None = None,
-                   fit_options: FitOptions | None = None, level: float = DEFAULT_LEVEL
-                   ) -> dict:
+                   fit_options: FitOptions | None = None, level: float = DEFAULT_LEVEL,
+                   columns: RecordingColumns | None = None) -> dict:
     """One recording (its name and CSV text) on a cluster worker: the result as a dict, or
     the error."""
     name, csv_text = recording
@@ -104,16 +104,16 @@ def _identify_text(recording: tuple[str, str], urdf_text: str, urdf_name: str, m
             identifier = Identifier(load_body(urdf), Method(method), model, fit_options, level)
         except PostureIdError as exc:
             return {"error": str(exc)}
-        return _identify_file(rec_path, identifier, stimulus, name)
+        return _identify_file(rec_path, identifier, stimulus, name, columns)
 
 
 def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | None = None,
-                   name: str | None = None) -> dict:
+                   name: str | None = None, columns: RecordingColumns | None = None) -> dict:
     """One recording file through ``identifier``: the result as a dict, or the error;
     ``name``: what messages call it (default the path)."""
     try:
-        recording = Recording.from_csv(path, identifier.body.segment_names,
-                                       None if stimulus is None else stimulus.angle)
+        recording = Recording.read(path, identifier.body.segment_names,
+                                   None if stimulus is None else stimulus.angle, columns)
         if name is not None:
             recording = replace(recording, name=name)
         return identifier.identify(recording, stimulus).to_dict()
@@ -123,8 +123,8 @@ def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | N
 
 def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identifier,
                     scheduler: str | None = None, progress: Progress | None = None,
-                    stimulus: TiltProfile | None = None, model: str | Path | None = None
-                    ) -> CohortResult:
+                    stimulus: TiltProfile | None = None, model: str | Path | None = None,
+                    columns: RecordingColumns | None = None) -> CohortResult:
     """Identify ``recordings`` into ``out`` (see the module doc) with ``identifier``.
 
     Args:
@@ -132,6 +132,8 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
         stimulus: the stimulus every recording was made with (default: each one's tilt).
         model: the identifier's model directory, for the cluster's workers (default: the
             bundled model for the body).
+        columns: the recordings' columns and units, when they are a lab's own
+            (default: ``time_s,tilt_deg,<segment>_deg``).
     """
     out = Path(out)
     status: dict[str, str] = {}
@@ -157,16 +159,17 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
         report(progress, done, len(recordings), "recording")
 
     if scheduler:
-        _run_on_cluster(scheduler, todo, identifier, model, record, stimulus)
+        _run_on_cluster(scheduler, todo, identifier, model, record, stimulus, columns)
     else:
         for path in todo:
-            record(path, _identify_file(path, identifier, stimulus))
+            record(path, _identify_file(path, identifier, stimulus, columns=columns))
     rows = _write_summary(out, recordings, status)
     return CohortResult(out, status, tuple(rows))
 
 
 def _run_on_cluster(address: str, todo: list[Path], identifier: Identifier, model,
-                    record, stimulus: TiltProfile | None = None) -> None:
+                    record, stimulus: TiltProfile | None = None,
+                    columns: RecordingColumns | None = None) -> None:
     """The recordings as tasks that carry their CSV text and the body's URDF text."""
     body = identifier.body
     by_name = {path.name: path for path in todo}
@@ -175,7 +178,7 @@ def _run_on_cluster(address: str, todo: list[Path], identifier: Identifier, mode
                 _identify_text, [(p.name, p.read_text()) for p in todo],
                 Path(body.urdf_path).read_text(), Path(body.urdf_path).name,
                 identifier.method.value, None if model is None else str(model), stimulus,
-                identifier.fit_options, identifier.level):
+                identifier.fit_options, identifier.level, columns):
             record(by_name[name], result)
 
 

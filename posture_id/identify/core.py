@@ -29,7 +29,9 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
+from posture_id.errors import PostureIdError
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
+from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentifier
@@ -154,7 +156,7 @@ class Identifier:
             joints=body.joint_names, cnn=cnn, fit=fit, intervals=intervals,
             notices=tuple(dict.fromkeys(notices)),
             provenance=provenance(options if fit is not None else None, body,
-                                  source=trial.name, method=method.value),
+                                  recording=trial.name, method=method.value),
             **checked,
         )
 
@@ -215,6 +217,7 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
     E_id, E_rel, segment fits."""
     rec = trial.recording
     wide = replace(simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
+    locked = _locked_projection(trial)
     trial = simulate(body, parameters, trial.stimulus, wide)
     n = len(rec.time)
     theta = trial.theta[:n]
@@ -222,15 +225,33 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
     sway_simulated = trial.alpha[:n, 0]
     e_id, e_rel = map(float, sway_errors(sway_recorded, sway_simulated))
     fell = math.isinf(e_rel)
+    share = explained = None
+    if locked is not None:
+        share = locked.locked_share(rec.theta)
+        explained = locked.explained(rec.theta, theta)
     segments = []
     for j, name in enumerate(rec.segments):
         residual = rec.theta[:, j] - theta[:, j]
+        statistics = {} if locked is None else {
+            "locked_share": float(share[j]), "locked_variance_explained": float(explained[j])}
         if fell:
-            segments.append(SegmentFit(name, math.inf, -math.inf))
+            segments.append(SegmentFit(name, math.inf, -math.inf, **statistics))
             continue
         segments.append(SegmentFit(
             name, math.degrees(float(np.sqrt(np.mean(residual**2)))),
-            float(1.0 - np.var(residual) / np.var(rec.theta[:, j]))))
+            float(1.0 - np.var(residual) / np.var(rec.theta[:, j])), **statistics))
     return {"e_id_deg": e_id, "e_rel": e_rel, "segments": tuple(segments), "time": rec.time,
             "recorded": rec.theta, "resimulated": theta, "sway_recorded": sway_recorded,
-            "sway_resimulated": sway_simulated}
+            "sway_resimulated": sway_simulated, "fell_at_s": trial.abort_time}
+
+
+def _locked_projection(trial: PreparedTrial) -> LockedProjection | None:
+    """The unweighted stimulus-locked projection of a trial with a periodic stimulus and
+    at least one whole cycle after its start, else None (no locked statistics)."""
+    stimulus = trial.stimulus
+    if stimulus.period_s is None:
+        return None
+    try:
+        return LockedProjection.for_trial(trial, LockedOptions(weighted=False))
+    except PostureIdError:  # less than a cycle, or a period off the sample grid
+        return None

@@ -17,7 +17,12 @@ if TYPE_CHECKING:  # CasADi and torch load only with the methods that need them
     from posture_id.fitting.result import FitResult
     from posture_id.learning.identifier import CnnIdentification
 
-__all__ = ["SegmentFit", "IdentificationResult"]
+__all__ = ["SegmentFit", "IdentificationResult", "FELL"]
+
+#: The one line of a result whose identified model falls in re-simulation.
+FELL = ("the identified model falls in re-simulation{at}: these parameters do not balance "
+        "this body on this stimulus; try --method hybrid, or for noisy sway --method fit "
+        "--locked --prior-sd 0.5")
 
 
 @dataclass(frozen=True)
@@ -26,12 +31,19 @@ class SegmentFit:
 
     Attributes:
         segment: link name. rms_deg: RMS of recorded minus re-simulated angle, degrees.
-        variance_explained: 1 − var(residual) / var(recorded).
+        variance_explained: 1 − var(residual) / var(recorded), of the raw sway.
+        locked_variance_explained: the share of the stimulus-locked sway (the drift-free
+            cycle average at the stimulated harmonics) that the identified model explains;
+            None for a stimulus that is not periodic.
+        locked_share: the share of the recorded sway's variance that is stimulus-locked
+            (the rest: noise, drift, sway of the subject's own); None likewise.
     """
 
     segment: str
     rms_deg: float
     variance_explained: float
+    locked_variance_explained: float | None = None
+    locked_share: float | None = None
 
 
 @dataclass(frozen=True)
@@ -77,6 +89,12 @@ class IdentificationResult(Result):
     intervals: ParameterIntervals | None = None
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
+    fell_at_s: float | None = None
+
+    @property
+    def fell(self) -> bool:
+        """The identified model falls in re-simulation (E_rel is then ∞)."""
+        return self.fell_at_s is not None or not np.isfinite(self.e_rel)
 
     @property
     def classes(self) -> tuple[Controls, ...]:
@@ -89,8 +107,11 @@ class IdentificationResult(Result):
             "e_id_deg": self.e_id_deg,
             "e_rel": self.e_rel,
             "segments": {s.segment: {"rms_deg": s.rms_deg,
-                                     "variance_explained": s.variance_explained}
+                                     "variance_explained": s.variance_explained,
+                                     "locked_variance_explained": s.locked_variance_explained,
+                                     "locked_share": s.locked_share}
                          for s in self.segments},
+            "fell_at_s": self.fell_at_s,
             "wall_time_s": self.wall_time_s,
             "identification_time_s": self.identification_time_s,
             "intervals": None if self.intervals is None else self.intervals.to_dict(),
@@ -104,11 +125,20 @@ class IdentificationResult(Result):
 
     def summary(self) -> str:
         lines = self.parameters.identified_table(self.class_probability)
-        lines.append("re-simulated: " + ", ".join(
-            f"{s.segment} RMS {s.rms_deg:.4f}° ({100 * s.variance_explained:.1f} % of variance)"
-            for s in self.segments))
-        lines.append(f"body sway: E_id {self.e_id_deg:.2e}°, E_rel {100 * self.e_rel:.2f} %; "
-                     f"{self.method.value} in {self.identification_time_s:.3g} s "
+        if self.fell:
+            lines.append(FELL.format(at="" if self.fell_at_s is None
+                                     else f" at t = {self.fell_at_s:.2f} s"))
+        else:
+            lines.append("re-simulated: " + ", ".join(
+                f"{s.segment} RMS {s.rms_deg:.4f}° (raw sway: {100 * s.variance_explained:.1f} "
+                "% of the variance explained" + (
+                    "" if s.locked_variance_explained is None else
+                    f"; stimulus-locked sway, {100 * s.locked_share:.0f} % of it: "
+                    f"{100 * s.locked_variance_explained:.1f} % explained") + ")"
+                for s in self.segments))
+            lines.append(f"body sway: E_id {self.e_id_deg:.2e}°, E_rel "
+                         f"{100 * self.e_rel:.2f} % (of the raw sway)")
+        lines.append(f"{self.method.value} in {self.identification_time_s:.3g} s "
                      f"({self.wall_time_s:.3g} s with the checks)")
         if self.intervals is not None:
             lines += self.intervals.table()

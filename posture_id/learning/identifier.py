@@ -256,5 +256,5 @@ class CnnIdentifier:
             parameters=params, normalised=normalised, class_probability=probability,
             joints=self.body.joint_names, model=model_info, intervals=intervals,
             notices=notices,
-            provenance={**provenance(None, self.body, source=trial.name),
+            provenance={**provenance(None, self.body, recording=trial.name),
                         "body": body_identity(self.body)})

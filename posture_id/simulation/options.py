@@ -62,16 +62,11 @@ class SimulationOptions:
         return round(1.0 / (self.sample_rate_hz * self.dt))
 
     def n_steps(self, stimulus: TiltProfile) -> int:
-        """Integration steps covering the stimulus (its duration must be a multiple of the
-        sample period)."""
-        steps = stimulus.duration / self.dt
-        n = round(steps)
-        if abs(steps - n) > 1e-6 or n % self.sample_every:
-            raise SimulationError(
-                f"stimulus duration {stimulus.duration:g} s is not a whole number of samples "
-                f"at {self.sample_rate_hz:g} Hz"
-            )
-        return n
+        """Integration steps covering the stimulus, up to its last sample: a stimulus that
+        does not end on the sample grid (a lab's onset or lag) runs to the next sample,
+        its tilt held at its last angle (:meth:`TiltProfile.angle`)."""
+        samples = math.ceil(stimulus.duration * self.sample_rate_hz - 1e-6)
+        return samples * self.sample_every
 
     def sampled(self, tilt_grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sample times (S,) s and the tilt (S,) rad at them, from the tilt on the step grid."""

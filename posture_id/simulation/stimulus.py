@@ -23,6 +23,8 @@ __all__ = [
     "tilt_from_array",
     "tilt_from_csv",
     "recognise_prts",
+    "recognise_lab_prts",
+    "unit_position",
     "check_recorded_tilt",
     "prts_match",
     "sample_rate_hint",
@@ -97,6 +99,24 @@ class TiltProfile:
                            f"{self.description}, offset {offset_s:+.3f} s", self.period_s,
                            self.periodic_from_s)
 
+    def spanning(self, duration_s: float) -> TiltProfile:
+        """The same tilt over exactly ``duration_s``: cut there (a recording shorter than
+        the stimulus) or held at its last angle until then (a recording with a tail)."""
+        if not (math.isfinite(duration_s) and duration_s > 0):
+            raise StimulusError(f"a duration must be a finite time > 0 s, got {duration_s}")
+        end = self.duration
+        if abs(end - duration_s) <= 1e-9:
+            return self
+        if end > duration_s:
+            keep = self.times < duration_s - 1e-9
+            times = np.concatenate([self.times[keep], [duration_s]])
+            angles = np.concatenate([self.angles[keep], [float(self.angle(duration_s))]])
+        else:
+            times = np.concatenate([self.times, [duration_s]])
+            angles = np.concatenate([self.angles, [self.angles[-1]]])
+        return TiltProfile(times, angles, self.description, self.period_s,
+                           self.periodic_from_s)
+
     def on_grid(self, dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
         """Tilt and tilt velocity at t = n·dt, n = 0..n_steps → two (n_steps + 1,) arrays."""
         t = np.arange(n_steps + 1) * dt
@@ -128,7 +148,7 @@ def prts(
     state_s: float = PRTS_STATE_S,
     *,
     onset_s: float = 0.0,
-    start_state: int = 0,
+    start_state: float = 0,
     sign: int = 1,
     lag_s: float = 0.0,
 ) -> TiltProfile:
@@ -143,8 +163,10 @@ def prts(
         states: 242 (5 stages, 60.5 s) or 80 (4 stages, 20 s).
         state_s: s per state.
         onset_s: s of level platform before the sequence starts (a lead-in).
-        start_state: the sequence starts at this state of its cycle (0: the register's
-            start state; the lab's PRTS may start part-way into its cycle).
+        start_state: where in its cycle the sequence starts, in states from the register's
+            start state, fractional for a start part-way through a state (a lab's PRTS
+            may start anywhere in its cycle); the platform is level at the start, and
+            after whole cycles it is level again.
         sign: +1, or −1 when the platform's positive tilt is the other way.
         lag_s: s the platform's tilt follows its command late (adds to the onset).
     """
@@ -160,21 +182,24 @@ def prts(
     if sign not in (1, -1):
         raise StimulusError(f"PRTS sign must be +1 or -1, got {sign}")
     symbols = prts_symbols(states)
-    if int(start_state) != start_state or not 0 <= start_state < states:
-        raise StimulusError(f"PRTS start state must be an integer in [0, {states}), "
+    if not (math.isfinite(start_state) and 0 <= start_state < states):
+        raise StimulusError(f"PRTS start state must be a number in [0, {states}), "
                             f"got {start_state}")
-    symbols = np.tile(np.roll(symbols, -int(start_state)).astype(float), int(cycles))
-    steps = np.concatenate([[0.0], np.cumsum(symbols)])
-    one_cycle = steps[: states + 1]
-    scale = math.radians(amplitude_deg) / float(one_cycle.max() - one_cycle.min())
+    first = float(start_state)
+    # state-time knots: the start, every state boundary after it, the end
+    inner = np.arange(math.floor(first) + 1, first + cycles * states - 1e-9)
+    knots = np.concatenate([[first], inner[inner > first + 1e-9], [first + cycles * states]])
+    unit = unit_position(symbols, knots) - unit_position(symbols, np.array([first]))[0]
+    scale = math.radians(amplitude_deg) / float(np.ptp(unit_position(
+        symbols, np.arange(states + 1, dtype=float))))
     delay = float(onset_s + lag_s)
-    times = delay + np.arange(len(steps)) * state_s
-    angles = sign * steps * scale
+    times = delay + (knots - first) * state_s
+    angles = sign * unit * scale
     if delay > 0:
         times, angles = np.concatenate([[0.0], times]), np.concatenate([[0.0], angles])
     extras = [text for text, used in (
         (f"state {state_s:g} s", state_s != PRTS_STATE_S),
-        (f"onset {onset_s:g} s", onset_s > 0), (f"from state {int(start_state)}", start_state),
+        (f"onset {onset_s:g} s", onset_s > 0), (f"from state {first:g}", first),
         ("negated", sign < 0), (f"lag {lag_s:g} s", lag_s > 0)) if used]
     return TiltProfile(
         times=times,
@@ -186,18 +211,34 @@ def prts(
     )
 
 
+def unit_position(symbols: np.ndarray, state_time: np.ndarray) -> np.ndarray:
+    """The unit PRTS position (the running sum of the symbols, one unit per state at
+    velocity ±1) at state times ``state_time`` (any real numbers; periodic, since a
+    cycle's symbols sum to zero) → same shape."""
+    symbols = np.asarray(symbols, dtype=float)
+    n = len(symbols)
+    cumulative = np.concatenate([[0.0], np.cumsum(symbols)])
+    s = np.asarray(state_time, dtype=float)
+    whole = np.floor(s)
+    k = whole.astype(np.int64) % n
+    return cumulative[k] + (s - whole) * symbols[k]
+
+
 def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
                    tolerance: float = 1e-6) -> TiltProfile | None:
-    """The PRTS a sampled tilt follows, or None.
+    """The PRTS a sampled tilt follows, as the lab ran it, or None.
 
-    Recordings sample the tilt at 50 Hz, which misses the PRTS corners at odd multiples of
-    0.25 s; when the samples are a PRTS of MODEL §4 (242 or 80 states from the start of
-    its cycle, at once, either sign, any amplitude: the least-squares scale of the unit
-    sequence), within ``tolerance`` of its peak-to-peak, the exact profile is returned,
-    extended to whole cycles covering the recording. A recording shorter than one cycle
-    is recognised too (at least 4 states long), so that it can be told it is too short.
-    A PRTS with a lead-in, a lag or another starting state is not guessed: name it
-    (:func:`prts` and the command line's stimulus flags).
+    First the plain case, exactly: a PRTS of MODEL §4 (242 or 80 states of 0.25 s from the
+    start of its cycle, at once, either sign, any amplitude: the least-squares scale of the
+    unit sequence) within ``tolerance`` of its peak-to-peak; the exact profile is
+    returned, extended to whole cycles covering the recording (recordings sample the tilt
+    at 50 Hz and miss the PRTS corners). A recording shorter than one cycle is recognised
+    too (at least 4 states long), so that it can be told it is too short.
+
+    Otherwise, as a lab runs it (:func:`recognise_lab_prts`): 242 or 80 states of any
+    duration from 0.1 to 0.5 s, starting anywhere in the cycle (part-way through a state
+    too), after a level lead-in and the platform's lag, either sign, with the platform
+    level again after the last whole cycle or the recording ending before it.
     """
     t = np.asarray(times_s, dtype=float)
     a = np.asarray(tilt_rad, dtype=float)
@@ -211,7 +252,134 @@ def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
             continue
         if np.max(np.abs(k * unit - a)) <= tolerance * abs(k) * math.radians(1.0):
             return prts(abs(k), cycles, states, sign=1 if k > 0 else -1)
-    return None
+    return recognise_lab_prts(t, a)
+
+
+#: The lab PRTS search: state durations tried (s), the rate it first searches at (Hz), the
+#: least normalised correlation of the first cycle, and the RMS misfit of the refined
+#: stimulus (share of the tilt's peak-to-peak) allowed beyond the column's own noise for
+#: a tilt to count as a PRTS.
+LAB_STATE_S = np.arange(0.10, 0.50 + 1e-9, 0.0025)
+_SEARCH_RATE_HZ, _MIN_MATCH, _MAX_MISFIT = 50.0, 0.9, 0.005
+
+
+def recognise_lab_prts(times_s: np.ndarray, tilt_rad: np.ndarray) -> TiltProfile | None:
+    """The PRTS a lab ran, from an evenly sampled tilt column (see :func:`recognise_prts`),
+    or None.
+
+    The platform is level (0) until the sequence starts; the first whole cycle after it
+    is matched against every state duration of :data:`LAB_STATE_S`, both sequences, every
+    starting phase and both signs (circular cross-correlation of the samples at 50 Hz);
+    the best match is refined by least squares on every sample (onset, starting state,
+    state duration, amplitude). The cycles are those the moving part spans when the
+    platform is level again before the recording ends, else enough to reach its end.
+    """
+    t = np.asarray(times_s, dtype=float)
+    a = np.asarray(tilt_rad, dtype=float)
+    span = float(np.ptp(a))
+    if len(t) < 8 or span == 0:
+        return None
+    # a piecewise-linear tilt has no second difference but at its corners: what there is
+    # elsewhere is the column's measurement noise (robust SD; Δ² of white noise has 6σ²)
+    noise = 1.4826 * float(np.median(np.abs(np.diff(a, 2)))) / math.sqrt(6.0)
+    still = max(1e-3 * span, 5.0 * noise)
+    if abs(a[0]) > max(0.02 * span, still):  # not level at the start: not a lab PRTS
+        return None
+    moving = np.flatnonzero(np.abs(a) > still)
+    if len(moving) < 8:
+        return None
+    first, last = max(int(moving[0]) - 1, 0), int(moving[-1])
+    grid = np.arange(t[first], t[-1], 1.0 / _SEARCH_RATE_HZ)
+    coarse = np.interp(grid, t, a)
+    best = (0.0, 0, 0.0, 0, 1)  # (match, states, state_s, shift, sign)
+    for states in (242, 80):
+        symbols = prts_symbols(states)
+        for state_s in LAB_STATE_S:
+            n = int(round(states * state_s * _SEARCH_RATE_HZ))
+            if n > len(coarse) or n < 8:
+                continue
+            x = coarse[:n] - coarse[:n].mean()
+            template = unit_position(symbols, np.arange(n) / (state_s * _SEARCH_RATE_HZ))
+            template = template - template.mean()
+            norm = float(np.linalg.norm(x) * np.linalg.norm(template))
+            if norm == 0:
+                continue
+            corr = np.fft.irfft(np.fft.rfft(template) * np.conj(np.fft.rfft(x)), n) / norm
+            k = int(np.argmax(np.abs(corr)))
+            if abs(corr[k]) > best[0]:
+                best = (float(abs(corr[k])), states, float(state_s), k,
+                        1 if corr[k] > 0 else -1)
+    match, states, state_s, shift, sign = best
+    if match < _MIN_MATCH:
+        return None
+    period = states * state_s
+    onset = float(t[first])
+    level_after = last < len(a) - 1 and np.all(np.abs(a[last + 1:]) <= still)
+    if level_after:
+        cycles = max(1, int(round((t[last] - onset) / period)))
+    else:
+        cycles = max(1, int(math.ceil((t[-1] - onset) / period - 1e-6)))
+    start = (shift / (state_s * _SEARCH_RATE_HZ)) % states
+    symbols = prts_symbols(states)
+    unit_cycle = np.ptp(unit_position(symbols, np.arange(states + 1, dtype=float)))
+    x = coarse[: int(round(period * _SEARCH_RATE_HZ))]
+    shape = unit_position(symbols, start + np.arange(len(x)) / (state_s * _SEARCH_RATE_HZ))
+    shape = sign * (shape - unit_position(symbols, np.array([start]))[0])
+    amplitude = math.degrees(float(shape @ x) / float(shape @ shape)) * unit_cycle
+
+    def profile(p: np.ndarray, snap: bool = False) -> TiltProfile:
+        onset_s, first_state, duration, peak = p
+        first_state = first_state % states
+        if snap:  # what least squares left a rounding error away from a round value
+            onset_s = 0.0 if onset_s < 1e-6 else onset_s
+            nearest = round(first_state)
+            first_state = float(nearest % states) if abs(first_state - nearest) < 1e-6 \
+                else first_state
+        return prts(abs(peak), cycles, states, duration, onset_s=max(onset_s, 0.0),
+                    start_state=first_state, sign=sign)
+
+    def misfit(p: np.ndarray) -> np.ndarray:
+        return (profile(p).angle(t) - a) / span
+
+    from scipy.optimize import least_squares  # only for a tilt that is not the plain PRTS
+
+    # the first motion shows late when the first states move little (or noise hides
+    # them): the onset is where the level lead-in best meets the matched periodic
+    # sequence, searched on the coarse grid from the recording's start to one state after
+    # the first motion (the window: up to one cycle after that)
+    coarse_t = np.arange(0.0, t[-1], 1.0 / _SEARCH_RATE_HZ)
+    c = np.interp(coarse_t, t, a)
+    window = coarse_t <= t[first] + period
+    c, tau = c[window], coarse_t[window]
+    scale = math.radians(amplitude) / unit_cycle
+    m = sign * scale * unit_position(symbols, start + (tau - t[first]) / state_s)
+    candidates = np.flatnonzero(tau <= t[first] + state_s)
+    before = np.concatenate([[0.0], np.cumsum(c**2)])[candidates]  # Σ c² before τ0
+    r = c - m
+    after_r2 = np.cumsum((r**2)[::-1])[::-1][candidates]
+    after_r = np.cumsum(r[::-1])[::-1][candidates]
+    count = (len(c) - candidates).astype(float)
+    m0 = m[candidates]
+    cost = before + after_r2 + 2 * m0 * after_r + m0**2 * count
+    k0 = int(candidates[int(np.argmin(cost))])
+    onset = float(tau[k0])
+    guess = np.array([onset, start + (onset - t[first]) / state_s, state_s, amplitude])
+    fitted = least_squares(misfit, guess, x_scale=[0.01, 0.05, 0.001, abs(amplitude)],
+                           bounds=([0.0, -np.inf, 0.05, 0.0], [np.inf, np.inf, 1.0, np.inf]),
+                           method="trf")
+    # a lab's state lasts a round number of 0.1 ms (its period is then a whole number of
+    # samples at a lab's rates, as cycle averages need): the rest fitted again with it
+    onset_s, first_state, state_s, peak = fitted.x
+    state_s = round(state_s, 4)
+    rounded = least_squares(lambda p: misfit(np.array([p[0], p[1], state_s, p[2]])),
+                            np.array([onset_s, first_state, peak]),
+                            x_scale=[0.01, 0.05, abs(amplitude)],
+                            bounds=([0.0, -np.inf, 0.0], [np.inf, np.inf, np.inf]))
+    # the right sequence leaves the column's own noise; a wrong one leaves more
+    if np.sqrt(np.mean(rounded.fun**2)) > _MAX_MISFIT + 1.25 * noise / span:
+        return None
+    onset_s, first_state, peak = rounded.x
+    return profile(np.array([onset_s, first_state, state_s, peak]), snap=True)
 
 
 #: Sampling rates (Hz) of posture labs' force plates and motion capture, tried by
@@ -240,7 +408,7 @@ def prts_match(tilt_rad: np.ndarray, rate_hz: float, states: int,
     return float(np.max(np.abs(correlation)) / norm)
 
 
-def sample_rate_hint(times_s: np.ndarray, tilt_rad: np.ndarray, source: str,
+def sample_rate_hint(times_s: np.ndarray, tilt_rad: np.ndarray, name: str,
                      state_s: float = PRTS_STATE_S) -> str | None:
     """A warning when the tilt is a PRTS (242 or 80 states of ``state_s``) sampled at a
     rate other than the one the time column gives, naming the likely true rate; None when
@@ -261,13 +429,13 @@ def sample_rate_hint(times_s: np.ndarray, tilt_rad: np.ndarray, source: str,
     match, rate, states = best
     if match < 0.9 or abs(rate / stated - 1) <= 0.01 or at_stated >= match - 0.05:
         return None
-    return (f"{source}: the tilt is a {states}-state PRTS sampled at {rate:g} Hz "
+    return (f"{name}: the tilt is a {states}-state PRTS sampled at {rate:g} Hz "
             f"(match {match:.2f}), not at the {stated:.4g} Hz the time column says "
             f"(match {at_stated:.2f}): check the time column")
 
 
 def check_recorded_tilt(times_s: np.ndarray, tilt_rad: np.ndarray, stimulus: TiltProfile,
-                        source: str, tolerance: float = 0.05) -> None:
+                        name: str, tolerance: float = 0.05) -> None:
     """Refuse a recorded tilt (``times_s``, ``tilt_rad``) that departs from the named
     stimulus by more than ``tolerance`` of its peak-to-peak (measurement noise stays well
     inside)."""
@@ -277,7 +445,7 @@ def check_recorded_tilt(times_s: np.ndarray, tilt_rad: np.ndarray, stimulus: Til
     worst = int(np.argmax(error))
     if error[worst] > tolerance * span:
         raise StimulusError(
-            f"{source}: the tilt column is not the named stimulus ({stimulus.description}): "
+            f"{name}: the tilt column is not the named stimulus ({stimulus.description}): "
             f"at t = {times_s[worst]:.3f} s it reads "
             f"{np.degrees(tilt_rad[worst]):.4g}° where the stimulus is at "
             f"{np.degrees(expected[worst]):.4g}° "

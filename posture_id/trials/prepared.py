@@ -149,4 +149,7 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
     if resampled is not recording:
         notices.append(f"{name}: resampled from {original:.4g} Hz to {rate_hz:g} Hz "
                        "by linear interpolation")
+    # the model runs exactly as long as the recording: a stimulus that ends before it
+    # (a level tail) is held, one that ends after it (a shorter recording) is cut
+    stimulus = stimulus.spanning(resampled.duration_s)
     return PreparedTrial(resampled, stimulus, tuple(notices), original, rate_hint=hint)

@@ -123,7 +123,7 @@ class ConformalCalibration:
                 "scales": np.where(np.isfinite(self.scales), self.scales, -1.0).round(6).tolist()}
 
     @classmethod
-    def from_dict(cls, data: dict, source: str) -> ConformalCalibration:
+    def from_dict(cls, data: dict, name: str) -> ConformalCalibration:
         try:
             scales = np.asarray(data["scales"], dtype=float)
             out = cls(Normaliser(data["normaliser"]), np.asarray(data["noise_deg"], float),
@@ -131,8 +131,8 @@ class ConformalCalibration:
                       np.asarray(data["levels"], float), np.where(scales < 0, np.inf, scales),
                       int(data["trials"]))
         except (KeyError, TypeError, ValueError) as error:
-            raise PostureIdError(f"{source}: not a conformal calibration ({error})") from None
+            raise PostureIdError(f"{name}: not a conformal calibration ({error})") from None
         if out.scales.ndim != 4 or out.scales.shape[:2] != (len(out.noise_deg), len(out.levels)):
-            raise PostureIdError(f"{source}: calibration tables of inconsistent shapes "
+            raise PostureIdError(f"{name}: calibration tables of inconsistent shapes "
                                  f"{out.scales.shape}")
         return out

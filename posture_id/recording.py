@@ -12,6 +12,7 @@ import io
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -114,9 +115,9 @@ class Recording:
         object.__setattr__(self, "theta", theta)
         object.__setattr__(self, "segments", segments)
 
-    @property
+    @cached_property
     def sample_rate_hz(self) -> float:
-        """Hz, from the median sample interval."""
+        """Hz, from the median sample interval (computed once)."""
         return float(1.0 / np.median(np.diff(self.time)))
 
     @property

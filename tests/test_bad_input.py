@@ -390,6 +390,7 @@ def test_a_hopeless_data_set_stops(tmp_path, capsys):
                  "--sway-limit-deg", "0.05", "--out", str(out), "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and "out of reach" in err and "Traceback" not in err
+    assert not out.exists()  # the folder it made holds nothing worth keeping: cleared
 
 
 # ------------------------------------------------------------------ output paths

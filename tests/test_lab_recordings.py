@@ -206,3 +206,72 @@ def test_a_lab_recording_by_the_command_line_alone(lab_subject, how):
     assert data["parameters"][joint]["kp"] == pytest.approx(truth[joint].kp, rel=0.1)
     assert data["segments"][segment]["locked_variance_explained"] > 0.9
     assert abs(data["fit"]["status"]["time_offset_s"]) < 0.05
+
+
+def _write(path, columns: dict[str, np.ndarray]) -> None:
+    names = list(columns)
+    rows = np.column_stack([columns[n] for n in names])
+    path.write_text(",".join(names) + "\n" + "".join(
+        ",".join(f"{v:.10g}" for v in row) + "\n" for row in rows))
+
+
+#: name → (stimulus as run, the file's rate (Hz), tail (s), how the file is written, the
+#: command line's extra flags)
+BATTERY = {
+    "mid-state start, lead-in, lag, tail": (LAB, 50.0, 1.7, "standard", []),
+    "negated, from state 100": ({"states": 242, "cycles": 2, "onset_s": 0.5,
+                                 "start_state": 100, "sign": -1}, 50.0, 0.0, "standard", []),
+    "100 Hz": ({"states": 80, "cycles": 3, "onset_s": 1.0}, 100.0, 1.0, "standard", []),
+    "200 Hz, 0.2 s states": ({"states": 80, "cycles": 3, "state_s": 0.2, "start_state": 12.5},
+                             200.0, 0.5, "standard", []),
+    "1000 Hz": ({"states": 80, "cycles": 3, "start_state": 3}, 1000.0, 0.0, "standard", []),
+    "the lab's column names": (LAB, 50.0, 1.7, "lab names",
+                               ["--angle-columns", "COM_x", "--time-column", "time",
+                                "--tilt-column", "platform"]),
+    "radians": (LAB, 50.0, 1.7, "radians",
+                ["--angle-columns", "COM_x", "--time-column", "time", "--tilt-column",
+                 "platform", "--units", "rad"]),
+    "a wrong time column, the rate given": (LAB, 50.0, 1.7, "time x2",
+                                            ["--angle-columns", "COM_x", "--time-column",
+                                             "time", "--tilt-column", "platform",
+                                             "--sample-rate-hz", "50"]),
+    "no tilt column, the stimulus named": (LAB, 50.0, 1.7, "no tilt",
+                                           ["--angle-columns", "COM_x", "--time-column",
+                                            "time", "--tilt-column", "none", "--states", "80",
+                                            "--cycles", "3", "--amplitude-deg", "1.0045",
+                                            "--onset-s", "2.01", "--start-state", "36.48"]),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", list(BATTERY))
+def test_lab_like_recordings_through_the_command_line(lab_subject, case, capsys):
+    """Each lab-like file, as it is, through `posture-id identify --method fit`: no crash,
+    the class right and Kp within 2 % (the clean case's tolerance) of the truth."""
+    folder, body, truth = lab_subject
+    kwargs, rate, tail, layout, flags = BATTERY[case]
+    stim = prts(**kwargs)
+    sway = simulate(body, truth, stim.spanning(stim.duration + tail))
+    fine = np.arange(int(round(sway.time[-1] * rate)) + 1) / rate
+    tilt = np.interp(fine, sway.time, sway.tilt) if rate != 50.0 else sway.tilt
+    com = np.interp(fine, sway.time, sway.theta[:, 0]) if rate != 50.0 else sway.theta[:, 0]
+    com = com + np.radians(0.01) * np.random.default_rng(7).standard_normal(len(com))
+    path = folder / f"{case}.csv"
+    segment = body.segment_names[0]
+    if layout == "standard":
+        _write(path, {"time_s": fine, "tilt_deg": np.degrees(tilt),
+                      f"{segment}_deg": np.degrees(com)})
+    elif layout == "no tilt":
+        _write(path, {"time": fine, "COM_x": np.degrees(com)})
+    else:
+        scale = np.asarray(1.0) if layout == "radians" else np.degrees(1.0)
+        _write(path, {"time": fine * (2.0 if layout == "time x2" else 1.0),
+                      "platform": tilt * scale, "COM_x": com * scale})
+    out = folder / f"{case}.json"
+    status = main(["identify", str(path), "--body", str(body.urdf_path), "--method", "fit",
+                   "--out", str(out), *flags])
+    assert status == 0, capsys.readouterr().err
+    data = json.loads(out.read_text())
+    joint = body.joint_names[0]
+    assert data["parameters"][joint]["controls"] == truth[joint].controls
+    assert data["parameters"][joint]["kp"] == pytest.approx(truth[joint].kp, rel=0.02)

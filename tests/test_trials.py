@@ -80,7 +80,8 @@ def test_the_cnn_route_enters_the_stimulus_module_once(tip, monkeypatch):
     recording = simulate(tip).to_recording().with_sensor_noise(0.01, 3)
     calls = _count_entrance(monkeypatch)
     result = identify(recording, tip, Method.CNN)
-    assert calls == {"recognise_prts": 1, "sample_rate_hint": 1, "check_recorded_tilt": 0,
+    # a PRTS of 0.25 s states recognised at the stated rate: no rate to hint at
+    assert calls == {"recognise_prts": 1, "sample_rate_hint": 0, "check_recorded_tilt": 0,
                      "tilt_from_array": 0}
     assert sum("the exact profile is used" in n for n in result.notices) == 1
 
@@ -91,5 +92,5 @@ def test_the_fit_route_enters_the_stimulus_module_once(tip, monkeypatch):
     recording = simulate(tip, stimulus=named).to_recording()
     calls = _count_entrance(monkeypatch)
     identify(recording, tip, Method.FIT, stimulus=named)
-    assert calls == {"recognise_prts": 0, "sample_rate_hint": 1, "check_recorded_tilt": 1,
+    assert calls == {"recognise_prts": 0, "sample_rate_hint": 0, "check_recorded_tilt": 1,
                      "tilt_from_array": 0}

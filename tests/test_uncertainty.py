@@ -246,3 +246,16 @@ def test_least_squares_coverage_known_answers():
                                                  rel=0.08)
     # too few fits for cross-validated coverage: said, not faked
     assert least_squares_check(_rows(5, 0.05, 1.0, rng), (0.05,)) == ({}, None)
+
+
+def test_the_folded_normal_quantiles_are_scipys():
+    """The prior's interval is computed without scipy.stats (start-up); it is
+    scipy.stats.foldnorm's to rounding."""
+    from scipy.stats import foldnorm
+
+    from posture_id.uncertainty.identifiability import folded_normal_quantile
+
+    for sigma in (0.2, 0.5, 1.0):
+        for q in (0.001, 0.05, 0.25, 0.5, 0.9, 0.999):
+            expected = foldnorm(1.0 / sigma, scale=sigma).ppf(q)
+            assert folded_normal_quantile(q, 1.0, sigma) == pytest.approx(expected, rel=1e-12)

@@ -18,7 +18,6 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-import scipy.fft
 
 __all__ = [
     "WINDOW",
@@ -82,6 +81,8 @@ def stft(x: np.ndarray) -> np.ndarray:
     if x.shape[-1] < need:
         raise ValueError(f"STFT needs at least {need} samples, got {x.shape[-1]}")
     frames = np.lib.stride_tricks.sliding_window_view(x[..., :need], WINDOW, axis=-1)[..., ::HOP, :]
+    import scipy.fft  # loaded with the first spectrogram, not with every command
+
     spectrum = scipy.fft.rfft(frames * _window(), n=NFFT, axis=-1)  # (..., windows, bins)
     return np.swapaxes(spectrum[..., :N_BINS], -1, -2)
 

@@ -24,6 +24,7 @@ shard stop the run with a one-line error before anything is written.
 from __future__ import annotations
 
 import math
+import shutil
 from dataclasses import asdict
 from pathlib import Path
 
@@ -175,6 +176,7 @@ def generate_dataset(
         progress: told the kept trials so far (of those wanted) as shards complete.
     """
     out = Path(out)
+    fresh = not out.exists()  # a folder this run makes is this run's to clear away
     body, manifest = _prepare(config, out)
     out.mkdir(parents=True, exist_ok=True)
     entries = {e["index"]: e for e in manifest["shards"]}
@@ -212,7 +214,12 @@ def generate_dataset(
             done = [e for e in entries.values()]
             simulated = sum(e["simulated"] for e in done)
             rate = sum(e["kept"] for e in done) / simulated if done else 0.75
-            _refuse_hopeless(config, simulated, rate)
+            try:
+                _refuse_hopeless(config, simulated, rate)
+            except DatasetError:
+                if fresh:  # nothing worth keeping: leave no folder of shards behind
+                    shutil.rmtree(out, ignore_errors=True)
+                raise
             missing = max(config.trials - kept_total(), 1)
             wave = max(1, math.ceil(missing / max(rate, 0.05) / config.shard_size))
             todo = []

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from statistics import NormalDist
 
 import numpy as np
-from scipy.stats import norm
 
 from posture_id.dec.parameters import TARGET_FIELDS, DecParameters, parameter_block
 from posture_id.fileio import Result
@@ -172,7 +172,7 @@ class FitResult(Result):
         if self.defaults is None:
             raise ValueError("intervals need the body's defaults (FitResult.defaults)")
         defaults = self.defaults
-        z = float(norm.ppf((1 + level) / 2))
+        z = NormalDist().inv_cdf((1 + level) / 2)
         noise = sensor_noise_deg(self.recorded)
         factor, method = z, "Gauss-Newton ±z·SE (coverage not checked)"
         if scales is not None:
@@ -194,7 +194,7 @@ def noise_allows(level: float, residual_sd: float, noise_floor: float) -> float:
     """The least scale of the standard errors at ``level``: z·σ_residual/σ_SE, the
     Gauss-Newton half-width of the fit's own residual noise (z when the residual is above
     the standard errors' floor; less when the floor made them wider than the noise)."""
-    z = float(norm.ppf((1 + level) / 2))
+    z = NormalDist().inv_cdf((1 + level) / 2)
     if not (noise_floor > 0 and math.isfinite(residual_sd)):
         return z
     return z * min(1.0, residual_sd / noise_floor)

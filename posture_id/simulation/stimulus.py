@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -123,6 +124,13 @@ class TiltProfile:
         return self.angle(t), self.velocity(t)
 
 
+@lru_cache(maxsize=32)
+def _unit_prts(cycles: int, states: int) -> TiltProfile:
+    """MODEL §4's PRTS of 1° peak to peak (cached: recognition tries it on every
+    recording)."""
+    return prts(1.0, cycles, states)
+
+
 def prts_symbols(states: int = 242) -> np.ndarray:
     """One cycle of the ternary sequence, (states,) int8 in {−1, 0, +1} (MODEL §4).
 
@@ -131,6 +139,11 @@ def prts_symbols(states: int = 242) -> np.ndarray:
     """
     if states not in PRTS_REGISTERS:
         raise StimulusError(f"PRTS with {states} states is not defined (use 242 or 80)")
+    return _symbols(states).copy()
+
+
+@lru_cache(maxsize=4)
+def _symbols(states: int) -> np.ndarray:
     feedback, start = PRTS_REGISTERS[states]
     reg = list(start)
     out = np.empty(states, dtype=np.int8)
@@ -246,7 +259,7 @@ def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
         return None
     for states in (242, 80):
         cycles = max(1, int(math.ceil(t[-1] / (states * PRTS_STATE_S) - 1e-9)))
-        unit = prts(1.0, cycles, states).angle(t)  # 1° peak to peak over a cycle
+        unit = _unit_prts(cycles, states).angle(t)  # 1° peak to peak over a cycle
         k = float(unit @ a) / float(unit @ unit)
         if k == 0.0:
             continue

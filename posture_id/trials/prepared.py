@@ -17,6 +17,8 @@ import numpy as np
 from posture_id.errors import RecordingError, StimulusError
 from posture_id.recording import Recording
 from posture_id.simulation.stimulus import (
+    PRTS_REGISTERS,
+    PRTS_STATE_S,
     TiltProfile,
     check_recorded_tilt,
     recognise_prts,
@@ -125,25 +127,34 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
                              "a simulated body that fell stops there: cut the recording")
     if not recording.evenly_sampled():
         raise RecordingError(f"{name}: samples are not evenly spaced in time")
-    hint = sample_rate_hint(recording.time, recording.tilt, name)
-    notices = [] if hint is None else [hint]
+    notices: list[str] = []
+    hint = None
     if stimulus is not None:
         try:
             check_recorded_tilt(recording.time, recording.tilt, stimulus, name)
         except StimulusError as error:  # a wrong time column shows as a wrong stimulus
+            hint = sample_rate_hint(recording.time, recording.tilt, name)
             if hint is None:
                 raise
             raise StimulusError(f"{error}; and {hint.removeprefix(name + ': ')}") from None
     else:
         stimulus = recognise_prts(recording.time, recording.tilt)
+        # a PRTS of 0.25 s states at the stated rate says the time column is right; a
+        # tilt that is no PRTS here, or one of other states, may be a PRTS of 0.25 s
+        # states at another rate: a wrong time column
+        if stimulus is None or not any(
+                abs(stimulus.period_s - states * PRTS_STATE_S) < 1e-9
+                for states in PRTS_REGISTERS):
+            hint = sample_rate_hint(recording.time, recording.tilt, name)
+            notices += [] if hint is None else [hint]
         if stimulus is not None:
             notices.append(f"{name}: the tilt is a {stimulus.description}; the exact profile "
                            "is used (samples miss its corners)")
         else:
             stimulus = tilt_from_array(recording.time, recording.tilt, description=name)
-            notices.append(f"{name}: the tilt is not a PRTS from the start of its cycle; it "
-                           "is interpolated linearly between samples (name the stimulus to "
-                           "use its exact profile)")
+            notices.append(f"{name}: the tilt is not a PRTS at the rate its time column "
+                           "gives; it is interpolated linearly between samples (name the "
+                           "stimulus to use its exact profile)")
     original = recording.sample_rate_hz
     resampled = recording if rate_hz is None else recording.resampled(rate_hz)
     if resampled is not recording:

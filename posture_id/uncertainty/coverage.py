@@ -12,8 +12,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import minimize_scalar
-from scipy.stats import binomtest
 
 __all__ = ["coverage", "coverage_interval", "reliability", "expected_calibration_error",
            "fit_temperature"]
@@ -28,6 +26,8 @@ def coverage(truth: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndar
 def coverage_interval(share: float, n: int, confidence: float = 0.95) -> tuple[float, float]:
     """Clopper-Pearson interval of a coverage ``share`` measured on ``n`` samples."""
     k = int(round(share * n))
+    from scipy.stats import binomtest  # loads scipy.stats: only where coverage is checked
+
     ci = binomtest(k, n).proportion_ci(confidence_level=confidence, method="exact")
     return float(ci.low), float(ci.high)
 
@@ -62,6 +62,8 @@ def fit_temperature(logits: np.ndarray, outcome: np.ndarray) -> float:
     def nll(log_t: float) -> float:
         s = z / np.exp(log_t)
         return float(np.mean(np.logaddexp(0.0, s) - y * s))
+
+    from scipy.optimize import minimize_scalar  # only where a temperature is fitted
 
     best = minimize_scalar(nll, bounds=(np.log(0.05), np.log(50.0)), method="bounded",
                            options={"xatol": 1e-6})

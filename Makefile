@@ -23,7 +23,8 @@ demo: $(STAMP)
 	@echo "demo: wrote demo/report.md (open it beside its PNGs)"
 
 # The example recordings shipped for the demo: simulated subjects (their true parameters
-# in *.truth.json) with 0.01° white sensor noise.
+# in *.truth.json) with 0.01° white sensor noise; and a lab-like file for the tutorial
+# (docs/tutorials/lab_recording.py): COM only, the lab's columns, a lab's PRTS.
 EXAMPLES := posture_id/studies/examples
 examples: $(STAMP)
 	$(BIN)/posture-id simulate --params $(EXAMPLES)/tip_subject.truth.json \
@@ -31,6 +32,7 @@ examples: $(STAMP)
 	$(BIN)/posture-id simulate --body urdf/winter_1.75m_70kg_2seg.urdf \
 	  --params $(EXAMPLES)/straight_leg_subject.truth.json \
 	  --noise-deg 0.01 --seed 2 --out $(EXAMPLES)/straight_leg_subject.csv
+	$(BIN)/python -m posture_id.studies.lab_example $(EXAMPLES)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
@@ -39,7 +41,7 @@ test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"
 
 lint: $(STAMP)
-	$(BIN)/ruff check posture_id tests benchmarks
+	$(BIN)/ruff check posture_id tests benchmarks docs/tutorials
 	$(BIN)/lint-imports
 
 bodies: $(STAMP)

@@ -58,3 +58,39 @@ def test_cohort_on_a_local_cluster_equals_a_local_run(cohort, tmp_path):
 def test_a_pattern_that_matches_nothing(tmp_path, capsys):
     assert main(["identify", str(tmp_path / "*.csv"), "--out", str(tmp_path / "r")]) == 2
     assert "no recording (CSV) found" in capsys.readouterr().err
+
+
+def test_a_cohort_of_subjects_with_bodies_of_their_own(tmp_path, capsys):
+    """Each subject identified with their own anthropometric body (--bodies), the others
+    with --body; the summary names each one's body and plots."""
+    from posture_id.bodies import load_body
+    from posture_id.identify.cohort import find_recordings
+    from posture_id.simulation import simulate
+
+    recordings, bodies = tmp_path / "recordings", tmp_path / "bodies"
+    recordings.mkdir()
+    bodies.mkdir()
+    for name, height, mass in (("ann", 1.62, 58.0), ("bob", 1.85, 90.0)):
+        urdf = bodies / f"{name}.urdf"
+        assert main(["body", "--height", str(height), "--mass", str(mass), "--segments", "2",
+                     "--out", str(urdf)]) == 0
+        simulate(load_body(urdf)).to_recording().with_sensor_noise(0.01, 3).to_csv(
+            recordings / f"{name}.csv")
+    two_segment = load_body(bodies / "ann.urdf")
+    simulate(load_body()).to_recording().to_csv(recordings / "tip.csv")  # no body of its own
+    out = tmp_path / "results"
+    assert main(["identify", str(recordings), "--bodies", str(bodies), "--out", str(out)]) == 0
+    rows = {r["recording"]: r for r in csv.DictReader((out / "summary.csv").open())}
+    assert rows["ann.csv"]["body"].startswith("winter_1.62m_58kg")
+    assert rows["bob.csv"]["body"].startswith("winter_1.85m_90kg")
+    # tip.csv has three segments, the default --body (the TIP) has too: identified with it
+    assert rows["tip.csv"]["status"] == "done" and rows["tip.csv"]["body"] == "tip_default"
+    kp = {n: json.loads((out / f"{n}.json").read_text())["parameters"] for n in ("ann", "bob")}
+    assert kp["ann"] != kp["bob"] and len(kp["ann"]) == two_segment.n_segments
+    from posture_id.identify import Identifier
+    from posture_id.identify.cohort import identify_cohort
+
+    again = identify_cohort(find_recordings(recordings), out, Identifier(load_body()),
+                            bodies=bodies)  # all done already: read back, and plotted
+    assert set(again.status.values()) == {"skipped"}
+    assert again.plot(tmp_path / "cohort.png") is not None

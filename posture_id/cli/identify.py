@@ -48,6 +48,10 @@ def add_parser(sub) -> None:
                    help="result JSON (its \"parameters\" object is a parameter file); for a "
                         "cohort, a folder: one JSON per recording and summary.csv")
     p.add_argument("--scheduler", help="cohort: Dask distributed scheduler (tcp://host:port)")
+    p.add_argument("--bodies", type=Path,
+                   help="cohort: a folder of the subjects' own bodies, <recording name>.urdf "
+                        "each (posture-id body --height H --mass M makes one); a subject "
+                        "without one gets --body")
     p.add_argument("--plot", type=Path,
                    help="recorded versus re-simulated sway (PNG), and each parameter's "
                         "interval beside it (NAME.intervals.png)")
@@ -67,8 +71,9 @@ def run(args: argparse.Namespace) -> int:
     if _is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)
-    if args.scheduler:
-        raise PostureIdError("--scheduler goes with a folder or pattern of recordings")
+    if args.scheduler or args.bodies:
+        raise PostureIdError("--scheduler and --bodies go with a folder or pattern of "
+                             "recordings")
     fit_options = FitOptions(**search_keywords(args))
     inputs = (args.recording, args.body, args.model, args.tilt)
     check_output_file(args.out, "--out", inputs)
@@ -104,6 +109,6 @@ def run_cohort(args: argparse.Namespace) -> int:
     identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
     with TerminalProgress("recordings", prefix="posture-id identify") as progress:
         result = identify_cohort(recordings, args.out, identifier, args.scheduler, progress,
-                                 stimulus, args.model, columns_from_args(args))
+                                 stimulus, args.model, columns_from_args(args), args.bodies)
     say(result.summary())
     return 1 if result.failed else 0

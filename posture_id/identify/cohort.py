@@ -36,7 +36,7 @@ from posture_id.progress import Progress, report
 from posture_id.recording import Recording, RecordingColumns
 from posture_id.simulation.stimulus import TiltProfile
 
-__all__ = ["CohortResult", "find_recordings", "identify_cohort"]
+__all__ = ["CohortResult", "SubjectIdentifiers", "find_recordings", "identify_cohort"]
 
 
 def find_recordings(pattern: str | Path) -> list[Path]:
@@ -71,9 +71,10 @@ class CohortResult(Result):
     def plot(self, path=None, ax=None):
         """Each identified recording's Kp per module and its E_rel."""
         done = [r for r in self.rows if "e_rel" in r]
-        joints = [k[: -len("_kp")] for k in (done[0] if done else {}) if k.endswith("_kp")]
+        joints = list(dict.fromkeys(k[: -len("_kp")] for r in done for k in r
+                                    if k.endswith("_kp")))  # subjects' bodies may differ
         return plot_cohort([r["recording"] for r in done], joints,
-                           [[r[f"{j}_kp"] for j in joints] for r in done],
+                           [[r.get(f"{j}_kp", math.nan) for j in joints] for r in done],
                            [math.inf if r["e_rel"] is None else r["e_rel"] for r in done],
                            path=path, ax=ax)
 
@@ -88,13 +89,13 @@ class CohortResult(Result):
                 + "".join(f"\n  {k}: {v}" for k, v in self.failed.items()))
 
 
-def _identify_text(recording: tuple[str, str], urdf_text: str, urdf_name: str, method: str,
+def _identify_text(recording: tuple[str, str, str, str], method: str,
                    model: str | None, stimulus: TiltProfile | None = None,
                    fit_options: FitOptions | None = None, level: float = DEFAULT_LEVEL,
                    columns: RecordingColumns | None = None) -> dict:
-    """One recording (its name and CSV text) on a cluster worker: the result as a dict, or
-    the error."""
-    name, csv_text = recording
+    """One recording (its name and CSV text, its body's URDF text and file name) on a
+    cluster worker: the result as a dict, or the error."""
+    name, csv_text, urdf_text, urdf_name = recording
     with tempfile.TemporaryDirectory() as tmp:
         urdf = Path(tmp) / urdf_name
         urdf.write_text(urdf_text)
@@ -121,10 +122,41 @@ def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | N
         return {"error": str(exc)}
 
 
+class SubjectIdentifiers:
+    """The identifier of each recording of a cohort: for a subject with a body of their
+    own (``bodies/<recording stem>.urdf``) one made like ``identifier`` for that body,
+    built once per body; otherwise ``identifier``."""
+
+    def __init__(self, identifier: Identifier, bodies: str | Path | None = None,
+                 model: str | Path | None = None) -> None:
+        self.default, self.model = identifier, model
+        self.bodies = None if bodies is None else Path(bodies)
+        if self.bodies is not None and not self.bodies.is_dir():
+            raise PostureIdError(f"{self.bodies}: not a folder of bodies (one URDF per "
+                                 "subject, named like their recording)")
+        self._built: dict[Path, Identifier] = {}
+
+    def urdf_of(self, recording: Path) -> Path:
+        """The URDF of a recording's subject."""
+        own = None if self.bodies is None else self.bodies / f"{recording.stem}.urdf"
+        return own if own is not None and own.is_file() else Path(self.default.body.urdf_path)
+
+    def __call__(self, recording: Path) -> Identifier:
+        urdf = self.urdf_of(recording)
+        if urdf == Path(self.default.body.urdf_path):
+            return self.default
+        if urdf not in self._built:
+            d = self.default
+            self._built[urdf] = Identifier(load_body(urdf), d.method, self.model,
+                                           d.fit_options, d.level)
+        return self._built[urdf]
+
+
 def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identifier,
                     scheduler: str | None = None, progress: Progress | None = None,
                     stimulus: TiltProfile | None = None, model: str | Path | None = None,
-                    columns: RecordingColumns | None = None) -> CohortResult:
+                    columns: RecordingColumns | None = None,
+                    bodies: str | Path | None = None) -> CohortResult:
     """Identify ``recordings`` into ``out`` (see the module doc) with ``identifier``.
 
     Args:
@@ -134,8 +166,11 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
             bundled model for the body).
         columns: the recordings' columns and units, when they are a lab's own
             (default: ``time_s,tilt_deg,<segment>_deg``).
+        bodies: a folder of the subjects' own bodies, ``<recording stem>.urdf`` each (a
+            subject without one gets ``identifier``'s body).
     """
     out = Path(out)
+    subjects = SubjectIdentifiers(identifier, bodies, model)
     status: dict[str, str] = {}
     todo = []
     for path in recordings:
@@ -159,26 +194,32 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
         report(progress, done, len(recordings), "recording")
 
     if scheduler:
-        _run_on_cluster(scheduler, todo, identifier, model, record, stimulus, columns)
+        _run_on_cluster(scheduler, todo, subjects, model, record, stimulus, columns)
     else:
         for path in todo:
-            record(path, _identify_file(path, identifier, stimulus, columns=columns))
+            try:
+                chosen = subjects(path)
+            except PostureIdError as exc:  # a subject's body that cannot be loaded
+                record(path, {"error": str(exc)})
+                continue
+            record(path, _identify_file(path, chosen, stimulus, columns=columns))
     rows = _write_summary(out, recordings, status)
     return CohortResult(out, status, tuple(rows))
 
 
-def _run_on_cluster(address: str, todo: list[Path], identifier: Identifier, model,
+def _run_on_cluster(address: str, todo: list[Path], subjects: SubjectIdentifiers, model,
                     record, stimulus: TiltProfile | None = None,
                     columns: RecordingColumns | None = None) -> None:
-    """The recordings as tasks that carry their CSV text and the body's URDF text."""
-    body = identifier.body
+    """The recordings as tasks that carry their CSV text and their body's URDF text."""
+    identifier = subjects.default
     by_name = {path.name: path for path in todo}
+    tasks = [(p.name, p.read_text(), subjects.urdf_of(p).read_text(), subjects.urdf_of(p).name)
+             for p in todo]
     with DaskExecutor(address) as cluster:
-        for (name, _), result in cluster.unordered(
-                _identify_text, [(p.name, p.read_text()) for p in todo],
-                Path(body.urdf_path).read_text(), Path(body.urdf_path).name,
-                identifier.method.value, None if model is None else str(model), stimulus,
-                identifier.fit_options, identifier.level, columns):
+        for (name, *_), result in cluster.unordered(
+                _identify_text, tasks, identifier.method.value,
+                None if model is None else str(model), stimulus, identifier.fit_options,
+                identifier.level, columns):
             record(by_name[name], result)
 
 
@@ -190,13 +231,14 @@ def _finished(target: Path) -> bool:
 
 
 def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) -> list[dict]:
-    rows, fields = [], ["recording", "status", "method", "classes", "e_rel"]
+    rows, fields = [], ["recording", "status", "body", "method", "classes", "e_rel"]
     for path in recordings:
         row = {"recording": path.name, "status": status.get(path.name, "")}
         target = out / f"{path.stem}.json"
         if status.get(path.name) in ("done", "skipped"):
             data = json.loads(target.read_text(encoding="utf-8"))
-            row.update(method=data["method"], e_rel=data["e_rel"], classes="/".join(
+            row.update(body=data.get("provenance", {}).get("body", {}).get("name", ""),
+                       method=data["method"], e_rel=data["e_rel"], classes="/".join(
                 m["controls"] for m in data["parameters"].values()))
             for joint, module in data["parameters"].items():
                 for key in ("kp", "ki", "kd", "delay_s"):

@@ -282,4 +282,5 @@ class Recording:
 def _check_segment_names(names, segments, name: str) -> None:
     if tuple(names) != tuple(segments):
         raise RecordingError(f"{name}: segment columns {','.join(names)} do not match the "
-                             f"body's segments {','.join(segments)}")
+                             f"body's segments {','.join(segments)}; give the body the "
+                             "recording was made with (--body URDF)")

@@ -14,7 +14,14 @@ is identified by:
 - ``raw LS``: least squares on every sample of the sway (relaxed classes, from defaults);
 - ``locked LS``: least squares on the stimulus-locked sway (``FitOptions.locked``);
 - ``CNN``: the spectrogram network trained on motor-noisy data of that stimulus;
-- ``FRF net``: the FRF-feature network trained on the same data.
+- ``FRF net``: the FRF-feature network trained on the same data;
+- ``hybrid``: :class:`~posture_id.identify.Identifier` with :attr:`Method.HYBRID`, raw
+  sway: least squares from a CNN's answer, its short route accepted when the residual is
+  consistent with the recording's own noise (docs/identify.md);
+- ``locked hybrid``: the same on the stimulus-locked sway (``--locked``).
+The hybrids start from the ``CNN`` network when ``--models`` holds it, otherwise from the
+bundled model (trained on sensor noise only, the 242-state PRTS only); the report says
+which.
 
 Per method: the share of subjects with every class right, the median |relative error| of
 each parameter per module, E_rel of the stimulus-locked response (the identified
@@ -43,6 +50,7 @@ from posture_id.executors import LocalExecutor
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.fitting import FitOptions, fit_recording
 from posture_id.frf.locked import LockedOptions
+from posture_id.identify import Identifier, Method
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.plotting import plot_benchmark
 from posture_id.simulation import prts, simulate
@@ -53,7 +61,7 @@ from posture_id.trials import prepare_trial
 
 ROOT = Path(__file__).resolve().parent.parent
 STIMULI = {"242": dict(states=242, cycles=2), "80": dict(states=80, cycles=6)}
-METHODS = ("raw LS", "locked LS", "CNN", "FRF net")
+METHODS = ("raw LS", "locked LS", "CNN", "FRF net", "hybrid", "locked hybrid")
 FIELDS = ("kp", "ki", "kd", "delay_s")
 SHARE_RANGE = (0.10, 0.30)
 _LOADED: dict = {}
@@ -77,11 +85,22 @@ def subjects(body, n: int, seed: int) -> list[dict]:
     return out
 
 
+def hybrid_start(folders: dict) -> str:
+    """The model the hybrids start from: the people-like CNN when it exists, else the
+    bundled one."""
+    return folders["cnn"] if (Path(folders["cnn"]) / "model.json").exists() else "bundled"
+
+
 def _models(stimulus_key: str, folders: dict):
     if stimulus_key not in _LOADED:
         body = load_body()
-        _LOADED[stimulus_key] = (body, {kind: CnnIdentifier.load(folders[kind], body)
-                                        for kind in ("cnn", "frf")})
+        nets = {kind: CnnIdentifier.load(folders[kind], body)
+                for kind in ("cnn", "frf") if (Path(folders[kind]) / "model.json").exists()}
+        start = nets.get("cnn") or CnnIdentifier.resolve(None, body)
+        nets["hybrid"] = Identifier(body, Method.HYBRID, start, FitOptions(threads=1))
+        nets["locked hybrid"] = Identifier(body, Method.HYBRID, start,
+                                           FitOptions(threads=1, locked=LockedOptions()))
+        _LOADED[stimulus_key] = (body, nets)
     return _LOADED[stimulus_key]
 
 
@@ -102,8 +121,10 @@ def _one(task: tuple) -> dict:
         params = fit_recording(prepare_trial(rec, stim), body, options=locked_fit).parameters
     elif method == "CNN":
         params = nets["cnn"].identify(prepare_trial(rec, stim)).parameters
-    else:
+    elif method == "FRF net":
         params = nets["frf"].identify(prepare_trial(rec, stim)).parameters
+    else:
+        params = nets[method].identify(rec, stim).parameters
     seconds = time.perf_counter() - start
     again = simulate(body, params, stim)
     reference = subject.locked.alpha[:, 0]
@@ -154,7 +175,10 @@ def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict) -
              f"(posture_id {__version__}, {workers} subjects at a time, one thread each). "
              "The networks were trained on motor-noisy data sets of "
              + ", ".join(f"{m['trials']} trials ({k.replace('_', ' PRTS, ')})"
-                         for k, m in models.items()) + " (`make real-like-models`).", ""]
+                         for k, m in models.items() if "trials" in m)
+             + " (`make real-like-models`). The hybrids started from: "
+             + ", ".join(f"{k.split('_')[0]}-state PRTS: {m['start']}"
+                         for k, m in models.items() if "start" in m) + ".", ""]
     for stimulus_key, spec in STIMULI.items():
         lines += [f"## PRTS {spec['states']} states × {spec['cycles']}", "",
                   "| method | every class right | Kp error (all modules) | Kp error "
@@ -212,6 +236,11 @@ def main() -> None:
     for stimulus_key in args.stimuli:
         folders = {kind: str(args.models / f"real_{stimulus_key}_{kind}")
                    for kind in ("cnn", "frf")}
+        for method, kind in (("CNN", "cnn"), ("FRF net", "frf")):
+            if method in args.methods and not (Path(folders[kind]) / "model.json").exists():
+                raise SystemExit(f"{folders[kind]}: no model for the {method} rows; make it "
+                                 "with `make real-like-models`, or leave the method out "
+                                 "(--methods)")
         for index, spec in enumerate(specs):
             for method in args.methods:
                 if (stimulus_key, index, method) not in done:
@@ -243,12 +272,21 @@ def main() -> None:
     stats = statistics(rows, body.joint_names)
     args.out.mkdir(parents=True, exist_ok=True)
     models = {}
+    if args.reuse is not None:
+        models.update(json.loads(args.reuse.read_text(encoding="utf-8"))["models"])
     for stimulus_key in args.stimuli:
-        for kind in ("cnn", "frf"):
-            sidecar = json.loads((args.models / f"real_{stimulus_key}_{kind}" / "model.json")
-                                 .read_text(encoding="utf-8"))
+        folders = {kind: args.models / f"real_{stimulus_key}_{kind}" for kind in ("cnn", "frf")}
+        for kind, folder in folders.items():
+            if not (folder / "model.json").exists():
+                continue
+            sidecar = json.loads((folder / "model.json").read_text(encoding="utf-8"))
             models[f"{stimulus_key}_{kind}"] = {"trials": sidecar["dataset"]["trials"],
                                                 "weights_sha256": sidecar["weights_sha256"]}
+        if any("hybrid" in m for m in args.methods):
+            start = hybrid_start({k: str(v) for k, v in folders.items()})
+            models[f"{stimulus_key}_hybrid"] = {
+                "start": "the people-like CNN" if start != "bundled"
+                else "the bundled model (sensor noise only)"}
     atomic_write_text(args.out / "real_like.json", json_text(
         {"subjects": args.subjects, "seed": args.seed, "share_range": SHARE_RANGE,
          "models": models, "statistics": stats, "rows": rows}))

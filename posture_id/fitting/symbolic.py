@@ -17,6 +17,11 @@ w_k = max(0, 1 − |Δ/dt − k|), i.e. linear interpolation, continuous in Δ. 
 class C may be relaxed to c ∈ [−1, 1] (x = (1+c)/2·x_COM + (1−c)/2·x_joint; exact at ±1)
 and the dead-band smoothed (softplus, width ``smooth``).
 
+The body enters as a vector of constants (:func:`body_constants`: D, S, the inertias and g),
+an input of every function like the parameters, so one compiled model serves every body
+with the same number of segments: a cohort of subjects with their own anthropometric
+bodies compiles once.
+
 Only the :mod:`posture_id.fitting` package imports CasADi (a layer contract).
 """
 
@@ -30,8 +35,52 @@ import numpy as np
 
 from posture_id.bodies.body import Body
 
-__all__ = ["SymbolicModel", "chain_dynamics", "step_function", "rollout_function",
-           "rollout_steps", "delay_weights", "buffer_sizes", "step_inputs"]
+__all__ = ["SymbolicModel", "BodyTerms", "body_constants", "n_body_constants",
+           "chain_dynamics", "step_function", "rollout_function", "rollout_steps",
+           "delay_weights", "buffer_sizes", "step_inputs"]
+
+
+def n_body_constants(n: int) -> int:
+    """Length of :func:`body_constants` for an N-segment body: 2N² + 3N + 1."""
+    return 2 * n * n + 3 * n + 1
+
+
+def body_constants(body: Body) -> np.ndarray:
+    """(2N² + 3N + 1,) the body's constants as the symbolic model takes them:
+    [Re D (N·N, row-major), Im D (N·N), Re S (N), Im S (N), I (N), g]
+    in kg·m², kg·m², kg·m, kg·m, kg·m², m/s² (D, S: docs/model.md)."""
+    d = np.asarray(body.coupling)
+    s = np.asarray(body.gravity_lever)
+    return np.concatenate([d.real.ravel(), d.imag.ravel(), s.real, s.imag,
+                           np.asarray(body.inertias, dtype=float), [float(body.gravity)]])
+
+
+@dataclass(frozen=True)
+class BodyTerms:
+    """The body's constants split into named terms, numbers or CasADi expressions.
+
+    Attributes:
+        d_re, d_im: (N, N) nested lists, Re and Im of the coupling D (kg·m²).
+        s_re, s_im: (N,) Re and Im of the gravity levers S (kg·m).
+        inertia: (N,) kg·m². gravity: m/s².
+    """
+
+    d_re: list
+    d_im: list
+    s_re: list
+    s_im: list
+    inertia: list
+    gravity: object
+
+    @classmethod
+    def of(cls, constants, n: int) -> BodyTerms:
+        """Split a :func:`body_constants` vector (numeric array or CasADi symbol)."""
+        c = [constants[i] for i in range(n_body_constants(n))]
+        nn = n * n
+        return cls([c[j * n : (j + 1) * n] for j in range(n)],
+                   [c[nn + j * n : nn + (j + 1) * n] for j in range(n)],
+                   c[2 * nn : 2 * nn + n], c[2 * nn + n : 2 * nn + 2 * n],
+                   c[2 * nn + 2 * n : 2 * nn + 3 * n], c[2 * nn + 3 * n])
 
 
 def _deadband(v, threshold: float, smooth: float):
@@ -47,7 +96,8 @@ def _deadband(v, threshold: float, smooth: float):
 
 
 def chain_dynamics(body: Body):
-    """CasADi SX function (θ, θ̇, τ) → (θ̈, M, G): the planar chain in segment angles.
+    """CasADi SX function (θ, θ̇, τ) → (θ̈, M, G): the planar chain in segment angles,
+    with ``body``'s constants filled in (the same expression the step uses).
 
     θ, θ̇, τ: (N,) rad, rad/s, N·m (joint torques). M: (N, N), G: (N,) gravity term.
     """
@@ -55,33 +105,34 @@ def chain_dynamics(body: Body):
     theta = ca.SX.sym("theta", n)
     omega = ca.SX.sym("omega", n)
     tau = ca.SX.sym("tau", n)
-    acc, mass, grav = _dynamics_expr(body, theta, omega, tau)
-    return ca.Function("chain_dynamics", [theta, omega, tau], [acc, mass, grav],
+    constants = ca.SX.sym("body", n_body_constants(n))
+    acc, mass, grav = _dynamics_expr(BodyTerms.of(constants, n), theta, omega, tau)
+    general = ca.Function("chain", [theta, omega, tau, constants], [acc, mass, grav])
+    out = general(theta, omega, tau, body_constants(body))
+    return ca.Function("chain_dynamics", [theta, omega, tau], list(out),
                        ["theta", "omega", "tau"], ["acc", "M", "G"])
 
 
-def _dynamics_expr(body: Body, theta, omega, tau):
-    n = body.n_segments
-    d = body.coupling
-    s = body.gravity_lever
-    g = body.gravity
-    inertia = body.inertias
+def _dynamics_expr(terms: BodyTerms, theta, omega, tau):
+    n = theta.numel()
+    d_re, d_im, g = terms.d_re, terms.d_im, terms.gravity
     cos = [ca.cos(theta[j]) for j in range(n)]
     sin = [ca.sin(theta[j]) for j in range(n)]
     mass = ca.SX.zeros(n, n)
     rhs = []
     for j in range(n):
-        lever_im = sin[j] * s[j].real + cos[j] * s[j].imag
+        lever_im = sin[j] * terms.s_re[j] + cos[j] * terms.s_im[j]
         r = tau[j] + g * lever_im - (tau[j + 1] if j + 1 < n else 0)
         for k in range(n):
             e_re = cos[j] * cos[k] + sin[j] * sin[k]
             e_im = sin[j] * cos[k] - cos[j] * sin[k]
-            mass[j, k] = d[j, k].real * e_re - d[j, k].imag * e_im
-            r -= omega[k] ** 2 * (d[j, k].real * e_im + d[j, k].imag * e_re)
-        mass[j, j] += inertia[j]
+            mass[j, k] = d_re[j][k] * e_re - d_im[j][k] * e_im
+            r -= omega[k] ** 2 * (d_re[j][k] * e_im + d_im[j][k] * e_re)
+        mass[j, j] += terms.inertia[j]
         rhs.append(r)
     rhs = ca.vertcat(*rhs)
-    grav = ca.vertcat(*[-g * (sin[j] * s[j].real + cos[j] * s[j].imag) for j in range(n)])
+    grav = ca.vertcat(*[-g * (sin[j] * terms.s_re[j] + cos[j] * terms.s_im[j])
+                        for j in range(n)])
     return ca.solve(mass, rhs), mass, grav
 
 
@@ -114,22 +165,19 @@ def delay_weights(delay_steps, sizes: list[int]):
 
 @dataclass(frozen=True)
 class SymbolicModel:
-    """Sizes and layout of the symbolic step for one body.
+    """Sizes and layout of the symbolic step for N-segment bodies.
 
     State x = [θ (N), θ̇ (N), ∫ε (N), α̂_FS (1), buffers (Σ P_i)]; step input
-    u = [n, α_FS(t), α̇_FS(t)]; parameters p = [Kp, Ki, Kd, Δ/dt, c, Kpas, Bpas] (7N) and
-    buffer weights w (Σ P_i) from :func:`delay_weights`.
+    u = [n, α_FS(t), α̇_FS(t)]; parameters p = [Kp, Ki, Kd, Δ/dt, c, Kpas, Bpas] (7N),
+    buffer weights w (Σ P_i) from :func:`delay_weights` and the body's constants b
+    (:func:`body_constants`).
     """
 
-    body: Body
+    n: int
     sizes: tuple[int, ...]
     dt: float
     deadband_rad_s: float
     smooth: float = 0.0
-
-    @property
-    def n(self) -> int:
-        return self.body.n_segments
 
     @property
     def n_state(self) -> int:
@@ -137,14 +185,15 @@ class SymbolicModel:
 
 
 def step_function(model: SymbolicModel) -> ca.Function:
-    """One integration step: (x, u, p, w) → x_next (SX, see :class:`SymbolicModel`)."""
+    """One integration step: (x, u, p, w, b) → x_next (SX, see :class:`SymbolicModel`)."""
     n = model.n
-    body = model.body
     dt = model.dt
     x = ca.SX.sym("x", model.n_state)
     u = ca.SX.sym("u", 3)
     p = ca.SX.sym("p", 7 * n)
     w = ca.SX.sym("w", sum(model.sizes))
+    b = ca.SX.sym("b", n_body_constants(n))
+    terms = BodyTerms.of(b, n)
     theta, omega = x[0:n], x[n : 2 * n]
     integ, est = x[2 * n : 3 * n], x[3 * n]
     step_n, tilt, tilt_vel = u[0], u[1], u[2]
@@ -153,13 +202,13 @@ def step_function(model: SymbolicModel) -> ca.Function:
     kpas, bpas = p[5 * n : 6 * n], p[6 * n : 7 * n]
 
     # COM-above angles and rates from the running sum V_i = Σ_{j≥i} e^{iθ_j} S_j
-    s = body.gravity_lever
+    s_re, s_im = terms.s_re, terms.s_im
     alpha, alpha_dot, tg, tg_dot = [None] * n, [None] * n, [None] * n, [None] * n
     v_re = v_im = vd_re = vd_im = 0
     for i in range(n - 1, -1, -1):
         c, sn = ca.cos(theta[i]), ca.sin(theta[i])
-        e_re = c * s[i].real - sn * s[i].imag
-        e_im = sn * s[i].real + c * s[i].imag
+        e_re = c * s_re[i] - sn * s_im[i]
+        e_im = sn * s_re[i] + c * s_im[i]
         v_re, v_im = v_re + e_re, v_im + e_im
         vd_re, vd_im = vd_re - omega[i] * e_im, vd_im + omega[i] * e_re
         r2 = v_re**2 + v_im**2
@@ -198,11 +247,12 @@ def step_function(model: SymbolicModel) -> ca.Function:
         w_offset += size
         beta, beta_rate = beta + q, beta_rate + qd
         below, below_rate = theta[i], omega[i]
-    acc, _, _ = _dynamics_expr(body, theta, omega, ca.vertcat(*tau))
+    acc, _, _ = _dynamics_expr(terms, theta, omega, ca.vertcat(*tau))
     omega_next = omega + dt * acc
     theta_next = theta + dt * omega_next
     x_next = ca.vertcat(theta_next, omega_next, *integ_next, est + dt * est_rate, *buffers)
-    return ca.Function("dec_step", [x, u, p, w], [x_next], ["x", "u", "p", "w"], ["x_next"])
+    return ca.Function("dec_step", [x, u, p, w, b], [x_next], ["x", "u", "p", "w", "b"],
+                       ["x_next"])
 
 
 #: Samples per inner block of the rollout (CasADi builds long mapaccums slowly: nest them).
@@ -217,7 +267,7 @@ def rollout_steps(n_samples: int, sample_every: int) -> int:
 
 
 def rollout_function(model: SymbolicModel, n_samples: int, sample_every: int) -> ca.Function:
-    """(u (3, rollout_steps), p (7N,), w) → θ samples (N, S) at t = 0, every·dt, …
+    """(u (3, rollout_steps), p (7N,), w, b) → θ samples (N, S) at t = 0, every·dt, …
 
     The step is folded ``sample_every`` times per sample, accumulated over blocks of 100
     samples, and the blocks accumulated over the trial (CasADi ``fold``/``mapaccum``:
@@ -230,11 +280,13 @@ def rollout_function(model: SymbolicModel, n_samples: int, sample_every: int) ->
     u_block = ca.MX.sym("u", 3, _INNER * sample_every)
     p = ca.MX.sym("p", 7 * model.n)
     w = ca.MX.sym("w", sum(model.sizes))
-    states = inner(x0, u_block, p, w)
-    block = ca.Function("block", [x0, u_block, p, w], [states[:, -1], states[: model.n, :]])
+    b = ca.MX.sym("b", n_body_constants(model.n))
+    states = inner(x0, u_block, p, w, b)
+    block = ca.Function("block", [x0, u_block, p, w, b],
+                        [states[:, -1], states[: model.n, :]])
     blocks = -(-(n_samples - 1) // _INNER)
     trial = block.mapaccum("trial", blocks, [0], [0])
     u = ca.MX.sym("u", 3, rollout_steps(n_samples, sample_every))
-    _, theta = trial(ca.DM.zeros(model.n_state), u, p, w)
+    _, theta = trial(ca.DM.zeros(model.n_state), u, p, w, b)
     theta = ca.horzcat(ca.DM.zeros(model.n, 1), theta[:, : n_samples - 1])
-    return ca.Function("rollout", [u, p, w], [theta], ["u", "p", "w"], ["theta"])
+    return ca.Function("rollout", [u, p, w, b], [theta], ["u", "p", "w", "b"], ["theta"])

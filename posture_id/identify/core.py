@@ -12,8 +12,9 @@
 - :attr:`Method.FIT`: least squares from the body's defaults (any tilt; seconds, and it
   can stall in a local minimum);
 - :attr:`Method.HYBRID`: least squares started from the CNN's answer: its classes kept
-  when it is sure of them and the fit then explains the sway, otherwise relaxed so that the
-  fit can overturn a class (:func:`_refine`; docs/identify.md).
+  when it is sure of them and the fit then explains the sway as well as the recording's
+  own noise allows, otherwise relaxed so that the fit can overturn a class
+  (:func:`_refine`; docs/identify.md).
 
 Every result is checked by simulating the identified model on the recording's tilt: the
 body-sway errors E_id and E_rel (MODEL §7) and each segment's residual.
@@ -33,6 +34,7 @@ from posture_id.errors import PostureIdError
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.method import DEFAULT_METHOD, Method
+from posture_id.identify.noise_check import noise_check
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentifier
 from posture_id.progress import Progress
@@ -48,9 +50,6 @@ __all__ = ["Method", "identify", "Identifier", "DEFAULT_METHOD"]
 
 #: The CNN is said to be unsure of a class when P(C = +1) is inside this band.
 UNSURE_CLASS = (0.05, 0.95)
-#: The hybrid's fit with the CNN's classes must explain this share of the recorded sway's
-#: variance, or it is done again with the classes relaxed.
-MIN_EXPLAINED = 0.9
 
 
 def identify(recording: Recording, body: Body | None = None, method: Method = DEFAULT_METHOD,
@@ -149,6 +148,7 @@ class Identifier:
             intervals = cnn.intervals
             notices += trial.notices
         checked = _resimulate(body, trial, parameters, options.simulation)
+        noise = noise_check(trial, checked["resimulated"])
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -157,7 +157,7 @@ class Identifier:
             notices=tuple(dict.fromkeys(notices)),
             provenance=provenance(options if fit is not None else None, body,
                                   recording=trial.name, method=method.value),
-            **checked,
+            noise=noise, **checked,
         )
 
 
@@ -166,49 +166,45 @@ def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,
     """The hybrid's least squares from the CNN's answer.
 
     Classes the CNN is sure of (P(C = +1) outside :data:`UNSURE_CLASS` for every module)
-    are kept and only the continuous parameters refined: the short route. When the CNN is
-    unsure of a class, or the short route explains less than :data:`MIN_EXPLAINED` of the
-    recorded sway's variance (a confidently wrong class leaves a large residual), the fit
-    runs again from the CNN's parameters with its classes relaxed half-way (c = ±0.5), so
-    that it can overturn a class; the better of the two fits is kept.
+    are kept and only the continuous parameters refined: the short route. It is accepted
+    when its residual is consistent with the recording's own noise
+    (:func:`~posture_id.identify.noise_check.noise_check`: stimulus-locked for a periodic
+    stimulus, so that sway of the subject's own does not count against it; raw
+    otherwise), whether the fit compares raw or locked sway. When the CNN is unsure of a
+    class, or the short route leaves more than the noise allows (a confidently wrong
+    class leaves a large locked residual), the fit runs again from the CNN's parameters
+    with its classes relaxed half-way (c = ±0.5), so that it can overturn a class; the
+    better of the two fits is kept.
     """
     from posture_id.fitting.least_squares import fit_recording
 
     low, high = UNSURE_CLASS
     unsure = [j for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
               if low < p < high]
-    fit, explained = None, -math.inf
+    fit = fit_short = None
     if unsure:
         notices.append(f"the CNN is unsure of the class of {', '.join(unsure)}: "
                        "least squares decides it")
     else:
         fit = fit_recording(trial, body, cnn.parameters,
                             replace(options, classes=FixedClasses()), progress)
-        explained = _explained(fit.recorded, fit.fitted)
-        if explained < MIN_EXPLAINED:
-            notices.append(f"with the CNN's classes the fit explains {100 * explained:.0f} % "
-                           "of the sway's variance: fitted again with the classes relaxed")
-    if fit is None or explained < MIN_EXPLAINED:
+        check = noise_check(fit.trial, fit.fitted)
+        if not check.consistent:
+            notices.append(f"with the CNN's classes the fit leaves a {check.sentence()}: "
+                           "fitted again with the classes relaxed")
+            fit_short, fit = fit, None
+    if fit is None:
         relaxed = options.classes if isinstance(options.classes, RelaxedClasses) \
             else RelaxedClasses()
-        again = fit_recording(trial, body, cnn.parameters,
-                              replace(options, classes=relaxed), progress)
-        if fit is None or again.cost < fit.cost:
-            fit = again
+        fit = fit_recording(trial, body, cnn.parameters,
+                            replace(options, classes=relaxed), progress)
+        if fit_short is not None and fit_short.cost < fit.cost:
+            fit = fit_short
     changed = [j for j in body.joint_names
                if fit.parameters[j].controls != cnn.parameters[j].controls]
     if changed:
         notices.append(f"least squares overturned the CNN's class of {', '.join(changed)}")
     return fit
-
-
-def _explained(recorded: np.ndarray, fitted: np.ndarray) -> float:
-    """Share of the variance of (S, N) ``recorded`` explained by ``fitted`` (all segments
-    pooled); −inf when the fitted model fell."""
-    residual = recorded - fitted
-    if not np.all(np.isfinite(residual)):
-        return -math.inf
-    return float(1.0 - residual.var(axis=0).sum() / recorded.var(axis=0).sum())
 
 
 def _resimulate(body: Body, trial: PreparedTrial, parameters,

@@ -10,6 +10,7 @@ import numpy as np
 from posture_id.dec.parameters import Controls, DecParameters, parameter_block
 from posture_id.fileio import Result
 from posture_id.identify.method import Method
+from posture_id.identify.noise_check import NoiseCheck
 from posture_id.plotting import plot_identification
 from posture_id.uncertainty.intervals import ParameterIntervals
 
@@ -67,6 +68,8 @@ class IdentificationResult(Result):
             (:class:`~posture_id.uncertainty.intervals.ParameterIntervals`), or None (a
             CNN without a calibration).
         notices: things to know. provenance: version, options, body identity, source.
+        noise: the re-simulation's residual against the recording's own noise
+            (:class:`~posture_id.identify.noise_check.NoiseCheck`), or None.
     """
 
     method: Method
@@ -90,6 +93,7 @@ class IdentificationResult(Result):
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
     fell_at_s: float | None = None
+    noise: NoiseCheck | None = None
 
     @property
     def fell(self) -> bool:
@@ -112,6 +116,7 @@ class IdentificationResult(Result):
                                      "locked_share": s.locked_share}
                          for s in self.segments},
             "fell_at_s": self.fell_at_s,
+            "noise_check": None if self.noise is None else self.noise.to_dict(),
             "wall_time_s": self.wall_time_s,
             "identification_time_s": self.identification_time_s,
             "intervals": None if self.intervals is None else self.intervals.to_dict(),
@@ -138,6 +143,8 @@ class IdentificationResult(Result):
                 for s in self.segments))
             lines.append(f"body sway: E_id {self.e_id_deg:.2e}°, E_rel "
                          f"{100 * self.e_rel:.2f} % (of the raw sway)")
+            if self.noise is not None:
+                lines.append(self.noise.sentence()[0].upper() + self.noise.sentence()[1:])
         lines.append(f"{self.method.value} in {self.identification_time_s:.3g} s "
                      f"({self.wall_time_s:.3g} s with the checks)")
         if self.intervals is not None:

@@ -1,0 +1,85 @@
+"""The residual against the recording's own noise: known answers.
+
+A model that is the truth leaves exactly the noise that was added, so its ratio is about 1
+whether the noise is white sensor noise (raw and locked) or the sway a subject makes of
+their own (locked); a wrong class leaves more than the limit; a model that falls is
+infinite and never consistent.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from posture_id.dec.parameters import Controls, DecParameters, default_parameters
+from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, noise_check
+from posture_id.simulation import prts, simulate
+from posture_id.simulation.stimulus import tilt_from_array
+from posture_id.simulation.subjects import people_like
+from posture_id.trials import prepare_trial
+
+
+def _flipped(params: DecParameters, joint: str) -> DecParameters:
+    mods = dict(params.modules)
+    other = Controls.JOINT if mods[joint].controls is Controls.COM else Controls.COM
+    mods[joint] = replace(mods[joint], controls=other)
+    return DecParameters(mods)
+
+
+@pytest.mark.parametrize("noise_deg", [0.01, 0.05])
+def test_the_truth_leaves_the_sensor_noise_locked(tip, noise_deg):
+    truth = default_parameters(tip)
+    clean = simulate(tip, truth)
+    trial = prepare_trial(clean.to_recording().with_sensor_noise(noise_deg, 3))
+    check = noise_check(trial, clean.theta)
+    assert check.basis == "locked"
+    assert 0.8 < check.ratio < 1.2 and check.consistent
+    wrong = simulate(tip, _flipped(truth, tip.joint_names[2]))
+    assert wrong.stable
+    bad = noise_check(trial, wrong.theta)
+    assert bad.ratio > 3 * NOISE_RATIO_LIMIT and not bad.consistent
+
+
+def test_a_tilt_that_is_not_periodic_is_judged_by_its_white_noise(tip):
+    t = np.arange(0, 60.0001, 0.02)
+    tilt = np.radians(0.5) * (np.sin(2 * np.pi * 0.11 * t) + 0.6 * np.sin(2 * np.pi * 0.37 * t)
+                              + 0.4 * np.sin(2 * np.pi * 0.93 * t))
+    stimulus = tilt_from_array(t, tilt, "sum of sines")
+    truth = default_parameters(tip)
+    clean = simulate(tip, truth, stimulus)
+    trial = prepare_trial(clean.to_recording().with_sensor_noise(0.03, 4), stimulus)
+    check = noise_check(trial, clean.theta)
+    assert check.basis == "raw"
+    assert abs(check.noise_deg - 0.03) < 0.005
+    assert 0.85 < check.ratio < 1.15 and check.consistent
+    wrong = simulate(tip, _flipped(truth, tip.joint_names[1]), stimulus)
+    assert not noise_check(trial, wrong.theta).consistent
+
+
+def test_sway_of_the_subjects_own_counts_as_noise_when_locked(tip):
+    """A people-like subject: 20 % of the body sway locked to the stimulus. The raw residual
+    of the truth is mostly the subject's own sway, yet the locked ratio is about 1."""
+    truth = default_parameters(tip)
+    subject = people_like(tip, truth, prts(), 0.2, seed=5)
+    trial = prepare_trial(subject.recording)
+    check = noise_check(trial, subject.locked.theta)
+    assert check.basis == "locked"
+    assert 0.7 < check.ratio < 1.3 and check.consistent
+    raw = np.degrees(subject.recording.theta - subject.locked.theta[: len(trial.recording.time)])
+    assert raw.std() > 5 * 0.05  # far above the 0.05° sensor noise
+
+
+def test_a_model_that_falls_is_never_consistent(tip):
+    truth = default_parameters(tip)
+    clean = simulate(tip, truth)
+    trial = prepare_trial(clean.to_recording().with_sensor_noise(0.02, 1))
+    fallen = clean.theta.copy()
+    fallen[1000:] = np.nan
+    check = noise_check(trial, fallen)
+    assert math.isinf(check.ratio) and not check.consistent
+    data = json.loads(json.dumps(check.to_dict(), allow_nan=False))
+    assert data["ratio"] is None and data["consistent"] is False

@@ -113,9 +113,9 @@ def test_cycle_averaging_removes_a_drift_ten_times_the_locked_amplitude():
 
 
 def test_locked_share_and_coherence_of_a_noisy_response():
-    """White noise of a chosen share of the variance: the locked share is estimated as
-    (σ_l² + σ_n²/C)/(σ_l² + σ_n²) (the cycle average keeps 1/C of the noise), coherence
-    falls below 1."""
+    """White noise of a chosen share of the variance: the cycle average keeps 1/C of the
+    noise, (σ_l² + σ_n²/C)/(σ_l² + σ_n²) uncorrected; the locked share, corrected for it,
+    is the true σ_l²/(σ_l² + σ_n²); coherence falls below 1."""
     stimulus, _, u = _prts_samples(80, cycles=10)
     b, a = signal.butter(2, 1.2, fs=RATE)
     locked = signal.lfilter(b, a, u)
@@ -128,8 +128,11 @@ def test_locked_share_and_coherence_of_a_noisy_response():
     result = frequency_response_arrays(u, y[:, None], RATE, stimulus.period_s, ("y",),
                                        FrfOptions(skip_cycles=1, drift_order=0))
     cycles = result.cycles
+    assert result.locked_share[0] == pytest.approx(share, rel=0.1)
+    averaged = cycle_average(y[p : 10 * p], p)
+    assert averaged.locked_share == pytest.approx(result.locked_share[0])
     expected = (var_locked + sd**2 / cycles) / (var_locked + sd**2)
-    assert result.locked_share[0] == pytest.approx(expected, rel=0.05)
+    assert averaged.uncorrected_share == pytest.approx(expected, rel=0.05)
     assert 0 < np.median(result.coherence) < 0.999
 
 
@@ -196,3 +199,74 @@ def test_bad_input_is_refused(tip):
         frequency_response(trial, tip, period_s=60.51)
     with pytest.raises(PostureIdError, match="bands must be an integer"):
         FrfOptions(bands=-1)
+
+
+@pytest.mark.parametrize(("states", "cycles"), [(242, 2), (80, 6)])
+def test_pure_noise_shows_no_locked_sway_and_no_significant_coherence(states, cycles):
+    """Random sway with no response to the tilt at all (low-passed noise, the spectrum of
+    body sway): the noise-corrected locked share is about 0 (uncorrected it would be about
+    1/C), and the coherence clears its 5 % significance level at about 5 % of the
+    frequencies, never at most of them (uncorrected: 1/C and more, the "locked 44–51 %"
+    that pure random sway of 2 cycles used to report)."""
+    stimulus, _, u = _prts_samples(states, cycles=cycles)
+    rng = np.random.default_rng(17)
+    b, a = signal.butter(2, 0.5, fs=RATE)
+    shares, significant, coherences = [], [], []
+    for _ in range(8):
+        y = signal.lfilter(b, a, rng.standard_normal((len(u), 3)), axis=0)
+        result = frequency_response_arrays(u, y, RATE, stimulus.period_s, ("a", "b", "c"),
+                                           FrfOptions(drift_order=1))
+        shares.append(result.locked_share)
+        significant.append(result.significant)
+        uncorrected = cycle_average(y[: cycles * len(u) // cycles], len(u) // cycles, 0, 1)
+        assert np.all(uncorrected.uncorrected_share > 0.5 / cycles)
+        coherences.append(result.coherence)
+    # clipped at 0, so many draws are exactly 0 and the rest small (the drift removed with
+    # the periodic part also takes some of the slow noise out of the remainder)
+    assert float(np.median(shares)) < 0.05
+    assert float(np.max(shares)) < 0.5 / cycles ** 0.5
+    # what the reported median coherence of pure noise was: about 1/C, far from 0
+    assert float(np.mean(coherences)) == pytest.approx(1 / cycles, rel=0.2)
+    fraction = float(np.mean(np.concatenate(significant)))
+    assert 0.02 < fraction < 0.09  # 5 % expected
+
+
+def test_coherence_level_is_the_noise_quantile():
+    """1 − α^{1/(n−1)}: the magnitude-squared coherence of n spectra of pure noise exceeds
+    it with probability α (checked by drawing such spectra)."""
+    from posture_id.frf.response import coherence_level
+
+    rng = np.random.default_rng(5)
+    for n in (2, 6, 20):
+        u = rng.standard_normal((20000, n)) + 1j * rng.standard_normal((20000, n))
+        y = rng.standard_normal((20000, n)) + 1j * rng.standard_normal((20000, n))
+        gamma = (np.abs((np.conj(u) * y).sum(axis=1)) ** 2
+                 / ((np.abs(u) ** 2).sum(axis=1) * (np.abs(y) ** 2).sum(axis=1)))
+        assert float(np.mean(gamma > coherence_level(n))) == pytest.approx(0.05, abs=0.006)
+    assert float(coherence_level(1)) == 1.0
+
+
+def test_a_linear_response_in_noise_is_significant_and_bands_are_counted():
+    """A known linear system (a 1.2 Hz low-pass) under noise of 5× its variance: its
+    locked share is 1/6, its coherence clears the level in its passband; with 12 bands asked, the summary says
+    how many held a stimulated frequency."""
+    stimulus, _, u = _prts_samples(80, cycles=10)
+    b, a = signal.butter(2, 1.2, fs=RATE)
+    locked = signal.lfilter(b, a, u)
+    rng = np.random.default_rng(8)
+    y = locked + math.sqrt(5 * np.var(locked)) * rng.standard_normal(len(u))
+    result = frequency_response_arrays(u, y[:, None], RATE, stimulus.period_s, ("y",),
+                                       FrfOptions(skip_cycles=1, drift_order=0))
+    assert result.locked_share[0] == pytest.approx(1 / 6, rel=0.15)
+    # significant where the filter passes the tilt, not where it has cut it to below the
+    # noise (the local signal-to-noise ratio at each harmonic decides)
+    passband = result.frequencies_hz < 0.8
+    assert float(np.mean(result.significant[passband])) > 0.8
+    assert float(np.mean(result.significant[result.frequencies_hz > 2.0])) < 0.3
+    banded = frequency_response_arrays(u, y[:, None], RATE, stimulus.period_s, ("y",),
+                                       FrfOptions(skip_cycles=1, drift_order=0, bands=12))
+    held = len(banded.frequencies_hz)
+    assert held + banded.bands_empty == 12
+    first = banded.summary().splitlines()[0]
+    assert f"{held} bands" in first
+    assert (f"of 12 asked: {banded.bands_empty} held no stimulated" in first) == (held < 12)

@@ -48,7 +48,8 @@ for seed, (name, (height, mass)) in enumerate(subjects.items()):
 # One JSON per recording and `summary.csv` (status, body, method, classes, E_rel, every
 # module's parameters); a run stopped part-way continues where it stopped. The default
 # method, the CNN, takes milliseconds a recording; `--method hybrid` refines each answer
-# by least squares, at the price (today) of compiling the fit model once per body.
+# by least squares; the fit model is compiled once for all the subjects' bodies (their
+# constants are inputs of the compiled code, docs/fit.md).
 
 # %%
 subprocess.run([posture_id_command, "identify", str(recordings), "--bodies", str(bodies),

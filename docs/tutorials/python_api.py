@@ -58,4 +58,4 @@ result.plot_intervals("intervals.png")
 # %% [markdown]
 # The CNN alone can be some way off, as its intervals say; `Method.HYBRID` refines its
 # answer by least squares (seconds a recording once the fit model is compiled: about a
-# minute, once per body and recording length).
+# minute, once per number of segments and recording length: every body shares it).

@@ -33,13 +33,20 @@ class CycleAverage:
         cycles: (C, P, ...) each analysed cycle, drift removed.
         drift: (C·P, ...) the fitted drift across the analysed span (zero mean).
         locked_share: (...) share of the drift-free signal's variance (about its mean)
-            that is the repeated cycle average: the stimulus-locked share, in [0, 1].
+            that is stimulus-locked, in [0, 1], corrected for the noise the cycle
+            average keeps: averaging C cycles leaves 1/C of the noise's variance in it,
+            estimated from how the cycles differ (the remainder, C − 1 degrees of freedom
+            per sample), so pure noise has a share about 0, not 1/C. NaN with a single
+            cycle (noise and response cannot be told apart).
+        uncorrected_share: (...) the cycle average's share as it is, noise left in it
+            (1 with a single cycle).
     """
 
     mean: np.ndarray
     cycles: np.ndarray
     drift: np.ndarray
     locked_share: np.ndarray
+    uncorrected_share: np.ndarray
 
 
 def cycle_spans(n_samples: int, samples_per_cycle: int, skip_cycles: int = 0,
@@ -94,12 +101,20 @@ def cycle_average(signal: np.ndarray, samples_per_cycle: int, skip_cycles: int =
     # cycle average is zero: two orthogonal parts, so the shares add up to 1
     periodic = ((mean - mean.mean(axis=0)) ** 2).sum(axis=0) * cycles
     remainder = ((locked - mean) ** 2).sum(axis=(0, 1))
+    # the noise in the average: its variance/C per sample, C·P samples (periodic counts C
+    # copies), so P·σ² in all, and the remainder estimates (C − 1)·P·σ²
     with np.errstate(invalid="ignore", divide="ignore"):
         share = periodic / (periodic + remainder)
+        if cycles >= 2:
+            corrected = np.clip((periodic - remainder / (cycles - 1))
+                                / (periodic + remainder), 0.0, 1.0)
+        else:
+            corrected = np.full_like(share, np.nan)
     return CycleAverage(mean=mean.reshape(p, *trailing),
                         cycles=locked.reshape(cycles, p, *trailing),
                         drift=drift.reshape(cycles * p, *trailing),
-                        locked_share=share.reshape(trailing))
+                        locked_share=corrected.reshape(trailing),
+                        uncorrected_share=share.reshape(trailing))
 
 
 def _without_cycle_average(x: np.ndarray, cycles: int, p: int) -> np.ndarray:

@@ -175,16 +175,10 @@ class LockedProjection:
                                  options, trial.name)
 
     def locked_share(self, x: np.ndarray) -> np.ndarray:
-        """(M,) share of each channel's variance (over the analysed cycles) that is its
-        drift-free cycle average: the stimulus-locked part of ``x`` (S, M)."""
-        c = self.all_harmonics(x)  # (P/2, M), DFT ÷ P
-        power = 2 * np.sum(np.abs(c) ** 2, axis=0)
-        if self.period % 2 == 0:  # the Nyquist harmonic counts once
-            power -= np.abs(c[-1]) ** 2
-        span = x[self.start : self.start + self.cycles * self.period]
-        total = np.var(span, axis=0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(total > 0, power / total, np.nan)
+        """(M,) share of each channel's variance (over the analysed cycles, drift removed)
+        that is stimulus-locked, corrected for the noise the cycle average keeps (NaN for
+        a single cycle: :func:`~posture_id.frf.cycles.cycle_average`); ``x``: (S, M)."""
+        return cycle_average(x[self.start :], self.period, 0, self.drift_order).locked_share
 
     def explained(self, recorded: np.ndarray, simulated: np.ndarray) -> np.ndarray:
         """(M,) share of the recorded locked sway (its compared harmonics, unweighted) that

@@ -10,7 +10,11 @@ the excited frequencies of a band, the cross- and auto-spectra are summed:
 H the FRF (gain |H| in deg/deg, phase ∠H in degrees, unwrapped along frequency) and γ² the
 coherence: the share of the response's power at those frequencies that is linearly locked
 to the tilt (1 for a noise-free linear response; defined only when something is averaged:
-≥ 2 cycles or bands). Before the DFTs a polynomial drift may be removed jointly with the
+≥ 2 cycles or bands). Averaged over n spectra (n = C cycles × the frequencies of a band),
+pure noise gives γ² of about 1/n, and exceeds 1 − α^{1/(n−1)} with probability α
+(the magnitude-squared coherence's null distribution, P(γ² > x) = (1 − x)^{n−1}; Carter,
+Knapp and Nuttall 1973): :attr:`FrequencyResponse.coherence_level` is that level at
+α = 5 %, the line a coherence must clear to show a response at all. Before the DFTs a polynomial drift may be removed jointly with the
 periodic part (:func:`~posture_id.frf.cycles.cycle_average`).
 """
 
@@ -26,7 +30,19 @@ from posture_id.fileio import Result
 from posture_id.frf.cycles import cycle_average
 
 __all__ = ["FrfOptions", "FrequencyResponse", "frequency_response_arrays",
-           "check_analysis_options", "samples_per_cycle"]
+           "check_analysis_options", "samples_per_cycle", "coherence_level",
+           "SIGNIFICANCE"]
+
+#: The coherence's significance level: pure noise exceeds the level this often.
+SIGNIFICANCE = 0.05
+
+
+def coherence_level(averages: np.ndarray | int, alpha: float = SIGNIFICANCE) -> np.ndarray:
+    """The γ² that pure noise exceeds with probability ``alpha``, for a coherence
+    averaged over ``averages`` (n ≥ 2) independent spectra: 1 − α^{1/(n−1)} (1 for n < 2)."""
+    n = np.asarray(averages, dtype=float)
+    with np.errstate(divide="ignore"):
+        return np.where(n >= 2, 1.0 - alpha ** (1.0 / np.maximum(n - 1, 1e-12)), 1.0)
 
 
 def samples_per_cycle(period_s: float, sample_rate_hz: float, name: str) -> int:
@@ -87,8 +103,14 @@ class FrequencyResponse(Result):
         response: (F, M) complex H, rad/rad = deg/deg. coherence: (F, M) γ² in [0, 1], or
             None when nothing was averaged (one cycle, no bands).
         channels: (M,) names. cycles: analysed cycles. period_s: one stimulus cycle.
-        locked_share: (M,) share of each channel's variance that is stimulus-locked.
+        locked_share: (M,) share of each channel's variance that is stimulus-locked,
+            corrected for the noise left in the cycle average (NaN for one cycle).
         options: how it was computed. name: the recording's name.
+        coherence_level: (F,) the γ² pure noise exceeds with probability
+            :data:`SIGNIFICANCE` at each frequency (its averages: cycles × frequencies of
+            the band), or None with the coherence.
+        bands_empty: with ``options.bands``, how many of the bands held no stimulated
+            frequency (dropped).
     """
 
     frequencies_hz: np.ndarray
@@ -100,6 +122,15 @@ class FrequencyResponse(Result):
     locked_share: np.ndarray
     options: FrfOptions
     name: str = "recording"
+    coherence_level: np.ndarray | None = None
+    bands_empty: int = 0
+
+    @property
+    def significant(self) -> np.ndarray | None:
+        """(F, M) bool: the coherence clears its significance level, or None."""
+        if self.coherence is None or self.coherence_level is None:
+            return None
+        return self.coherence > self.coherence_level[:, None]
 
     @property
     def gain(self) -> np.ndarray:
@@ -120,23 +151,48 @@ class FrequencyResponse(Result):
                 "gain": self.gain[:, m].tolist(),
                 "phase_deg": self.phase_deg[:, m].tolist(),
                 "coherence": None if self.coherence is None else self.coherence[:, m].tolist(),
-                "locked_share": float(self.locked_share[m]),
+                "locked_share": (float(self.locked_share[m])
+                                 if np.isfinite(self.locked_share[m]) else None),
             }
         return {"frequencies_hz": self.frequencies_hz.tolist(), "channels": channels,
+                "coherence_level": (None if self.coherence_level is None
+                                    else self.coherence_level.tolist()),
+                "coherence_significance": SIGNIFICANCE,
                 "cycles": self.cycles, "period_s": self.period_s,
+                "bands_empty": self.bands_empty,
                 "provenance": provenance(self.options, recording=self.name)}
 
     def summary(self) -> str:
-        lines = [f"FRF of {self.name}: {self.cycles} cycle(s) of {self.period_s:g} s, "
-                 f"{len(self.frequencies_hz)} frequencies "
-                 f"{self.frequencies_hz[0]:.3g}–{self.frequencies_hz[-1]:.3g} Hz",
-                 f"{'channel':<12} {'locked':>7} {'gain@f1':>8} {'phase@f1':>9} "
-                 f"{'coherence':>10}"]
+        count = len(self.frequencies_hz)
+        if self.options.bands:
+            what = f"{count} bands" + (
+                f" (of {self.options.bands} asked: {self.bands_empty} held no stimulated "
+                "frequency)" if self.bands_empty else "")
+        else:
+            what = f"{count} frequencies"
+        lines = [f"FRF of {self.name}: {self.cycles} cycle(s) of {self.period_s:g} s, {what} "
+                 f"{self.frequencies_hz[0]:.3g}–{self.frequencies_hz[-1]:.3g} Hz"]
+        significant = self.significant
+        if significant is not None:
+            lines.append(f"coherence: significant where it clears the level pure noise "
+                         f"exceeds {100 * SIGNIFICANCE:g} % of the time ("
+                         f"{float(np.min(self.coherence_level)):.2f}–"
+                         f"{float(np.max(self.coherence_level)):.2f} for these averages)")
+        lines.append(f"{'channel':<12} {'locked':>7} {'gain@f1':>8} {'phase@f1':>9} "
+                     f"{'coherence':>10} {'significant':>12}")
         for m, name in enumerate(self.channels):
             coherence = ("" if self.coherence is None
                          else f"{float(np.median(self.coherence[:, m])):.2f} (median)")
-            lines.append(f"{name:<12} {100 * self.locked_share[m]:6.1f}% "
-                         f"{self.gain[0, m]:8.3f} {self.phase_deg[0, m]:8.1f}° {coherence:>10}")
+            where = ("" if significant is None
+                     else f"{int(significant[:, m].sum())} of {count}")
+            share = ("  n/a  " if not np.isfinite(self.locked_share[m])
+                     else f"{100 * self.locked_share[m]:6.1f}%")
+            lines.append(f"{name:<12} {share} "
+                         f"{self.gain[0, m]:8.3f} {self.phase_deg[0, m]:8.1f}° {coherence:>10} "
+                         f"{where:>12}")
+        if self.cycles < 2:
+            lines.append("locked share: n/a with one cycle (noise and response cannot be "
+                         "told apart)")
         return "\n".join(lines)
 
     def plot(self, path=None, ax=None):
@@ -176,11 +232,15 @@ def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate
     y_power = (np.abs(yf[:, idx, :]) ** 2).sum(axis=0)  # (F, M)
     f = freqs[idx]
     averaged = n_cycles > 1
+    averages = np.full(len(f), n_cycles)
+    empty = 0
     if options.bands:
         edges = np.geomspace(f[0], f[-1] * (1 + 1e-9), options.bands + 1)
         which = np.clip(np.searchsorted(edges, f, side="right") - 1, 0, options.bands - 1)
         groups = [np.flatnonzero(which == b) for b in range(options.bands)]
+        empty = sum(1 for g in groups if not len(g))
         groups = [g for g in groups if len(g)]
+        averages = np.array([n_cycles * len(g) for g in groups])
         cross = np.stack([cross[g].sum(axis=0) for g in groups])
         u_power = np.stack([u_power[g].sum(axis=0) for g in groups])
         y_power = np.stack([y_power[g].sum(axis=0) for g in groups])
@@ -194,4 +254,5 @@ def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate
         coherence=np.clip(coherence, 0.0, 1.0) if averaged else None,
         channels=tuple(channels), cycles=n_cycles, period_s=float(period_s),
         locked_share=np.asarray(y_cycles.locked_share, dtype=float), options=options,
-        name=name)
+        name=name, coherence_level=coherence_level(averages) if averaged else None,
+        bands_empty=empty)

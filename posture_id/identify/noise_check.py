@@ -5,14 +5,17 @@ fit stuck in a local minimum or a parameter pinned at a bound leaves more. The n
 estimated from the recording itself, in the way that suits its stimulus:
 
 - **locked** (a periodic stimulus, at least one whole cycle): the residual's
-  stimulus-locked harmonics (recorded minus model, the drift-free cycle average at the
-  stimulated frequencies) divided by the noise level at each, estimated from the
-  neighbouring harmonics the stimulus leaves empty (:class:`~posture_id.frf.locked.
-  LockedProjection`). Sway of the subject's own, drift and sensor noise are all "noise"
-  here, so a people-like recording whose sway is mostly not locked to the stimulus is
-  judged as fairly as a clean one. A right model leaves an RMS of about 1 (the residual
-  is χ² with 2K·N degrees of freedom); below 1 when the noise estimate includes response
-  the model reproduces (the dead-band's even harmonics of a clean recording).
+  stimulus-locked harmonics (recorded minus model: the DFT of its drift-free cycle
+  average at the stimulated frequencies up to 2 Hz) divided by the noise level at each.
+  With C ≥ 2 cycles the noise level is the spread of the residual's harmonics from cycle
+  to cycle (the variance of their mean, pooled over the neighbouring harmonics): whatever
+  differs between cycles is not locked to the stimulus, while a deterministic response,
+  the dead-band's even harmonics included, repeats in every cycle and never counts as
+  noise. With one cycle it is the power at the neighbouring harmonics the stimulus leaves
+  empty (:class:`~posture_id.frf.locked.LockedProjection`). Sway of the subject's own,
+  drift and sensor noise are all "noise" here, so a people-like recording whose sway is
+  mostly not locked to the stimulus is judged as fairly as a clean one. A right model
+  leaves an RMS of about 1.
 - **raw** (any other stimulus): the residual's SD against the white sensor noise
   estimated from the recording's third differences
   (:func:`~posture_id.uncertainty.noise.sensor_noise_deg`). Sway of the subject's own is
@@ -31,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posture_id.errors import PostureIdError
+from posture_id.frf.cycles import cycle_average
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.noise import sensor_noise_deg
@@ -43,6 +47,8 @@ NOISE_RATIO_LIMIT = 1.5
 #: A noise estimate below this (degrees) is raised to it: quantisation and rounding of a
 #: recording's file leave at least this much.
 _NOISE_FLOOR_DEG = 1e-4
+#: Harmonics on each side pooled into one harmonic's cycle-to-cycle noise level.
+_NEIGHBOURS = 3
 
 
 @dataclass(frozen=True)
@@ -88,23 +94,53 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
     residual = np.degrees(recorded - model_theta)
     projection = _locked_projection(trial)
     if projection is not None:
-        noise = float(np.median(projection.noise))
-        if not np.all(np.isfinite(residual)):
-            return NoiseCheck(math.inf, "locked", noise, limit)
-        weighted = projection.apply(residual)
-        return NoiseCheck(float(np.sqrt(np.mean(weighted**2))), "locked", noise, limit)
+        finite = bool(np.all(np.isfinite(residual)))
+        if projection.cycles >= 2:
+            # what differs between cycles: in the recording, a transient of the body's
+            # own repeats in the model and is no noise; in the residual, a model whose
+            # sway is not periodic adds its own. Each only ever adds: the smaller holds
+            variance = _between_cycles(projection, np.degrees(recorded))
+            if finite:
+                variance = np.minimum(variance, _between_cycles(projection, residual))
+            ratio = (float(np.sqrt(np.mean(np.abs(projection.spectrum(residual)) ** 2
+                                           / variance))) if finite else math.inf)
+            noise = float(np.median(np.sqrt(variance / 2)))
+        else:
+            ratio = (float(np.sqrt(np.mean(projection.apply(residual) ** 2))) if finite
+                     else math.inf)
+            noise = float(np.median(projection.noise))
+        return NoiseCheck(ratio, "locked", noise, limit)
     noise = max(float(sensor_noise_deg(recorded)), _NOISE_FLOOR_DEG)
     if not np.all(np.isfinite(residual)):
         return NoiseCheck(math.inf, "raw", noise, limit)
     return NoiseCheck(float(np.sqrt(np.mean(residual**2))) / noise, "raw", noise, limit)
 
 
+def _between_cycles(projection: LockedProjection, recorded: np.ndarray) -> np.ndarray:
+    """(K, N) the variance of the cycle-averaged compared harmonics that the recording's
+    noise leaves (DFT ÷ P, degrees²), from how its cycles (C ≥ 2) differ from their mean:
+    pooled over ±:data:`_NEIGHBOURS` harmonics, floored at :data:`_NOISE_FLOOR_DEG`.
+    ``recorded``: (S, N) degrees."""
+    p, c = projection.period, projection.cycles
+    average = cycle_average(recorded[projection.start :], p, 0, projection.drift_order)
+    spectra = np.fft.rfft(average.cycles, axis=1)[:, 1 : p // 2 + 1] / p  # (C, P/2, N)
+    spread = (np.abs(spectra - spectra.mean(axis=0)) ** 2).sum(axis=0) / (c * (c - 1))
+    kernel = np.ones(2 * _NEIGHBOURS + 1)
+    counts = np.convolve(np.ones(len(spread)), kernel, mode="same")
+    pooled = np.stack([np.convolve(spread[:, j], kernel, mode="same") / counts
+                       for j in range(spread.shape[1])], axis=1)
+    return np.maximum(pooled[projection.harmonics - 1], _NOISE_FLOOR_DEG**2 / (p * c))
+
+
 def _locked_projection(trial: PreparedTrial) -> LockedProjection | None:
-    """The noise-weighted locked projection of a trial with a periodic stimulus and a
-    whole cycle, else None."""
+    """The locked projection of a trial with a periodic stimulus and a whole cycle (noise
+    weights only for a single cycle), else None."""
     if trial.stimulus.period_s is None:
         return None
     try:
-        return LockedProjection.for_trial(trial, LockedOptions(weighted=True))
+        projection = LockedProjection.for_trial(trial, LockedOptions(weighted=False))
+        if projection.cycles < 2:
+            projection = LockedProjection.for_trial(trial, LockedOptions(weighted=True))
+        return projection
     except PostureIdError:  # less than a cycle, a period off the grid, no empty harmonic
         return None

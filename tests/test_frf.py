@@ -248,8 +248,8 @@ def test_coherence_level_is_the_noise_quantile():
 
 def test_a_linear_response_in_noise_is_significant_and_bands_are_counted():
     """A known linear system (a 1.2 Hz low-pass) under noise of 5× its variance: its
-    locked share is 1/6, its coherence clears the level in its passband; with 12 bands asked, the summary says
-    how many held a stimulated frequency."""
+    locked share is 1/6, its coherence clears the level in its passband; with 12 bands
+    asked, the summary says how many held a stimulated frequency."""
     stimulus, _, u = _prts_samples(80, cycles=10)
     b, a = signal.butter(2, 1.2, fs=RATE)
     locked = signal.lfilter(b, a, u)

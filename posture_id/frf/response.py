@@ -14,8 +14,9 @@ to the tilt (1 for a noise-free linear response; defined only when something is 
 pure noise gives γ² of about 1/n, and exceeds 1 − α^{1/(n−1)} with probability α
 (the magnitude-squared coherence's null distribution, P(γ² > x) = (1 − x)^{n−1}; Carter,
 Knapp and Nuttall 1973): :attr:`FrequencyResponse.coherence_level` is that level at
-α = 5 %, the line a coherence must clear to show a response at all. Before the DFTs a polynomial drift may be removed jointly with the
-periodic part (:func:`~posture_id.frf.cycles.cycle_average`).
+α = 5 %, the line a coherence must clear to show a response at all. Before the DFTs a
+polynomial drift may be removed jointly with the periodic part
+(:func:`~posture_id.frf.cycles.cycle_average`).
 """
 
 from __future__ import annotations

@@ -230,7 +230,23 @@ class FitRun:
             joints=body.joint_names,
             provenance=provenance(self.options, body, recording=self.trial.name),
             residual_sd=residual_sd, noise_floor_deg=self.options.noise_floor_deg,
-            time_offset_s=self.trial.time_offset_s, trial=self.trial, defaults=defaults)
+            time_offset_s=self.trial.time_offset_s, trial=self.trial, defaults=defaults,
+            on_bounds=self._on_bounds(best.q, params),
+            precision_rel=self.options.precision_rel)
+
+    def _on_bounds(self, q: np.ndarray, params: DecParameters) -> tuple[str, ...]:
+        """The fitted parameters that ended within 0.1 % of the search range of a bound."""
+        lay, out = self.layout, []
+        names = (*TARGET_FIELDS, "class", "kpas", "bpas")
+        for k in lay.continuous(self.options.fit_passive):
+            margin = 1e-3 * (self.upper[k] - self.lower[k])
+            side = ("lower" if q[k] <= self.lower[k] + margin
+                    else "upper" if q[k] >= self.upper[k] - margin else None)
+            if side is not None:
+                field_name, joint = names[k // lay.n], self.body.joint_names[k % lay.n]
+                value = params.array(field_name)[k % lay.n]
+                out.append(f"{joint} {field_name} at its {side} bound ({value:.4g})")
+        return tuple(out)
 
 
 def _search_offset(run: FitRun, result: FitResult) -> FitResult:

@@ -76,6 +76,10 @@ class FitResult(Result):
         residual_sd: the residual's SD (its units: degrees, or noise levels for a locked
             fit) and noise_floor_deg the least σ the standard errors assumed; the SEs use
             σ = max(residual_sd, noise_floor_deg).
+        precision_rel: the precision ``poorly_determined`` was judged by.
+        on_bounds: the parameters that ended on a bound of the search, as
+            "<joint> <field> at its lower|upper bound (<value>)" (Kp, Ki, Kd, Δ; the
+            passive terms too when they were fitted).
     """
 
     parameters: DecParameters
@@ -103,6 +107,8 @@ class FitResult(Result):
     noise_floor_deg: float = 0.0
     trial: PreparedTrial | None = field(default=None, repr=False, compare=False)
     defaults: DecParameters | None = field(default=None, repr=False, compare=False)
+    on_bounds: tuple[str, ...] = ()
+    precision_rel: float = 0.05
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -127,6 +133,7 @@ class FitResult(Result):
                 "time_offset_s": self.time_offset_s,
                 "stages": [s.to_dict() for s in self.stages],
             },
+            "on_bounds": list(self.on_bounds),
             "notices": list(self.notices),
             "provenance": self.provenance,
         }
@@ -182,7 +189,8 @@ class FitResult(Result):
         si = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
         return ParameterIntervals.around(self.normalised[:, :4],
                                          factor * self.standard_errors_normalised, si,
-                                         level, method, noise, self.joints)
+                                         level, method, noise, self.joints,
+                                         self.poorly_determined, self.precision_rel)
 
     def plot(self, path=None, ax=None):
         """Recorded versus fitted sway per segment (degrees); saved to ``path`` if given,

@@ -36,6 +36,7 @@ from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.noise_check import noise_check
 from posture_id.identify.result import IdentificationResult, SegmentFit
+from posture_id.identify.verdict import PEOPLE_LIKE_SHARE, TrustVerdict, suggestion
 from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentifier
 from posture_id.progress import Progress
 from posture_id.provenance import provenance
@@ -139,7 +140,9 @@ class Identifier:
             spent += time.perf_counter() - began
             notices += fit.notices
             parameters, normalised = fit.parameters, fit.normalised
-            calibration = self.cnn.calibration if method is Method.HYBRID else None
+            # the hybrid's scales are calibrated for the network's own body only
+            calibration = (self.cnn.calibration if method is Method.HYBRID
+                           and self.cnn.trained_on_this_body else None)
             intervals = fit.intervals_at(self.level, None if calibration is None
                                          else calibration.least_squares)
             trial = fit.trial  # with a fitted stimulus offset: the shifted trial
@@ -148,7 +151,7 @@ class Identifier:
             intervals = cnn.intervals
             notices += trial.notices
         checked = _resimulate(body, trial, parameters, options.simulation)
-        noise = noise_check(trial, checked["resimulated"])
+        verdict = _verdict(method, options, trial, checked, cnn, fit)
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -157,7 +160,7 @@ class Identifier:
             notices=tuple(dict.fromkeys(notices)),
             provenance=provenance(options if fit is not None else None, body,
                                   recording=trial.name, method=method.value),
-            noise=noise, **checked,
+            verdict=verdict, **{k: v for k, v in checked.items() if k != "locked_share"},
         )
 
 
@@ -221,10 +224,11 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
     sway_simulated = trial.alpha[:n, 0]
     e_id, e_rel = map(float, sway_errors(sway_recorded, sway_simulated))
     fell = math.isinf(e_rel)
-    share = explained = None
+    share = explained = body_share = None
     if locked is not None:
         share = locked.locked_share(rec.theta)
         explained = locked.explained(rec.theta, theta)
+        body_share = float(locked.locked_share(np.degrees(sway_recorded)[:, None])[0])
     segments = []
     for j, name in enumerate(rec.segments):
         residual = rec.theta[:, j] - theta[:, j]
@@ -238,7 +242,32 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
             float(1.0 - np.var(residual) / np.var(rec.theta[:, j])), **statistics))
     return {"e_id_deg": e_id, "e_rel": e_rel, "segments": tuple(segments), "time": rec.time,
             "recorded": rec.theta, "resimulated": theta, "sway_recorded": sway_recorded,
-            "sway_resimulated": sway_simulated, "fell_at_s": trial.abort_time}
+            "sway_resimulated": sway_simulated, "fell_at_s": trial.abort_time,
+            "locked_share": None if body_share is None or not math.isfinite(body_share)
+            else body_share}
+
+
+def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked: dict,
+             cnn, fit) -> TrustVerdict:
+    """The trust verdict (:mod:`posture_id.identify.verdict`) of one identification."""
+    noise = noise_check(trial, checked["resimulated"])
+    share = checked["locked_share"]
+    locked = options.locked is not None
+    people_like = share is not None and share < PEOPLE_LIKE_SHARE
+    outside = list(cnn.outside) if method is Method.CNN and cnn is not None else []
+    if people_like and method is Method.CNN:
+        outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked; the "
+                       "network was trained on sway that is the stimulus's response and "
+                       "sensor noise")
+    elif people_like and not locked:
+        outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked: "
+                       "least squares on the raw sway fits the subject's own sway too")
+    on_bounds = () if fit is None else fit.on_bounds
+    verdict = TrustVerdict(noise, on_bounds, tuple(outside), share)
+    if verdict.doubtful:
+        verdict = TrustVerdict(noise, on_bounds, tuple(outside), share,
+                               suggestion(method, locked, share, on_bounds, noise))
+    return verdict
 
 
 def _locked_projection(trial: PreparedTrial) -> LockedProjection | None:

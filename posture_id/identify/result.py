@@ -10,7 +10,7 @@ import numpy as np
 from posture_id.dec.parameters import Controls, DecParameters, parameter_block
 from posture_id.fileio import Result
 from posture_id.identify.method import Method
-from posture_id.identify.noise_check import NoiseCheck
+from posture_id.identify.verdict import TrustVerdict
 from posture_id.plotting import plot_identification
 from posture_id.uncertainty.intervals import ParameterIntervals
 
@@ -68,8 +68,8 @@ class IdentificationResult(Result):
             (:class:`~posture_id.uncertainty.intervals.ParameterIntervals`), or None (a
             CNN without a calibration).
         notices: things to know. provenance: version, options, body identity, source.
-        noise: the re-simulation's residual against the recording's own noise
-            (:class:`~posture_id.identify.noise_check.NoiseCheck`), or None.
+        verdict: whether the answer should be trusted, and what to run if not
+            (:class:`~posture_id.identify.verdict.TrustVerdict`), or None.
     """
 
     method: Method
@@ -93,7 +93,7 @@ class IdentificationResult(Result):
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
     fell_at_s: float | None = None
-    noise: NoiseCheck | None = None
+    verdict: TrustVerdict | None = None
 
     @property
     def fell(self) -> bool:
@@ -116,7 +116,7 @@ class IdentificationResult(Result):
                                      "locked_share": s.locked_share}
                          for s in self.segments},
             "fell_at_s": self.fell_at_s,
-            "noise_check": None if self.noise is None else self.noise.to_dict(),
+            "trust": None if self.verdict is None else self.verdict.to_dict(),
             "wall_time_s": self.wall_time_s,
             "identification_time_s": self.identification_time_s,
             "intervals": None if self.intervals is None else self.intervals.to_dict(),
@@ -143,13 +143,13 @@ class IdentificationResult(Result):
                 for s in self.segments))
             lines.append(f"body sway: E_id {self.e_id_deg:.2e}°, E_rel "
                          f"{100 * self.e_rel:.2f} % (of the raw sway)")
-            if self.noise is not None:
-                lines.append(self.noise.sentence()[0].upper() + self.noise.sentence()[1:])
         lines.append(f"{self.method.value} in {self.identification_time_s:.3g} s "
                      f"({self.wall_time_s:.3g} s with the checks)")
         if self.intervals is not None:
             lines += self.intervals.table()
         lines += [f"note: {n}" for n in self.notices]
+        if self.verdict is not None:
+            lines.append(self.verdict.line())
         return "\n".join(lines)
 
     def plot(self, path=None, ax=None):

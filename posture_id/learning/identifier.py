@@ -65,6 +65,8 @@ class CnnIdentification(Result):
         intervals: conformal intervals of Kp, Ki, Kd, Δ (None for a model without a
             calibration); the class probability is then temperature-scaled too.
         notices: things to know. provenance: version, body identity, recording name.
+        outside: ways the recording lies outside what the network was trained or
+            calibrated on (another body; more sensor noise than the calibration saw).
     """
 
     parameters: DecParameters
@@ -75,6 +77,7 @@ class CnnIdentification(Result):
     intervals: ParameterIntervals | None = None
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
+    outside: tuple[str, ...] = ()
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -86,6 +89,7 @@ class CnnIdentification(Result):
             "method": "cnn",
             "model": self.model,
             "intervals": None if self.intervals is None else self.intervals.to_dict(),
+            "outside": list(self.outside),
             "notices": list(self.notices),
             "provenance": self.provenance,
         }
@@ -133,9 +137,13 @@ class CnnIdentifier:
                              "not used: no intervals (posture-id calibration makes one)",)
             self.calibration = None
         elif self.calibration is None:
-            self.notices += (f"{model.path}: the model has no calibration, so no intervals "
-                             "(posture-id calibration MODEL_DIR DATASET makes one)",)
-        if trained.get("sha256") != body.sha256:
+            self.notices += (f"{model.path}: the model has no calibration, so the CNN's own "
+                             "answer has no intervals (posture-id calibration MODEL_DIR "
+                             "DATASET makes one)",)
+        #: the network was trained (and calibrated) on this very body
+        self.trained_on_this_body = trained.get("sha256") == body.sha256
+        self.trained_on = str(trained.get("name"))
+        if not self.trained_on_this_body:
             self.notices += (f"the model was trained on body '{trained.get('name')}', not on "
                              f"this URDF ('{body.name}'); its gains are normalised by this "
                              "body's m·g·h",)
@@ -223,6 +231,8 @@ class CnnIdentifier:
         tilt, theta = self._window(trial)
         images = self._features(tilt, theta)
         notices = self.notices + trial.notices
+        outside = [] if self.trained_on_this_body else [
+            f"the network was trained on body '{self.trained_on}', not on this one"]
         prediction = predict_images(self.model, images)
         if self.model.config.layout is Layout.MODULAR:  # one sample per module
             normalised = prediction.targets[:, 0]
@@ -239,13 +249,18 @@ class CnnIdentifier:
             noise = sensor_noise_deg(theta)
             conformal = self.calibration.intervals
             defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
+            label = ("conformal, CNN (validation split)" if self.trained_on_this_body else
+                     f"conformal, CNN, calibrated on body '{self.trained_on}', not on this "
+                     "one (coverage not checked here)")
             intervals = ParameterIntervals.around(
                 normalised[:, :4], conformal.scale(level, noise), defaults, level,
-                "conformal, CNN (validation split)", noise, self.body.joint_names)
+                label, noise, self.body.joint_names)
             if conformal.beyond(noise):
-                notices += (f"{trial.name}: its sensor noise (about {noise:.3f}°) is above the "
-                            f"{conformal.noise_deg[-1]:.3f}° the intervals were calibrated "
-                            "for: they are likely too narrow",)
+                beyond = (f"its sensor noise (about {noise:.3f}°) is above the "
+                          f"{conformal.noise_deg[-1]:.3f}° the intervals were calibrated "
+                          "for: they are likely too narrow")
+                notices += (f"{trial.name}: {beyond}",)
+                outside.append(beyond)
         arrays = denormalise_arrays(normalised[None], self.defaults)
         params = arrays.trial(0, self.body.joint_names)
         model_info = {"path": str(self.model.path), "layout": self.model.config.layout.value,
@@ -255,6 +270,6 @@ class CnnIdentifier:
         return CnnIdentification(
             parameters=params, normalised=normalised, class_probability=probability,
             joints=self.body.joint_names, model=model_info, intervals=intervals,
-            notices=notices,
+            notices=notices, outside=tuple(outside),
             provenance={**provenance(None, self.body, recording=trial.name),
                         "body": body_identity(self.body)})

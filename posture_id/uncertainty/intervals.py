@@ -26,6 +26,11 @@ class ParameterIntervals:
         lower_si, upper_si: (N, 4) the same in SI units (N·m/rad, N·m/(rad·s), N·m·s/rad, s).
         ratio: (N, 4) width against the prior's at the same level.
         noise_deg: the recording's estimated sensor noise, °. joints: module names.
+        imprecise: (N, 4) bool, or None: least squares' flags of parameters determined to
+            worse than ±``precision`` of their value (its 95 % Gauss-Newton interval,
+            ``FitResult.poorly_determined``); the sentences say them too, so that the
+            words and the flags of one result agree.
+        precision: the relative precision those flags were judged by (0.05 = ±5 %).
     """
 
     level: float
@@ -37,10 +42,13 @@ class ParameterIntervals:
     ratio: np.ndarray
     noise_deg: float
     joints: tuple[str, ...]
+    imprecise: np.ndarray | None = None
+    precision: float = 0.05
 
     @classmethod
     def around(cls, estimate: np.ndarray, half_width: np.ndarray, defaults: np.ndarray,
-               level: float, method: str, noise_deg: float, joints: tuple[str, ...]
+               level: float, method: str, noise_deg: float, joints: tuple[str, ...],
+               imprecise: np.ndarray | None = None, precision: float = 0.05
                ) -> ParameterIntervals:
         """estimate ± half_width (both (N, 4) normalised), cut at p̃ = −1; ``defaults``
         (N, 4) the SI defaults p_default."""
@@ -48,7 +56,8 @@ class ParameterIntervals:
         upper = estimate + half_width
         ratio, _ = determination(upper - lower, level)
         return cls(level, method, lower, upper, defaults * (1 + lower), defaults * (1 + upper),
-                   ratio, float(noise_deg), tuple(joints))
+                   ratio, float(noise_deg), tuple(joints),
+                   None if imprecise is None else np.asarray(imprecise, bool), precision)
 
     @property
     def words(self) -> np.ndarray:
@@ -57,15 +66,26 @@ class ParameterIntervals:
 
     def sentences(self) -> list[str]:
         """One sentence per module for what the recording leaves undetermined or only
-        partly determined, e.g. "the knee's Ki is not determined by this recording"."""
+        partly determined, e.g. "the knee's Ki is not determined by this recording", and,
+        with least squares' flags, what is determined against the prior but to worse than
+        ±``precision`` of its value."""
         out = []
-        for j, row in zip(self.joints, self.words, strict=True):
+        words = self.words
+        for i, (j, row) in enumerate(zip(self.joints, words, strict=True)):
             for kind in (Determination.NOT, Determination.PARTLY):
                 names = [LABELS[f] for f, w in zip(TARGET_FIELDS, row, strict=True) if w is kind]
                 if names:
                     verb = "is" if len(names) == 1 else "are"
                     out.append(f"the {j}'s {' and '.join(names)} {verb} {kind.value} by this "
                                "recording")
+            if self.imprecise is not None:
+                names = [LABELS[f] for k, f in enumerate(TARGET_FIELDS)
+                         if self.imprecise[i, k] and row[k] is Determination.WELL]
+                if names:
+                    verb = "is" if len(names) == 1 else "are"
+                    out.append(f"the {j}'s {' and '.join(names)} {verb} determined to worse "
+                               f"than ±{100 * self.precision:g} % of the value (poorly "
+                               "determined, 95 % Gauss-Newton interval)")
         return out
 
     def table(self) -> list[str]:

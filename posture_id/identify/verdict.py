@@ -1,0 +1,125 @@
+"""Should this answer be trusted? One verdict on every identification.
+
+Three questions, each answered from the recording and the result alone (no truth):
+
+1. **Does the identified model explain the recording as well as its noise allows?**
+   (:func:`~posture_id.identify.noise_check.noise_check`: the re-simulation's residual
+   against the noise estimated from the recording, stimulus-locked for a periodic
+   stimulus, raw otherwise; or, if not, is it close anyway: at most
+   :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the recorded sway.)
+2. **Did least squares stop on a bound of its search?** (:attr:`FitResult.on_bounds
+   <posture_id.fitting.result.FitResult.on_bounds>`, named.)
+3. **Is the recording inside what the method was trained or calibrated on?** The CNN:
+   its body, its noise calibration, and sway that is mostly the stimulus's response (the
+   bundled networks are trained on sensor noise alone, so a recording whose body sway is
+   less than :data:`PEOPLE_LIKE_SHARE` stimulus-locked lies outside them). Least squares
+   on the raw sway: the same share (below it the raw fit is fitting the subject's own
+   sway).
+
+The answer is "doubtful" when any of them fails, and the verdict then names the method or
+flags that suit the recording (:func:`suggestion`; the rule and its measurement:
+docs/identify.md, "Trust").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from posture_id.identify.method import Method
+from posture_id.identify.noise_check import NoiseCheck
+
+__all__ = ["TrustVerdict", "PEOPLE_LIKE_SHARE", "suggestion"]
+
+#: Body sway whose noise-corrected stimulus-locked share is below this is people-like:
+#: the subject's own sway dominates (docs/real_recordings.md: 10–40 % in people).
+PEOPLE_LIKE_SHARE = 0.6
+
+#: What suits people-like sway (docs/real_recordings.md, docs/results/real_like.md).
+LOCKED_FLAGS = "--method fit --locked --prior-sd 0.5"
+
+
+@dataclass(frozen=True)
+class TrustVerdict:
+    """Whether an identification should be trusted, and why not.
+
+    Attributes:
+        noise: the residual against the recording's own noise, or None.
+        on_bounds: parameters that least squares left on a bound of its search.
+        outside: ways the recording lies outside what the method was trained or
+            calibrated on (sentences).
+        locked_share: the body sway's stimulus-locked share (noise-corrected), or None.
+        suggestion: what to run instead when doubtful ("" otherwise).
+    """
+
+    noise: NoiseCheck | None
+    on_bounds: tuple[str, ...] = ()
+    outside: tuple[str, ...] = ()
+    locked_share: float | None = None
+    suggestion: str = ""
+
+    @property
+    def reasons(self) -> tuple[str, ...]:
+        """Why the answer is doubtful (empty when it is not)."""
+        out = []
+        if self.noise is not None and not self.noise.acceptable:
+            out.append(f"the model leaves a {self.noise.sentence()}")
+        if self.on_bounds:
+            out.append("on a search bound: " + ", ".join(self.on_bounds))
+        return (*out, *self.outside)
+
+    @property
+    def doubtful(self) -> bool:
+        return bool(self.reasons)
+
+    def line(self) -> str:
+        """The one line a user reads."""
+        if not self.doubtful:
+            noise = self.noise
+            if noise is None:
+                what = ""
+            elif noise.consistent:
+                what = (f": the model explains the recording as well as its noise allows "
+                        f"({noise.basis} residual {noise.ratio:.2f}× the noise)")
+            else:
+                what = (f": the model is close ({noise.basis} residual "
+                        f"{100 * noise.relative:.1f} % of the recorded sway), though not "
+                        f"within the noise ({noise.ratio:.2f}× it)")
+            return f"trust: good{what}"
+        line = "trust: DOUBTFUL: " + "; ".join(self.reasons)
+        return line + (f"; try {self.suggestion}" if self.suggestion else "")
+
+    def to_dict(self) -> dict:
+        return {"doubtful": self.doubtful, "reasons": list(self.reasons),
+                "suggestion": self.suggestion or None,
+                "noise_check": None if self.noise is None else self.noise.to_dict(),
+                "on_bounds": list(self.on_bounds), "outside": list(self.outside),
+                "locked_share": self.locked_share}
+
+
+def suggestion(method: Method, locked: bool, locked_share: float | None,
+               on_bounds: tuple[str, ...], noise: NoiseCheck | None) -> str:
+    """What suits a recording whose answer is doubtful, by the documented rule:
+
+    - people-like sway (locked share below :data:`PEOPLE_LIKE_SHARE`) identified without
+      ``--locked``: :data:`LOCKED_FLAGS`;
+    - the CNN alone: ``--method hybrid`` (least squares from its answer);
+    - least squares on a bound: a wider ``--gain-range`` / ``--delay-range``, and for a
+      noisy recording the prior that keeps it off them (``--locked --prior-sd 0.5``);
+    - least squares from the defaults left more than the noise: ``--method hybrid`` (a
+      start from the CNN's answer, away from the local minimum);
+    - the hybrid or a locked fit left more than the noise: ``--locked --max-offset-s 1
+      --prior-sd 0.5`` (a stimulus that is not where the lab's clock says, and the prior).
+    """
+    people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
+    if people_like and not locked:
+        return LOCKED_FLAGS
+    if method is Method.CNN:
+        return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like else "")
+    if on_bounds:
+        return ("a wider --gain-range MIN MAX / --delay-range MIN MAX, or --locked "
+                "--prior-sd 0.5 to keep a noisy recording off the bounds")
+    if noise is not None and not noise.acceptable:
+        if method is Method.FIT and not locked:
+            return "--method hybrid"
+        return "--locked --max-offset-s 1 --prior-sd 0.5"
+    return ""

@@ -48,7 +48,7 @@ from posture_id.dec.prior import sample_parameters
 from posture_id.errors import SimulationError
 from posture_id.executors import LocalExecutor
 from posture_id.fileio import atomic_write_text, json_text
-from posture_id.fitting import FitOptions, fit_recording
+from posture_id.fitting import FitOptions
 from posture_id.frf.locked import LockedOptions
 from posture_id.identify import Identifier, Method
 from posture_id.learning.identifier import CnnIdentifier
@@ -64,6 +64,8 @@ STIMULI = {"242": dict(states=242, cycles=2), "80": dict(states=80, cycles=6)}
 METHODS = ("raw LS", "locked LS", "CNN", "FRF net", "hybrid", "locked hybrid")
 FIELDS = ("kp", "ki", "kd", "delay_s")
 SHARE_RANGE = (0.10, 0.30)
+#: An answer whose locked response is further than this (E_rel) from the truth's is far.
+FAR_E_REL = 0.10
 _LOADED: dict = {}
 
 
@@ -97,9 +99,11 @@ def _models(stimulus_key: str, folders: dict):
         nets = {kind: CnnIdentifier.load(folders[kind], body)
                 for kind in ("cnn", "frf") if (Path(folders[kind]) / "model.json").exists()}
         start = nets.get("cnn") or CnnIdentifier.resolve(None, body)
-        nets["hybrid"] = Identifier(body, Method.HYBRID, start, FitOptions(threads=1))
-        nets["locked hybrid"] = Identifier(body, Method.HYBRID, start,
-                                           FitOptions(threads=1, locked=LockedOptions()))
+        raw, locked = FitOptions(threads=1), FitOptions(threads=1, locked=LockedOptions())
+        nets["raw LS"] = Identifier(body, Method.FIT, fit_options=raw)
+        nets["locked LS"] = Identifier(body, Method.FIT, fit_options=locked)
+        nets["hybrid"] = Identifier(body, Method.HYBRID, start, raw)
+        nets["locked hybrid"] = Identifier(body, Method.HYBRID, start, locked)
         _LOADED[stimulus_key] = (body, nets)
     return _LOADED[stimulus_key]
 
@@ -112,30 +116,32 @@ def _one(task: tuple) -> dict:
     truth = DecParameters.from_dict(spec["params"], body)
     subject = people_like(body, truth, stim, spec["share"], spec["seed"])
     rec = subject.recording
-    locked_fit = FitOptions(threads=1, locked=LockedOptions())
     start = time.perf_counter()
-    if method == "raw LS":
-        params = fit_recording(prepare_trial(rec, stim), body,
-                               options=FitOptions(threads=1)).parameters
-    elif method == "locked LS":
-        params = fit_recording(prepare_trial(rec, stim), body, options=locked_fit).parameters
-    elif method == "CNN":
+    verdict = None
+    if method == "CNN":
         params = nets["cnn"].identify(prepare_trial(rec, stim)).parameters
     elif method == "FRF net":
         params = nets["frf"].identify(prepare_trial(rec, stim)).parameters
-    else:
-        params = nets[method].identify(rec, stim).parameters
+    else:  # least squares and the hybrids: identify, with its trust verdict
+        result = nets[method].identify(rec, stim)
+        params, verdict = result.parameters, result.verdict
     seconds = time.perf_counter() - start
     again = simulate(body, params, stim)
     reference = subject.locked.alpha[:, 0]
     got = again.alpha[: len(reference), 0]
     e_rel = float(sway_errors(reference, got)[1])
     rel = np.column_stack([params.array(f) / truth.array(f) - 1 for f in FIELDS])
-    return {"stimulus": stimulus_key, "index": index, "method": method, "seconds": seconds,
-            "share": subject.locked_share, "motor_noise_deg": subject.motor_noise.sd_deg,
-            "relative_error": rel.tolist(), "e_rel": e_rel,
-            "classes_correct": [params[j].controls == truth[j].controls
-                                for j in body.joint_names]}
+    row = {"stimulus": stimulus_key, "index": index, "method": method, "seconds": seconds,
+           "share": subject.locked_share, "motor_noise_deg": subject.motor_noise.sd_deg,
+           "relative_error": rel.tolist(), "e_rel": e_rel,
+           "classes_correct": [params[j].controls == truth[j].controls
+                               for j in body.joint_names]}
+    if verdict is not None:
+        row.update(doubtful=verdict.doubtful, trust_reasons=list(verdict.reasons),
+                   suggestion=verdict.suggestion, estimated_locked_share=verdict.locked_share,
+                   relaxed=any("classes relaxed" in n or "unsure of the class" in n
+                               for n in result.notices))
+    return row
 
 
 def statistics(rows: list[dict], joints) -> dict:
@@ -160,6 +166,13 @@ def statistics(rows: list[dict], joints) -> dict:
                 "seconds_median": float(np.median([r["seconds"] for r in mine])),
                 "locked_share_median": float(np.median([r["share"] for r in mine])),
             }
+            if all("doubtful" in r for r in mine):
+                far = ~correct.all(axis=1) | ~(e_rel <= FAR_E_REL)
+                doubtful = np.array([r["doubtful"] for r in mine])
+                out[f"{stimulus_key}|{method}"].update(
+                    far=int(far.sum()), doubtful_far=int((doubtful & far).sum()),
+                    doubtful_right=int((doubtful & ~far).sum()),
+                    relaxed=sum(bool(r.get("relaxed")) for r in mine))
     return out
 
 
@@ -202,6 +215,21 @@ def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict) -
         share = next((s["locked_share_median"] for k, s in stats.items()
                       if k.startswith(stimulus_key + "|")), float("nan"))
         lines += ["", f"Median realised locked share: {100 * share:.1f} %.", ""]
+        judged = [(m, stats[f"{stimulus_key}|{m}"]) for m in METHODS
+                  if "doubtful_far" in stats.get(f"{stimulus_key}|{m}", {})]
+        if judged:
+            lines += ["The trust verdict (far: a wrong class or E_rel of the locked response "
+                      f"above {100 * FAR_E_REL:g} %; want doubtful for ≥ 90 % of the far "
+                      "answers and ≤ 10 % of the others):", "",
+                      "| method | far: doubtful | right: doubtful | fitted again, classes "
+                      "relaxed |", "|---|---|---|---|"]
+            for m, st in judged:
+                right = st["subjects"] - st["far"]
+                lines.append(f"| {m} | {st['doubtful_far']}/{st['far']} | "
+                             f"{st['doubtful_right']}/{right} | "
+                             + (f"{st['relaxed']}/{st['subjects']}" if "hybrid" in m else "")
+                             + " |")
+            lines.append("")
     lines += ["![E_rel of the locked response per method](real_like.png)", ""]
     return "\n".join(lines)
 

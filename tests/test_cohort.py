@@ -33,7 +33,16 @@ def test_cohort_writes_one_json_each_and_a_summary(cohort, tmp_path, capsys):
     rows = list(csv.DictReader((out / "summary.csv").open()))
     status = {r["recording"]: r["status"] for r in rows}
     assert status["subject0.csv"] == "done" and "do not match" in status["broken.csv"]
-    assert rows[0].keys() >= {"ankle_kp", "hip_delay_s", "classes", "e_rel"}
+    assert rows[0].keys() >= {"ankle_kp", "hip_delay_s", "classes", "e_rel_pct", "trust",
+                              "ankle_p_com", "ankle_kp_low", "ankle_kp_high"}
+    done = next(r for r in rows if r["recording"] == "subject0.csv")
+    data = json.loads((out / "subject0.json").read_text())
+    # one unit convention (SI; E_rel in percent), 5 significant digits
+    assert float(done["e_rel_pct"]) == pytest.approx(100 * data["e_rel"], rel=1e-4)
+    assert len(done["ankle_kp"].replace(".", "").lstrip("0")) <= 6
+    low, high = float(done["ankle_kp_low"]), float(done["ankle_kp_high"])
+    assert low <= float(done["ankle_kp"]) <= high
+    assert 0 <= float(done["ankle_p_com"]) <= 1
     # started again, nothing finished is redone
     stamps = {p.name: p.stat().st_mtime_ns for p in out.glob("subject*.json")}
     assert main(["identify", str(cohort / "subject*.csv"), "--out", str(out)]) == 0
@@ -94,3 +103,26 @@ def test_a_cohort_of_subjects_with_bodies_of_their_own(tmp_path, capsys):
                             bodies=bodies)  # all done already: read back, and plotted
     assert set(again.status.values()) == {"skipped"}
     assert again.plot(tmp_path / "cohort.png") is not None
+
+
+def test_a_cohort_run_again_with_other_options_redoes_what_they_change(cohort, tmp_path,
+                                                                        capsys):
+    """The options a result was made with are in its JSON: started again with the same
+    options nothing is redone; with another interval level (or method, or model) every
+    recording is identified again, and the run says which and what changed."""
+    out = tmp_path / "results"
+    pattern = str(cohort / "subject*.csv")
+    assert main(["identify", pattern, "--out", str(out)]) == 0
+    first = {p.name: json.loads(p.read_text()) for p in out.glob("subject*.json")}
+    assert all(d["cohort_options"]["level"] == 0.9 for d in first.values())
+    capsys.readouterr()
+    assert main(["identify", pattern, "--out", str(out), "--level", "0.8"]) == 0
+    err = capsys.readouterr().err
+    assert "3 identified again" in err and "level (0.9 → 0.8)" in err
+    again = {p.name: json.loads(p.read_text()) for p in out.glob("subject*.json")}
+    assert all(d["cohort_options"]["level"] == 0.8 for d in again.values())
+    assert all(d["intervals"]["level"] == 0.8 for d in again.values())
+    rows = list(csv.DictReader((out / "summary.csv").open()))
+    assert {r["status"] for r in rows} == {"redone"}
+    assert main(["identify", pattern, "--out", str(out), "--level", "0.8"]) == 0
+    assert "3 already done" in capsys.readouterr().err

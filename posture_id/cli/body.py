@@ -90,6 +90,11 @@ def _write(args: argparse.Namespace) -> Path | None:
         name = f"winter_{args.height:g}m_{args.mass:g}kg_{args.segments}seg"
     path = write_chain_urdf(args.out, name, straight_links(segments))
     say(f"wrote {path}")
+    if not args.default_tip:
+        modelled = sum(s.mass for s in segments)
+        say(f"it models {modelled:.2f} of the {args.mass:g} kg: the feet "
+            f"({args.mass - modelled:.2f} kg, Winter's tables) are the support on the "
+            "platform, not a segment that sways (docs/model.md)")
     return path
 
 

@@ -140,9 +140,7 @@ class FitRun:
         def say(message: str) -> None:
             report(progress, 0, None, "message", message)
 
-        notices = list(trial.notices)
-        for notice in notices:
-            say(notice)
+        notices = list(trial.notices)  # said once, with the result (not as progress too)
         n_samples = len(trial.recording.time)
         if problem is None:
             problem = FitProblem.get(body, n_samples, options, notify=say)

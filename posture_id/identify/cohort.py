@@ -2,10 +2,15 @@
 
 ``posture-id identify DIR_OR_GLOB --out RESULTS_DIR`` writes ``<recording>.json`` per
 recording (the :class:`~posture_id.identify.result.IdentificationResult`) and
-``summary.csv`` (one row per recording: status, classes, every module's parameters,
-E_rel, time). A recording whose JSON exists is not identified again, so a killed run
-started again continues. A recording that cannot be identified (a bad file) gets its
-one-line reason in the summary; the others go on.
+``summary.csv`` (one row per recording: status, body, method, classes, E_rel in percent,
+the trust verdict, and every module's parameters in SI units with their class
+probability and interval bounds, to 5 significant digits). Each JSON records the options
+it was made with (``"cohort_options"``: method, model weights, least-squares options,
+level, stimulus, columns, body): a recording whose JSON holds the same options is not
+identified again, so a killed run started again continues; one made with other options
+(another ``--method``, say) is identified again and the run says which and why. A
+recording that cannot be identified (a bad file) gets its one-line reason in the summary;
+the others go on.
 
 With a scheduler address the recordings are sent to a running Dask distributed cluster
 as tasks that carry the CSV text and the body's URDF text (the workers need not see the
@@ -17,17 +22,18 @@ from __future__ import annotations
 
 import csv
 import glob
+import hashlib
 import io
 import json
 import math
 import tempfile
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from posture_id.bodies.body import load_body
 from posture_id.errors import PostureIdError
 from posture_id.executors import DaskExecutor
-from posture_id.fileio import Result, atomic_write_text, json_text
+from posture_id.fileio import Result, atomic_write_text, json_text, jsonable
 from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Identifier, Method
 from posture_id.learning.identifier import DEFAULT_LEVEL
@@ -36,7 +42,44 @@ from posture_id.progress import Progress, report
 from posture_id.recording import Recording, RecordingColumns
 from posture_id.simulation.stimulus import TiltProfile
 
-__all__ = ["CohortResult", "SubjectIdentifiers", "find_recordings", "identify_cohort"]
+__all__ = ["CohortResult", "SubjectIdentifiers", "find_recordings", "identify_cohort",
+           "cohort_options"]
+
+#: The statuses of a recording with a result.
+_FINISHED = ("done", "skipped", "redone")
+
+
+def cohort_options(identifier: Identifier, stimulus: TiltProfile | None,
+                   columns: RecordingColumns | None) -> dict:
+    """What a cohort's result depends on besides the recording (JSON-ready): the method,
+    the network's weights, the least-squares options, the level, the stimulus, the
+    columns and the body."""
+    cnn = identifier.cnn
+    return jsonable({
+        "method": identifier.method.value,
+        "model_weights_sha256": None if cnn is None
+        else cnn.model.sidecar.get("weights_sha256"),
+        "fit_options": identifier.fit_options if identifier.method is not Method.CNN
+        else None,
+        "level": identifier.level,
+        "stimulus": None if stimulus is None else {
+            "description": stimulus.description, "period_s": stimulus.period_s,
+            "sha256": hashlib.sha256(stimulus.times.tobytes()
+                                     + stimulus.angles.tobytes()).hexdigest()},
+        "columns": columns,
+        "body_sha256": identifier.body.sha256,
+    })
+
+
+def _differences(old: dict, new: dict) -> tuple[str, ...]:
+    """The top-level options that differ, as "name (old → new)" for short values."""
+    out = []
+    for key in sorted(set(old) | set(new)):
+        a, b = old.get(key), new.get(key)
+        if a != b:
+            short = all(isinstance(x, str | int | float | type(None)) for x in (a, b))
+            out.append(f"{key} ({a} → {b})" if short else key)
+    return tuple(out)
 
 
 def find_recordings(pattern: str | Path) -> list[Path]:
@@ -56,37 +99,47 @@ class CohortResult(Result):
     """What a cohort run did.
 
     Attributes:
-        out: the results folder. status: per recording, "done", "skipped" (already done)
-            or the error. rows: ``summary.csv``'s rows (recording, status, method,
-            classes, e_rel and every module's parameters).
+        out: the results folder. status: per recording, "done", "skipped" (already done
+            with the same options), "redone" (done before with other options: see
+            ``changed``) or the error. rows: ``summary.csv``'s rows.
+        changed: per redone recording, the options that differed.
     """
 
     out: Path
     status: dict[str, str]
     rows: tuple[dict, ...] = ()
+    changed: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return {"out": str(self.out), "status": dict(self.status), "rows": list(self.rows)}
+        return {"out": str(self.out), "status": dict(self.status), "rows": list(self.rows),
+                "changed": {k: list(v) for k, v in self.changed.items()}}
 
     def plot(self, path=None, ax=None):
         """Each identified recording's Kp per module and its E_rel."""
-        done = [r for r in self.rows if "e_rel" in r]
+        done = [r for r in self.rows if "e_rel_pct" in r]
         joints = list(dict.fromkeys(k[: -len("_kp")] for r in done for k in r
                                     if k.endswith("_kp")))  # subjects' bodies may differ
         return plot_cohort([r["recording"] for r in done], joints,
                            [[r.get(f"{j}_kp", math.nan) for j in joints] for r in done],
-                           [math.inf if r["e_rel"] is None else r["e_rel"] for r in done],
+                           [math.inf if r["e_rel_pct"] is None else r["e_rel_pct"] / 100
+                            for r in done],
                            path=path, ax=ax)
 
     @property
     def failed(self) -> dict[str, str]:
-        return {k: v for k, v in self.status.items() if v not in ("done", "skipped")}
+        return {k: v for k, v in self.status.items() if v not in _FINISHED}
 
     def summary(self) -> str:
-        counts = {s: sum(v == s for v in self.status.values()) for s in ("done", "skipped")}
+        counts = {s: sum(v == s for v in self.status.values()) for s in _FINISHED}
+        doubtful = [r["recording"] for r in self.rows if r.get("trust") == "doubtful"]
         return (f"{self.out}: {len(self.status)} recordings, {counts['done']} identified, "
-                f"{counts['skipped']} already done, {len(self.failed)} failed"
-                + "".join(f"\n  {k}: {v}" for k, v in self.failed.items()))
+                f"{counts['skipped']} already done, {counts['redone']} identified again "
+                f"(done before with other options), {len(self.failed)} failed"
+                + "".join(f"\n  {k}: identified again, its options changed: {', '.join(v)}"
+                          for k, v in self.changed.items())
+                + "".join(f"\n  {k}: {v}" for k, v in self.failed.items())
+                + (f"\n  trust doubtful: {', '.join(doubtful)} (the JSON says why and what "
+                   "to try)" if doubtful else ""))
 
 
 def _identify_text(recording: tuple[str, str, str, str], method: str,
@@ -117,9 +170,10 @@ def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | N
                                    None if stimulus is None else stimulus.angle, columns)
         if name is not None:
             recording = replace(recording, name=name)
-        return identifier.identify(recording, stimulus).to_dict()
+        result = identifier.identify(recording, stimulus).to_dict()
     except PostureIdError as exc:
         return {"error": str(exc)}
+    return {**result, "cohort_options": cohort_options(identifier, stimulus, columns)}
 
 
 class SubjectIdentifiers:
@@ -172,12 +226,22 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
     out = Path(out)
     subjects = SubjectIdentifiers(identifier, bodies, model)
     status: dict[str, str] = {}
+    changed: dict[str, tuple[str, ...]] = {}
     todo = []
     for path in recordings:
-        target = out / f"{path.stem}.json"
-        if _finished(target):
+        earlier = _earlier_options(out / f"{path.stem}.json")
+        if earlier is None:
+            todo.append(path)
+            continue
+        try:
+            wanted = cohort_options(subjects(path), stimulus, columns)
+        except PostureIdError:  # its body cannot be loaded: said when it is identified
+            todo.append(path)
+            continue
+        if earlier == wanted:
             status[path.name] = "skipped"
         else:
+            changed[path.name] = _differences(earlier, wanted) or ("cohort_options",)
             todo.append(path)
     out.mkdir(parents=True, exist_ok=True)
     done = len(status)
@@ -189,7 +253,7 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
             status[path.name] = result["error"]
         else:
             atomic_write_text(out / f"{path.stem}.json", json_text(result))
-            status[path.name] = "done"
+            status[path.name] = "redone" if path.name in changed else "done"
         done += 1
         report(progress, done, len(recordings), "recording")
 
@@ -204,7 +268,8 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
                 continue
             record(path, _identify_file(path, chosen, stimulus, columns=columns))
     rows = _write_summary(out, recordings, status)
-    return CohortResult(out, status, tuple(rows))
+    return CohortResult(out, status, tuple(rows),
+                        {k: v for k, v in changed.items() if status.get(k) == "redone"})
 
 
 def _run_on_cluster(address: str, todo: list[Path], subjects: SubjectIdentifiers, model,
@@ -223,29 +288,52 @@ def _run_on_cluster(address: str, todo: list[Path], subjects: SubjectIdentifiers
             record(by_name[name], result)
 
 
-def _finished(target: Path) -> bool:
+def _earlier_options(target: Path) -> dict | None:
+    """The options a finished result was made with ({} for one from before they were
+    recorded), or None when there is no finished result."""
     try:
-        return "parameters" in json.loads(target.read_text(encoding="utf-8"))
+        data = json.loads(target.read_text(encoding="utf-8"))
     except (OSError, ValueError):
-        return False
+        return None
+    return data.get("cohort_options", {}) if "parameters" in data else None
+
+
+def _sig(x) -> float | None:
+    """A number for the summary: 5 significant digits, None for a missing one."""
+    return None if x is None else float(f"{float(x):.5g}")
 
 
 def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) -> list[dict]:
-    rows, fields = [], ["recording", "status", "body", "method", "classes", "e_rel"]
+    """summary.csv: SI units throughout (N·m/rad, N·m·s/rad, N·m/(rad·s), s), E_rel in
+    percent, 5 significant digits; per module its class probability (P(COM), the CNN's
+    or none) and the bounds of each parameter's interval."""
+    rows = []
+    fields = ["recording", "status", "body", "method", "classes", "e_rel_pct", "trust",
+              "suggestion"]
     for path in recordings:
         row = {"recording": path.name, "status": status.get(path.name, "")}
         target = out / f"{path.stem}.json"
-        if status.get(path.name) in ("done", "skipped"):
+        if status.get(path.name) in _FINISHED:
             data = json.loads(target.read_text(encoding="utf-8"))
+            trust = data.get("trust") or {}
             row.update(body=data.get("provenance", {}).get("body", {}).get("name", ""),
-                       method=data["method"], e_rel=data["e_rel"], classes="/".join(
-                m["controls"] for m in data["parameters"].values()))
+                       method=data["method"],
+                       e_rel_pct=None if data["e_rel"] is None else _sig(100 * data["e_rel"]),
+                       classes="/".join(m["controls"] for m in data["parameters"].values()),
+                       trust=("doubtful" if trust.get("doubtful") else "good") if trust
+                       else "", suggestion=trust.get("suggestion") or "")
+            probability = data.get("class_probability_com") or {}
+            intervals = (data.get("intervals") or {}).get("modules", {})
             for joint, module in data["parameters"].items():
+                values = {f"{joint}_{key}": _sig(module[key])
+                          for key in ("kp", "ki", "kd", "delay_s")}
+                values[f"{joint}_p_com"] = _sig(probability.get(joint))
                 for key in ("kp", "ki", "kd", "delay_s"):
-                    name = f"{joint}_{key}"
-                    row[name] = module[key]
-                    if name not in fields:
-                        fields.append(name)
+                    bounds = intervals.get(joint, {}).get(key, {})
+                    values[f"{joint}_{key}_low"] = _sig(bounds.get("lower_si"))
+                    values[f"{joint}_{key}_high"] = _sig(bounds.get("upper_si"))
+                row.update(values)
+                fields += [name for name in values if name not in fields]
         rows.append(row)
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=fields, lineterminator="\n")

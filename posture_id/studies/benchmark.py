@@ -83,7 +83,15 @@ def _one(task: tuple) -> dict:
     correct = [result.parameters[j].controls == truth[j].controls for j in body.joint_names]
     row = {"index": index, "noise_deg": noise_deg, "method": method, "seconds": seconds,
            "identification_seconds": result.identification_time_s, "e_rel": e_rel,
-           "abs_error": error.tolist(), "classes_correct": correct}
+           "abs_error": error.tolist(), "classes_correct": correct,
+           "relaxed": any("classes relaxed" in n or "unsure of the class" in n
+                          for n in result.notices)}
+    if result.verdict is not None:
+        row["doubtful"] = result.verdict.doubtful
+        row["trust_reasons"] = list(result.verdict.reasons)
+        noise = result.verdict.noise
+        row["noise_ratio"] = None if noise is None else jsonable(noise.ratio)
+        row["relative_residual"] = None if noise is None else jsonable(noise.relative)
     if result.intervals is not None:  # is the truth inside each 90 % interval?
         iv = result.intervals
         true = defaults_norm[:, :4]
@@ -105,6 +113,9 @@ class MethodStatistics:
         identification_seconds_mean: identifying alone, s.
         interval_coverage: (N, 4) share of truths inside the 90 % intervals (None without
             intervals); interval_method, interval_recordings: their kind and count.
+        doubtful_far, doubtful_right: of the recordings far from the truth / not far, how
+            many the trust verdict called doubtful (None without verdicts).
+        relaxed: recordings the hybrid fitted again with its classes relaxed.
     """
 
     noise_deg: float
@@ -123,6 +134,9 @@ class MethodStatistics:
     interval_coverage: np.ndarray | None = None
     interval_method: str | None = None
     interval_recordings: int = 0
+    doubtful_far: int | None = None
+    doubtful_right: int | None = None
+    relaxed: int = 0
 
     @classmethod
     def of_rows(cls, noise: float, method: Method, rows: list[dict]) -> MethodStatistics:
@@ -133,6 +147,8 @@ class MethodStatistics:
         seconds = [r["seconds"] for r in rows]
         identifying = [r["identification_seconds"] for r in rows]
         inside = [r["inside_interval"] for r in rows if "inside_interval" in r]
+        judged = all("doubtful" in r for r in rows)
+        doubtful = np.array([bool(r.get("doubtful")) for r in rows])
         return cls(
             noise_deg=noise, method=method, recordings=len(rows),
             mean_abs_error=err.mean(axis=0), median_abs_error=np.median(err, axis=0),
@@ -144,7 +160,10 @@ class MethodStatistics:
             identification_seconds_mean=float(np.mean(identifying)),
             interval_coverage=np.mean(inside, axis=0) if inside else None,
             interval_method=rows[0].get("interval_method") if inside else None,
-            interval_recordings=len(inside))
+            interval_recordings=len(inside),
+            doubtful_far=int((doubtful & far).sum()) if judged else None,
+            doubtful_right=int((doubtful & ~far).sum()) if judged else None,
+            relaxed=sum(bool(r.get("relaxed")) for r in rows))
 
     def to_dict(self) -> dict:
         out = {f.name: getattr(self, f.name) for f in fields(self)}
@@ -239,8 +258,34 @@ class BenchmarkReport(Result):
                               "the CNN's."]
             lines.append("")
         lines += self._coverage_markdown(stats)
+        lines += self._verdict_markdown(stats)
         lines += ["![E_rel per method](cnn_vs_optimizer.png)", ""]
         return "\n".join(lines)
+
+    def _verdict_markdown(self, stats: dict[tuple[float, Method], MethodStatistics]
+                          ) -> list[str]:
+        """How often the trust verdict called far answers and right ones doubtful."""
+        judged = [s for s in stats.values() if s.doubtful_far is not None]
+        if not judged:
+            return []
+        lines = ["## Does the trust verdict know?", "",
+                 "Of the answers far from the truth, how many the verdict called doubtful "
+                 "(want ≥ 90 %), and of the others (want ≤ 10 %); hybrid: recordings fitted "
+                 "again with relaxed classes.", "",
+                 "| sensor noise | method | far: doubtful | right: doubtful | relaxed |",
+                 "|---|---|---|---|---|"]
+        for s in judged:
+            right = s.recordings - s.far_from_truth
+            lines.append(f"| {s.noise_deg:g}° | {s.method.value} | "
+                         f"{s.doubtful_far}/{s.far_from_truth} | {s.doubtful_right}/{right} | "
+                         + (f"{s.relaxed}/{s.recordings}" if s.method is Method.HYBRID
+                            else "") + " |")
+        far = sum(s.far_from_truth for s in judged)
+        right = sum(s.recordings - s.far_from_truth for s in judged)
+        lines += ["", f"All: doubtful for {sum(s.doubtful_far for s in judged)} of {far} far "
+                      f"answers and {sum(s.doubtful_right for s in judged)} of {right} right "
+                      "ones.", ""]
+        return lines
 
     def _coverage_markdown(self, stats: dict[tuple[float, Method], MethodStatistics]
                            ) -> list[str]:

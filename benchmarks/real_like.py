@@ -177,7 +177,8 @@ def statistics(rows: list[dict], joints) -> dict:
 
 
 def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict) -> str:
-    lines = ["# People-like subjects: raw sway, locked least squares and the networks", "",
+    lines = ["# People-like subjects: raw and locked least squares, the networks, the hybrids",
+             "",
              f"{n_subjects} simulated TIP subjects, each under both stimuli (MODEL §5 "
              "parameters; motor noise scaled so that "
              f"{100 * SHARE_RANGE[0]:g}–{100 * SHARE_RANGE[1]:g} % of "
@@ -186,12 +187,15 @@ def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict) -
              "E_rel: the identified parameters simulated without noise against the subject's "
              "noise-free (stimulus-locked) body sway. Made by `benchmarks/real_like.py` "
              f"(posture_id {__version__}, {workers} subjects at a time, one thread each). "
-             "The networks were trained on motor-noisy data sets of "
-             + ", ".join(f"{m['trials']} trials ({k.replace('_', ' PRTS, ')})"
-                         for k, m in models.items() if "trials" in m)
-             + " (`make real-like-models`). The hybrids started from: "
-             + ", ".join(f"{k.split('_')[0]}-state PRTS: {m['start']}"
-                         for k, m in models.items() if "start" in m) + ".", ""]
+             + ("The networks were trained on motor-noisy data sets of "
+                + ", ".join(f"{m['trials']} trials ({k.replace('_', ' PRTS, ')})"
+                            for k, m in models.items() if "trials" in m)
+                + " (`make real-like-models`). "
+                if any("trials" in m for m in models.values()) else "")
+             + ("The hybrids started from: "
+                + ", ".join(f"{k.split('_')[0]}-state PRTS: {m['start']}"
+                            for k, m in models.items() if "start" in m) + "."
+                if any("start" in m for m in models.values()) else ""), ""]
     for stimulus_key, spec in STIMULI.items():
         lines += [f"## PRTS {spec['states']} states × {spec['cycles']}", "",
                   "| method | every class right | Kp error (all modules) | Kp error "

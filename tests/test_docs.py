@@ -1,0 +1,107 @@
+"""The docs match the program: every command they quote names flags and choices the
+command line has, and the concrete ones that are cheap run as quoted."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shlex
+from pathlib import Path
+
+import pytest
+
+from posture_id.cli import build_parser, main
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+#: A quoted command: a line of a code block, or an inline `...` span.
+_BLOCK = re.compile(r"^\s*(posture-id [^`#\n]*?)(?:\s+#.*)?$", re.MULTILINE)
+_INLINE = re.compile(r"`(posture-id [^`]*)`")
+
+
+def quoted_commands() -> list[tuple[str, str]]:
+    """(where, command) of every posture-id command the README and docs quote; a code
+    line ending in a backslash is joined with the next."""
+    out = []
+    for path in DOCS:
+        text = path.read_text(encoding="utf-8").replace("\\\n", " ")
+        for pattern in (_BLOCK, _INLINE):
+            for match in pattern.finditer(text):
+                line = text.count("\n", 0, match.start()) + 1
+                out.append((f"{path.relative_to(ROOT)}:{line}", match.group(1).strip()))
+    return out
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    for action in parser._actions:  # noqa: SLF001 - argparse keeps them here
+        if isinstance(action, argparse._SubParsersAction):  # noqa: SLF001
+            return dict(action.choices)
+    return {}
+
+
+def _flags(parser: argparse.ArgumentParser) -> dict[str, argparse.Action]:
+    return {flag: action for action in parser._actions  # noqa: SLF001
+            for flag in action.option_strings}
+
+
+COMMANDS = quoted_commands()
+
+
+def test_the_docs_quote_commands():
+    assert len(COMMANDS) > 50  # the extraction works
+
+
+@pytest.mark.parametrize(("where", "command"), COMMANDS, ids=[w for w, _ in COMMANDS])
+def test_every_quoted_flag_and_choice_exists(where, command):
+    """Each quoted command names a real subcommand, and every --flag it shows (in a
+    template too: [--flag X], --flag a|b) is one of that subcommand's, with any literal
+    choice among its choices."""
+    root = build_parser()
+    words = command.replace("[", " ").replace("]", " ").split()[1:]
+    if not words or words[0] in ("--debug", "--help", "...", "-h"):
+        return
+    commands = _subparsers(root)
+    assert words[0] in commands, f"{where}: no command {words[0]!r}"
+    parser = commands[words[0]]
+    if words[0] == "dataset" and len(words) > 1 and not words[1].startswith("-"):
+        parser = _subparsers(parser)[words[1]]
+    flags = _flags(parser) | _flags(root)
+    for k, word in enumerate(words):
+        if not word.startswith("--"):
+            continue
+        flag = word.split("=")[0]
+        assert flag in flags, f"{where}: {words[0]} has no {flag} ({command})"
+        action = flags[flag]
+        if action.choices and k + 1 < len(words):
+            for value in words[k + 1].split("|"):
+                if value.isidentifier() or value.lstrip("+-").isdigit():
+                    assert value in map(str, action.choices), (
+                        f"{where}: {flag} takes {sorted(map(str, action.choices))}, the docs "
+                        f"say {value!r}")
+
+
+#: Concrete quoted commands that are cheap: run as quoted (outputs into a temporary
+#: folder), each must exit 0.
+_RUNNABLE = re.compile(r"^posture-id (body|frf|simulate) [^\[\]|<>]*$")
+
+
+def _inputs_exist(command: str) -> bool:
+    """Every file the command reads (words ending .csv, .urdf or .json that are not
+    outputs) is in the repository."""
+    words = shlex.split(command)
+    outputs = {words[k + 1] for k, w in enumerate(words[:-1]) if w in ("--out", "--plot")}
+    return all((ROOT / w).is_file() for w in words
+               if w.endswith((".csv", ".urdf", ".json")) and w not in outputs)
+
+
+@pytest.mark.parametrize("command", sorted({c for _, c in COMMANDS if _RUNNABLE.match(c)
+                                            and "..." not in c and _inputs_exist(c)
+                                            and not c.split()[-1].startswith("--")
+                                            and not any(w.isupper() for w in c.split())}))
+def test_cheap_quoted_commands_run(command, tmp_path, monkeypatch):
+    words = shlex.split(command)[1:]
+    for k, word in enumerate(words):  # outputs go to the temporary folder
+        if word in ("--out", "--plot") and k + 1 < len(words):
+            words[k + 1] = str(tmp_path / Path(words[k + 1]).name)
+    monkeypatch.chdir(ROOT)
+    assert main(words) == 0, command

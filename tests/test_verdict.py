@@ -1,0 +1,93 @@
+"""Every answer says when it should not be trusted, and its labels are true."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from posture_id.dec.parameters import default_parameters
+from posture_id.identify import Identifier, Method, identify
+from posture_id.identify.verdict import LOCKED_FLAGS, PEOPLE_LIKE_SHARE
+from posture_id.simulation import prts, simulate
+from posture_id.simulation.subjects import people_like
+from posture_id.uncertainty.intervals import ParameterIntervals
+
+
+def test_people_like_sway_makes_the_cnn_doubtful_and_names_the_locked_fit(tip):
+    """20 % of the sway locked to the stimulus: outside what the bundled network saw; the
+    verdict says so, with the locked share it estimated, and suggests the locked fit."""
+    subject = people_like(tip, default_parameters(tip), prts(), 0.2, seed=4)
+    result = identify(subject.recording, tip)
+    verdict = result.verdict
+    assert verdict.doubtful
+    assert verdict.locked_share < PEOPLE_LIKE_SHARE
+    assert abs(verdict.locked_share - subject.locked_share) < 0.1
+    assert any("stimulus-locked" in r for r in verdict.reasons)
+    assert verdict.suggestion == LOCKED_FLAGS
+    assert result.summary().splitlines()[-1].startswith("trust: DOUBTFUL")
+    data = json.loads(json.dumps(result.to_dict(), allow_nan=False))
+    assert data["trust"]["doubtful"] and data["trust"]["suggestion"] == LOCKED_FLAGS
+
+
+def test_a_clean_recording_of_the_networks_own_body_is_trusted(tip):
+    truth = default_parameters(tip)
+    recording = simulate(tip, truth).to_recording().with_sensor_noise(0.01, 2)
+    result = identify(recording, tip)
+    assert not result.verdict.doubtful, result.verdict.line()
+    assert result.verdict.locked_share > 0.9
+    assert result.intervals.method == "conformal, CNN (validation split)"
+
+
+def test_another_bodys_network_is_named_and_its_intervals_labelled_for_what_they_are(winter):
+    """A 3-segment Winter body identified with the TIP's network: the verdict says the
+    network was trained on another body, and the intervals are not called calibrated."""
+    recording = simulate(winter, default_parameters(winter)).to_recording()
+    result = identify(recording.with_sensor_noise(0.01, 5), winter)
+    assert any("trained on body 'tip_default'" in r for r in result.verdict.outside)
+    assert result.verdict.doubtful and result.verdict.suggestion == "--method hybrid"
+    assert "not on this one" in result.intervals.method
+    assert "validation split" not in result.intervals.method
+
+
+def test_the_hybrid_uses_its_calibrated_scales_only_on_the_networks_own_body(tip, winter):
+    tip_identifier = Identifier(tip, Method.HYBRID)
+    winter_identifier = Identifier(winter, Method.HYBRID)
+    assert tip_identifier.cnn.trained_on_this_body
+    assert not winter_identifier.cnn.trained_on_this_body
+
+
+def test_the_sentences_say_what_the_precision_flags_say():
+    """An interval narrow against the prior but wider than ±5 % of the value: the flag
+    and the words agree (the words used to say nothing)."""
+    estimate = np.zeros((1, 4))
+    half = np.full((1, 4), 0.01)
+    half[0, 1] = 0.2  # Ki: well determined against the prior (1.61 wide), ±20 % precision
+    imprecise = np.array([[False, True, False, False]])
+    intervals = ParameterIntervals.around(estimate, half, np.ones((1, 4)), 0.9, "test", 0.0,
+                                          ("ankle",), imprecise)
+    sentences = intervals.sentences()
+    assert sentences == ["the ankle's Ki is determined to worse than ±5 % of the value "
+                         "(poorly determined, 95 % Gauss-Newton interval)"]
+    without = ParameterIntervals.around(estimate, half, np.ones((1, 4)), 0.9, "test", 0.0,
+                                        ("ankle",))
+    assert without.sentences() == []
+
+
+@pytest.mark.slow
+def test_a_parameter_on_a_search_bound_is_named(tip):
+    """Kp 40 % above the defaults, searched within ±10 %: the fit stops on the bound, and
+    the verdict names it and suggests a wider range."""
+    from posture_id.fitting import FitOptions, FixedClasses
+
+    truth = default_parameters(tip)
+    truth = truth.replace("ankle", kp=1.4 * truth["ankle"].kp)
+    recording = simulate(tip, truth).to_recording().with_sensor_noise(0.01, 6)
+    options = FitOptions(gain_bounds=(-0.1, 0.1), classes=FixedClasses())  # the defaults'
+    result = identify(recording, tip, Method.FIT, fit_options=options)
+    assert any(b.startswith("ankle kp at its upper bound") for b in result.fit.on_bounds)
+    assert result.verdict.doubtful
+    assert any("on a search bound: ankle kp at its upper bound" in r
+               for r in result.verdict.reasons)
+    assert "--gain-range" in result.verdict.suggestion

@@ -105,3 +105,28 @@ def test_cheap_quoted_commands_run(command, tmp_path, monkeypatch):
             words[k + 1] = str(tmp_path / Path(words[k + 1]).name)
     monkeypatch.chdir(ROOT)
     assert main(words) == 0, command
+
+
+def _prose_blocks(text: str) -> list[str]:
+    """The README's bullets and paragraphs, code blocks left out."""
+    prose = re.sub(r"```.*?```", "", text, flags=re.DOTALL)
+    return [b for b in re.split(r"\n(?=- )|\n\n", prose) if b.strip()]
+
+
+def test_every_number_the_readme_claims_names_where_it_comes_from():
+    """A bullet or paragraph of the README that states a measured number (a percentage, a
+    time, a ratio) names the doc or benchmark that reproduces it."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    unsourced = [b[:120] for b in _prose_blocks(text)
+                 if re.search(r"\d[\d.,  ]*\s?(?:%|ms\b|s\b|×)", b)
+                 and not re.search(r"(docs|benchmarks)/[\w./-]+", b)]
+    assert not unsourced, unsourced
+
+
+@pytest.mark.parametrize("report", sorted([*(ROOT / "docs" / "results").glob("*.md"),
+                                           *(ROOT / "docs").glob("**/calibration_report.md"),
+                                           *(ROOT / "docs" / "results").glob("*/*.md")]),
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_results_report_names_the_command_that_wrote_it(report):
+    text = report.read_text(encoding="utf-8")
+    assert re.search(r"[Mm]ade by `(posture-id|benchmarks/|\.venv/bin/python)", text), report

@@ -266,7 +266,8 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
     verdict = TrustVerdict(noise, on_bounds, tuple(outside), share)
     if verdict.doubtful:
         verdict = TrustVerdict(noise, on_bounds, tuple(outside), share,
-                               suggestion(method, locked, share, on_bounds, noise))
+                               suggestion(method, locked, share, on_bounds, noise,
+                                          options.prior_sd is not None))
     return verdict
 
 

@@ -97,14 +97,17 @@ class TrustVerdict:
 
 
 def suggestion(method: Method, locked: bool, locked_share: float | None,
-               on_bounds: tuple[str, ...], noise: NoiseCheck | None) -> str:
+               on_bounds: tuple[str, ...], noise: NoiseCheck | None,
+               prior: bool = False) -> str:
     """What suits a recording whose answer is doubtful, by the documented rule:
 
     - people-like sway (locked share below :data:`PEOPLE_LIKE_SHARE`) identified without
       ``--locked``: :data:`LOCKED_FLAGS`;
     - the CNN alone: ``--method hybrid`` (least squares from its answer);
-    - least squares on a bound: a wider ``--gain-range`` / ``--delay-range``, and for a
-      noisy recording the prior that keeps it off them (``--locked --prior-sd 0.5``);
+    - least squares on a bound: for a locked fit without a prior, ``--prior-sd 0.5`` (a
+      noisy recording leaves some parameters free to run to a bound; the prior holds
+      them); otherwise a wider ``--gain-range`` / ``--delay-range`` (and the locked fit
+      with the prior for a noisy recording);
     - least squares from the defaults left more than the noise: ``--method hybrid`` (a
       start from the CNN's answer, away from the local minimum);
     - the hybrid or a locked fit left more than the noise: ``--locked --max-offset-s 1
@@ -116,10 +119,12 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     if method is Method.CNN:
         return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like else "")
     if on_bounds:
-        return ("a wider --gain-range MIN MAX / --delay-range MIN MAX, or --locked "
-                "--prior-sd 0.5 to keep a noisy recording off the bounds")
+        if locked and not prior:
+            return "--prior-sd 0.5 (or a wider --gain-range / --delay-range)"
+        return ("a wider --gain-range MIN MAX / --delay-range MIN MAX"
+                + ("" if locked else ", or --locked --prior-sd 0.5 for a noisy recording"))
     if noise is not None and not noise.acceptable:
         if method is Method.FIT and not locked:
             return "--method hybrid"
-        return "--locked --max-offset-s 1 --prior-sd 0.5"
+        return "--locked --max-offset-s 1" + ("" if prior else " --prior-sd 0.5")
     return ""

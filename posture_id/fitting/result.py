@@ -160,6 +160,9 @@ class FitResult(Result):
                      f"residual RMS {self.rms_deg:.5f}° ({self.backend})"
                      + (f"; stimulus offset {1000 * self.time_offset_s:+.0f} ms"
                         if self.time_offset_s else ""))
+        if self.on_bounds:
+            lines.append("on a search bound (a wider --gain-range / --delay-range, or for a "
+                         "noisy recording --locked --prior-sd 0.5): " + ", ".join(self.on_bounds))
         lines += [f"note: {n}" for n in self.notices]
         return "\n".join(lines)
 

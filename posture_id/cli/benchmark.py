@@ -13,6 +13,7 @@ from posture_id.cli.arguments import (
     positive_int,
     say,
 )
+from posture_id.cli.identify import METHODS
 from posture_id.cli.progress import TerminalProgress
 
 __all__ = ["add_parser"]
@@ -27,6 +28,8 @@ def add_parser(sub) -> None:
                    help="sensor-noise levels, degrees (default %(default)s)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     p.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
+    p.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
+                   help="methods compared (default: all: cnn fit hybrid)")
     p.add_argument("--out", type=Path, default=Path("docs/results"),
                    help="report folder (default %(default)s); an interrupted run goes on "
                         "from its journal there")
@@ -35,13 +38,15 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
+    from posture_id.identify import Method
     from posture_id.studies.benchmark import JOURNAL, run_benchmark
 
     body = load_body(args.body or DEFAULT_URDF)
     journal = args.out / JOURNAL
     with TerminalProgress("identifications", prefix="posture-id benchmark") as progress:
         result = run_benchmark(body, args.trials, tuple(args.noise_deg), args.seed,
-                               args.workers, progress=progress, journal=journal)
+                               args.workers, tuple(Method(m) for m in args.methods),
+                               progress=progress, journal=journal)
     paths = result.write(args.out)
     journal.unlink()  # its rows are in the report's JSON now
     print(result.to_markdown())

@@ -13,6 +13,8 @@ is identified by:
 
 - ``raw LS``: least squares on every sample of the sway (relaxed classes, from defaults);
 - ``locked LS``: least squares on the stimulus-locked sway (``FitOptions.locked``);
+- ``locked LS, prior``: the same with a Gaussian prior of SD 0.5 on the normalised
+  parameters (``--locked --prior-sd 0.5``);
 - ``CNN``: the spectrogram network trained on motor-noisy data of that stimulus;
 - ``FRF net``: the FRF-feature network trained on the same data;
 - ``hybrid``: :class:`~posture_id.identify.Identifier` with :attr:`Method.HYBRID`, raw
@@ -61,7 +63,8 @@ from posture_id.trials import prepare_trial
 
 ROOT = Path(__file__).resolve().parent.parent
 STIMULI = {"242": dict(states=242, cycles=2), "80": dict(states=80, cycles=6)}
-METHODS = ("raw LS", "locked LS", "CNN", "FRF net", "hybrid", "locked hybrid")
+METHODS = ("raw LS", "locked LS", "locked LS, prior", "CNN", "FRF net", "hybrid",
+           "locked hybrid")
 FIELDS = ("kp", "ki", "kd", "delay_s")
 SHARE_RANGE = (0.10, 0.30)
 #: An answer whose locked response is further than this (E_rel) from the truth's is far.
@@ -102,6 +105,8 @@ def _models(stimulus_key: str, folders: dict):
         raw, locked = FitOptions(threads=1), FitOptions(threads=1, locked=LockedOptions())
         nets["raw LS"] = Identifier(body, Method.FIT, fit_options=raw)
         nets["locked LS"] = Identifier(body, Method.FIT, fit_options=locked)
+        nets["locked LS, prior"] = Identifier(body, Method.FIT, fit_options=FitOptions(
+            threads=1, locked=LockedOptions(), prior_sd=0.5))
         nets["hybrid"] = Identifier(body, Method.HYBRID, start, raw)
         nets["locked hybrid"] = Identifier(body, Method.HYBRID, start, locked)
         _LOADED[stimulus_key] = (body, nets)

@@ -143,8 +143,13 @@ class Identifier:
             # the hybrid's scales are calibrated for the network's own body only
             calibration = (self.cnn.calibration if method is Method.HYBRID
                            and self.cnn.trained_on_this_body else None)
-            intervals = fit.intervals_at(self.level, None if calibration is None
-                                         else calibration.least_squares)
+            scales = None if calibration is None else calibration.least_squares
+            intervals = fit.intervals_at(self.level, scales)
+            if scales is not None and scales.beyond(intervals.noise_deg):
+                notices.append(f"{trial.name}: its sensor noise (about "
+                               f"{intervals.noise_deg:.3f}°) is above the "
+                               f"{scales.noise_deg[-1]:.3f}° the hybrid's intervals were "
+                               "calibrated for: they are likely too narrow")
             trial = fit.trial  # with a fitted stimulus offset: the shifted trial
         else:
             parameters, normalised = cnn.parameters, cnn.normalised

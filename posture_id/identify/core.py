@@ -255,7 +255,8 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
 def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked: dict,
              cnn, fit) -> TrustVerdict:
     """The trust verdict (:mod:`posture_id.identify.verdict`) of one identification."""
-    noise = noise_check(trial, checked["resimulated"])
+    noise = noise_check(trial, checked["resimulated"],
+                        body_sway=(checked["sway_recorded"], checked["sway_resimulated"]))
     share = checked["locked_share"]
     locked = options.locked is not None
     people_like = share is not None and share < PEOPLE_LIKE_SHARE

@@ -68,7 +68,8 @@ class NoiseCheck:
             estimated sensor noise SD (degrees); for "locked", the median noise level of
             the compared harmonics (degrees, DFT ÷ P). limit: :data:`NOISE_RATIO_LIMIT`.
         relative: the residual's RMS against the recorded sway's (its compared locked
-            harmonics, or the raw sway about its mean), inf for a model that falls.
+            harmonics, or the raw sway about its mean), of the whole-body COM sway when
+            it was given (else of the segments); inf for a model that falls.
     """
 
     ratio: float
@@ -107,9 +108,15 @@ class NoiseCheck:
 
 
 def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
-                limit: float = NOISE_RATIO_LIMIT) -> NoiseCheck:
+                limit: float = NOISE_RATIO_LIMIT,
+                body_sway: tuple[np.ndarray, np.ndarray] | None = None) -> NoiseCheck:
     """Judge a model's sway ``model_theta`` (S, N) rad against ``trial``'s recording (the
-    trial the model was fitted on: with a fitted offset, the shifted one)."""
+    trial the model was fitted on: with a fitted offset, the shifted one).
+
+    Args:
+        body_sway: (recorded, model) whole-body COM sway α_BS (S,) rad: when given,
+            ``relative`` is measured on it (the sway E_rel judges), else on the segments.
+    """
     recorded = trial.recording.theta
     model_theta = np.asarray(model_theta, dtype=float)[: len(recorded)]
     residual = np.degrees(recorded - model_theta)
@@ -130,9 +137,15 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
             ratio = (float(np.sqrt(np.mean(projection.apply(residual) ** 2))) if finite
                      else math.inf)
             noise = float(np.median(projection.noise))
-        relative = (float(np.sqrt(np.sum(np.abs(projection.spectrum(residual)) ** 2)
-                                  / np.sum(np.abs(projection.spectrum(np.degrees(recorded)))
-                                           ** 2))) if finite else math.inf)
+        relative = math.inf
+        if finite:
+            ours, theirs = residual, np.degrees(recorded)
+            if body_sway is not None:
+                rec_sway = np.degrees(np.asarray(body_sway[0], dtype=float))
+                model_sway = np.degrees(np.asarray(body_sway[1], dtype=float))[: len(rec_sway)]
+                ours, theirs = (rec_sway - model_sway)[:, None], rec_sway[:, None]
+            relative = float(np.sqrt(np.sum(np.abs(projection.spectrum(ours)) ** 2)
+                                     / np.sum(np.abs(projection.spectrum(theirs)) ** 2)))
         return NoiseCheck(ratio, "locked", noise, limit, relative)
     noise = max(float(sensor_noise_deg(recorded)), _NOISE_FLOOR_DEG)
     if not np.all(np.isfinite(residual)):

@@ -8,7 +8,9 @@ Three questions, each answered from the recording and the result alone (no truth
    stimulus, raw otherwise; or, if not, is it close anyway: at most
    :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the recorded sway.)
 2. **Did least squares stop on a bound of its search?** (:attr:`FitResult.on_bounds
-   <posture_id.fitting.result.FitResult.on_bounds>`, named.)
+   <posture_id.fitting.result.FitResult.on_bounds>`, named; Kp, Kd or a passive term on a
+   bound makes the answer doubtful, Ki or a delay is named as what the recording leaves
+   open: :data:`DOUBTFUL_ON_BOUND`.)
 3. **Is the recording inside what the method was trained or calibrated on?** The CNN:
    its body, its noise calibration, and sway that is mostly the stimulus's response (the
    bundled networks are trained on sensor noise alone, so a recording whose body sway is
@@ -33,6 +35,12 @@ __all__ = ["TrustVerdict", "PEOPLE_LIKE_SHARE", "suggestion"]
 #: Body sway whose noise-corrected stimulus-locked share is below this is people-like:
 #: the subject's own sway dominates (docs/real_recordings.md: 10–40 % in people).
 PEOPLE_LIKE_SHARE = 0.6
+
+#: A parameter on a search bound makes the answer doubtful when it is one of these: the
+#: sway determines them well, so a bound there cut the answer short. Ki and the delay are
+#: the parameters a recording determines least (docs/uncertainty.md); on a bound they are
+#: named, as what the recording leaves open, without doubting the rest.
+DOUBTFUL_ON_BOUND = ("kp", "kd", "kpas", "bpas")
 
 #: What suits people-like sway (docs/real_recordings.md, docs/results/real_like.md).
 LOCKED_FLAGS = "--method fit --locked --prior-sd 0.5"
@@ -63,9 +71,14 @@ class TrustVerdict:
         out = []
         if self.noise is not None and not self.noise.acceptable:
             out.append(f"the model leaves a {self.noise.sentence()}")
-        if self.on_bounds:
-            out.append("on a search bound: " + ", ".join(self.on_bounds))
+        if self.bounds_that_matter:
+            out.append("on a search bound: " + ", ".join(self.bounds_that_matter))
         return (*out, *self.outside)
+
+    @property
+    def bounds_that_matter(self) -> tuple[str, ...]:
+        """The bound hits that make the answer doubtful (:data:`DOUBTFUL_ON_BOUND`)."""
+        return tuple(b for b in self.on_bounds if b.split()[1] in DOUBTFUL_ON_BOUND)
 
     @property
     def doubtful(self) -> bool:
@@ -84,6 +97,10 @@ class TrustVerdict:
                 what = (f": the model is close ({noise.basis} residual "
                         f"{100 * noise.relative:.1f} % of the recorded sway), though not "
                         f"within the noise ({noise.ratio:.2f}× it)")
+            others = [b for b in self.on_bounds if b not in self.bounds_that_matter]
+            if others:
+                what += ("; on a search bound, which the recording leaves open: "
+                         + ", ".join(others))
             return f"trust: good{what}"
         line = "trust: DOUBTFUL: " + "; ".join(self.reasons)
         return line + (f"; try {self.suggestion}" if self.suggestion else "")
@@ -118,7 +135,7 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
         return LOCKED_FLAGS
     if method is Method.CNN:
         return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like else "")
-    if on_bounds:
+    if any(b.split()[1] in DOUBTFUL_ON_BOUND for b in on_bounds):
         if locked and not prior:
             return "--prior-sd 0.5 (or a wider --gain-range / --delay-range)"
         return ("a wider --gain-range MIN MAX / --delay-range MIN MAX"

@@ -49,7 +49,7 @@ from posture_id.dec.parameters import DecParameters
 from posture_id.dec.prior import sample_parameters
 from posture_id.errors import SimulationError
 from posture_id.executors import LocalExecutor
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import atomic_write_text, json_text, jsonable
 from posture_id.fitting import FitOptions
 from posture_id.frf.locked import LockedOptions
 from posture_id.identify import Identifier, Method
@@ -142,7 +142,11 @@ def _one(task: tuple) -> dict:
            "classes_correct": [params[j].controls == truth[j].controls
                                for j in body.joint_names]}
     if verdict is not None:
+        noise = verdict.noise
         row.update(doubtful=verdict.doubtful, trust_reasons=list(verdict.reasons),
+                   noise_ratio=None if noise is None else jsonable(noise.ratio),
+                   relative_residual=None if noise is None else jsonable(noise.relative),
+                   noise_relative=None if noise is None else jsonable(noise.noise_relative),
                    suggestion=verdict.suggestion, estimated_locked_share=verdict.locked_share,
                    relaxed=any("classes relaxed" in n or "unsure of the class" in n
                                for n in result.notices))

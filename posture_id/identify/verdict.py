@@ -95,8 +95,8 @@ class TrustVerdict:
                         f"({noise.basis} residual {noise.ratio:.2f}× the noise)")
             else:
                 what = (f": the model is close ({noise.basis} residual "
-                        f"{100 * noise.relative:.1f} % of the recorded sway), though not "
-                        f"within the noise ({noise.ratio:.2f}× it)")
+                        f"{100 * noise.relative:.1f} % of the recorded body sway), though "
+                        f"not within the noise ({noise.ratio:.2f}× it)")
             others = [b for b in self.on_bounds if b not in self.bounds_that_matter]
             if others:
                 what += ("; on a search bound, which the recording leaves open: "

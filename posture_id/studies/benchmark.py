@@ -92,6 +92,7 @@ def _one(task: tuple) -> dict:
         noise = result.verdict.noise
         row["noise_ratio"] = None if noise is None else jsonable(noise.ratio)
         row["relative_residual"] = None if noise is None else jsonable(noise.relative)
+        row["noise_relative"] = None if noise is None else jsonable(noise.noise_relative)
     if result.intervals is not None:  # is the truth inside each 90 % interval?
         iv = result.intervals
         true = defaults_norm[:, :4]

@@ -28,7 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from posture_id.identify.method import Method
-from posture_id.identify.noise_check import NoiseCheck
+from posture_id.identify.noise_check import CLOSE_ENOUGH, NoiseCheck
 
 __all__ = ["TrustVerdict", "PEOPLE_LIKE_SHARE", "suggestion"]
 
@@ -120,6 +120,9 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
 
     - people-like sway (locked share below :data:`PEOPLE_LIKE_SHARE`) identified without
       ``--locked``: :data:`LOCKED_FLAGS`;
+    - least squares on a recording whose noise alone leaves more than
+      :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the locked sway: a longer
+      recording (nothing fitted to it can be checked);
     - the CNN alone: ``--method hybrid`` (least squares from its answer);
     - least squares on a bound: for a locked fit without a prior, ``--prior-sd 0.5`` (a
       noisy recording leaves some parameters free to run to a bound; the prior holds
@@ -133,6 +136,11 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
     if people_like and not locked:
         return LOCKED_FLAGS
+    if (noise is not None and not noise.acceptable
+            and noise.noise_relative > CLOSE_ENOUGH and method is not Method.CNN):
+        return ("a longer recording (more stimulus cycles to average): its noise alone "
+                f"leaves {100 * noise.noise_relative:.0f} % of the locked sway, so no answer "
+                f"can be checked to {100 * CLOSE_ENOUGH:g} %")
     if method is Method.CNN:
         return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like else "")
     if any(b.split()[1] in DOUBTFUL_ON_BOUND for b in on_bounds):

@@ -238,7 +238,9 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
     for j, name in enumerate(rec.segments):
         residual = rec.theta[:, j] - theta[:, j]
         statistics = {} if locked is None else {
-            "locked_share": float(share[j]), "locked_variance_explained": float(explained[j])}
+            # a single cycle cannot tell noise from response: no share (None)
+            "locked_share": float(share[j]) if np.isfinite(share[j]) else None,
+            "locked_variance_explained": float(explained[j])}
         if fell:
             segments.append(SegmentFit(name, math.inf, -math.inf, **statistics))
             continue

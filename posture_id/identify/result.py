@@ -138,7 +138,8 @@ class IdentificationResult(Result):
                 f"{s.segment} RMS {s.rms_deg:.4f}° (raw sway: {100 * s.variance_explained:.1f} "
                 "% of the variance explained" + (
                     "" if s.locked_variance_explained is None else
-                    f"; stimulus-locked sway, {100 * s.locked_share:.0f} % of it: "
+                    "; stimulus-locked sway" + ("" if s.locked_share is None else
+                                                f", {100 * s.locked_share:.0f} % of it") + ": "
                     f"{100 * s.locked_variance_explained:.1f} % explained") + ")"
                 for s in self.segments))
             lines.append(f"body sway: E_id {self.e_id_deg:.2e}°, E_rel "

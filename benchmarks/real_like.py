@@ -188,7 +188,8 @@ def statistics(rows: list[dict], joints) -> dict:
 def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict) -> str:
     lines = ["# People-like subjects: raw and locked least squares, the networks, the hybrids",
              "",
-             f"{n_subjects} simulated TIP subjects, each under both stimuli (MODEL §5 "
+             f"{n_subjects} simulated TIP subjects (drawn so that they stay up under both "
+             "stimuli; MODEL §5 "
              "parameters; motor noise scaled so that "
              f"{100 * SHARE_RANGE[0]:g}–{100 * SHARE_RANGE[1]:g} % of "
              "the body COM sway's variance is stimulus-locked, drawn per subject; 0.05° "
@@ -206,6 +207,8 @@ def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict) -
                             for k, m in models.items() if "start" in m) + "."
                 if any("start" in m for m in models.values()) else ""), ""]
     for stimulus_key, spec in STIMULI.items():
+        if not any(k.startswith(stimulus_key + "|") for k in stats):
+            continue  # this stimulus was not run
         lines += [f"## PRTS {spec['states']} states × {spec['cycles']}", "",
                   "| method | every class right | Kp error (all modules) | Kp error "
                   + " / ".join(joints) + " | Kd error " + " / ".join(joints)
@@ -257,8 +260,9 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
     parser.add_argument("--stimuli", nargs="+", choices=list(STIMULI), default=list(STIMULI),
                         help="PRTS lengths to run (default: both)")
-    parser.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
-                        help="methods to run (default: all)")
+    parser.add_argument("--methods", nargs="*", choices=METHODS, default=list(METHODS),
+                        help="methods to run (default: all; none, with --reuse: rewrite the "
+                             "report from the earlier rows)")
     parser.add_argument("--reuse", type=Path,
                         help="an earlier real_like.json of the same subjects and seed: the "
                              "rows of the methods not run now are taken from it (e.g. the "

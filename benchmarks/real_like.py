@@ -49,7 +49,7 @@ from posture_id.dec.parameters import DecParameters
 from posture_id.dec.prior import sample_parameters
 from posture_id.errors import SimulationError
 from posture_id.executors import LocalExecutor
-from posture_id.fileio import atomic_write_text, json_text, jsonable
+from posture_id.fileio import atomic_write_text, json_text
 from posture_id.fitting import FitOptions
 from posture_id.frf.locked import LockedOptions
 from posture_id.identify import Identifier, Method
@@ -58,6 +58,7 @@ from posture_id.plotting import plot_benchmark
 from posture_id.simulation import prts, simulate
 from posture_id.simulation.metrics import sway_errors
 from posture_id.simulation.subjects import people_like
+from posture_id.studies.benchmark import FAR_E_REL
 from posture_id.studies.journal import Journal
 from posture_id.trials import prepare_trial
 
@@ -67,8 +68,6 @@ METHODS = ("raw LS", "locked LS", "locked LS, prior", "CNN", "FRF net", "hybrid"
            "locked hybrid")
 FIELDS = ("kp", "ki", "kd", "delay_s")
 SHARE_RANGE = (0.10, 0.30)
-#: An answer whose locked response is further than this (E_rel) from the truth's is far.
-FAR_E_REL = 0.10
 _LOADED: dict = {}
 
 
@@ -142,14 +141,8 @@ def _one(task: tuple) -> dict:
            "classes_correct": [params[j].controls == truth[j].controls
                                for j in body.joint_names]}
     if verdict is not None:
-        noise = verdict.noise
-        row.update(doubtful=verdict.doubtful, trust_reasons=list(verdict.reasons),
-                   noise_ratio=None if noise is None else jsonable(noise.ratio),
-                   relative_residual=None if noise is None else jsonable(noise.relative),
-                   noise_relative=None if noise is None else jsonable(noise.noise_relative),
-                   suggestion=verdict.suggestion, estimated_locked_share=verdict.locked_share,
-                   relaxed=any("classes relaxed" in n or "unsure of the class" in n
-                               for n in result.notices))
+        row.update(verdict.benchmark_fields(), suggestion=verdict.suggestion,
+                   estimated_locked_share=verdict.locked_share, relaxed=result.relaxed_refit)
     return row
 
 

@@ -112,6 +112,7 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     result = identify(recording, tip, Method.HYBRID)
     assert result.cnn.parameters["knee"].controls != truth["knee"].controls
     assert any("fitted again with the classes relaxed" in n for n in result.notices)
+    assert result.relaxed_refit
     assert any("overturned the CNN's class of knee" in n for n in result.notices)
     assert result.classes == tuple(truth[j].controls for j in tip.joint_names)
     for joint in tip.joint_names:

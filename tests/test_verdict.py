@@ -51,7 +51,8 @@ def test_another_bodys_network_is_named_and_its_intervals_labelled_for_what_they
     assert "validation split" not in result.intervals.method
 
 
-def test_the_hybrid_uses_its_calibrated_scales_only_on_the_networks_own_body(tip, winter):
+def test_an_identifier_knows_whether_its_network_was_trained_on_its_body(tip, winter):
+    """What the hybrid's use of its calibrated scales turns on (core.Identifier)."""
     tip_identifier = Identifier(tip, Method.HYBRID)
     winter_identifier = Identifier(winter, Method.HYBRID)
     assert tip_identifier.cnn.trained_on_this_body

@@ -112,6 +112,28 @@ class ProblemKey:
                         self.compilation)
 
 
+class _ProcessCache:
+    """A small process-wide least-recently-used cache of built objects (thread-safe; at
+    most one build per key at a time). Dropping an entry never stops a user that still
+    holds it."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self._items: OrderedDict = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key, build):
+        """The object for ``key``: cached, or ``build()`` and cached."""
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                return self._items[key]
+            value = self._items[key] = build()
+            while len(self._items) > self.size:
+                self._items.popitem(last=False)
+            return value
+
+
 class CompiledModel:
     """Compiled simulation and Jacobian of one recording length for N-segment bodies.
 
@@ -125,10 +147,8 @@ class CompiledModel:
         backend: how the functions run (:class:`~posture_id.fitting.build.Backend`).
     """
 
-    _cache: OrderedDict = OrderedDict()
-    _cache_lock = threading.Lock()
     #: Models kept in the process-wide cache (each holds compiled code and threads).
-    CACHE_SIZE = 4
+    _cache = _ProcessCache(4)
 
     def __init__(self, key: ModelKey, notify=None) -> None:
         n = key.n_segments
@@ -183,15 +203,7 @@ class CompiledModel:
     def get(cls, key: ModelKey, notify=None) -> CompiledModel:
         """The model for ``key``, from the process-wide cache when an equal one was built
         before (thread-safe; at most one build per key at a time)."""
-        with cls._cache_lock:
-            if key in cls._cache:
-                cls._cache.move_to_end(key)
-                return cls._cache[key]
-            model = cls(key, notify)
-            cls._cache[key] = model
-            while len(cls._cache) > cls.CACHE_SIZE:
-                cls._cache.popitem(last=False)  # a problem still holding it keeps it alive
-            return model
+        return cls._cache.get(key, lambda: cls(key, notify))
 
 
 class FitProblem:
@@ -204,10 +216,8 @@ class FitProblem:
         backend: how the functions run (:class:`~posture_id.fitting.build.Backend`).
     """
 
-    _cache: OrderedDict = OrderedDict()
-    _cache_lock = threading.Lock()
     #: Problems kept in the process-wide cache (small: the compiled code is shared).
-    CACHE_SIZE = 16
+    _cache = _ProcessCache(16)
 
     def __init__(self, key: ProblemKey, notify=None) -> None:
         body = key.body
@@ -227,15 +237,7 @@ class FitProblem:
         equal one was made before; its compiled model is shared by every body with as
         many segments (thread-safe)."""
         key = ProblemKey.of(body, n_samples, options)
-        with cls._cache_lock:
-            if key in cls._cache:
-                cls._cache.move_to_end(key)
-                return cls._cache[key]
-            problem = cls(key, notify)
-            cls._cache[key] = problem
-            while len(cls._cache) > cls.CACHE_SIZE:
-                cls._cache.popitem(last=False)
-            return problem
+        return cls._cache.get(key, lambda: cls(key, notify))
 
     def simulate(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(S, N) rad segment angles for unknowns q (7N,) and rollout input u."""

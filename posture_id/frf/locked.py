@@ -174,6 +174,19 @@ class LockedProjection:
                                  trial.stimulus.period_s, trial.stimulus.periodic_from_s,
                                  options, trial.name)
 
+    @classmethod
+    def for_periodic_trial(cls, trial: PreparedTrial, options: LockedOptions | None = None
+                           ) -> LockedProjection | None:
+        """:meth:`for_trial`, or None where there is nothing locked to compare: a stimulus
+        that is not periodic, less than one whole cycle after its start, a period off
+        the sample grid (or, weighted, no harmonic left empty)."""
+        if trial.stimulus.period_s is None:
+            return None
+        try:
+            return cls.for_trial(trial, options)
+        except PostureIdError:
+            return None
+
     def locked_share(self, x: np.ndarray) -> np.ndarray:
         """(M,) share of each channel's variance (over the analysed cycles, drift removed)
         that is stimulus-locked, corrected for the noise the cycle average keeps (NaN for

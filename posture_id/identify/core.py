@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
-from posture_id.errors import PostureIdError
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.method import DEFAULT_METHOD, Method
@@ -122,6 +121,7 @@ class Identifier:
         method, body, options = self.method, self.body, self.fit_options
         notices: list[str] = []
         cnn = fit = None
+        relaxed_refit = False
         spent = 0.0
         if self.cnn is not None:
             began = time.perf_counter()
@@ -135,7 +135,7 @@ class Identifier:
 
             fit = fit_recording(trial, body, None, options, progress)
         elif method is Method.HYBRID:
-            fit = _refine(trial, body, cnn, options, progress, notices)
+            fit, relaxed_refit = _refine(trial, body, cnn, options, progress, notices)
         if fit is not None:
             spent += time.perf_counter() - began
             notices += fit.notices
@@ -155,8 +155,10 @@ class Identifier:
             parameters, normalised = cnn.parameters, cnn.normalised
             intervals = cnn.intervals
             notices += trial.notices
-        checked = _resimulate(body, trial, parameters, options.simulation)
-        verdict = _verdict(method, options, trial, checked, cnn, fit)
+        locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+        checked = _resimulate(body, trial, parameters, options.simulation, locked)
+        body_share = checked.pop("locked_share")  # the verdict's, not a result field
+        verdict = _verdict(method, options, trial, checked, body_share, cnn, fit, locked)
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -165,13 +167,14 @@ class Identifier:
             notices=tuple(dict.fromkeys(notices)),
             provenance=provenance(options if fit is not None else None, body,
                                   recording=trial.name, method=method.value),
-            verdict=verdict, **{k: v for k, v in checked.items() if k != "locked_share"},
+            verdict=verdict, relaxed_refit=relaxed_refit, **checked,
         )
 
 
 def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,
             progress: Progress | None, notices: list[str]):
-    """The hybrid's least squares from the CNN's answer.
+    """The hybrid's least squares from the CNN's answer: (the fit, whether it was fitted
+    again with the classes relaxed).
 
     Classes the CNN is sure of (P(C = +1) outside :data:`UNSURE_CLASS` for every module)
     are kept and only the continuous parameters refined: the short route. It is accepted
@@ -212,16 +215,16 @@ def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,
                if fit.parameters[j].controls != cnn.parameters[j].controls]
     if changed:
         notices.append(f"least squares overturned the CNN's class of {', '.join(changed)}")
-    return fit
+    return fit, fit_short is not None or bool(unsure)
 
 
 def _resimulate(body: Body, trial: PreparedTrial, parameters,
-                simulation: SimulationOptions) -> dict:
+                simulation: SimulationOptions, locked: LockedProjection | None) -> dict:
     """Simulate the identified model on the trial's stimulus (with any fitted offset);
-    E_id, E_rel, segment fits."""
+    E_id, E_rel, segment fits; with ``locked`` (the trial's unweighted locked projection)
+    the locked statistics too."""
     rec = trial.recording
     wide = replace(simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
-    locked = _locked_projection(trial)
     trial = simulate(body, parameters, trial.stimulus, wide)
     n = len(rec.time)
     theta = trial.theta[:n]
@@ -255,37 +258,25 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
 
 
 def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked: dict,
-             cnn, fit) -> TrustVerdict:
-    """The trust verdict (:mod:`posture_id.identify.verdict`) of one identification."""
+             share: float | None, cnn, fit, locked: LockedProjection | None) -> TrustVerdict:
+    """The trust verdict (:mod:`posture_id.identify.verdict`) of one identification;
+    ``share``: the recorded body sway's locked share."""
     noise = noise_check(trial, checked["resimulated"],
-                        body_sway=(checked["sway_recorded"], checked["sway_resimulated"]))
-    share = checked["locked_share"]
-    locked = options.locked is not None
+                        body_sway=(checked["sway_recorded"], checked["sway_resimulated"]),
+                        projection=locked)
+    locked_fit = options.locked is not None
     people_like = share is not None and share < PEOPLE_LIKE_SHARE
     outside = list(cnn.outside) if method is Method.CNN and cnn is not None else []
     if people_like and method is Method.CNN:
         outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked; the "
                        "network was trained on sway that is the stimulus's response and "
                        "sensor noise")
-    elif people_like and not locked:
+    elif people_like and not locked_fit:
         outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked: "
                        "least squares on the raw sway fits the subject's own sway too")
     on_bounds = () if fit is None else fit.on_bounds
     verdict = TrustVerdict(noise, on_bounds, tuple(outside), share)
-    if verdict.doubtful:
-        verdict = TrustVerdict(noise, on_bounds, tuple(outside), share,
-                               suggestion(method, locked, share, on_bounds, noise,
-                                          options.prior_sd is not None))
-    return verdict
-
-
-def _locked_projection(trial: PreparedTrial) -> LockedProjection | None:
-    """The unweighted stimulus-locked projection of a trial with a periodic stimulus and
-    at least one whole cycle after its start, else None (no locked statistics)."""
-    stimulus = trial.stimulus
-    if stimulus.period_s is None:
-        return None
-    try:
-        return LockedProjection.for_trial(trial, LockedOptions(weighted=False))
-    except PostureIdError:  # less than a cycle, or a period off the sample grid
-        return None
+    if not verdict.doubtful:
+        return verdict
+    return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,
+                                                  options.prior_sd is not None))

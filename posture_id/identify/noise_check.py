@@ -40,7 +40,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posture_id.errors import PostureIdError
 from posture_id.frf.cycles import cycle_average
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.trials import PreparedTrial
@@ -122,18 +121,24 @@ class NoiseCheck:
 
 def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
                 limit: float = NOISE_RATIO_LIMIT,
-                body_sway: tuple[np.ndarray, np.ndarray] | None = None) -> NoiseCheck:
+                body_sway: tuple[np.ndarray, np.ndarray] | None = None,
+                projection: LockedProjection | None = None) -> NoiseCheck:
     """Judge a model's sway ``model_theta`` (S, N) rad against ``trial``'s recording (the
     trial the model was fitted on: with a fitted offset, the shifted one).
 
     Args:
         body_sway: (recorded, model) whole-body COM sway α_BS (S,) rad: when given,
             ``relative`` is measured on it (the sway E_rel judges), else on the segments.
+        projection: the trial's unweighted locked projection, when the caller has it
+            (default: made here).
     """
     recorded = trial.recording.theta
     model_theta = np.asarray(model_theta, dtype=float)[: len(recorded)]
     residual = np.degrees(recorded - model_theta)
-    projection = _locked_projection(trial)
+    if projection is None:
+        projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+    if projection is not None and projection.cycles < 2:  # the noise from empty harmonics
+        projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=True))
     if projection is not None:
         finite = bool(np.all(np.isfinite(residual)))
         if projection.cycles >= 2:
@@ -187,17 +192,3 @@ def _between_cycles(projection: LockedProjection, recorded: np.ndarray) -> np.nd
     pooled = np.stack([np.convolve(spread[:, j], kernel, mode="same") / counts
                        for j in range(spread.shape[1])], axis=1)
     return np.maximum(pooled[projection.harmonics - 1], _NOISE_FLOOR_DEG**2 / (p * c))
-
-
-def _locked_projection(trial: PreparedTrial) -> LockedProjection | None:
-    """The locked projection of a trial with a periodic stimulus and a whole cycle (noise
-    weights only for a single cycle), else None."""
-    if trial.stimulus.period_s is None:
-        return None
-    try:
-        projection = LockedProjection.for_trial(trial, LockedOptions(weighted=False))
-        if projection.cycles < 2:
-            projection = LockedProjection.for_trial(trial, LockedOptions(weighted=True))
-        return projection
-    except PostureIdError:  # less than a cycle, a period off the grid, no empty harmonic
-        return None

@@ -70,6 +70,8 @@ class IdentificationResult(Result):
         notices: things to know. provenance: version, options, body identity, source.
         verdict: whether the answer should be trusted, and what to run if not
             (:class:`~posture_id.identify.verdict.TrustVerdict`), or None.
+        relaxed_refit: the hybrid fitted again with the classes relaxed (the CNN was unsure
+            of a class, or its classes left more than the recording's noise).
     """
 
     method: Method
@@ -94,6 +96,7 @@ class IdentificationResult(Result):
     provenance: dict = field(default_factory=dict, repr=False)
     fell_at_s: float | None = None
     verdict: TrustVerdict | None = None
+    relaxed_refit: bool = False
 
     @property
     def fell(self) -> bool:

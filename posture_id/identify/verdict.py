@@ -25,6 +25,7 @@ docs/identify.md, "Trust").
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from posture_id.identify.method import Method
@@ -104,6 +105,19 @@ class TrustVerdict:
             return f"trust: good{what}"
         line = "trust: DOUBTFUL: " + "; ".join(self.reasons)
         return line + (f"; try {self.suggestion}" if self.suggestion else "")
+
+    def benchmark_fields(self) -> dict:
+        """The flat fields a benchmark row keeps of the verdict (JSON-ready): doubtful,
+        trust_reasons, noise_ratio, relative_residual, noise_relative."""
+        noise = self.noise
+
+        def number(x: float | None) -> float | None:
+            return None if x is None or not math.isfinite(x) else float(x)
+
+        return {"doubtful": self.doubtful, "trust_reasons": list(self.reasons),
+                "noise_ratio": None if noise is None else number(noise.ratio),
+                "relative_residual": None if noise is None else number(noise.relative),
+                "noise_relative": None if noise is None else number(noise.noise_relative)}
 
     def to_dict(self) -> dict:
         return {"doubtful": self.doubtful, "reasons": list(self.reasons),

@@ -84,15 +84,9 @@ def _one(task: tuple) -> dict:
     row = {"index": index, "noise_deg": noise_deg, "method": method, "seconds": seconds,
            "identification_seconds": result.identification_time_s, "e_rel": e_rel,
            "abs_error": error.tolist(), "classes_correct": correct,
-           "relaxed": any("classes relaxed" in n or "unsure of the class" in n
-                          for n in result.notices)}
+           "relaxed": result.relaxed_refit}
     if result.verdict is not None:
-        row["doubtful"] = result.verdict.doubtful
-        row["trust_reasons"] = list(result.verdict.reasons)
-        noise = result.verdict.noise
-        row["noise_ratio"] = None if noise is None else jsonable(noise.ratio)
-        row["relative_residual"] = None if noise is None else jsonable(noise.relative)
-        row["noise_relative"] = None if noise is None else jsonable(noise.noise_relative)
+        row.update(result.verdict.benchmark_fields())
     if result.intervals is not None:  # is the truth inside each 90 % interval?
         iv = result.intervals
         true = defaults_norm[:, :4]

@@ -16,7 +16,8 @@ import numpy as np
 from posture_id.fileio import atomic_write
 
 __all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit", "plot_locked_sway",
-           "plot_coverage", "plot_reliability", "plot_identifiability", "plot_intervals"]
+           "plot_coverage", "plot_reliability", "plot_identifiability", "plot_intervals",
+           "plot_score_grid"]
 
 
 def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
@@ -508,6 +509,28 @@ def plot_cohort(names, joints, kp, e_rel, path=None, ax=None):
     for a in (a_kp, a_rel):
         a.grid(alpha=0.3, axis="x")
         a.invert_yaxis()
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_score_grid(rows: list[str], columns: list[str], panels: dict, path=None, ax=None):
+    """Heat maps, one per panel: ``panels`` maps a title to ((rows, columns) values,
+    (low, high) colour range, format) — e.g. the universal network's classes and Kp error
+    per body family and stimulus."""
+    fig, axes = _axes(ax, 1, len(panels), (4.2 * len(panels) + 1, 0.45 * len(rows) + 1.8))
+    for a, (title, (values, (low, high), fmt)) in zip(axes[0], panels.items(), strict=True):
+        values = np.asarray(values, dtype=float)
+        image = a.imshow(values, vmin=low, vmax=high, cmap="viridis", aspect="auto")
+        a.set_xticks(range(len(columns)), columns, rotation=45, ha="right", fontsize=7)
+        a.set_yticks(range(len(rows)), rows if a is axes[0, 0] else [""] * len(rows),
+                     fontsize=7)
+        for (i, j), v in np.ndenumerate(values):
+            if np.isfinite(v):
+                a.text(j, i, format(v, fmt), ha="center", va="center", fontsize=6,
+                       color="white" if v < (low + high) / 2 else "black")
+        a.set_title(title, fontsize=9)
+        fig.colorbar(image, ax=a, shrink=0.8)
     fig.tight_layout()
     _save(fig, path)
     return fig

@@ -1,5 +1,5 @@
 """Command line: ``posture-id body | simulate | fit | frf | dataset | train | evaluate |
-calibration | identify | demo | benchmark``,
+calibration | identify | demo | benchmark | universal``,
 one module per command.
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
@@ -26,6 +26,7 @@ from posture_id.cli import (
     identify,
     simulate,
     train,
+    universal,
 )
 from posture_id.cli.arguments import Parser
 from posture_id.errors import PostureIdError
@@ -40,7 +41,7 @@ def build_parser() -> Parser:
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for command in (body, simulate, fit, frf, dataset, train, evaluate, calibration, identify,
-                    demo, benchmark):
+                    demo, benchmark, universal):
         command.add_parser(sub)
     return parser
 

@@ -33,10 +33,11 @@ from posture_id.bodies.body import Body, load_body
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.method import DEFAULT_METHOD, Method
+from posture_id.identify.networks import Network, network_for
 from posture_id.identify.noise_check import noise_check
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.identify.verdict import PEOPLE_LIKE_SHARE, TrustVerdict, suggestion
-from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentifier
+from posture_id.learning.identifier import DEFAULT_LEVEL
 from posture_id.progress import Progress
 from posture_id.provenance import provenance
 from posture_id.recording import Recording
@@ -53,7 +54,7 @@ UNSURE_CLASS = (0.05, 0.95)
 
 
 def identify(recording: Recording, body: Body | None = None, method: Method = DEFAULT_METHOD,
-             model: str | Path | CnnIdentifier | None = None,
+             model: str | Path | Network | None = None,
              fit_options: FitOptions | None = None, progress: Progress | None = None,
              stimulus: TiltProfile | None = None,
              level: float = DEFAULT_LEVEL) -> IdentificationResult:
@@ -64,8 +65,9 @@ def identify(recording: Recording, body: Body | None = None, method: Method = DE
         recording: tilt and segment angles (the body's segments); its ``name`` names it
             in messages. body: default the TIP.
         method: :class:`Method` (default :data:`DEFAULT_METHOD`). model: a model
-            directory or a loaded :class:`~posture_id.learning.identifier.CnnIdentifier`
-            (default: the bundled model for the body). fit_options: for least squares.
+            directory (a universal model or a per-body specialist) or a loaded network
+            (default: the bundled universal model, :func:`~.networks.network_for`).
+            fit_options: for least squares.
         progress: told the fit's stages.
         stimulus: the tilt as the lab ran it (checked against the recording's tilt column);
             default: recognised from the tilt column.
@@ -86,19 +88,19 @@ class Identifier:
 
     Attributes:
         body, method, fit_options, level: as given. cnn: the loaded
-            :class:`~posture_id.learning.identifier.CnnIdentifier` (None for
+            network (:func:`~.networks.network_for`; None for
             :attr:`Method.FIT`).
     """
 
     def __init__(self, body: Body, method: Method = DEFAULT_METHOD,
-                 model: str | Path | CnnIdentifier | None = None,
+                 model: str | Path | Network | None = None,
                  fit_options: FitOptions | None = None,
                  level: float = DEFAULT_LEVEL) -> None:
         self.body = body
         self.method = Method(method)
         self.fit_options = fit_options or FitOptions()
         self.level = level
-        self.cnn = None if self.method is Method.FIT else CnnIdentifier.resolve(model, body)
+        self.cnn = None if self.method is Method.FIT else network_for(model, body)
 
     def prepare(self, recording: Recording, stimulus: TiltProfile | None = None
                 ) -> PreparedTrial:

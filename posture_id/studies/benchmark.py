@@ -20,7 +20,6 @@ parallel processes, one per core, each on one thread.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
@@ -35,8 +34,7 @@ from posture_id.dec.prior import sample_parameters
 from posture_id.executors import LocalExecutor
 from posture_id.fileio import Result, atomic_write_text, json_text, jsonable
 from posture_id.identify import Method
-from posture_id.learning.bundled import bundled_model_dir
-from posture_id.learning.checkpoint import SIDECAR
+from posture_id.identify.networks import network_for
 from posture_id.plotting import plot_benchmark
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate, simulate_batch
@@ -343,8 +341,7 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
             for method in methods:
                 tasks.append((str(body.urdf_path), arrays, b, noise, method.value,
                               int(1000 * seed + b)))
-    model_dir, _ = bundled_model_dir(body)  # its sidecar names the weights; no need to load
-    weights = json.loads((model_dir / SIDECAR).read_text(encoding="utf-8"))["weights_sha256"]
+    weights = network_for(None, body).model.sidecar["weights_sha256"]
     header = {"format": "posture_id-benchmark-journal", "body_sha256": body.sha256,
               "model_weights_sha256": weights, "trials": trials, "seed": seed}
     book = None if journal is None else Journal(Path(journal), header, _task_key)

@@ -9,14 +9,14 @@ import functools
 from posture_id.bodies.body import load_body
 from posture_id.fitting.options import FitOptions
 from posture_id.identify import Identifier, Method
-from posture_id.learning.identifier import CnnIdentifier
+from posture_id.identify.networks import Network, network_for
 
 __all__ = ["worker_identifier"]
 
 
 @functools.cache
-def _cnn(urdf: str, model: str | None) -> CnnIdentifier:
-    return CnnIdentifier.resolve(model, load_body(urdf))
+def _cnn(urdf: str, model: str | None) -> Network:
+    return network_for(model, load_body(urdf))
 
 
 @functools.cache

@@ -1,0 +1,110 @@
+"""``posture-id universal data | train | check | table``: the universal identifier's
+training set, training, calibration and check, and its table over body families and
+stimuli (docs/universal.md)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.cli.arguments import (
+    check_output_folder,
+    non_negative_int,
+    positive_float,
+    positive_int,
+    say,
+)
+from posture_id.cli.progress import TerminalProgress
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("universal", help="the universal identifier: its training set, "
+                       "training, calibration and tables")
+    u = p.add_subparsers(dest="universal_command", required=True, parser_class=type(p))
+    d = u.add_parser("data", help="simulate the training set (resumable)")
+    d.add_argument("--out", type=Path, required=True, help="set directory")
+    d.add_argument("--shards", type=positive_int, required=True,
+                   help="shards: each one drawn body and PRTS")
+    d.add_argument("--trials", type=positive_int,
+                   help="parameter sets per shard (default: UniversalDataConfig's, 64)")
+    d.add_argument("--seed", type=non_negative_int, default=0, help="root seed (default 0)")
+    d.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
+    d.add_argument("--quiet", action="store_true", help="no progress bar")
+    d.set_defaults(func=run_data)
+
+    t = u.add_parser("train", help="train the universal network on a set (resumable)")
+    t.add_argument("data", type=Path, help="set directory (posture-id universal data)")
+    t.add_argument("--out", type=Path, required=True, help="model directory")
+    t.add_argument("--epochs", type=positive_int,
+                   help="at most this many epochs (default: UniversalTrainingConfig's, 60)")
+    t.add_argument("--learning-rate", type=positive_float,
+                   help="peak learning rate (default: UniversalTrainingConfig's, 2e-3)")
+    t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
+    t.add_argument("--threads", type=positive_int, help="torch threads (default: all cores)")
+    t.add_argument("--quiet", action="store_true", help="no progress bar")
+    t.set_defaults(func=run_train)
+
+    c = u.add_parser("check", help="calibrate a model on its set's calibration split and "
+                     "check it on the test split")
+    c.add_argument("model", type=Path, help="model directory")
+    c.add_argument("data", type=Path, help="the set it was trained on")
+    c.set_defaults(func=run_check)
+
+    b = u.add_parser("table", help="the table over body families, stimuli and sway")
+    b.add_argument("model", type=Path, nargs="?", help="model directory (default: bundled)")
+    b.add_argument("--out", type=Path, required=True, help="report folder")
+    b.add_argument("--trials", type=positive_int, default=64,
+                   help="trials per cell (default %(default)d)")
+    b.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
+    b.set_defaults(func=run_table)
+
+
+def run_data(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out")
+    from posture_id.universal.data import UniversalDataConfig, generate_universal
+
+    given = {"trials": args.trials} if args.trials else {}
+    config = UniversalDataConfig(shards=args.shards, seed=args.seed, **given)
+    with TerminalProgress("shard", prefix="posture-id universal data",
+                          quiet=args.quiet) as progress:
+        data = generate_universal(config, args.out, args.workers, progress)
+    counts = data.manifest["counts"]
+    say(f"wrote {args.out}: {counts['shards']} shards, {counts['kept']} of "
+        f"{counts['simulated']} trials kept")
+    return 0
+
+
+def run_train(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out", inputs=(args.data,))
+    from posture_id.universal.training import UniversalTrainingConfig, train_universal
+
+    given = {k: v for k, v in (("epochs", args.epochs),
+                               ("max_learning_rate", args.learning_rate)) if v is not None}
+    config = UniversalTrainingConfig(seed=args.seed, threads=args.threads, **given)
+    with TerminalProgress("epoch", prefix="posture-id universal train",
+                          quiet=args.quiet) as progress:
+        train_universal(args.data, args.out, config, progress=progress, log=say)
+    say(f"wrote {args.out / 'model.safetensors'} and model.json")
+    return 0
+
+
+def run_check(args: argparse.Namespace) -> int:
+    from posture_id.universal.checking import calibrate_model
+
+    report = calibrate_model(args.model, args.data)
+    print(report.markdown())
+    say(f"wrote {args.model / 'calibration.json'}, check.json and check.md")
+    return 0
+
+
+def run_table(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out")
+    from posture_id.universal.identifier import BUNDLED_DIR
+    from posture_id.universal.table import family_table
+
+    table = family_table(args.model or BUNDLED_DIR, args.out, args.trials, args.workers)
+    print(table.markdown())
+    say(f"wrote {args.out / 'table.md'}, table.json and table.png")
+    return 0

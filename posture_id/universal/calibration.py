@@ -1,0 +1,124 @@
+"""Calibrated answers of the universal network, per regime.
+
+A regime is (segment count, noise-ratio bin): the noise ratio is the share of the
+recording's stimulus-locked harmonics that is noise (:func:`.features.noise_ratio`),
+measured on the recording itself, so it tells a clean recording from a people-like one
+at identification time. On the calibration split (shards no training or validation
+trial came from, their noise drawn as in training) the calibration keeps, per regime and
+parameter, the conformal quantiles of the score |t − μ| / σ̂ (σ̂: the network's own SD):
+an interval μ ± q_level·σ̂ covers the truth with probability ≥ level in that regime
+(split-conformal, normalised scores). Class probabilities get a temperature per regime
+(minimum negative log-likelihood). A regime with fewer than :data:`MIN_CELL` samples
+uses its segment count's pooled values.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.universal.model import ModelError, UniversalModel, UniversalPrediction
+from posture_id.universal.samples import Samples
+
+__all__ = ["RATIO_EDGES", "LEVELS", "MIN_CELL", "UniversalCalibration", "calibrate",
+           "regime_of", "CALIBRATION_FILE"]
+
+#: Bin edges of the noise ratio (clean below 0.02; people-like sway mostly above 0.1).
+RATIO_EDGES = (0.02, 0.1, 0.3)
+#: Nominal levels the quantiles are kept for.
+LEVELS = tuple(np.round(np.arange(0.5, 0.995, 0.005), 3).tolist())
+MIN_CELL = 100
+CALIBRATION_FILE = "calibration.json"
+
+
+def regime_of(segments: np.ndarray | int, ratio: np.ndarray | float) -> np.ndarray:
+    """Regime keys 'N:b' (segment count, noise-ratio bin 0..3)."""
+    bins = np.searchsorted(RATIO_EDGES, np.asarray(ratio, dtype=float))
+    return np.char.add(np.char.add(np.asarray(segments).astype(str), ":"), bins.astype(str))
+
+
+def _conformal(scores: np.ndarray) -> list[list[float]]:
+    """(levels, 4) conformal quantiles: the ⌈(n + 1)·level⌉-th smallest score."""
+    n = len(scores)
+    ranked = np.sort(scores, axis=0)
+    rank = np.minimum(np.ceil((n + 1) * np.asarray(LEVELS)).astype(int), n) - 1
+    return ranked[rank].tolist()
+
+
+def _temperature(logit: np.ndarray, truth: np.ndarray) -> float:
+    y = (truth > 0).astype(float)
+
+    def nll(log_t: float) -> float:
+        z = logit / np.exp(log_t)
+        return float(np.mean(np.logaddexp(0, z) - y * z))
+
+    return float(np.exp(minimize_scalar(nll, bounds=(-3, 3), method="bounded").x))
+
+
+@dataclass(frozen=True)
+class UniversalCalibration:
+    """Per regime: the score quantiles (levels × 4) and the class temperature; ``counts``
+    the calibration samples behind each; ``weights_sha256`` of the model calibrated."""
+
+    quantiles: dict
+    temperature: dict
+    counts: dict
+    weights_sha256: str
+
+    def _key(self, regime: str, table: dict) -> str:
+        return regime if regime in table else regime.split(":")[0]
+
+    def scale(self, regime: str, level: float) -> np.ndarray:
+        """(4,) the score quantile at ``level`` (nearest kept level at or above it)."""
+        table = self.quantiles[self._key(regime, self.quantiles)]
+        row = min(int(np.searchsorted(LEVELS, level - 1e-9)), len(LEVELS) - 1)
+        return np.asarray(table[row])
+
+    def probability(self, regime: str, logit: np.ndarray) -> np.ndarray:
+        t = self.temperature[self._key(regime, self.temperature)]
+        return 1.0 / (1.0 + np.exp(-np.asarray(logit) / t))
+
+    def to_dict(self) -> dict:
+        return {"levels": list(LEVELS), "ratio_edges": list(RATIO_EDGES),
+                "quantiles": self.quantiles, "temperature": self.temperature,
+                "counts": self.counts, "weights_sha256": self.weights_sha256}
+
+    def save(self, folder: str | Path) -> Path:
+        return atomic_write_text(Path(folder) / CALIBRATION_FILE, json_text(self.to_dict()))
+
+    @classmethod
+    def load(cls, folder: str | Path) -> UniversalCalibration | None:
+        file = Path(folder) / CALIBRATION_FILE
+        if not file.exists():
+            return None
+        try:
+            data = json.loads(file.read_text(encoding="utf-8"))
+            if data["levels"] != list(LEVELS) or data["ratio_edges"] != list(RATIO_EDGES):
+                raise ModelError(f"{file}: made for other levels or regimes than this code's")
+            return cls(data["quantiles"], data["temperature"], data["counts"],
+                       data["weights_sha256"])
+        except (json.JSONDecodeError, KeyError, TypeError) as exc:
+            raise ModelError(f"{file}: not a universal calibration ({exc})") from None
+
+
+def calibrate(model: UniversalModel, samples: Samples) -> UniversalCalibration:
+    """The calibration of ``model`` from held-out module samples."""
+    pred: UniversalPrediction = model.predict(samples.inputs)
+    scores = np.abs(samples.targets[:, :4] - pred.mean) / pred.sd
+    regimes = regime_of(samples.segments, samples.noise_ratio)
+    quantiles, temperature, counts = {}, {}, {}
+    keys = sorted(set(regimes.tolist()) | {str(n) for n in set(samples.segments.tolist())})
+    for key in keys:
+        sel = (regimes == key) if ":" in key else (samples.segments == int(key))
+        if sel.sum() < MIN_CELL:
+            continue
+        quantiles[key] = _conformal(scores[sel])
+        temperature[key] = _temperature(pred.logit[sel], samples.targets[sel, 4])
+        counts[key] = int(sel.sum())
+    return UniversalCalibration(quantiles, temperature, counts,
+                                str(model.sidecar.get("weights_sha256")))

@@ -1,0 +1,84 @@
+"""Calibrate a universal model on its set's calibration split and check it on the test
+split, per regime: the numbers docs/universal.md quotes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.universal.calibration import UniversalCalibration, calibrate
+from posture_id.universal.data import UniversalSet
+from posture_id.universal.evaluation import GroupScore, score_samples
+from posture_id.universal.model import UniversalModel
+from posture_id.universal.samples import Samples, load_split, make_samples
+
+__all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes"]
+
+CALIBRATION_SEED, TEST_SEED = 0x43414C, 0x544553
+
+
+def true_regimes(samples: Samples) -> np.ndarray:
+    """Group labels by what was simulated: 'N-seg, clean|people-like, sensor a–b°'
+    (people-like: motor noise leaving under 60 % of the body COM sway locked)."""
+    kind = np.where(samples.locked_share < 0.6, "people-like",
+                    np.where(samples.locked_share < 0.995, "part-locked", "clean"))
+    bins = np.digitize(samples.sensor_noise_deg, [0.02, 0.05])
+    noise = np.array(["sensor <0.02°", "sensor 0.02–0.05°", "sensor >0.05°"])[bins]
+    seg = np.char.add(samples.segments.astype(str), "-seg")
+    return np.char.add(np.char.add(np.char.add(np.char.add(seg, ", "), kind), ", "), noise)
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """Test-split scores overall, per segment count and per simulated regime."""
+
+    overall: GroupScore
+    by_segments: dict
+    by_regime: dict
+    calibration: dict
+
+    def to_dict(self) -> dict:
+        return {"overall": self.overall.to_dict(),
+                "by_segments": {k: v.to_dict() for k, v in self.by_segments.items()},
+                "by_regime": {k: v.to_dict() for k, v in self.by_regime.items()},
+                "calibration_counts": self.calibration}
+
+    def markdown(self) -> str:
+        head = ("| group | trials | classes % | all classes right % | Kp err % | Ki err % | "
+                "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay |")
+        lines = [head, "|" + "---|" * 9]
+        rows = [("all", self.overall), *self.by_segments.items(), *self.by_regime.items()]
+        for name, s in rows:
+            e, c = s.median_error_pct, s.coverage_pct
+            lines.append(f"| {name} | {s.trials} | {s.classes_pct:.1f} | "
+                         f"{s.trials_all_right_pct:.1f} | {e['kp']:.1f} | {e['ki']:.1f} | "
+                         f"{e['kd']:.1f} | {e['delay_s']:.1f} | "
+                         + " / ".join(f"{c[k]:.0f}" for k in ("kp", "ki", "kd", "delay_s"))
+                         + " |")
+        return "\n".join(lines)
+
+
+def calibrate_model(model_dir: str | Path, data_path: str | Path,
+                    level: float = 0.9) -> CheckReport:
+    """Calibrate the model at ``model_dir`` (written there as calibration.json) and check
+    it on the test split; the report is written there as check.json and check.md."""
+    model = UniversalModel.load(model_dir)
+    data = UniversalSet.open(data_path)
+    scope = model.scope
+    cal = make_samples(load_split(data, "calibration"), scope,
+                       np.random.default_rng(CALIBRATION_SEED))
+    calibration: UniversalCalibration = calibrate(model, cal)
+    calibration.save(model_dir)
+    test = make_samples(load_split(data, "test"), scope, np.random.default_rng(TEST_SEED))
+    overall = score_samples(model, test, calibration, level)["all"]
+    by_segments = score_samples(model, test, calibration, level,
+                                np.char.add(test.segments.astype(str), "-seg"))
+    by_regime = score_samples(model, test, calibration, level, true_regimes(test))
+    report = CheckReport(overall, by_segments, by_regime, calibration.counts)
+    folder = Path(model_dir)
+    atomic_write_text(folder / "check.json", json_text(report.to_dict()))
+    atomic_write_text(folder / "check.md", report.markdown() + "\n")
+    return report

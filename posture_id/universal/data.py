@@ -1,0 +1,266 @@
+"""The universal identifier's training set: shards of drawn bodies and stimuli.
+
+A set is a directory::
+
+    manifest.json       configuration, scope, shard list (SHA-256 each), package version
+    shard-00000.npz     one drawn body and PRTS, ``trials`` parameter sets (nothing
+                        pickled), written atomically
+
+Shard k draws everything from ``SeedSequence([seed, UNIVERSAL_STREAM, k])``: its bytes
+depend only on (configuration, k). A killed run started again keeps the shards the
+manifest lists (after checking their SHA-256) and makes the rest.
+
+Each trial is simulated three times (:func:`make_shard`): without motor noise (its
+stimulus-locked response), with a small unit of motor noise (how much sway a level
+makes), and with the level that leaves the drawn share of its body COM sway locked (as
+:func:`posture_id.simulation.subjects.people_like`, batched). The stored sway is the
+last one's harmonics (:mod:`.harmonics`); sensor noise and drift are added to them when
+the features are made, afresh every epoch.
+
+Shards with ``k % 10 == 0`` are the test split, ``k % 10 == 1`` calibration,
+``k % 10 == 2`` validation (early stopping), the rest training: held-out trials are on
+bodies and stimuli no training trial had.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from posture_id._version import __version__
+from posture_id.datasets.config import DatasetError
+from posture_id.datasets.store import check_shard, save_npz, shard_name
+from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
+from posture_id.dec.prior import sample_parameters
+from posture_id.executors import executor_for
+from posture_id.fileio import atomic_write_text, file_sha256, json_text
+from posture_id.progress import Progress, report
+from posture_id.simulation.batch import simulate_batch
+from posture_id.simulation.noise import MotorNoise
+from posture_id.simulation.options import SimulationOptions
+from posture_id.universal.bodies import build_body
+from posture_id.universal.features import body_descriptors
+from posture_id.universal.harmonics import HarmonicLayout, harmonic_layout, sway_harmonics
+from posture_id.universal.scope import (
+    BodyDraw,
+    StimulusDraw,
+    UniversalScope,
+    draw_body,
+    draw_stimulus,
+)
+
+__all__ = ["UniversalDataConfig", "shard_layout", "make_shard", "simulate_trials",
+           "generate_universal", "UniversalSet", "split_of", "UNIVERSAL_STREAM"]
+
+UNIVERSAL_STREAM = 0x554E49
+FORMAT = "posture_id-universal-set"
+#: The motor-noise level of the calibration run, per degree of peak-to-peak tilt.
+_UNIT_LEVEL_PER_DEG = 0.05
+
+
+@dataclass(frozen=True)
+class UniversalDataConfig:
+    """A universal training set: ``shards`` shards of ``trials`` parameter sets each."""
+
+    shards: int
+    trials: int = 64
+    seed: int = 0
+    scope: UniversalScope = field(default_factory=UniversalScope)
+    simulation: SimulationOptions = field(default_factory=SimulationOptions)
+
+    def __post_init__(self) -> None:
+        if self.shards < 1 or self.trials < 1:
+            raise DatasetError(f"shards and trials must be ≥ 1, got {self.shards}, {self.trials}")
+
+    def identity(self) -> dict:
+        return {"trials": self.trials, "seed": self.seed, "scope": self.scope.to_dict(),
+                "simulation": dict(vars(self.simulation))}
+
+
+def split_of(k: int) -> str:
+    """The split of shard k (module docstring)."""
+    return {0: "test", 1: "calibration", 2: "validation"}.get(k % 10, "train")
+
+
+def _var(x: np.ndarray) -> np.ndarray:
+    return np.var(x, axis=1)
+
+
+def make_shard(config: UniversalDataConfig, k: int) -> dict[str, np.ndarray]:
+    """Simulate shard k: a body and a PRTS drawn from the scope, then
+    :func:`simulate_trials`."""
+    rng = np.random.default_rng(np.random.SeedSequence([config.seed, UNIVERSAL_STREAM, k]))
+    body_draw = draw_body(config.scope, rng)
+    stim = draw_stimulus(config.scope, rng)
+    return simulate_trials(body_draw, stim, config.trials, config.scope, rng,
+                           config.simulation)
+
+
+def simulate_trials(body_draw: BodyDraw, stim: StimulusDraw, trials: int,
+                    scope: UniversalScope, rng: np.random.Generator,
+                    options: SimulationOptions | None = None) -> dict[str, np.ndarray]:
+    """Simulate ``trials`` parameter sets (MODEL §5's prior) of one body under one PRTS,
+    with motor noise as the scope says. Keys: ``y`` (T, K, N) complex64 harmonics of the
+    kept trials' sway (motor noise included), ``y_locked`` the same without motor noise,
+    ``tilt`` (K,) complex, ``frequencies_hz`` (K,), ``excited`` (K,), ``targets`` (T, N, 5)
+    normalised [K̃p, K̃i, K̃d, Δ̃, C], the parameter arrays (T, N), ``locked_share`` (T,)
+    realised, ``motor_noise_deg`` (T,), ``body`` (N, 11) descriptors, and
+    ``period_samples``, ``cycles``, ``sample_rate_hz``, ``amplitude_deg``,
+    ``velocity_deg_s``, ``draw`` (JSON text of the body and stimulus drawn),
+    ``simulated`` and ``kept`` counts."""
+    options = options or SimulationOptions()
+    body = build_body(body_draw)
+    profile = stim.profile()
+    params = sample_parameters(body, trials, rng)
+    clean = simulate_batch(body, params, profile, options, workers=1)
+    noisy_trial = rng.random(trials) >= scope.clean_share
+    share = np.where(noisy_trial, rng.uniform(*scope.locked_share, trials), 1.0)
+    seeds = rng.integers(0, 2**62, trials)
+    unit_level = _UNIT_LEVEL_PER_DEG * stim.amplitude_deg
+    unit = simulate_batch(body, params, profile, options, workers=1, motor_noise=[
+        MotorNoise(unit_level, scope.cutoff_hz, int(s)) for s in seeds])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        response = _var(clean.alpha[:, :, 0])
+        per_level = _var(unit.alpha[:, :, 0] - clean.alpha[:, :, 0]) / unit_level**2
+        level = np.sqrt(response * (1 - share) / share / per_level)
+    usable = clean.stable & unit.stable & np.isfinite(level) & (level <= 10)
+    level = np.where(usable & noisy_trial, level, 0.0)
+    final = simulate_batch(body, params, profile, options, workers=1, motor_noise=[
+        MotorNoise(float(v), scope.cutoff_hz, int(s)) for v, s in zip(level, seeds, strict=True)])
+    kept = usable & final.stable
+    with np.errstate(invalid="ignore", divide="ignore"):
+        realised = response / _var(final.alpha[:, :, 0])
+    rate = options.sample_rate_hz
+    layout = harmonic_layout(clean.tilt, rate, profile.period_s, profile.periodic_from_s)
+    theta = np.moveaxis(final.theta[kept], 0, 1)  # (S, T, N)
+    locked = np.moveaxis(clean.theta[kept], 0, 1)
+    y = np.moveaxis(sway_harmonics(layout, theta), 1, 0)
+    y_locked = np.moveaxis(sway_harmonics(layout, locked), 1, 0)
+    targets = normalise_arrays(params, default_parameters(body))[kept]
+    draw = {"body": vars(body_draw) | {"label": body_draw.label()}, "stimulus": vars(stim),
+            "body_name": body.name, "n_segments": body.n_segments}
+    out = {f: getattr(params, f)[kept] for f in ParameterArrays.FIELDS}
+    out.update(
+        y=y.astype(np.complex64), y_locked=y_locked.astype(np.complex64),
+        tilt=layout.tilt.astype(np.complex128), frequencies_hz=layout.frequencies_hz,
+        excited=layout.excited, targets=targets, locked_share=realised[kept],
+        motor_noise_deg=level[kept], body=body_descriptors(body),
+        period_samples=np.array(layout.period_samples), cycles=np.array(layout.cycles),
+        sample_rate_hz=np.array(rate), amplitude_deg=np.array(layout.amplitude_deg),
+        velocity_deg_s=np.array(layout.velocity_deg_s),
+        draw=np.array(json.dumps(draw, default=float)),
+        simulated=np.array(trials), kept=np.array(int(kept.sum())),
+    )
+    return out
+
+
+def _make(k: int, config: UniversalDataConfig) -> dict[str, np.ndarray]:
+    return make_shard(config, k)
+
+
+def shard_layout(arrays: dict[str, np.ndarray]) -> HarmonicLayout:
+    """The harmonic layout of a stored shard (no projection: its sway is stored as
+    harmonics already)."""
+    return HarmonicLayout(
+        projection=None, frequencies_hz=arrays["frequencies_hz"], excited=arrays["excited"],
+        tilt=arrays["tilt"], period_samples=int(arrays["period_samples"]),
+        cycles=int(arrays["cycles"]), sample_rate_hz=float(arrays["sample_rate_hz"]),
+        amplitude_deg=float(arrays["amplitude_deg"]),
+        velocity_deg_s=float(arrays["velocity_deg_s"]))
+
+
+def _manifest(config: UniversalDataConfig) -> dict:
+    return {"format": FORMAT, "package_version": __version__, "config": config.identity(),
+            "shards": [], "complete": False}
+
+
+def generate_universal(config: UniversalDataConfig, out: str | Path, workers: int | None = None,
+                       progress: Progress | None = None) -> UniversalSet:
+    """Generate (or finish) the set ``config`` into ``out``; resumable (module doc)."""
+    out = Path(out)
+    manifest = _read(out)
+    if manifest is None:
+        if out.exists() and any(out.iterdir()):
+            raise DatasetError(f"{out}: exists, is not empty and holds no universal set")
+        manifest = _manifest(config)
+    elif manifest["config"] != json.loads(json_text(config.identity())):
+        raise DatasetError(f"{out}: was made with other arguments; choose another directory "
+                           "or repeat the original arguments")
+    for entry in manifest["shards"]:
+        check_shard(out, entry)
+    out.mkdir(parents=True, exist_ok=True)
+    entries = {e["index"]: e for e in manifest["shards"] if e["index"] < config.shards}
+    todo = [k for k in range(config.shards) if k not in entries]
+    _write(out, manifest)
+    report(progress, len(entries), config.shards, "shard")
+    executor = executor_for(None, workers, processes=True)
+    try:
+        for k, arrays in executor.unordered(_make, todo, config):
+            file = out / shard_name(k)
+            save_npz(file, arrays)
+            entries[k] = {"index": k, "file": file.name, "kept": int(arrays["kept"]),
+                          "simulated": int(arrays["simulated"]), "split": split_of(k),
+                          "sha256": file_sha256(file)}
+            manifest["shards"] = [entries[i] for i in sorted(entries)]
+            _write(out, manifest)
+            report(progress, len(entries), config.shards, "shard")
+    finally:
+        executor.close()
+    manifest["shards"] = [entries[i] for i in sorted(entries)]
+    manifest["complete"] = True
+    manifest["counts"] = {"shards": len(entries),
+                          "simulated": sum(e["simulated"] for e in entries.values()),
+                          "kept": sum(e["kept"] for e in entries.values())}
+    _write(out, manifest)
+    return UniversalSet(out, manifest)
+
+
+def _read(out: Path) -> dict | None:
+    if not (out / "manifest.json").exists():
+        return None
+    try:
+        manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise DatasetError(f"{out / 'manifest.json'}: not valid JSON ({exc})") from None
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+        raise DatasetError(f"{out / 'manifest.json'}: not a universal training set manifest")
+    return manifest
+
+
+def _write(out: Path, manifest: dict) -> None:
+    atomic_write_text(out / "manifest.json", json_text(manifest))
+
+
+@dataclass
+class UniversalSet:
+    """A finished universal set (read side)."""
+
+    path: Path
+    manifest: dict
+
+    @classmethod
+    def open(cls, path: str | Path) -> UniversalSet:
+        path = Path(path)
+        manifest = _read(path)
+        if manifest is None:
+            raise DatasetError(f"{path}: not a universal training set (no manifest.json)")
+        if not manifest.get("complete"):
+            raise DatasetError(f"{path}: generation did not finish; run the same command again")
+        return cls(path, manifest)
+
+    def shards(self, split: str | None = None) -> list[dict]:
+        return [e for e in self.manifest["shards"] if split is None or e["split"] == split]
+
+    def load(self, entry: dict) -> dict[str, np.ndarray]:
+        check_shard(self.path, entry)
+        with np.load(self.path / entry["file"], allow_pickle=False) as z:
+            return {key: z[key] for key in z.files}
+
+    def iter_split(self, split: str) -> Iterator[dict[str, np.ndarray]]:
+        for entry in self.shards(split):
+            if entry["kept"]:
+                yield self.load(entry)

@@ -1,0 +1,102 @@
+"""A sway's stimulus-locked harmonics, and the noise the training adds to them.
+
+Everything the universal identifier sees of a recording comes from the DFT (÷P) of the
+drift-free cycle average of its whole stimulus cycles
+(:meth:`posture_id.frf.locked.LockedProjection.all_harmonics`) at every harmonic of the
+cycle up to :data:`STORED_MAX_HZ`: recorded and simulated sway alike, at any sample rate
+and length. Because that map is linear, noise can be added to stored harmonics instead
+of to the sway, with a fresh draw every epoch:
+
+- white sensor noise of SD σ per sample: each harmonic's real and imaginary parts get
+  independent N(0, σ²/(2·C·P)) (C cycles of P samples averaged);
+- slow drift, a random walk of the lean whose SD reaches d in 60 s (diffusion
+  q = d²/60 s): its one-sided PSD q/(2π²f²) gives each part N(0, q/(8π²f²T)) at a
+  harmonic f of a record of T = C·P/rate seconds.
+
+``tests/test_universal.py`` checks both against noise added to the sway itself.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from posture_id.frf.locked import LockedOptions, LockedProjection
+
+__all__ = ["STORED_MAX_HZ", "HarmonicLayout", "harmonic_layout", "sway_harmonics",
+           "sensor_noise_parts", "drift_parts"]
+
+#: Highest harmonic kept, Hz (the features use up to 2.5 Hz; the rest estimates noise).
+STORED_MAX_HZ = 3.0
+_OPTIONS = LockedOptions(drift_order=1, max_frequency_hz=STORED_MAX_HZ, weighted=False)
+
+
+@dataclass(frozen=True)
+class HarmonicLayout:
+    """Where a recording's harmonics lie.
+
+    Attributes:
+        projection: the cycle-average map (None for harmonics read from a training
+        set). frequencies_hz: (K,) the harmonics 1..K of the
+        cycle up to :data:`STORED_MAX_HZ`. excited: (K,) bool, those the tilt excites.
+        tilt: (K,) complex, the tilt's harmonics, rad. period_samples: P. cycles: C.
+        sample_rate_hz: the rate. amplitude_deg: the tilt's peak to peak over the
+        analysed cycles. velocity_deg_s: its RMS velocity.
+    """
+
+    projection: LockedProjection | None
+    frequencies_hz: np.ndarray
+    excited: np.ndarray
+    tilt: np.ndarray
+    period_samples: int
+    cycles: int
+    sample_rate_hz: float
+    amplitude_deg: float
+    velocity_deg_s: float
+
+    @property
+    def record_s(self) -> float:
+        """T, s: the analysed span."""
+        return self.cycles * self.period_samples / self.sample_rate_hz
+
+
+def harmonic_layout(tilt: np.ndarray, sample_rate_hz: float, period_s: float,
+                    start_s: float = 0.0, name: str = "recording") -> HarmonicLayout:
+    """The layout of a recording's tilt (S,) rad with a stimulus of period ``period_s``
+    from ``start_s``."""
+    tilt = np.asarray(tilt, dtype=float)
+    projection = LockedProjection.for_recording(tilt, np.zeros((len(tilt), 1)), sample_rate_hz,
+                                                period_s, start_s, _OPTIONS, name)
+    u = projection.all_harmonics(tilt)
+    p = projection.period
+    k = np.arange(1, len(u) + 1)
+    keep = k * sample_rate_hz / p <= STORED_MAX_HZ
+    span = tilt[projection.start : projection.start + projection.cycles * p]
+    return HarmonicLayout(
+        projection=projection, frequencies_hz=k[keep] * sample_rate_hz / p,
+        excited=projection.excited[keep], tilt=u[keep], period_samples=p,
+        cycles=projection.cycles, sample_rate_hz=float(sample_rate_hz),
+        amplitude_deg=float(np.degrees(np.ptp(span))),
+        velocity_deg_s=float(np.degrees(np.sqrt(np.mean((np.diff(span) * sample_rate_hz)**2)))))
+
+
+def sway_harmonics(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
+    """(K, ...) complex harmonics of a sway (S, ...) rad."""
+    if layout.projection is None:
+        raise ValueError("this layout was read from a training set: it has no projection")
+    return layout.projection.all_harmonics(np.asarray(sway, dtype=float))[: len(layout.tilt)]
+
+
+def sensor_noise_parts(period_samples: int, cycles: int, sd_rad: np.ndarray) -> np.ndarray:
+    """SD of each part (real, imaginary) of a harmonic for white sensor noise ``sd_rad``."""
+    return np.asarray(sd_rad) / math.sqrt(2.0 * cycles * period_samples)
+
+
+def drift_parts(frequencies_hz: np.ndarray, record_s: float, drift_deg: np.ndarray
+                ) -> np.ndarray:
+    """(..., K) SD of each part of each harmonic for a random walk reaching ``drift_deg``
+    (...,) in 60 s over a record of ``record_s``."""
+    q = np.radians(np.asarray(drift_deg, dtype=float))[..., None] ** 2 / 60.0
+    return np.sqrt(q / (8.0 * math.pi**2 * np.asarray(frequencies_hz) ** 2 * record_s))

@@ -1,0 +1,194 @@
+"""Identify a recording with the universal network: any body of 1 to 3 segments, any PRTS
+a lab runs, clean or people-like sway (docs/universal.md).
+
+    >>> from posture_id import load_body, Recording
+    >>> from posture_id.trials import prepare_trial
+    >>> from posture_id.universal.identifier import UniversalIdentifier
+    >>> body = load_body("subject.urdf")
+    >>> identifier = UniversalIdentifier.bundled(body)
+    >>> result = identifier.identify(prepare_trial(Recording.from_csv("rec.csv")))
+
+It reads the stimulus-locked harmonics of whole stimulus cycles, so the stimulus must be
+periodic (a PRTS of any length, state duration, amplitude and cycles); a recording
+outside what it was trained on (body, amplitude, period, noise) is identified with a
+notice saying so.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.bodies.body import Body
+from posture_id.dec.parameters import TARGET_FIELDS, default_parameters, denormalise_arrays
+from posture_id.errors import PostureIdError, RecordingError
+from posture_id.learning.config import LearningError
+from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentification
+from posture_id.provenance import body_identity, provenance
+from posture_id.trials import PreparedTrial
+from posture_id.uncertainty.intervals import ParameterIntervals
+from posture_id.uncertainty.noise import sensor_noise_deg
+from posture_id.universal.calibration import UniversalCalibration, regime_of
+from posture_id.universal.features import DESCRIPTORS, body_descriptors, noise_ratio
+from posture_id.universal.harmonics import harmonic_layout, sway_harmonics
+from posture_id.universal.model import SIDECAR, ModelError, UniversalModel
+from posture_id.universal.samples import module_inputs
+
+__all__ = ["UniversalIdentifier", "BUNDLED_DIR", "is_universal_model"]
+
+#: The bundled universal model (made by ``make models``).
+BUNDLED_DIR = Path(__file__).resolve().parent / "models" / "universal"
+_DESCRIPTOR_NAMES = ("ankle column", "knee column", "hip column", "1 segment", "2 segments",
+                     "3 segments", "time scale", "coupling below", "coupling above",
+                     "m·g·h ratio below", "m·g·h ratio above", "peak-to-peak tilt",
+                     "tilt velocity", "stimulus period", "cycles")
+
+
+def is_universal_model(folder: str | Path) -> bool:
+    """Whether ``folder`` holds a universal model (not a per-body specialist)."""
+    try:
+        text = (Path(folder) / SIDECAR).read_text(encoding="utf-8")
+    except OSError:
+        return False
+    return '"posture_id-universal-model"' in text
+
+
+class UniversalIdentifier:
+    """The universal model and the body it identifies (the same interface as
+    :class:`~posture_id.learning.identifier.CnnIdentifier`)."""
+
+    #: never the network's "own" body: the hybrid scales no least-squares intervals by it
+    trained_on_this_body = False
+
+    def __init__(self, model: UniversalModel, body: Body, notices: tuple[str, ...] = ()) -> None:
+        if not 1 <= body.n_segments <= 3:
+            raise LearningError(f"the universal model identifies bodies of 1 to 3 segments; "
+                                f"'{body.name}' has {body.n_segments}")
+        self.model = model
+        self.body = body
+        self.notices = tuple(notices)
+        self.trained_on = "the universal scope"
+        self.calibration = UniversalCalibration.load(model.path) if model.path else None
+        if self.calibration is not None and (self.calibration.weights_sha256
+                                             != model.sidecar.get("weights_sha256")):
+            self.notices += (f"{model.path}: its calibration was made for other weights and "
+                             "is not used: no intervals",)
+            self.calibration = None
+        elif self.calibration is None:
+            self.notices += (f"{model.path}: the model has no calibration, so its answer has "
+                             "no intervals",)
+        self.descriptors = body_descriptors(body)
+        self.defaults = default_parameters(body)
+        self.body_outside = self._outside(self.descriptors, range(0, DESCRIPTORS - 4),
+                                          f"body '{body.name}'")
+
+    @classmethod
+    def load(cls, folder: str | Path, body: Body) -> UniversalIdentifier:
+        return cls(UniversalModel.load(folder), body)
+
+    @classmethod
+    def bundled(cls, body: Body) -> UniversalIdentifier:
+        """The bundled universal model for ``body``."""
+        if not (BUNDLED_DIR / SIDECAR).exists():
+            raise ModelError(f"{BUNDLED_DIR}: the universal model is not built (make models)")
+        return cls.load(BUNDLED_DIR, body)
+
+    def _outside(self, values: np.ndarray, columns, what: str) -> list[str]:
+        """What of ``values`` (…, DESCRIPTORS or its last columns) lies outside the
+        training inputs' 0.5–99.5 % range."""
+        ranges = self.model.sidecar.get("ranges", {})
+        low, high = ranges.get("descriptors_low"), ranges.get("descriptors_high")
+        if low is None:
+            return []
+        values = np.atleast_2d(values)
+        out = []
+        for c in columns:
+            v = values[:, c - (DESCRIPTORS - values.shape[1])]
+            if np.any(v < low[c] - 1e-9) or np.any(v > high[c] + 1e-9):
+                out.append(f"{what}: its {_DESCRIPTOR_NAMES[c]} is outside what the universal "
+                           "model was trained on")
+        return out
+
+    def _layout(self, trial: PreparedTrial):
+        stimulus = trial.stimulus
+        if stimulus.period_s is None:
+            raise RecordingError(
+                f"{trial.name}: the universal network reads the stimulus-locked response to "
+                f"a periodic stimulus (a PRTS); this tilt ({stimulus.description}) is not "
+                "periodic: use --method fit, which takes any tilt")
+        trial.require_whole_cycle()
+        rec = trial.recording
+        try:
+            return harmonic_layout(rec.tilt, rec.sample_rate_hz, stimulus.period_s,
+                                   stimulus.periodic_from_s, trial.name)
+        except PostureIdError as error:
+            raise RecordingError(f"{error} (the universal network needs whole cycles of "
+                                 "its stimulus)") from None
+
+    def features(self, trial: PreparedTrial) -> np.ndarray:
+        """(N, N_INPUTS) the network's inputs for a prepared trial."""
+        trial.require_segments(self.body.segment_names)
+        layout = self._layout(trial)
+        y = sway_harmonics(layout, trial.recording.theta)[:, None, :]
+        return module_inputs(layout, y, self.descriptors)
+
+    def identify(self, trial: PreparedTrial, level: float = DEFAULT_LEVEL
+                 ) -> CnnIdentification:
+        """Every module's parameters for one prepared trial, with intervals at ``level``."""
+        trial.require_segments(self.body.segment_names)
+        layout = self._layout(trial)
+        theta = trial.recording.theta
+        y = sway_harmonics(layout, theta)[:, None, :]
+        inputs = module_inputs(layout, y, self.descriptors)
+        prediction = self.model.predict(inputs)
+        n = self.body.n_segments
+        ratio = float(noise_ratio(layout, y)[0])
+        regime = str(regime_of(n, ratio))
+        outside = list(self.body_outside) + self._outside(
+            inputs[0, -4:], range(DESCRIPTORS - 4, DESCRIPTORS), f"{trial.name}: the stimulus")
+        if ratio > self.model.sidecar.get("ranges", {}).get("noise_ratio_high", math.inf):
+            outside.append(f"{trial.name}: {100 * ratio:.0f} % of its locked harmonics is "
+                           "noise, more than in any recording the model was trained on")
+        normalised = np.column_stack([prediction.mean, np.zeros(n)])
+        intervals = None
+        noise = sensor_noise_deg(theta)
+        if self.calibration is not None:
+            probability = self.calibration.probability(regime, prediction.logit)
+            if not 0.5 <= level <= LEVEL_MAX:
+                raise PostureIdError(f"interval level {level:g} is outside the calibrated "
+                                     f"0.5–{LEVEL_MAX:g}")
+            half = prediction.sd * self.calibration.scale(regime, level)
+            defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
+            intervals = ParameterIntervals.around(
+                prediction.mean, half, defaults, level,
+                f"conformal, universal network (regime {_regime_text(regime)}, held-out "
+                "bodies and stimuli)", noise, self.body.joint_names)
+        else:
+            probability = 1.0 / (1.0 + np.exp(-prediction.logit))
+        normalised[:, 4] = np.where(probability >= 0.5, 1.0, -1.0)
+        arrays = denormalise_arrays(normalised[None], self.defaults)
+        params = arrays.trial(0, self.body.joint_names)
+        notices = self.notices + trial.notices + tuple(outside)
+        model_info = {"path": str(self.model.path), "layout": "universal",
+                      "weights_sha256": self.model.sidecar.get("weights_sha256"),
+                      "trained_on": self.trained_on,
+                      "package_version": self.model.sidecar.get("package_version"),
+                      "regime": regime, "noise_ratio": ratio}
+        return CnnIdentification(
+            parameters=params, normalised=normalised, class_probability=probability,
+            joints=self.body.joint_names, model=model_info, intervals=intervals,
+            notices=notices, outside=tuple(outside),
+            provenance={**provenance(None, self.body, recording=trial.name),
+                        "body": body_identity(self.body)})
+
+
+#: The highest interval level calibrated.
+LEVEL_MAX = 0.99
+
+
+def _regime_text(regime: str) -> str:
+    n, b = regime.split(":")
+    words = ("clean", "a little noisy", "noisy", "mostly noise")[int(b)]
+    return f"{n} segment{'s' if n != '1' else ''}, {words}"

@@ -1,0 +1,139 @@
+"""A trained universal model on disk: ``model.safetensors`` (weights and standardisation)
+and ``model.json`` (what made it: scope, features, training; the weights' SHA-256).
+Nothing is unpickled; a directory whose parts do not match is refused in one line."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+from safetensors import SafetensorError
+from safetensors.torch import load_file, save_file
+
+from posture_id._version import __version__
+from posture_id.errors import PostureIdError
+from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
+from posture_id.universal.features import UNIVERSAL_FEATURE_DEFINITION
+from posture_id.universal.network import UniversalNetwork, UniversalNetworkConfig
+from posture_id.universal.scope import UniversalScope
+
+__all__ = ["UniversalModel", "UniversalPrediction", "ModelError", "FORMAT", "WEIGHTS",
+           "SIDECAR"]
+
+FORMAT = "posture_id-universal-model"
+WEIGHTS = "model.safetensors"
+SIDECAR = "model.json"
+
+
+class ModelError(PostureIdError):
+    """A universal model directory is missing, corrupt or of another kind."""
+
+
+@dataclass(frozen=True)
+class UniversalPrediction:
+    """Per module sample: normalised [K̃p, K̃i, K̃d, Δ̃] (M, 4), the network's own SD of
+    each (M, 4) in the same units, and the class logit (M,)."""
+
+    mean: np.ndarray
+    sd: np.ndarray
+    logit: np.ndarray
+
+
+@dataclass
+class UniversalModel:
+    """The network and its standardisation.
+
+    Attributes:
+        input_mean, input_std: (N_INPUTS,). target_mean, target_std: (4,).
+        sidecar: what made it (``model.json``). path: where it was loaded from.
+    """
+
+    network: UniversalNetwork
+    input_mean: np.ndarray
+    input_std: np.ndarray
+    target_mean: np.ndarray
+    target_std: np.ndarray
+    sidecar: dict = field(default_factory=dict)
+    path: Path | None = None
+
+    @property
+    def scope(self) -> UniversalScope:
+        return UniversalScope.from_dict(self.sidecar["scope"])
+
+    def standardise(self, inputs: np.ndarray) -> torch.Tensor:
+        return torch.from_numpy(((inputs - self.input_mean) / self.input_std).astype(np.float32))
+
+    @torch.no_grad()
+    def predict(self, inputs: np.ndarray, batch_size: int = 8192) -> UniversalPrediction:
+        """Predictions for (M, N_INPUTS) unstandardised inputs."""
+        self.network.eval()
+        outs = [self.network(self.standardise(inputs[i : i + batch_size])).numpy()
+                for i in range(0, len(inputs), batch_size)]
+        out = np.concatenate(outs) if outs else np.zeros((0, 9), np.float32)
+        out = out.astype(np.float64)
+        mean = out[:, :4] * self.target_std + self.target_mean
+        sd = np.exp(np.clip(out[:, 4:8], -12, 6)) * self.target_std
+        return UniversalPrediction(mean, sd, out[:, 8])
+
+    def tensors(self) -> dict[str, torch.Tensor]:
+        out = {f"network.{k}": v.detach().contiguous()
+               for k, v in self.network.state_dict().items()}
+        for name in ("input_mean", "input_std", "target_mean", "target_std"):
+            out[f"standardiser.{name}"] = torch.from_numpy(
+                np.ascontiguousarray(getattr(self, name), dtype=np.float64))
+        return out
+
+    def save(self, folder: str | Path, extra: dict | None = None) -> Path:
+        """Write the model atomically (weights, then the sidecar naming their hash)."""
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        atomic_write(folder / WEIGHTS, lambda tmp: save_file(self.tensors(), str(tmp)))
+        self.sidecar = {
+            **self.sidecar, **(extra or {}),
+            "format": FORMAT, "package_version": __version__,
+            "architecture": {**asdict(self.network.config),
+                             "hidden": list(self.network.config.hidden)},
+            "features": UNIVERSAL_FEATURE_DEFINITION,
+            "weights_sha256": file_sha256(folder / WEIGHTS),
+        }
+        atomic_write_text(folder / SIDECAR, json_text(self.sidecar))
+        self.path = folder
+        return folder
+
+    @classmethod
+    def load(cls, folder: str | Path) -> UniversalModel:
+        folder = Path(folder)
+        sidecar_file, weights = folder / SIDECAR, folder / WEIGHTS
+        for file in (sidecar_file, weights):
+            if not file.is_file():
+                raise ModelError(f"{folder}: not a universal model ({file.name} is missing)")
+        try:
+            sidecar = json.loads(sidecar_file.read_text(encoding="utf-8"))
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise ModelError(f"{sidecar_file}: not valid JSON ({exc})") from None
+        if not isinstance(sidecar, dict) or sidecar.get("format") != FORMAT:
+            raise ModelError(f"{sidecar_file}: not a universal model's sidecar")
+        if sidecar.get("features") != json.loads(json_text(UNIVERSAL_FEATURE_DEFINITION)):
+            raise ModelError(f"{sidecar_file}: made for other features than this code's; "
+                             "train it again (make models)")
+        if file_sha256(weights) != sidecar.get("weights_sha256"):
+            raise ModelError(f"{weights}: corrupt or not the weights its sidecar names "
+                             "(SHA-256 differs)")
+        arch = sidecar["architecture"]
+        config = UniversalNetworkConfig(int(arch["inputs"]), tuple(arch["hidden"]),
+                                        float(arch["dropout"]))
+        try:
+            tensors = load_file(str(weights))
+        except SafetensorError as exc:
+            raise ModelError(f"{weights}: cannot be read ({exc})") from None
+        network = UniversalNetwork(config)
+        network.load_state_dict({k.removeprefix("network."): v for k, v in tensors.items()
+                                 if k.startswith("network.")})
+        network.eval()
+        std = {k.removeprefix("standardiser."): v.numpy() for k, v in tensors.items()
+               if k.startswith("standardiser.")}
+        return cls(network, std["input_mean"], std["input_std"], std["target_mean"],
+                   std["target_std"], sidecar, folder)

@@ -1,0 +1,110 @@
+"""Training samples of the universal network: one per module of every trial, made from a
+shard's stored harmonics with fresh sensor noise and drift (:mod:`.harmonics`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from posture_id.universal.data import UniversalSet, shard_layout
+from posture_id.universal.features import (
+    module_features,
+    noise_ratio,
+    stimulus_descriptors,
+)
+from posture_id.universal.harmonics import drift_parts, sensor_noise_parts
+from posture_id.universal.scope import UniversalScope
+
+__all__ = ["LoadedShard", "Samples", "load_split", "make_samples", "module_inputs"]
+
+
+@dataclass(frozen=True)
+class LoadedShard:
+    """A shard's arrays and its layout."""
+
+    arrays: dict
+    layout: object
+
+    @property
+    def n_segments(self) -> int:
+        return int(self.arrays["y"].shape[2])
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Module samples. inputs: (M, N_INPUTS) float32 (unstandardised). targets: (M, 5)
+    normalised [K̃p, K̃i, K̃d, Δ̃, C]. trial: (M,) trial index within the set made;
+    module: (M,) its index in the body; segments: (M,) N; noise_ratio: (M,) the trial's
+    share of locked harmonics that is noise; locked_share: (M,) its body COM sway's
+    realised locked share; sensor_noise_deg, drift_deg: (M,) what was added; shard: (M,)
+    the shard index."""
+
+    inputs: np.ndarray
+    targets: np.ndarray
+    trial: np.ndarray
+    module: np.ndarray
+    segments: np.ndarray
+    noise_ratio: np.ndarray
+    locked_share: np.ndarray
+    sensor_noise_deg: np.ndarray
+    drift_deg: np.ndarray
+    shard: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.inputs)
+
+
+def load_split(data: UniversalSet, split: str) -> list[LoadedShard]:
+    """Every non-empty shard of a split, in memory (a few kB per trial)."""
+    out = []
+    for entry in data.shards(split):
+        if entry["kept"]:
+            arrays = data.load(entry)
+            arrays["index"] = entry["index"]
+            out.append(LoadedShard(arrays, shard_layout(arrays)))
+    return out
+
+
+def module_inputs(layout, harmonics: np.ndarray, body: np.ndarray) -> np.ndarray:
+    """(B·N, N_INPUTS) float32 inputs of B sways' harmonics (K, B, N) on a body whose
+    descriptors are ``body`` (N, 11), module after module within each trial."""
+    feats = module_features(layout, harmonics)  # (B, N, C, G)
+    b, n = feats.shape[:2]
+    stim = np.broadcast_to(stimulus_descriptors(layout), (b, n, 4))
+    desc = np.broadcast_to(body, (b, n, body.shape[1]))
+    return np.concatenate([feats.reshape(b, n, -1), desc, stim], axis=2).reshape(
+        b * n, -1).astype(np.float32)
+
+
+def make_samples(shards: list[LoadedShard], scope: UniversalScope,
+                 rng: np.random.Generator) -> Samples:
+    """The module samples of ``shards`` with sensor noise (SD uniform in the scope's range,
+    per trial) and drift (level uniform in the scope's range, for trials with motor
+    noise) drawn from ``rng``."""
+    parts: dict[str, list] = {k: [] for k in Samples.__dataclass_fields__}
+    first = 0
+    for shard in shards:
+        a, layout = shard.arrays, shard.layout
+        y = np.moveaxis(a["y"], 0, 1).astype(np.complex128)  # (K, T, N)
+        k, t, n = y.shape
+        sensor = rng.uniform(*scope.sensor_noise_deg, t)
+        drift = np.where(a["motor_noise_deg"] > 0, rng.uniform(*scope.drift_deg, t), 0.0)
+        sd = np.sqrt(sensor_noise_parts(layout.period_samples, layout.cycles,
+                                        np.radians(sensor))[None, :] ** 2
+                     + drift_parts(layout.frequencies_hz, layout.cycles * layout.period_samples
+                                   / layout.sample_rate_hz, drift).T ** 2)  # (K, T)
+        y = y + sd[:, :, None] * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
+        parts["inputs"].append(module_inputs(layout, y, a["body"]))
+        parts["targets"].append(a["targets"].reshape(t * n, 5))
+        rho = noise_ratio(layout, y)
+        per_module = {"trial": first + np.arange(t), "noise_ratio": rho,
+                      "locked_share": a["locked_share"], "sensor_noise_deg": sensor,
+                      "drift_deg": drift}
+        for key, value in per_module.items():
+            parts[key].append(np.repeat(value, n))
+        parts["module"].append(np.tile(np.arange(n), t))
+        parts["segments"].append(np.full(t * n, n))
+        parts["shard"].append(np.full(t * n, a["index"]))
+        first += t
+    return Samples(**{k: np.concatenate(v) for k, v in parts.items()})

@@ -1,0 +1,143 @@
+"""The universal network over body families × stimuli × clean and people-like sway, on
+trials simulated for the table alone (their own seeds: no training trial is among them).
+
+Families: Winter 1-, 2- and 3-segment bodies (height and mass drawn per cell from the
+scope's ranges, Winter's proportions), the default TIP and lumped TALOS (3 segments).
+Stimuli: the 242-state PRTS ×2 (121 s) and the 80-state PRTS ×6 (120 s), 0.25 s states,
+at 0.5, 1 and 3° peak to peak. Sway: clean (sensor noise uniform in 0–0.1°, no motor
+noise) and people-like (motor noise leaving 15–40 % of the body COM sway locked, sensor
+noise 0.02–0.1°, drift up to 0.5° per minute).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.executors import executor_for
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.plotting import plot_score_grid
+from posture_id.universal.calibration import UniversalCalibration
+from posture_id.universal.data import shard_layout, simulate_trials
+from posture_id.universal.evaluation import GroupScore, score_samples
+from posture_id.universal.model import UniversalModel
+from posture_id.universal.samples import LoadedShard, make_samples
+from posture_id.universal.scope import BodyDraw, StimulusDraw, UniversalScope
+
+__all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "TABLE_SEED"]
+
+TABLE_SEED = 0x544142
+FAMILIES = ("Winter 1-seg", "Winter 2-seg", "Winter 3-seg", "TIP", "TALOS 3-seg")
+STIMULI = tuple((states, cycles, amp) for states, cycles in ((242, 2), (80, 6))
+                for amp in (0.5, 1.0, 3.0))
+SWAY = {
+    "clean": dict(clean_share=1.0, sensor_noise_deg=(0.0, 0.1), drift_deg=(0.0, 0.0)),
+    "people-like": dict(clean_share=0.0, locked_share=(0.15, 0.4),
+                        sensor_noise_deg=(0.02, 0.1), drift_deg=(0.0, 0.5)),
+}
+
+
+def _body(family: str, rng: np.random.Generator, scope: UniversalScope) -> BodyDraw:
+    if family == "TIP":
+        return BodyDraw("tip", 3)
+    if family.startswith("TALOS"):
+        return BodyDraw("talos", 3)
+    n = int(family.split()[1][0])
+    return BodyDraw("winter", n, float(rng.uniform(*scope.heights_m)),
+                    float(rng.uniform(*scope.masses_kg)), ((1.0, 1.0),) * n)
+
+
+def _cell(index: int, trials: int, scope_dict: dict) -> dict:
+    family, (states, cycles, amp), sway = list(_cells())[index]
+    scope = replace(UniversalScope.from_dict(scope_dict), **SWAY[sway])
+    rng = np.random.default_rng(np.random.SeedSequence([TABLE_SEED, index]))
+    body = _body(family, rng, scope)
+    return simulate_trials(body, StimulusDraw(states, 0.25, amp, cycles), trials, scope, rng)
+
+
+def _cells():
+    return itertools.product(FAMILIES, STIMULI, SWAY)
+
+
+def _stimulus_label(states: int, cycles: int, amp: float) -> str:
+    return f"{states}×{cycles}, {amp:g}°"
+
+
+@dataclass(frozen=True)
+class FamilyTable:
+    """Scores per (family, stimulus, sway) cell."""
+
+    cells: dict
+
+    def to_dict(self) -> dict:
+        return {" | ".join(k): v.to_dict() for k, v in self.cells.items()}
+
+    def markdown(self) -> str:
+        lines = ["| body | stimulus | sway | trials | classes % | all right % | Kp err % | "
+                 "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay |",
+                 "|" + "---|" * 10]
+        for (family, stim, sway), s in self.cells.items():
+            e, c = s.median_error_pct, s.coverage_pct
+            lines.append(f"| {family} | {stim} | {sway} | {s.trials} | {s.classes_pct:.1f} | "
+                         f"{s.trials_all_right_pct:.0f} | {e['kp']:.1f} | {e['kd']:.1f} | "
+                         f"{e['delay_s']:.1f} | "
+                         + " / ".join(f"{c[k]:.0f}" for k in ("kp", "ki", "kd", "delay_s"))
+                         + " |")
+        return "\n".join(lines)
+
+    def plot(self, path=None, ax=None):
+        rows = [f"{f}, {s}" for f in FAMILIES for s in SWAY]
+        columns = [_stimulus_label(*s) for s in STIMULI]
+        shape = (len(rows), len(columns))
+        classes, kp, coverage = (np.full(shape, np.nan) for _ in range(3))
+        for (family, stim, sway), s in self.cells.items():
+            i = rows.index(f"{family}, {sway}")
+            j = columns.index(stim)
+            classes[i, j] = s.classes_pct
+            kp[i, j] = s.median_error_pct["kp"]
+            coverage[i, j] = np.mean(list(s.coverage_pct.values()))
+        return plot_score_grid(rows, columns, {
+            "classes right, %": (classes, (80, 100), ".0f"),
+            "median |Kp error|, %": (kp, (0, 20), ".1f"),
+            "90 % interval coverage (mean of 4), %": (coverage, (75, 100), ".0f")}, path, ax)
+
+
+def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
+                 workers: int | None = None) -> FamilyTable:
+    """Simulate every cell, score the model there, write table.{md,json,png} to ``out``."""
+    model = UniversalModel.load(model_dir)
+    calibration = UniversalCalibration.load(model_dir)
+    scope = model.scope
+    cells = list(_cells())
+    executor = executor_for(None, workers, processes=True)
+    results = {}
+    try:
+        for index, arrays in executor.unordered(_cell, range(len(cells)), trials,
+                                                scope.to_dict()):
+            results[index] = arrays
+    finally:
+        executor.close()
+    scores: dict[tuple[str, str, str], GroupScore] = {}
+    for index, (family, stim, sway) in enumerate(cells):
+        arrays = results[index]
+        arrays["index"] = index
+        sway_scope = replace(scope, **SWAY[sway])
+        samples = make_samples([LoadedShard(arrays, shard_layout(arrays))], sway_scope,
+                               np.random.default_rng([TABLE_SEED, index]))
+        key = (family, _stimulus_label(*stim), sway)
+        scores[key] = score_samples(model, samples, calibration)["all"]
+        scores[key] = replace(scores[key])
+    table = FamilyTable(scores)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "table.json", json_text({
+        "model": str(model_dir), "weights_sha256": model.sidecar.get("weights_sha256"),
+        "trials_per_cell": trials, "cells": table.to_dict()}))
+    atomic_write_text(out / "table.md", table.markdown() + "\n")
+    table.plot(out / "table.png")
+    return table
+
+

@@ -1,0 +1,217 @@
+"""Training the universal network on a universal set (:mod:`.data`).
+
+Every epoch makes the training split's module samples afresh (:func:`.samples.
+make_samples`: new sensor noise and drift on the stored sway), so the network never sees
+the same noisy recording twice. Loss per module sample: the mean squared error of the
+four standardised continuous targets, plus half the Gaussian negative log-likelihood of
+their errors under the network's own SD (the mean detached: the SD learns the size of
+the error without pulling the estimate), plus the binary cross-entropy of the class
+logit. AdamW with a one-cycle schedule; the weights of the epoch with the lowest
+validation loss (MSE + cross-entropy, fixed noise) are kept; training stops early after
+``patience`` epochs without improvement. All cores are used (torch threads); a GPU when
+torch finds one.
+
+The run is resumable: after each epoch the state (weights, optimiser, best weights,
+history) is written atomically to ``train-state.safetensors`` and ``train-state.json``
+in the output folder; the same command continues from there.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+from safetensors.torch import load_file, save_file
+
+from posture_id.fileio import atomic_write, atomic_write_text, json_text
+from posture_id.progress import Progress, report
+from posture_id.universal.data import UniversalSet
+from posture_id.universal.model import UniversalModel
+from posture_id.universal.network import UniversalNetwork, UniversalNetworkConfig
+from posture_id.universal.samples import Samples, load_split, make_samples
+from posture_id.universal.scope import UniversalScope
+
+__all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED"]
+
+#: Seed of the validation split's noise (fixed, so epochs are compared alike).
+VALIDATION_SEED = 0x56414C
+
+
+@dataclass(frozen=True)
+class UniversalTrainingConfig:
+    """How to train: epochs (at most), batch size, AdamW's peak learning rate and weight
+    decay, early-stopping patience, seed, torch threads (default: all cores)."""
+
+    epochs: int = 60
+    batch_size: int = 512
+    max_learning_rate: float = 2e-3
+    weight_decay: float = 1e-4
+    patience: int = 12
+    seed: int = 0
+    threads: int | None = None
+
+
+def _device() -> torch.device:
+    return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+
+
+def _loss(out: torch.Tensor, target: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """(training loss, validation loss) of a batch; ``target`` (B, 5) standardised
+    continuous targets then the class (±1)."""
+    mean, log_sd, logit = out[:, :4], out[:, 4:8].clamp(-8, 6), out[:, 8]
+    err = target[:, :4] - mean
+    mse = (err**2).mean()
+    nll = (log_sd + 0.5 * (err.detach() ** 2) * torch.exp(-2 * log_sd)).mean()
+    bce = torch.nn.functional.binary_cross_entropy_with_logits(logit, (target[:, 4] > 0).float())
+    return mse + 0.5 * nll + bce, mse + bce
+
+
+def _targets(samples: Samples, mean: np.ndarray, std: np.ndarray) -> torch.Tensor:
+    t = samples.targets.astype(np.float64).copy()
+    t[:, :4] = (t[:, :4] - mean) / std
+    return torch.from_numpy(t.astype(np.float32))
+
+
+def train_universal(data_path: str | Path, out: str | Path,
+                    config: UniversalTrainingConfig | None = None,
+                    network: UniversalNetworkConfig | None = None,
+                    progress: Progress | None = None, log=print) -> UniversalModel:
+    """Train on the set at ``data_path``; the best model is written to ``out``."""
+    config = config or UniversalTrainingConfig()
+    network_config = network or UniversalNetworkConfig()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    torch.set_num_threads(config.threads or os.cpu_count() or 1)
+    device = _device()
+    data = UniversalSet.open(data_path)
+    scope = UniversalScope.from_dict(data.manifest["config"]["scope"])
+    t0 = time.perf_counter()
+    train_shards = load_split(data, "train")
+    validation = make_samples(load_split(data, "validation"), scope,
+                              np.random.default_rng(VALIDATION_SEED))
+    first = make_samples(train_shards, scope, np.random.default_rng([config.seed, 0]))
+    input_mean = first.inputs.mean(axis=0, dtype=np.float64)
+    input_std = np.maximum(first.inputs.std(axis=0, dtype=np.float64), 1e-6)
+    target_mean = first.targets[:, :4].mean(axis=0)
+    target_std = first.targets[:, :4].std(axis=0)
+    log(f"loaded {len(train_shards)} training shards ({len(first)} module samples), "
+        f"{len(validation)} validation samples in {time.perf_counter() - t0:.0f} s")
+    torch.manual_seed(config.seed)
+    net = UniversalNetwork(network_config).to(device)
+    model = UniversalModel(net, input_mean, input_std, target_mean, target_std)
+    steps = math.ceil(len(first) / config.batch_size)
+    optimiser = torch.optim.AdamW(net.parameters(), lr=config.max_learning_rate,
+                                  weight_decay=config.weight_decay)
+    schedule = torch.optim.lr_scheduler.OneCycleLR(
+        optimiser, max_lr=config.max_learning_rate, total_steps=config.epochs * steps + 1)
+    state = _resume(out, net, optimiser, schedule, config)
+    best_state = state.pop("best_weights", None)
+    history = state.get("history", [])
+    best = state.get("best", math.inf)
+    x_val = model.standardise(validation.inputs).to(device)
+    t_val = _targets(validation, target_mean, target_std).to(device)
+    for epoch in range(len(history), config.epochs):
+        started = time.perf_counter()
+        samples = first if epoch == 0 else make_samples(
+            train_shards, scope, np.random.default_rng([config.seed, epoch]))
+        x = model.standardise(samples.inputs)
+        t = _targets(samples, target_mean, target_std)
+        order = torch.from_numpy(np.random.default_rng([config.seed, 1, epoch]).permutation(len(x)))
+        torch.manual_seed(config.seed * 100003 + epoch)  # dropout: the same on a resumed run
+        net.train()
+        total = 0.0
+        for i in range(steps):
+            pick = order[i * config.batch_size : (i + 1) * config.batch_size]
+            if not len(pick):
+                continue
+            loss, _ = _loss(net(x[pick].to(device)), t[pick].to(device))
+            optimiser.zero_grad(set_to_none=True)
+            loss.backward()
+            optimiser.step()
+            schedule.step()
+            total += loss.item() * len(pick)
+        net.eval()
+        with torch.no_grad():
+            val = float(np.mean([_loss(net(x_val[i:i + 8192]), t_val[i:i + 8192])[1].item()
+                                 for i in range(0, len(x_val), 8192)]))
+        history.append({"epoch": epoch + 1, "train_loss": total / len(x),
+                        "validation_loss": val, "seconds": time.perf_counter() - started})
+        if val < best:
+            best = val
+            best_state = {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
+        _save_state(out, net, optimiser, schedule, best_state, history, best, config)
+        log(f"epoch {epoch + 1}/{config.epochs}: train {total / len(x):.4f}, validation "
+            f"{val:.4f}{' (best)' if val == best else ''}, {time.perf_counter() - started:.0f} s")
+        report(progress, epoch + 1, config.epochs, "epoch")
+        stale = len(history) - 1 - int(np.argmin([h["validation_loss"] for h in history]))
+        if stale >= config.patience:
+            log(f"no improvement for {config.patience} epochs: stopping")
+            break
+    net.load_state_dict(best_state)
+    net.cpu()
+    model.sidecar = {
+        "scope": scope.to_dict(),
+        "dataset": {"path": str(Path(data_path).resolve()),
+                    "config": data.manifest["config"], "counts": data.manifest.get("counts")},
+        "training": {**asdict(config), "history": history,
+                     "best_epoch": int(np.argmin([h["validation_loss"] for h in history])) + 1,
+                     "device": str(device), "train_samples": len(first)},
+        "ranges": _ranges(first),
+    }
+    model.save(out)
+    for name in ("train-state.safetensors", "train-state.json"):
+        (out / name).unlink(missing_ok=True)
+    return model
+
+
+def _ranges(samples: Samples) -> dict:
+    """Per input column, the 0.5 % and 99.5 % points of the training inputs' descriptors
+    (what a recording is checked against)."""
+    from posture_id.universal.features import DESCRIPTORS
+
+    desc = samples.inputs[:, -DESCRIPTORS:]
+    return {"descriptors_low": np.percentile(desc, 0.5, axis=0).tolist(),
+            "descriptors_high": np.percentile(desc, 99.5, axis=0).tolist(),
+            "noise_ratio_high": float(np.percentile(samples.noise_ratio, 99.5))}
+
+
+def _save_state(out: Path, net, optimiser, schedule, best_state, history, best, config) -> None:
+    tensors = {f"net.{k}": v.detach().cpu().contiguous() for k, v in net.state_dict().items()}
+    tensors |= {f"best.{k}": v.contiguous() for k, v in (best_state or {}).items()}
+    for pid, group in optimiser.state_dict()["state"].items():
+        for key, value in group.items():
+            tensors[f"opt.{pid}.{key}"] = torch.as_tensor(value).detach().cpu().contiguous()
+    atomic_write(out / "train-state.safetensors", lambda tmp: save_file(tensors, str(tmp)))
+    atomic_write_text(out / "train-state.json", json_text({
+        "config": asdict(config), "history": history, "best": best,
+        "schedule": schedule.state_dict(),
+        "param_groups": optimiser.state_dict()["param_groups"]}))
+
+
+def _resume(out: Path, net, optimiser, schedule, config) -> dict:
+    """Load the state of an interrupted run of the same configuration (else nothing)."""
+    meta_file, weights = out / "train-state.json", out / "train-state.safetensors"
+    if not (meta_file.exists() and weights.exists()):
+        return {}
+    meta = json.loads(meta_file.read_text())
+    if meta.get("config") != json.loads(json_text(asdict(config))):
+        return {}
+    tensors = load_file(str(weights))
+    net.load_state_dict({k[4:]: v for k, v in tensors.items() if k.startswith("net.")})
+    opt = optimiser.state_dict()
+    opt["param_groups"] = [{k: tuple(v) if k == "betas" else v for k, v in group.items()}
+                           for group in meta["param_groups"]]
+    for pid in range(sum(len(g["params"]) for g in opt["param_groups"])):
+        found = {k.split(".", 2)[2]: v for k, v in tensors.items() if k.startswith(f"opt.{pid}.")}
+        if found:
+            opt["state"][pid] = found
+    optimiser.load_state_dict(opt)
+    schedule.load_state_dict(meta["schedule"])
+    best = {k[5:]: v for k, v in tensors.items() if k.startswith("best.")}
+    return {"history": meta["history"], "best": meta["best"], "best_weights": best or None}

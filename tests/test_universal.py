@@ -1,0 +1,196 @@
+"""The universal identifier's pieces against known answers: the noise added to stored
+harmonics against noise added to the sway, the band FRFs against a known system, the
+body descriptors against Pinocchio, the draws, the shards, training and resumption."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from posture_id.universal.features import (
+    CHANNELS,
+    GRID_HZ,
+    band_weights,
+    body_descriptors,
+    module_features,
+)
+from posture_id.universal.harmonics import (
+    drift_parts,
+    harmonic_layout,
+    sensor_noise_parts,
+    sway_harmonics,
+)
+from posture_id.universal.scope import UniversalScope, draw_body, draw_stimulus
+
+
+def _layout(states=80, state_s=0.25, cycles=4, amp=1.0):
+    from posture_id.simulation.stimulus import prts
+
+    profile = prts(amp, cycles, states, state_s)
+    t = np.arange(int(round(profile.duration * 50)) + 1) / 50
+    return harmonic_layout(profile.angle(t), 50.0, profile.period_s), t
+
+
+def test_sensor_noise_on_harmonics_matches_noise_on_the_sway():
+    layout, t = _layout(cycles=3)
+    rng = np.random.default_rng(1)
+    sd = 0.002
+    noise = sd * rng.standard_normal((len(t), 400))
+    y = sway_harmonics(layout, noise)  # (K, 400)
+    measured = np.sqrt(np.mean(y.real[5:] ** 2))  # skip the lowest, touched by detrending
+    predicted = sensor_noise_parts(layout.period_samples, layout.cycles, sd)
+    assert measured == pytest.approx(predicted, rel=0.03)
+    assert np.sqrt(np.mean(y.imag[5:] ** 2)) == pytest.approx(predicted, rel=0.03)
+
+
+def test_drift_on_harmonics_matches_a_random_walk_of_the_sway():
+    layout, t = _layout(cycles=4)
+    rng = np.random.default_rng(2)
+    drift_deg = 0.4
+    q = math.radians(drift_deg) ** 2 / 60.0  # rad²/s
+    walk = np.cumsum(math.sqrt(q / 50.0) * rng.standard_normal((len(t), 600)), axis=0)
+    y = sway_harmonics(layout, walk)
+    predicted = drift_parts(layout.frequencies_hz, layout.record_s, np.array([drift_deg]))[0]
+    rows = slice(3, 40)  # above the detrending's reach, below the sampling's
+    ratio = np.sqrt(np.mean(np.abs(y[rows]) ** 2, axis=1) / 2) / predicted[rows]
+    assert np.median(ratio) == pytest.approx(1.0, abs=0.15)
+
+
+def test_band_frf_of_a_known_system_is_its_tilt_weighted_mean():
+    layout, _ = _layout(states=242, state_s=0.2, cycles=2)
+    f = layout.frequencies_hz
+    h_true = 1.0 / (1.0 + 1j * f / 0.5)  # a first-order low-pass
+    y = (h_true * layout.tilt)[:, None, None]
+    feats = module_features(layout, y)  # (1, 1, C, G)
+    w, count = band_weights(layout)
+    rows = np.flatnonzero(layout.excited & (f <= 2.5))
+    expected = w @ (h_true[rows] * layout.tilt[rows])
+    assert np.allclose(feats[0, 0, 3] + 1j * feats[0, 0, 4], expected, atol=1e-6)
+    # where a band holds harmonics, the estimate is the low-pass at about its centre
+    full = count > 0
+    assert np.allclose(expected[full], 1.0 / (1.0 + 1j * GRID_HZ[full] / 0.5), atol=0.08)
+    # a constant FRF comes back exactly in every band, measured or interpolated
+    const = ((0.5 - 0.2j) * layout.tilt)[:, None, None]
+    feats = module_features(layout, const)
+    assert np.allclose(feats[0, 0, 3], 0.5, atol=1e-6)
+    assert np.allclose(feats[0, 0, 4], -0.2, atol=1e-6)
+
+
+def test_module_channels_hold_the_platform_below_and_nothing_above(winter2):
+    layout, t = _layout()
+    y = (np.array([0.8, 1.2])[None, None, :] * layout.tilt[:, None, None]).astype(complex)
+    feats = module_features(layout, y)  # (1, 2, C, G)
+    assert feats.shape == (1, 2, CHANNELS, len(GRID_HZ))
+    assert np.allclose(feats[0, 0, 0], 1.0) and np.allclose(feats[0, 0, 1], 0.0)
+    assert np.allclose(feats[0, 0, 3], 0.8, atol=1e-6)
+    assert np.allclose(feats[0, 0, 6], 1.2, atol=1e-6)  # the segment above the ankle
+    assert np.allclose(feats[0, 1, 0], 0.8, atol=1e-6)  # below the hip: the leg
+    assert np.allclose(feats[0, 1, 6:8], 0.0)  # nothing above the top segment
+
+
+@pytest.mark.parametrize("body_name", ["tip", "winter", "winter2", "winter1"])
+def test_time_scale_descriptor_is_pinocchios_inertia_about_the_joint(body_name, request):
+    import pinocchio as pin
+
+    body = request.getfixturevalue(body_name)
+    data = body.model.createData()
+    joint_inertia = pin.crba(body.model, data, pin.neutral(body.model))
+    desc = body_descriptors(body)
+    for i in range(body.n_segments):
+        assert 10 ** desc[i, 6] == pytest.approx(
+            math.sqrt(joint_inertia[i, i] / body.mgh[i]), rel=1e-9)
+    assert np.allclose(desc[:, 3 + body.n_segments - 1], 1.0)
+
+
+def test_draws_stay_in_the_scope_and_cycles_fit_the_sample_grid():
+    scope = UniversalScope()
+    rng = np.random.default_rng(3)
+    kinds = set()
+    for _ in range(300):
+        body = draw_body(scope, rng)
+        kinds.add(body.kind)
+        if body.kind == "winter":
+            assert scope.heights_m[0] <= body.height_m <= scope.heights_m[1]
+            assert len(body.factors) == body.segments
+        stim = draw_stimulus(scope, rng)
+        period_samples = stim.states * stim.state_s * 50
+        assert period_samples == pytest.approx(round(period_samples), abs=1e-9)
+        assert 0.2 - 0.01 <= stim.state_s <= 0.3 + 0.01
+        assert 0.5 - 1e-9 <= stim.amplitude_deg <= 4.0 + 1e-4
+        assert stim.cycles >= 1
+        assert stim.duration_s <= 250 or stim.cycles == 1
+    assert kinds == {"winter", "tip", "talos", "g1", "human"}
+
+
+@pytest.fixture(scope="module")
+def tiny_set(tmp_path_factory):
+    """A 20-shard set of 6 trials each: enough for every split."""
+    from posture_id.universal.data import UniversalDataConfig, generate_universal
+
+    out = tmp_path_factory.mktemp("universal") / "set"
+    return generate_universal(UniversalDataConfig(shards=20, trials=6, seed=5), out, workers=2)
+
+
+@pytest.mark.slow
+def test_shards_are_reproducible_and_a_killed_run_resumes(tiny_set, tmp_path):
+    from posture_id.datasets.config import DatasetError
+    from posture_id.universal.data import (
+        UniversalDataConfig,
+        UniversalSet,
+        generate_universal,
+        make_shard,
+    )
+
+    config = UniversalDataConfig(shards=20, trials=6, seed=5)
+    entry = tiny_set.shards()[3]
+    again = make_shard(config, 3)
+    stored = tiny_set.load(entry)
+    for key, value in again.items():
+        assert np.array_equal(value, stored[key]), key
+    kept = stored["locked_share"][stored["motor_noise_deg"] > 0]
+    assert np.all((kept > 0.03) & (kept < 1.2))
+    assert {e["split"] for e in tiny_set.shards()} == {"train", "validation", "calibration",
+                                                       "test"}
+    # a run killed after 2 shards finishes with the same bytes
+    partial = tmp_path / "set"
+    generate_universal(UniversalDataConfig(shards=2, trials=6, seed=5), partial, workers=1)
+    finished = generate_universal(config, partial, workers=2)
+    assert [e["sha256"] for e in finished.shards()] == [e["sha256"] for e in tiny_set.shards()]
+    with pytest.raises(DatasetError, match="other arguments"):
+        generate_universal(UniversalDataConfig(shards=20, trials=7, seed=5), partial)
+    assert UniversalSet.open(partial).manifest["complete"]
+
+
+@pytest.mark.slow
+def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
+    import torch
+
+    from posture_id.universal.model import ModelError, UniversalModel
+    from posture_id.universal.network import UniversalNetworkConfig
+    from posture_id.universal.training import UniversalTrainingConfig, train_universal
+
+    config = UniversalTrainingConfig(epochs=3, batch_size=64, threads=1, patience=10)
+    net = UniversalNetworkConfig(hidden=(32, 32))
+    whole = train_universal(tiny_set.path, tmp_path / "whole", config, net, log=lambda m: None)
+
+    class Stop(Exception):
+        pass
+
+    def stop_after_first(message):
+        if message.startswith("epoch 1/"):
+            raise Stop
+
+    with pytest.raises(Stop):
+        train_universal(tiny_set.path, tmp_path / "resumed", config, net, log=stop_after_first)
+    resumed = train_universal(tiny_set.path, tmp_path / "resumed", config, net,
+                              log=lambda m: None)
+    for key, value in whole.network.state_dict().items():
+        assert torch.equal(value, resumed.network.state_dict()[key]), key
+    loaded = UniversalModel.load(tmp_path / "whole")
+    x = np.random.default_rng(0).standard_normal((5, whole.input_mean.size)).astype(np.float32)
+    assert np.allclose(loaded.predict(x).mean, whole.predict(x).mean)
+    (tmp_path / "whole" / "model.safetensors").write_bytes(b"not weights")
+    with pytest.raises(ModelError, match="SHA-256"):
+        UniversalModel.load(tmp_path / "whole")

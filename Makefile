@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-fast lint bench bodies models model calibration examples real-like \
+.PHONY: universal-model demo test test-fast lint bench bodies models model calibration examples real-like \
         real-like-models real-like-model clean
 
 $(STAMP): pyproject.toml
@@ -61,8 +61,25 @@ MODELS_DIR   := posture_id/learning/models
 TWO_SEGMENT  := urdf/winter_1.75m_70kg_2seg.urdf
 
 models: $(STAMP)
+	$(MAKE) universal-model
 	$(MAKE) model NAME=tip_default URDF=urdf/tip_default.urdf FITS=500
 	$(MAKE) model NAME=winter_1.75m_70kg_2seg URDF=$(TWO_SEGMENT)
+
+# The universal identifier (docs/universal.md): the set (UNIVERSAL_SHARDS drawn bodies and
+# PRTSs, 64 parameter sets each), training, calibration and check, its bundled copy, and
+# the table over body families and stimuli (docs/results/universal). Resumable.
+UNIVERSAL_SHARDS ?= 1500
+UNIVERSAL_DIR    := posture_id/universal/models/universal
+universal-model: $(STAMP)
+	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
+	$(BIN)/posture-id universal train data/universal --out data/models/universal --quiet
+	$(BIN)/posture-id universal check data/models/universal data/universal > /dev/null
+	mkdir -p $(UNIVERSAL_DIR) docs/models/universal
+	cp data/models/universal/model.safetensors data/models/universal/model.json \
+	  data/models/universal/calibration.json $(UNIVERSAL_DIR)/
+	cp data/models/universal/model.json data/models/universal/check.md \
+	  data/models/universal/check.json docs/models/universal/
+	$(BIN)/posture-id universal table --out docs/results/universal > /dev/null
 
 model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(MODEL_TRIALS) --body $(URDF) \
@@ -102,7 +119,23 @@ real-like-models: $(STAMP)
 	$(MAKE) real-like-model STATES=242 CYCLES=2 REAL_TRIALS=36000
 	$(MAKE) real-like-model STATES=80 CYCLES=6 REAL_TRIALS=36000
 
-real-like-model: $(STAMP)
+real-like-# The universal identifier (docs/universal.md): the set (UNIVERSAL_SHARDS drawn bodies and
+# PRTSs, 64 parameter sets each), training, calibration and check, its bundled copy, and
+# the table over body families and stimuli (docs/results/universal). Resumable.
+UNIVERSAL_SHARDS ?= 1500
+UNIVERSAL_DIR    := posture_id/universal/models/universal
+universal-model: $(STAMP)
+	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
+	$(BIN)/posture-id universal train data/universal --out data/models/universal --quiet
+	$(BIN)/posture-id universal check data/models/universal data/universal > /dev/null
+	mkdir -p $(UNIVERSAL_DIR) docs/models/universal
+	cp data/models/universal/model.safetensors data/models/universal/model.json \
+	  data/models/universal/calibration.json $(UNIVERSAL_DIR)/
+	cp data/models/universal/model.json data/models/universal/check.md \
+	  data/models/universal/check.json docs/models/universal/
+	$(BIN)/posture-id universal table --out docs/results/universal > /dev/null
+
+model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(REAL_TRIALS) --states $(STATES) \
 	  --cycles $(CYCLES) --motor-noise 0.8 --sensor-noise-deg 0.05 --out data/real_$(STATES) --quiet
 	$(BIN)/posture-id train data/real_$(STATES) --layout frf --epochs 30 \

@@ -3,11 +3,11 @@
 Run:  .venv/bin/python benchmarks/real_like.py [--subjects 30] [--workers 2]
       (the networks first: ``make real-like-models``, docs/real_recordings.md)
 
-``--subjects`` simulated TIP subjects, each recorded with the 242-state PRTS (2 cycles,
-121 s) and with the 80-state PRTS (6 cycles, 120 s), both 1° peak-to-peak: MODEL §5
-parameters (from a seed no data set uses; subjects that fall under either stimulus are
-drawn again), motor noise scaled so that a share drawn uniformly from [10 %, 30 %] of
-their body COM sway's variance is stimulus-locked
+``--subjects`` simulated subjects of the TIP (or of ``--body``), each recorded with the
+242-state PRTS (2 cycles, 121 s) and with the 80-state PRTS (6 cycles, 120 s), both 1°
+peak-to-peak: MODEL §5 parameters (from a seed no data set uses; subjects that fall
+under either stimulus are drawn again), motor noise scaled so that a share drawn
+uniformly from [10 %, 30 %] of their body COM sway's variance is stimulus-locked
 (:func:`posture_id.simulation.subjects.people_like`), 0.05° sensor noise. Every recording
 is identified by:
 
@@ -20,7 +20,9 @@ is identified by:
 - ``hybrid``: :class:`~posture_id.identify.Identifier` with :attr:`Method.HYBRID`, raw
   sway: least squares from a CNN's answer, its short route accepted when the residual is
   consistent with the recording's own noise (docs/identify.md);
-- ``locked hybrid``: the same on the stimulus-locked sway (``--locked``).
+- ``locked hybrid``: the same on the stimulus-locked sway (``--locked``);
+- ``universal``: ``posture-id identify``'s default, the bundled universal network
+  (docs/universal.md), for any body.
 The hybrids start from the ``CNN`` network when ``--models`` holds it, otherwise from the
 bundled model (trained on sensor noise only, the 242-state PRTS only); the report says
 which.
@@ -53,6 +55,7 @@ from posture_id.fileio import atomic_write_text, json_text
 from posture_id.fitting import FitOptions
 from posture_id.frf.locked import LockedOptions
 from posture_id.identify import Identifier, Method
+from posture_id.learning.config import LearningError
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.plotting import plot_benchmark
 from posture_id.simulation import prts, simulate
@@ -65,7 +68,7 @@ from posture_id.trials import prepare_trial
 ROOT = Path(__file__).resolve().parent.parent
 STIMULI = {"242": dict(states=242, cycles=2), "80": dict(states=80, cycles=6)}
 METHODS = ("raw LS", "locked LS", "locked LS, prior", "CNN", "FRF net", "hybrid",
-           "locked hybrid")
+           "locked hybrid", "universal")
 FIELDS = ("kp", "ki", "kd", "delay_s")
 SHARE_RANGE = (0.10, 0.30)
 _LOADED: dict = {}
@@ -95,12 +98,15 @@ def hybrid_start(folders: dict) -> str:
     return folders["cnn"] if (Path(folders["cnn"]) / "model.json").exists() else "bundled"
 
 
-def _models(stimulus_key: str, folders: dict):
-    if stimulus_key not in _LOADED:
-        body = load_body()
+def _models(stimulus_key: str, folders: dict, urdf: str):
+    if (urdf, stimulus_key) not in _LOADED:
+        body = load_body(urdf)
         nets = {kind: CnnIdentifier.load(folders[kind], body)
                 for kind in ("cnn", "frf") if (Path(folders[kind]) / "model.json").exists()}
-        start = nets.get("cnn") or CnnIdentifier.resolve(None, body)
+        try:  # the bundled specialist for the body's segment count, where there is one
+            start = nets.get("cnn") or CnnIdentifier.resolve(None, body)
+        except LearningError:
+            start = None  # the hybrids start from the universal model
         raw, locked = FitOptions(threads=1), FitOptions(threads=1, locked=LockedOptions())
         nets["raw LS"] = Identifier(body, Method.FIT, fit_options=raw)
         nets["locked LS"] = Identifier(body, Method.FIT, fit_options=locked)
@@ -108,14 +114,15 @@ def _models(stimulus_key: str, folders: dict):
             threads=1, locked=LockedOptions(), prior_sd=0.5))
         nets["hybrid"] = Identifier(body, Method.HYBRID, start, raw)
         nets["locked hybrid"] = Identifier(body, Method.HYBRID, start, locked)
-        _LOADED[stimulus_key] = (body, nets)
-    return _LOADED[stimulus_key]
+        nets["universal"] = Identifier(body, Method.CNN)  # the default: the universal model
+        _LOADED[urdf, stimulus_key] = (body, nets)
+    return _LOADED[urdf, stimulus_key]
 
 
 def _one(task: tuple) -> dict:
     """Identify one subject with one method (a worker process, one thread)."""
-    stimulus_key, index, spec, method, folders = task
-    body, nets = _models(stimulus_key, folders)
+    stimulus_key, index, spec, method, folders, urdf = task
+    body, nets = _models(stimulus_key, folders, urdf)
     stim = prts(**STIMULI[stimulus_key])
     truth = DecParameters.from_dict(spec["params"], body)
     subject = people_like(body, truth, stim, spec["share"], spec["seed"])
@@ -178,10 +185,12 @@ def statistics(rows: list[dict], joints) -> dict:
     return out
 
 
-def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict) -> str:
+def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict,
+             body_name: str = "the TIP") -> str:
     lines = ["# People-like subjects: raw and locked least squares, the networks, the hybrids",
              "",
-             f"{n_subjects} simulated TIP subjects (drawn so that they stay up under both "
+             f"{n_subjects} simulated subjects of {body_name} (drawn so that they stay up "
+             "under both "
              "stimuli; MODEL §5 "
              "parameters; motor noise scaled so that "
              f"{100 * SHARE_RANGE[0]:g}–{100 * SHARE_RANGE[1]:g} % of "
@@ -247,6 +256,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--subjects", type=int, default=30)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--body", type=Path, default=None,
+                        help="the subjects' body URDF (default: the TIP); the CNN, FRF net "
+                             "and hybrid rows need the TIP")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--models", type=Path, default=ROOT / "data" / "models",
                         help="folder of real_<states>_<cnn|frf> model directories")
@@ -261,7 +273,8 @@ def main() -> None:
                              "rows of the methods not run now are taken from it (e.g. the "
                              "least-squares rows after retraining a network)")
     args = parser.parse_args()
-    body = load_body()
+    body = load_body(args.body) if args.body else load_body()
+    urdf = str(body.urdf_path)
     journal = args.out / "real_like.journal.jsonl"
     header = {"format": "posture_id-real-like-journal", "subjects": args.subjects,
               "seed": args.seed, "body_sha256": body.sha256, "stimuli": args.stimuli,
@@ -282,7 +295,7 @@ def main() -> None:
         for index, spec in enumerate(specs):
             for method in args.methods:
                 if (stimulus_key, index, method) not in done:
-                    tasks.append((stimulus_key, index, spec, method, folders))
+                    tasks.append((stimulus_key, index, spec, method, folders, urdf))
     rows = list(done.values())
     if args.reuse is not None:
         earlier = json.loads(args.reuse.read_text(encoding="utf-8"))
@@ -329,7 +342,8 @@ def main() -> None:
         {"subjects": args.subjects, "seed": args.seed, "share_range": SHARE_RANGE,
          "models": models, "statistics": stats, "rows": rows}))
     atomic_write_text(args.out / "real_like.md",
-                      markdown(stats, body.joint_names, args.subjects, args.workers, models))
+                      markdown(stats, body.joint_names, args.subjects, args.workers, models,
+                               "the TIP" if args.body is None else f"body '{body.name}'"))
     groups = {}
     for stimulus_key in STIMULI:
         for method in METHODS:

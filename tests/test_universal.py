@@ -194,3 +194,15 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
     (tmp_path / "whole" / "model.safetensors").write_bytes(b"not weights")
     with pytest.raises(ModelError, match="SHA-256"):
         UniversalModel.load(tmp_path / "whole")
+
+
+@pytest.mark.parametrize("body_name", ["tip", "winter", "winter2"])
+def test_com_weights_linearise_the_com_above_each_joint(body_name, request):
+    from posture_id.universal.features import com_weights
+
+    body = request.getfixturevalue(body_name)
+    w = com_weights(body)
+    theta = 1e-5 * np.random.default_rng(4).standard_normal(body.n_segments)
+    exact = body.com_angles(theta) - body.com_angles(np.zeros(body.n_segments))
+    assert np.allclose(w @ theta, exact, rtol=1e-4, atol=1e-12)
+    assert np.allclose(w.sum(axis=1), 1.0)  # a rigid lean of the whole body moves every COM

@@ -19,6 +19,9 @@ def add_parser(sub) -> None:
                    help="report directory (report.md, report.json, PNGs)")
     p.add_argument("--resimulate", type=non_negative_int, default=200,
                    help="test trials re-simulated for E_id and E_rel (default %(default)d)")
+    p.add_argument("--universal", nargs="?", const="bundled", metavar="MODEL",
+                   help="also score the universal model (default: the bundled one) on the "
+                        "same test trials, side by side (universal_comparison.md)")
     p.set_defaults(func=run)
 
 
@@ -32,5 +35,36 @@ def run(args: argparse.Namespace) -> int:
                           progress=progress)
     paths = report.write(args.out)
     print(report.summary())
+    if args.universal:
+        paths += _compare(args, report)
     say("wrote " + ", ".join(str(p) for p in paths))
     return 0
+
+
+def _compare(args: argparse.Namespace, report) -> list[Path]:
+    """The universal model on the specialist's test trials, written beside its report."""
+    from posture_id.fileio import atomic_write_text, json_text
+    from posture_id.universal.compare import universal_on_dataset
+    from posture_id.universal.identifier import BUNDLED_DIR
+
+    folder = BUNDLED_DIR if args.universal == "bundled" else Path(args.universal)
+    modular = report.layout == "modular"
+    universal = universal_on_dataset(folder, args.dataset, per_module=modular)
+    test = report.splits["test"]
+    reading = universal["reading"]
+    lines = [f"# The universal model against the specialist on {args.dataset} (test split)",
+             "", f"Command: `posture-id evaluate {args.model} {args.dataset} --out {args.out} "
+             f"--universal{'' if args.universal == 'bundled' else ' ' + args.universal}`", "",
+             f"| model | fit RMSE ({reading}) | classes % |", "|---|---|---|",
+             f"| specialist ({report.layout}) | {test.fit_rmse_per_sample:.4f} | "
+             f"{100 * test.class_accuracy:.2f} |",
+             f"| universal | {universal['fit_rmse_per_sample']:.4f} | "
+             f"{100 * universal['class_accuracy']:.2f} |", "",
+             f"ratio of fit RMSE universal / specialist: "
+             f"{universal['fit_rmse_per_sample'] / test.fit_rmse_per_sample:.2f}"]
+    universal["specialist"] = {"fit_rmse_per_sample": test.fit_rmse_per_sample,
+                               "class_accuracy": test.class_accuracy, "layout": report.layout}
+    md = atomic_write_text(args.out / "universal_comparison.md", "\n".join(lines) + "\n")
+    js = atomic_write_text(args.out / "universal_comparison.json", json_text(universal))
+    print("\n".join(lines[4:]))
+    return [md, js]

@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +44,7 @@ from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.noise import MotorNoise
 from posture_id.simulation.options import SimulationOptions
 from posture_id.universal.bodies import build_body
-from posture_id.universal.features import body_descriptors
+from posture_id.universal.features import body_descriptors, com_weights
 from posture_id.universal.harmonics import HarmonicLayout, harmonic_layout, sway_harmonics
 from posture_id.universal.scope import (
     BodyDraw,
@@ -53,8 +54,8 @@ from posture_id.universal.scope import (
     draw_stimulus,
 )
 
-__all__ = ["UniversalDataConfig", "shard_layout", "make_shard", "simulate_trials",
-           "generate_universal", "UniversalSet", "split_of", "UNIVERSAL_STREAM"]
+__all__ = ["UniversalDataConfig", "shard_layout", "shard_com_weights", "make_shard",
+           "simulate_trials", "generate_universal", "UniversalSet", "split_of", "UNIVERSAL_STREAM"]
 
 UNIVERSAL_STREAM = 0x554E49
 FORMAT = "posture_id-universal-set"
@@ -171,6 +172,21 @@ def shard_layout(arrays: dict[str, np.ndarray]) -> HarmonicLayout:
         cycles=int(arrays["cycles"]), sample_rate_hz=float(arrays["sample_rate_hz"]),
         amplitude_deg=float(arrays["amplitude_deg"]),
         velocity_deg_s=float(arrays["velocity_deg_s"]))
+
+
+@lru_cache(maxsize=64)
+def _drawn_com(draw_json: str) -> bytes:
+    body = json.loads(draw_json)["body"]
+    draw = BodyDraw(body["kind"], int(body["segments"]), float(body["height_m"]),
+                    float(body["mass_kg"]), tuple(tuple(f) for f in body["factors"]))
+    return com_weights(build_body(draw)).tobytes()
+
+
+def shard_com_weights(arrays: dict[str, np.ndarray]) -> np.ndarray:
+    """(N, N) the COM weights (:func:`~.features.com_weights`) of a shard's body, rebuilt
+    from the body it drew."""
+    n = int(arrays["y"].shape[2])
+    return np.frombuffer(_drawn_com(str(arrays["draw"])), dtype=float).reshape(n, n)
 
 
 def _manifest(config: UniversalDataConfig) -> dict:

@@ -10,6 +10,9 @@ log-spaced, whatever the stimulus's harmonics):
   weighted by the tilt's power there (Σ Y·conj(U) / Σ|U|²), and σ_H its noise level from
   the harmonics the stimulus leaves empty; a band holding no excited harmonic is
   interpolated (in log frequency) from its neighbours;
+- the same three for the angle of the COM of everything above joint i (linearised at
+  upright, :func:`com_weights`): what the module controls when its class is "COM in
+  space";
 - log(1 + the excited harmonics in the band): how much each band was measured.
 
 and :data:`DESCRIPTORS` numbers: the module's place (ankle, knee, hip column of MODEL §3;
@@ -28,7 +31,7 @@ from posture_id.dec.parameters import _column
 from posture_id.frf.locked import noise_levels
 from posture_id.universal.harmonics import HarmonicLayout
 
-__all__ = ["GRID_HZ", "CHANNELS", "DESCRIPTORS", "FEATURE_MAX_HZ", "band_weights",
+__all__ = ["GRID_HZ", "CHANNELS", "com_weights", "DESCRIPTORS", "FEATURE_MAX_HZ", "band_weights",
            "module_features", "body_descriptors", "stimulus_descriptors", "noise_ratio",
            "UNIVERSAL_FEATURE_DEFINITION", "N_INPUTS"]
 
@@ -37,7 +40,7 @@ FEATURE_MAX_HZ = 2.5
 #: Band centres, Hz.
 GRID_HZ = np.geomspace(0.03, FEATURE_MAX_HZ, 20)
 _EDGES = np.sqrt(GRID_HZ[1:] * GRID_HZ[:-1])
-CHANNELS = 10
+CHANNELS = 13
 DESCRIPTORS = 15
 N_INPUTS = CHANNELS * len(GRID_HZ) + DESCRIPTORS
 _NEIGHBOURS = 3
@@ -47,7 +50,8 @@ UNIVERSAL_FEATURE_DEFINITION = {
     "version": 1,
     "kind": "universal",
     "grid_hz": [round(float(f), 6) for f in GRID_HZ],
-    "channels": "below/own/above segment: Re H, Im H, log10 noise of H; log(1 + harmonics)",
+    "channels": "below/own/above segment, COM above the joint: Re H, Im H, log10 noise of "
+                "H; log(1 + harmonics)",
     "descriptors": "column one-hot (3), segments one-hot (3), log10 sqrt(M_ii/mgh_i), "
                    "M_i,i-1/M_ii, M_i,i+1/M_ii, ln(mgh_i/mgh_i-1), ln(mgh_i+1/mgh_i), "
                    "log10 p-p deg, log10 RMS velocity deg/s, log10 period s, log10 cycles",
@@ -89,19 +93,40 @@ def band_weights(layout: HarmonicLayout) -> tuple[np.ndarray, np.ndarray]:
     return w, count
 
 
-def module_features(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
-    """(B, N, CHANNELS, G) float32 features of B sways' harmonics ``sway`` (K, B, N)."""
-    k, b, n = sway.shape
-    rows = _rows(layout)
-    power = np.abs(sway) ** 2
-    sigma = noise_levels(power, layout.excited, rows, _NEIGHBOURS)  # (R, B, N)
-    w, count = band_weights(layout)
-    h = np.einsum("gr,rbn->gbn", w, sway[rows])  # (G, B, N)
+def com_weights(body: Body) -> np.ndarray:
+    """(N, N) W with α_i ≈ Σ_j W_ij θ_j: the angle of the COM above joint i from the
+    segment angles, linearised at upright (∂ angle(Σ_{j≥i} e^{iθ_j} S_j) / ∂θ_j at 0)."""
+    s = np.asarray(body.gravity_lever)
+    n = len(s)
+    w = np.zeros((n, n))
+    for i in range(n):
+        total = s[i:].sum()
+        w[i, i:] = (s[i:] * np.conj(total)).real / abs(total) ** 2
+    return w
+
+
+def _frf_channels(y: np.ndarray, rows: np.ndarray, excited: np.ndarray, w: np.ndarray
+                  ) -> np.ndarray:
+    """(B, N, 3, G) Re H, Im H, log10 σ_H of harmonics ``y`` (K, B, N) in the bands."""
+    sigma = noise_levels(np.abs(y) ** 2, excited, rows, _NEIGHBOURS)  # (R, B, N)
+    h = np.einsum("gr,rbn->gbn", w, y[rows])  # (G, B, N)
     sd = np.sqrt(np.einsum("gr,rbn->gbn", np.abs(w) ** 2, sigma**2))
     log_sd = np.clip(np.log10(np.maximum(sd, 1e-12)), _LOG_FLOOR, _LOG_CEIL)
     re = np.clip(h.real, -_H_LIMIT, _H_LIMIT)
     im = np.clip(h.imag, -_H_LIMIT, _H_LIMIT)
-    seg = np.stack([re, im, log_sd]).transpose(2, 3, 0, 1)  # (B, N, 3, G)
+    return np.stack([re, im, log_sd]).transpose(2, 3, 0, 1)
+
+
+def module_features(layout: HarmonicLayout, sway: np.ndarray,
+                    com: np.ndarray | None = None) -> np.ndarray:
+    """(B, N, CHANNELS, G) float32 features of B sways' harmonics ``sway`` (K, B, N);
+    ``com``: the body's :func:`com_weights` (default: each segment its own COM)."""
+    k, b, n = sway.shape
+    rows = _rows(layout)
+    w, count = band_weights(layout)
+    seg = _frf_channels(sway, rows, layout.excited, w)  # (B, N, 3, G)
+    com = np.eye(n) if com is None else np.asarray(com)
+    above = _frf_channels(np.einsum("ij,kbj->kbi", com, sway), rows, layout.excited, w)
     g = len(GRID_HZ)
     platform = np.zeros((b, 1, 3, g))
     platform[:, :, 0] = 1.0
@@ -113,7 +138,8 @@ def module_features(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
     out[:, :, 0:3] = padded[:, :-2]
     out[:, :, 3:6] = padded[:, 1:-1]
     out[:, :, 6:9] = padded[:, 2:]
-    out[:, :, 9] = np.log1p(count)
+    out[:, :, 9:12] = above
+    out[:, :, 12] = np.log1p(count)
     return out
 
 

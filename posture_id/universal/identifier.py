@@ -31,7 +31,12 @@ from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
 from posture_id.universal.calibration import UniversalCalibration, regime_of
-from posture_id.universal.features import DESCRIPTORS, body_descriptors, noise_ratio
+from posture_id.universal.features import (
+    DESCRIPTORS,
+    body_descriptors,
+    com_weights,
+    noise_ratio,
+)
 from posture_id.universal.harmonics import harmonic_layout, sway_harmonics
 from posture_id.universal.model import SIDECAR, ModelError, UniversalModel
 from posture_id.universal.samples import module_inputs
@@ -80,6 +85,7 @@ class UniversalIdentifier:
             self.notices += (f"{model.path}: the model has no calibration, so its answer has "
                              "no intervals",)
         self.descriptors = body_descriptors(body)
+        self.com = com_weights(body)
         self.defaults = default_parameters(body)
         self.body_outside = self._outside(self.descriptors, range(0, DESCRIPTORS - 4),
                                           f"body '{body.name}'")
@@ -132,7 +138,7 @@ class UniversalIdentifier:
         trial.require_segments(self.body.segment_names)
         layout = self._layout(trial)
         y = sway_harmonics(layout, trial.recording.theta)[:, None, :]
-        return module_inputs(layout, y, self.descriptors)
+        return module_inputs(layout, y, self.descriptors, self.com)
 
     def identify(self, trial: PreparedTrial, level: float = DEFAULT_LEVEL
                  ) -> CnnIdentification:
@@ -141,7 +147,7 @@ class UniversalIdentifier:
         layout = self._layout(trial)
         theta = trial.recording.theta
         y = sway_harmonics(layout, theta)[:, None, :]
-        inputs = module_inputs(layout, y, self.descriptors)
+        inputs = module_inputs(layout, y, self.descriptors, self.com)
         prediction = self.model.predict(inputs)
         n = self.body.n_segments
         ratio = float(noise_ratio(layout, y)[0])

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posture_id.universal.data import UniversalSet, shard_layout
+from posture_id.universal.data import UniversalSet, shard_com_weights, shard_layout
 from posture_id.universal.features import (
     module_features,
     noise_ratio,
@@ -21,10 +21,15 @@ __all__ = ["LoadedShard", "Samples", "load_split", "make_samples", "module_input
 
 @dataclass(frozen=True)
 class LoadedShard:
-    """A shard's arrays and its layout."""
+    """A shard's arrays, its layout and its body's COM weights."""
 
     arrays: dict
     layout: object
+    com: np.ndarray
+
+    @classmethod
+    def of(cls, arrays: dict) -> LoadedShard:
+        return cls(arrays, shard_layout(arrays), shard_com_weights(arrays))
 
     @property
     def n_segments(self) -> int:
@@ -62,14 +67,16 @@ def load_split(data: UniversalSet, split: str) -> list[LoadedShard]:
         if entry["kept"]:
             arrays = data.load(entry)
             arrays["index"] = entry["index"]
-            out.append(LoadedShard(arrays, shard_layout(arrays)))
+            out.append(LoadedShard.of(arrays))
     return out
 
 
-def module_inputs(layout, harmonics: np.ndarray, body: np.ndarray) -> np.ndarray:
+def module_inputs(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarray
+                  ) -> np.ndarray:
     """(B·N, N_INPUTS) float32 inputs of B sways' harmonics (K, B, N) on a body whose
-    descriptors are ``body`` (N, 11), module after module within each trial."""
-    feats = module_features(layout, harmonics)  # (B, N, C, G)
+    descriptors are ``body`` (N, 11) and COM weights ``com`` (N, N), module after module
+    within each trial."""
+    feats = module_features(layout, harmonics, com)  # (B, N, C, G)
     b, n = feats.shape[:2]
     stim = np.broadcast_to(stimulus_descriptors(layout), (b, n, 4))
     desc = np.broadcast_to(body, (b, n, body.shape[1]))
@@ -95,7 +102,7 @@ def make_samples(shards: list[LoadedShard], scope: UniversalScope,
                      + drift_parts(layout.frequencies_hz, layout.cycles * layout.period_samples
                                    / layout.sample_rate_hz, drift).T ** 2)  # (K, T)
         y = y + sd[:, :, None] * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
-        parts["inputs"].append(module_inputs(layout, y, a["body"]))
+        parts["inputs"].append(module_inputs(layout, y, a["body"], shard.com))
         parts["targets"].append(a["targets"].reshape(t * n, 5))
         rho = noise_ratio(layout, y)
         per_module = {"trial": first + np.arange(t), "noise_ratio": rho,

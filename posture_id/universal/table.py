@@ -21,7 +21,7 @@ from posture_id.executors import executor_for
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.plotting import plot_score_grid
 from posture_id.universal.calibration import UniversalCalibration
-from posture_id.universal.data import shard_layout, simulate_trials
+from posture_id.universal.data import simulate_trials
 from posture_id.universal.evaluation import GroupScore, score_samples
 from posture_id.universal.model import UniversalModel
 from posture_id.universal.samples import LoadedShard, make_samples
@@ -125,7 +125,7 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
         arrays = results[index]
         arrays["index"] = index
         sway_scope = replace(scope, **SWAY[sway])
-        samples = make_samples([LoadedShard(arrays, shard_layout(arrays))], sway_scope,
+        samples = make_samples([LoadedShard.of(arrays)], sway_scope,
                                np.random.default_rng([TABLE_SEED, index]))
         key = (family, _stimulus_label(*stim), sway)
         scores[key] = score_samples(model, samples, calibration)["all"]

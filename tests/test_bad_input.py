@@ -257,7 +257,7 @@ def test_bad_recording_for_fit(tmp_path, capsys, recording_lines, case):
 
 #: identify and fit share one entrance (posture_id.trials): only the CNN's own length differs
 IDENTIFY_ONLY = {
-    "short": "the CNN was trained on 121 s",
+    "short": "shorter than one whole cycle of its stimulus",
 }
 
 

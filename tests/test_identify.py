@@ -41,7 +41,7 @@ def test_cnn_result_is_checked_by_resimulation(tip, tmp_path):
     assert "E_rel" in result.summary()
     # the bundled model is calibrated: intervals around every answer, said in words
     iv = result.intervals
-    assert iv.method == "conformal, CNN (validation split)" and iv.level == 0.9
+    assert iv.method.startswith("conformal, universal network") and iv.level == 0.9
     assert np.all(iv.lower <= result.normalised[:, :4])
     assert np.all(result.normalised[:, :4] <= iv.upper)
     assert data["intervals"]["modules"]["ankle"]["kp"]["determination"] in (

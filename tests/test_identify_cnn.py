@@ -1,5 +1,6 @@
 """``posture-id identify`` with the bundled models: classes recovered, the result is a
-parameter file, and recordings the CNN cannot judge are refused in one line."""
+parameter file, and recordings a specialist CNN cannot judge are refused in one line
+(the universal model, the default, reads them: tests/test_universal.py)."""
 
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ def test_identify_recovers_the_classes_of_a_simulated_recording(tip, tmp_path, c
     result = json.loads((tmp_path / "r.json").read_text())
     assert [result["parameters"][j]["controls"] for j in tip.joint_names] == \
         ["com", "joint", "com"]
-    assert result["cnn"]["model"]["layout"] == "modular" and result["method"] == "cnn"
+    assert result["cnn"]["model"]["layout"] == "universal" and result["method"] == "cnn"
     assert all(p > 0.9 for p in result["class_probability_com"].values()
                if p > 0.5)
     # the parameters object is a parameter file: simulate takes it back
@@ -63,15 +64,23 @@ def test_the_two_segment_body_has_its_own_model():
     (lambda t: t.replace(amplitude=2.0), "the CNN was trained on PRTS 242 states ×2, 1° p-p"),
     (lambda t: t.replace(cycles=1), "the CNN was trained on 121 s"),
 ])
-def test_recordings_of_another_stimulus_are_refused(tip, tmp_path, capsys, change, message):
+def test_recordings_of_another_stimulus_are_refused_by_a_specialist(tip, tmp_path, capsys,
+                                                                    change, message):
     spec = change(_Stimulus())
     trial = simulate(tip, default_parameters(tip), prts(spec.amplitude, spec.cycles))
     csv = tmp_path / "other.csv"
     trial.to_csv(csv)
-    assert main(["identify", str(csv), "--out", str(tmp_path / "r.json")]) == 2
+    specialist = str(bundled_model_dir(tip)[0])
+    assert main(["identify", str(csv), "--model", specialist,
+                 "--out", str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "posture-id fit" in err
     assert str(csv) in err and not (tmp_path / "r.json").exists()
+    # the default, the universal model, reads it and gets the defaults' classes
+    assert main(["identify", str(csv), "--out", str(tmp_path / "u.json")]) == 0
+    result = json.loads((tmp_path / "u.json").read_text())
+    assert [result["parameters"][j]["controls"] for j in tip.joint_names] == \
+        ["com", "joint", "com"]
 
 
 def test_a_recording_of_other_segments_is_refused(tip, tmp_path, capsys):

@@ -122,11 +122,11 @@ def test_a_lab_file_is_read_as_it_is(tmp_path, tip):
 
 
 def test_a_model_that_falls_is_said_in_one_line(tmp_path, tip, monkeypatch, capsys):
-    """The CNN's answer makes the body fall when re-simulated: one line says so and what
+    """The network's answer makes the body fall when re-simulated: one line says so and what
     to try, the JSON stays strict, the exit status is 1."""
-    from posture_id.learning.identifier import CnnIdentifier
+    from posture_id.universal.identifier import UniversalIdentifier
 
-    honest = CnnIdentifier.identify
+    honest = UniversalIdentifier.identify
 
     def feeble(self, trial, level=0.9):
         answer = honest(self, trial, level)
@@ -135,7 +135,7 @@ def test_a_model_that_falls_is_said_in_one_line(tmp_path, tip, monkeypatch, caps
             weak = weak.replace(joint, kp=0.2 * weak[joint].kp, kd=0.2 * weak[joint].kd)
         return replace(answer, parameters=weak)
 
-    monkeypatch.setattr(CnnIdentifier, "identify", feeble)
+    monkeypatch.setattr(UniversalIdentifier, "identify", feeble)
     path = tmp_path / "rec.csv"
     simulate(tip).to_recording().with_sensor_noise(0.01, 1).to_csv(path)
     out = tmp_path / "r.json"

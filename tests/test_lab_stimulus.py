@@ -125,14 +125,31 @@ def test_tilt_file_and_prts_flags_do_not_mix(tip, tmp_path, capsys):
     assert not (tmp_path / "x.json").exists()
 
 
-def test_the_cnn_refuses_a_lab_stimulus(tip, tmp_path, capsys):
+def test_a_specialist_refuses_a_lab_stimulus_the_universal_model_reads_it(tip, tmp_path,
+                                                                         capsys):
+    from posture_id.learning.bundled import MODELS_DIR
+
     lab = prts(1.0, **LAB)
     recording = simulate(tip, stimulus=lab).to_recording()
     csv = tmp_path / "lab.csv"
     recording.to_csv(csv)
-    assert main(["identify", str(csv), *LAB_FLAGS, "--out", str(tmp_path / "r.json")]) == 2
+    specialist = str(MODELS_DIR / "tip_default")
+    assert main(["identify", str(csv), *LAB_FLAGS, "--model", specialist,
+                 "--out", str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
     assert "the CNN was trained on" in err and "use posture-id fit" in err
+    out = tmp_path / "u.json"
+    assert main(["identify", str(csv), *LAB_FLAGS, "--out", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["cnn"]["model"]["layout"] == "universal"
+    assert data["normalised"]["ankle"]["class"] == tip_default_class("ankle")
+
+
+def tip_default_class(joint: str) -> float:
+    from posture_id import load_body
+    from posture_id.dec.parameters import default_parameters
+
+    return float(default_parameters(load_body())[joint].sign)
 
 
 @pytest.mark.slow

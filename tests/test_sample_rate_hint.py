@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -53,8 +55,17 @@ def test_fit_and_identify_say_it(tip, tmp_path, capsys):
     assert any("sampled at 50 Hz" in n and "25 Hz the time column" in n for n in notices)
     csv = tmp_path / "lab.csv"
     wrong.to_csv(csv)
-    assert main(["identify", str(csv), "--out", str(tmp_path / "r.json")]) == 2
+    from posture_id.learning.bundled import MODELS_DIR
+
+    specialist = str(MODELS_DIR / "tip_default")
+    assert main(["identify", str(csv), "--model", specialist,
+                 "--out", str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
     assert "valid for that stimulus only" in err and "sampled at 50 Hz" in err
     assert len(err.strip().splitlines()) == 1
     assert not (tmp_path / "r.json").exists()
+    # the universal model reads the PRTS it finds (0.5 s states) and says what is odd
+    assert main(["identify", str(csv), "--out", str(tmp_path / "u.json")]) == 0
+    out = capsys.readouterr().out
+    assert "sampled at 50 Hz" in out and "period outside what the universal model" in out
+    assert json.loads((tmp_path / "u.json").read_text())["trust"]["doubtful"]

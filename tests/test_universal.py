@@ -206,3 +206,62 @@ def test_com_weights_linearise_the_com_above_each_joint(body_name, request):
     exact = body.com_angles(theta) - body.com_angles(np.zeros(body.n_segments))
     assert np.allclose(w @ theta, exact, rtol=1e-4, atol=1e-12)
     assert np.allclose(w.sum(axis=1), 1.0)  # a rigid lean of the whole body moves every COM
+
+
+def test_identify_by_default_reads_a_body_and_prts_no_network_was_trained_on(tmp_path):
+    """The command line alone, as a lab would run it: a 1-segment Winter body, an 80-state
+    PRTS of 0.22 s states at 2° peak to peak, three cycles, sensor noise."""
+    import json
+
+    from posture_id.cli import main
+
+    urdf, rec, out = tmp_path / "b.urdf", tmp_path / "rec.csv", tmp_path / "r.json"
+    assert main(["body", "--height", "1.68", "--mass", "61", "--segments", "1",
+                 "--out", str(urdf)]) == 0
+    assert main(["simulate", "--body", str(urdf), "--states", "80", "--state-s", "0.22",
+                 "--amplitude-deg", "2", "--cycles", "3", "--noise-deg", "0.02", "--seed", "3",
+                 "--out", str(rec)]) == 0
+    assert main(["identify", str(rec), "--body", str(urdf), "--out", str(out)]) == 0
+    result = json.loads(out.read_text())
+    assert result["cnn"]["model"]["layout"] == "universal"
+    (joint, estimate), = result["normalised"].items()
+    # the subject has the body's default parameters: normalised 0, the ankle's class
+    from posture_id import load_body
+    from posture_id.dec.parameters import default_parameters
+
+    truth = default_parameters(load_body(urdf))[joint]
+    assert abs(estimate["kp"]) < 0.1
+    assert estimate["class"] == truth.sign
+    assert result["intervals"] is not None
+    assert result["trust"]["doubtful"] in (True, False)
+
+
+def test_conformal_quantiles_and_temperature_recover_known_answers():
+    from posture_id.universal.calibration import LEVELS, _conformal, _temperature, regime_of
+
+    rng = np.random.default_rng(6)
+    scores = np.abs(rng.standard_normal((40000, 4)))
+    table = np.asarray(_conformal(scores))
+    row = LEVELS.index(0.9)
+    assert np.allclose(table[row], 1.6449, atol=0.03)  # the 90 % point of |N(0, 1)|
+    # logits twice as confident as the truth: temperature 2
+    true_logit = rng.normal(0, 2, 50000)
+    truth = np.where(rng.random(50000) < 1 / (1 + np.exp(-true_logit)), 1.0, -1.0)
+    assert _temperature(2 * true_logit, truth) == pytest.approx(2.0, rel=0.05)
+    assert list(regime_of(np.array([1, 3]), np.array([0.01, 0.5]))) == ["1:0", "3:3"]
+
+
+def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_path):
+    import json
+
+    from posture_id.cli import main
+
+    rec, out = tmp_path / "rec.csv", tmp_path / "r.json"
+    assert main(["simulate", "--amplitude-deg", "0.3", "--noise-deg", "0.01", "--seed", "4",
+                 "--out", str(rec)]) == 0
+    assert main(["identify", str(rec), "--out", str(out)]) == 0
+    result = json.loads(out.read_text())
+    outside = result["cnn"]["outside"]
+    assert any("stimulus: peak-to-peak tilt outside" in o for o in outside), outside
+    assert not any("body" in o for o in outside)  # the TIP itself is inside
+    assert result["trust"]["doubtful"]

@@ -37,14 +37,17 @@ def test_a_clean_recording_of_the_networks_own_body_is_trusted(tip):
     result = identify(recording, tip)
     assert not result.verdict.doubtful, result.verdict.line()
     assert result.verdict.locked_share > 0.9
-    assert result.intervals.method == "conformal, CNN (validation split)"
+    assert result.intervals.method.startswith("conformal, universal network")
 
 
 def test_another_bodys_network_is_named_and_its_intervals_labelled_for_what_they_are(winter):
     """A 3-segment Winter body identified with the TIP's network: the verdict says the
     network was trained on another body, and the intervals are not called calibrated."""
+    from posture_id.learning.bundled import bundled_model_dir
+
     recording = simulate(winter, default_parameters(winter)).to_recording()
-    result = identify(recording.with_sensor_noise(0.01, 5), winter)
+    specialist = bundled_model_dir(winter)[0]
+    result = identify(recording.with_sensor_noise(0.01, 5), winter, model=specialist)
     assert any("trained on body 'tip_default'" in r for r in result.verdict.outside)
     assert result.verdict.doubtful and result.verdict.suggestion == "--method hybrid"
     assert "not on this one" in result.intervals.method
@@ -53,10 +56,15 @@ def test_another_bodys_network_is_named_and_its_intervals_labelled_for_what_they
 
 def test_an_identifier_knows_whether_its_network_was_trained_on_its_body(tip, winter):
     """What the hybrid's use of its calibrated scales turns on (core.Identifier)."""
-    tip_identifier = Identifier(tip, Method.HYBRID)
-    winter_identifier = Identifier(winter, Method.HYBRID)
+    from posture_id.learning.bundled import bundled_model_dir
+
+    specialist = bundled_model_dir(tip)[0]
+    tip_identifier = Identifier(tip, Method.HYBRID, specialist)
+    winter_identifier = Identifier(winter, Method.HYBRID, specialist)
     assert tip_identifier.cnn.trained_on_this_body
     assert not winter_identifier.cnn.trained_on_this_body
+    # the universal model has no body of its own: the hybrid scales nothing by it
+    assert not Identifier(tip, Method.HYBRID).cnn.trained_on_this_body
 
 
 def test_the_sentences_say_what_the_precision_flags_say():

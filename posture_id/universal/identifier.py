@@ -48,7 +48,7 @@ BUNDLED_DIR = Path(__file__).resolve().parent / "models" / "universal"
 _DESCRIPTOR_NAMES = ("ankle column", "knee column", "hip column", "1 segment", "2 segments",
                      "3 segments", "time scale", "coupling below", "coupling above",
                      "m·g·h ratio below", "m·g·h ratio above", "peak-to-peak tilt",
-                     "tilt velocity", "stimulus period", "cycles")
+                     "tilt velocity", "period", "number of cycles")
 
 
 def is_universal_model(folder: str | Path) -> bool:
@@ -101,9 +101,9 @@ class UniversalIdentifier:
             raise ModelError(f"{BUNDLED_DIR}: the universal model is not built (make models)")
         return cls.load(BUNDLED_DIR, body)
 
-    def _outside(self, values: np.ndarray, columns, what: str) -> list[str]:
-        """What of ``values`` (…, DESCRIPTORS or its last columns) lies outside the
-        training inputs' 0.5–99.5 % range."""
+    def _outside(self, values: np.ndarray, columns: range, what: str) -> list[str]:
+        """What of ``values`` (…, len(columns)), the descriptors ``columns``, lies outside
+        the training inputs' 0.5–99.5 % range."""
         ranges = self.model.sidecar.get("ranges", {})
         low, high = ranges.get("descriptors_low"), ranges.get("descriptors_high")
         if low is None:
@@ -111,9 +111,9 @@ class UniversalIdentifier:
         values = np.atleast_2d(values)
         out = []
         for c in columns:
-            v = values[:, c - (DESCRIPTORS - values.shape[1])]
+            v = values[:, c - columns.start]
             if np.any(v < low[c] - 1e-9) or np.any(v > high[c] + 1e-9):
-                out.append(f"{what}: its {_DESCRIPTOR_NAMES[c]} is outside what the universal "
+                out.append(f"{what}: {_DESCRIPTOR_NAMES[c]} outside what the universal "
                            "model was trained on")
         return out
 
@@ -153,7 +153,10 @@ class UniversalIdentifier:
         ratio = float(noise_ratio(layout, y)[0])
         regime = str(regime_of(n, ratio))
         outside = list(self.body_outside) + self._outside(
-            inputs[0, -4:], range(DESCRIPTORS - 4, DESCRIPTORS), f"{trial.name}: the stimulus")
+            inputs[0, -4:], range(DESCRIPTORS - 4, DESCRIPTORS), f"{trial.name}, stimulus")
+        if not trial.stimulus.description.startswith("PRTS"):
+            outside.append(f"{trial.name}: the stimulus ({trial.stimulus.description}) is "
+                           "periodic but not a PRTS; the model was trained on PRTSs only")
         if ratio > self.model.sidecar.get("ranges", {}).get("noise_ratio_high", math.inf):
             outside.append(f"{trial.name}: {100 * ratio:.0f} % of its locked harmonics is "
                            "noise, more than in any recording the model was trained on")

@@ -49,6 +49,8 @@ bodies: $(STAMP)
 	$(BIN)/posture-id body --default-tip --out posture_id/bodies/data/tip_default.urdf > /dev/null
 	$(BIN)/posture-id body --height 1.75 --mass 70 --segments 2 \
 	  --out posture_id/bodies/data/winter_1.75m_70kg_2seg.urdf > /dev/null
+	for n in 1 3; do $(BIN)/posture-id body --height 1.75 --mass 70 --segments $$n \
+	  --out urdf/winter_1.75m_70kg_$${n}seg.urdf > /dev/null; done
 
 # The bundled CNN models (docs/learning.md): a data set, training (under 30 min each on
 # 2 cores), evaluation into docs/models/, then weights + sidecar into the package.

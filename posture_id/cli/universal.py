@@ -9,6 +9,7 @@ from pathlib import Path
 
 from posture_id.cli.arguments import (
     check_output_folder,
+    non_negative_float,
     non_negative_int,
     positive_float,
     positive_int,
@@ -41,6 +42,10 @@ def add_parser(sub) -> None:
                    help="at most this many epochs (default: UniversalTrainingConfig's, 60)")
     t.add_argument("--learning-rate", type=positive_float,
                    help="peak learning rate (default: UniversalTrainingConfig's, 2e-3)")
+    t.add_argument("--dropout", type=non_negative_float,
+                   help="dropout after each hidden layer (default: UniversalNetworkConfig's)")
+    t.add_argument("--weight-decay", type=non_negative_float,
+                   help="AdamW's weight decay (default: UniversalTrainingConfig's)")
     t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     t.add_argument("--threads", type=positive_int, help="torch threads (default: all cores)")
     t.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -78,14 +83,17 @@ def run_data(args: argparse.Namespace) -> int:
 
 def run_train(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=(args.data,))
+    from posture_id.universal.network import UniversalNetworkConfig
     from posture_id.universal.training import UniversalTrainingConfig, train_universal
 
-    given = {k: v for k, v in (("epochs", args.epochs),
-                               ("max_learning_rate", args.learning_rate)) if v is not None}
+    given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
+                               ("weight_decay", args.weight_decay)) if v is not None}
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads, **given)
+    network = (UniversalNetworkConfig() if args.dropout is None
+               else UniversalNetworkConfig(dropout=args.dropout))
     with TerminalProgress("epoch", prefix="posture-id universal train",
                           quiet=args.quiet) as progress:
-        train_universal(args.data, args.out, config, progress=progress, log=say)
+        train_universal(args.data, args.out, config, network, progress=progress, log=say)
     say(f"wrote {args.out / 'model.safetensors'} and model.json")
     return 0
 

@@ -3,8 +3,8 @@ parameters they were simulated with.
 
 The examples (``posture_id/studies/examples/``, made by ``make examples``) are simulated
 subjects with 0.01° white sensor noise: a TIP and a straight-leg 2-segment body (the
-paper's human experiment). ``posture-id demo --out DIR`` identifies each with the bundled
-model and the hybrid (the CNN's answer refined by least squares), prints identified
+paper's human experiment). ``posture-id demo --out DIR`` identifies each with the hybrid
+(the bundled universal network's answer refined by least squares), prints identified
 against true parameters, and writes ``DIR/report.md`` with a plot per recording.
 """
 
@@ -91,8 +91,8 @@ def run_demo(out: str | Path, method: Method = Method.HYBRID,
 def _markdown(rows: list[DemoRow], method: Method) -> str:
     parts = ["# posture_id demo", "",
              f"Each example recording (simulated subject, 0.01° sensor noise; made by `make "
-             f"examples`) identified with `{method.value}` (the bundled CNN, then least "
-             "squares from its answer) and compared with the parameters it was simulated "
+             f"examples`) identified with `{method.value}` (the bundled universal network, then "
+             "least squares from its answer) and compared with the parameters it was simulated "
              "with. Made by `posture-id demo`.", ""]
     for row in rows:
         r = row.result

@@ -26,7 +26,7 @@ class UniversalNetworkConfig:
 
     inputs: int = N_INPUTS
     hidden: tuple[int, ...] = (512, 512, 256)
-    dropout: float = 0.05
+    dropout: float = 0.1
 
 
 class UniversalNetwork(nn.Module):

@@ -51,7 +51,7 @@ class UniversalTrainingConfig:
     epochs: int = 60
     batch_size: int = 512
     max_learning_rate: float = 2e-3
-    weight_decay: float = 1e-4
+    weight_decay: float = 1e-3
     patience: int = 12
     seed: int = 0
     threads: int | None = None

@@ -194,3 +194,36 @@ def test_frf_network_round_trips_and_identifies(tiny_set, tmp_path, tip):
                                rtol=1e-5, atol=1e-5)
     result = identifier.identify(prepare_trial(recording))
     assert result.parameters.joints == tip.joint_names
+
+
+def test_evaluate_puts_the_universal_model_beside_a_specialist(trained, tiny_set, tip,
+                                                                tmp_path):
+    """``evaluate --universal``: the universal model on the specialist's own test trials;
+    its class accuracy is what identifying each test trial's recording gives."""
+    from posture_id.cli import main
+    from posture_id.datasets import Dataset
+    from posture_id.recording import Recording
+    from posture_id.simulation import prts
+    from posture_id.universal.identifier import UniversalIdentifier
+
+    out, _ = trained
+    report = tmp_path / "report"
+    assert main(["evaluate", str(out), str(tiny_set), "--out", str(report), "--resimulate",
+                 "0", "--universal"]) == 0
+    comparison = json.loads((report / "universal_comparison.json").read_text())
+    assert "| universal |" in (report / "universal_comparison.md").read_text()
+    data = Dataset.open(tiny_set)
+    identifier = UniversalIdentifier.bundled(tip)
+    stimulus = prts()
+    right = []
+    for k, local in enumerate(data.split_local("test")):
+        arrays = data.load_shard(k)
+        for i in local:  # the set has no sensor noise: the same sway both ways
+            theta = arrays["theta"][i].astype(float)
+            t = np.arange(len(theta)) / 50.0
+            rec = Recording(t, stimulus.angle(t), theta, tip.segment_names, f"trial{i}")
+            got = identifier.identify(prepare_trial(rec, stimulus))
+            right += list(np.sign(got.normalised[:, 4]) == arrays["targets"][i, :, 4])
+    assert comparison["test_trials"] * 3 == len(right)
+    assert comparison["class_accuracy"] == pytest.approx(np.mean(right))
+    assert comparison["specialist"]["layout"] == "modular"

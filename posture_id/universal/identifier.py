@@ -160,7 +160,8 @@ class UniversalIdentifier:
         if ratio > self.model.sidecar.get("ranges", {}).get("noise_ratio_high", math.inf):
             outside.append(f"{trial.name}: {100 * ratio:.0f} % of its locked harmonics is "
                            "noise, more than in any recording the model was trained on")
-        normalised = np.column_stack([prediction.mean, np.zeros(n)])
+        # a parameter is positive: an estimate below 1 % of its default is held there
+        normalised = np.column_stack([np.maximum(prediction.mean, FLOOR - 1.0), np.zeros(n)])
         intervals = None
         noise = sensor_noise_deg(theta)
         if self.calibration is not None:
@@ -171,7 +172,7 @@ class UniversalIdentifier:
             half = prediction.sd * self.calibration.scale(regime, level)
             defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
             intervals = ParameterIntervals.around(
-                prediction.mean, half, defaults, level,
+                normalised[:, :4], half, defaults, level,
                 f"conformal, universal network (regime {_regime_text(regime)}, held-out "
                 "bodies and stimuli)", noise, self.body.joint_names)
         else:
@@ -193,6 +194,8 @@ class UniversalIdentifier:
                         "body": body_identity(self.body)})
 
 
+#: The smallest parameter the identifier gives, as a share of the body's default.
+FLOOR = 0.01
 #: The highest interval level calibrated.
 LEVEL_MAX = 0.99
 

@@ -265,3 +265,29 @@ def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_
     assert any("stimulus: peak-to-peak tilt outside" in o for o in outside), outside
     assert not any("body" in o for o in outside)  # the TIP itself is inside
     assert result["trust"]["doubtful"]
+
+
+@pytest.mark.slow
+def test_a_table_cell_draws_until_enough_trials_stay_up():
+    """TALOS falls under many prior draws: its cells draw more batches until they hold
+    the trials asked for; every per-trial array is cut alike."""
+    from posture_id.universal.table import _cell, _cells
+
+    cells = list(_cells())
+    index = next(i for i, (family, stim, sway) in enumerate(cells)
+                 if family.startswith("TALOS") and stim == (80, 6, 1.0) and sway == "clean")
+    arrays = _cell(index, 4, UniversalScope().to_dict())
+    assert int(arrays["kept"]) == 4 == len(arrays["y"]) == len(arrays["targets"])
+    assert len(arrays["kp"]) == len(arrays["locked_share"]) == 4
+    assert int(arrays["simulated"]) >= 4 and np.all(arrays["motor_noise_deg"] == 0)
+
+
+def test_ece_of_calibrated_and_overconfident_probabilities():
+    from posture_id.universal.evaluation import _ece
+
+    rng = np.random.default_rng(9)
+    p = rng.uniform(0, 1, 200000)
+    truth = rng.random(200000) < p
+    assert _ece(p, truth) < 0.005  # calibrated
+    sharp = np.where(p > 0.5, 0.999, 0.001)  # always sure, right 75 % of the time
+    assert _ece(sharp, truth) == pytest.approx(0.249, abs=0.005)

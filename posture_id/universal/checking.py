@@ -48,8 +48,8 @@ class CheckReport:
 
     def markdown(self) -> str:
         head = ("| group | trials | classes % | all classes right % | Kp err % | Ki err % | "
-                "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay |")
-        lines = [head, "|" + "---|" * 9]
+                "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay | class ECE % |")
+        lines = [head, "|" + "---|" * 10]
         rows = [("all", self.overall), *self.by_segments.items(), *self.by_regime.items()]
         for name, s in rows:
             e, c = s.median_error_pct, s.coverage_pct
@@ -57,7 +57,7 @@ class CheckReport:
                          f"{s.trials_all_right_pct:.1f} | {e['kp']:.1f} | {e['ki']:.1f} | "
                          f"{e['kd']:.1f} | {e['delay_s']:.1f} | "
                          + " / ".join(f"{c[k]:.0f}" for k in ("kp", "ki", "kd", "delay_s"))
-                         + " |")
+                         + f" | {s.class_ece_pct:.1f} |")
         return "\n".join(lines)
 
 

@@ -30,6 +30,9 @@ class GroupScore:
         right, %. trials_all_right_pct: trials with every class right, %.
         median_error_pct: parameter → median |relative error|, %. coverage_pct: parameter →
         share of the truths inside the ``level`` intervals, % (NaN without a calibration).
+        by_module: per module position (0: the ankle), parameter → median |relative
+        error|, %. class_ece_pct: expected calibration error of the (calibrated) class
+        probabilities, 10 bins of confidence, %.
     """
 
     modules: int
@@ -39,12 +42,30 @@ class GroupScore:
     median_error_pct: dict
     coverage_pct: dict
     level: float
+    by_module: tuple = ()
+    class_ece_pct: float = float("nan")
 
     def to_dict(self) -> dict:
-        return {"modules": self.modules, "trials": self.trials,
+        return {"modules": self.modules, "trials": self.trials, "by_module": list(self.by_module),
                 "classes_pct": self.classes_pct, "trials_all_right_pct": self.trials_all_right_pct,
+                "class_ece_pct": self.class_ece_pct,
                 "median_error_pct": self.median_error_pct, "coverage_pct": self.coverage_pct,
                 "level": self.level}
+
+
+def _ece(probability: np.ndarray, truth: np.ndarray, bins: int = 10) -> float:
+    """Expected calibration error of P(class = +1): over 10 bins of the confidence
+    max(p, 1 − p), the sample-weighted |accuracy − mean confidence|."""
+    confidence = np.maximum(probability, 1 - probability)
+    right = (probability >= 0.5) == truth
+    edges = np.linspace(0.5, 1.0, bins + 1)
+    which = np.clip(np.digitize(confidence, edges) - 1, 0, bins - 1)
+    total = 0.0
+    for b in range(bins):
+        sel = which == b
+        if sel.any():
+            total += sel.sum() * abs(right[sel].mean() - confidence[sel].mean())
+    return float(total / max(len(probability), 1))
 
 
 def score_samples(model: UniversalModel, samples: Samples,
@@ -55,8 +76,11 @@ def score_samples(model: UniversalModel, samples: Samples,
     right = (pred.logit > 0) == (samples.targets[:, 4] > 0)
     errors = relative_errors(pred.mean, samples.targets[:, :4])
     inside = np.full(errors.shape, np.nan)
+    probability = 1.0 / (1.0 + np.exp(-pred.logit))
     if calibration is not None:
         regimes = regime_of(samples.segments, samples.noise_ratio)
+        probability = np.array([calibration.probability(r, z)
+                                for r, z in zip(regimes, pred.logit, strict=True)])
         half = np.stack([pred.sd[i] * calibration.scale(r, level)
                          for i, r in enumerate(regimes)])
         low = np.maximum(pred.mean - half, -1.0)
@@ -75,5 +99,8 @@ def score_samples(model: UniversalModel, samples: Samples,
             median_error_pct={n: float(100 * np.median(errors[sel, i]))
                               for i, n in enumerate(_NAMES)},
             coverage_pct={n: float(100 * np.mean(inside[sel, i])) for i, n in enumerate(_NAMES)},
-            level=level)
+            level=level, class_ece_pct=100 * _ece(probability[sel], samples.targets[sel, 4] > 0),
+            by_module=tuple({n: float(100 * np.median(errors[sel & (samples.module == m), i]))
+                             for i, n in enumerate(_NAMES)}
+                            for m in np.unique(samples.module[sel])))
     return out

@@ -15,11 +15,13 @@ from posture_id.simulation.subjects import people_like
 from posture_id.uncertainty.intervals import ParameterIntervals
 
 
-def test_people_like_sway_makes_the_cnn_doubtful_and_names_the_locked_fit(tip):
-    """20 % of the sway locked to the stimulus: outside what the bundled network saw; the
+def test_people_like_sway_makes_a_specialist_doubtful_and_names_the_locked_fit(tip):
+    """20 % of the sway locked to the stimulus: outside what a specialist saw; the
     verdict says so, with the locked share it estimated, and suggests the locked fit."""
+    from posture_id.learning.bundled import bundled_model_dir
+
     subject = people_like(tip, default_parameters(tip), prts(), 0.2, seed=4)
-    result = identify(subject.recording, tip)
+    result = identify(subject.recording, tip, model=bundled_model_dir(tip)[0])
     verdict = result.verdict
     assert verdict.doubtful
     assert verdict.locked_share < PEOPLE_LIKE_SHARE
@@ -29,6 +31,18 @@ def test_people_like_sway_makes_the_cnn_doubtful_and_names_the_locked_fit(tip):
     assert result.summary().splitlines()[-1].startswith("trust: DOUBTFUL")
     data = json.loads(json.dumps(result.to_dict(), allow_nan=False))
     assert data["trust"]["doubtful"] and data["trust"]["suggestion"] == LOCKED_FLAGS
+
+
+def test_people_like_sway_is_inside_the_universal_models_scope(tip):
+    """The same subject with the default network, trained on people-like sway: its share
+    is no reason for doubt, and a doubtful answer points to the locked hybrid, not to
+    least squares from the defaults."""
+    subject = people_like(tip, default_parameters(tip), prts(), 0.2, seed=4)
+    result = identify(subject.recording, tip)
+    verdict = result.verdict
+    assert verdict.locked_share < PEOPLE_LIKE_SHARE
+    assert not any("stimulus-locked; the network" in r for r in verdict.reasons)
+    assert verdict.suggestion in ("", "--method hybrid --locked --prior-sd 0.5")
 
 
 def test_a_clean_recording_of_the_networks_own_body_is_trusted(tip):

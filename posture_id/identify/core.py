@@ -160,7 +160,8 @@ class Identifier:
         locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
         checked = _resimulate(body, trial, parameters, options.simulation, locked)
         body_share = checked.pop("locked_share")  # the verdict's, not a result field
-        verdict = _verdict(method, options, trial, checked, body_share, cnn, fit, locked)
+        verdict = _verdict(method, options, trial, checked, body_share, cnn, fit, locked,
+                           self.cnn is not None and self.cnn.reads_people_like)
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -260,16 +261,18 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
 
 
 def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked: dict,
-             share: float | None, cnn, fit, locked: LockedProjection | None) -> TrustVerdict:
+             share: float | None, cnn, fit, locked: LockedProjection | None,
+             reads_people_like: bool = False) -> TrustVerdict:
     """The trust verdict (:mod:`posture_id.identify.verdict`) of one identification;
-    ``share``: the recorded body sway's locked share."""
+    ``share``: the recorded body sway's locked share; ``reads_people_like``: the network
+    was trained on people-like sway (the universal model)."""
     noise = noise_check(trial, checked["resimulated"],
                         body_sway=(checked["sway_recorded"], checked["sway_resimulated"]),
                         projection=locked)
     locked_fit = options.locked is not None
     people_like = share is not None and share < PEOPLE_LIKE_SHARE
     outside = list(cnn.outside) if method is Method.CNN and cnn is not None else []
-    if people_like and method is Method.CNN:
+    if people_like and method is Method.CNN and not reads_people_like:
         outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked; the "
                        "network was trained on sway that is the stimulus's response and "
                        "sensor noise")
@@ -281,4 +284,5 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
     if not verdict.doubtful:
         return verdict
     return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,
-                                                  options.prior_sd is not None))
+                                                  options.prior_sd is not None,
+                                                  reads_people_like))

@@ -129,11 +129,12 @@ class TrustVerdict:
 
 def suggestion(method: Method, locked: bool, locked_share: float | None,
                on_bounds: tuple[str, ...], noise: NoiseCheck | None,
-               prior: bool = False) -> str:
+               prior: bool = False, network_reads_people_like: bool = False) -> str:
     """What suits a recording whose answer is doubtful, by the documented rule:
 
     - people-like sway (locked share below :data:`PEOPLE_LIKE_SHARE`) identified without
-      ``--locked``: :data:`LOCKED_FLAGS`;
+      ``--locked``, other than by a network trained on it (the universal model):
+      :data:`LOCKED_FLAGS`;
     - least squares on a recording whose noise alone leaves more than
       :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the locked sway: a longer
       recording (nothing fitted to it can be checked);
@@ -148,7 +149,7 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
       --prior-sd 0.5`` (a stimulus that is not where the lab's clock says, and the prior).
     """
     people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
-    if people_like and not locked:
+    if people_like and not locked and not (method is Method.CNN and network_reads_people_like):
         return LOCKED_FLAGS
     if (noise is not None and not noise.acceptable
             and noise.noise_relative > CLOSE_ENOUGH and method is not Method.CNN):

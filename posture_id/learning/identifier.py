@@ -117,6 +117,9 @@ class CnnIdentification(Result):
 class CnnIdentifier:
     """A loaded model and the body it identifies."""
 
+    #: the specialists are trained on sensor noise only: people-like sway is outside them
+    reads_people_like = False
+
     def __init__(self, model: LoadedModel, body: Body, notices: tuple[str, ...] = ()) -> None:
         self.model = model
         self.body = body

@@ -66,7 +66,16 @@ def _rows(layout: HarmonicLayout) -> np.ndarray:
 
 def band_weights(layout: HarmonicLayout) -> tuple[np.ndarray, np.ndarray]:
     """((G, R) complex W, (G,) harmonics per band): H_band = W @ Y over the R excited
-    harmonics up to :data:`FEATURE_MAX_HZ`; empty bands interpolate their neighbours."""
+    harmonics up to :data:`FEATURE_MAX_HZ`; empty bands interpolate their neighbours.
+    Made once per layout."""
+    cached = layout.__dict__.get("_band_weights")
+    if cached is None:
+        cached = _band_weights(layout)
+        object.__setattr__(layout, "_band_weights", cached)
+    return cached
+
+
+def _band_weights(layout: HarmonicLayout) -> tuple[np.ndarray, np.ndarray]:
     rows = _rows(layout)
     f = layout.frequencies_hz[rows]
     u = layout.tilt[rows]

@@ -66,6 +66,8 @@ class UniversalIdentifier:
 
     #: never the network's "own" body: the hybrid scales no least-squares intervals by it
     trained_on_this_body = False
+    #: trained on people-like sway (motor noise, drift): such a recording is inside its scope
+    reads_people_like = True
 
     def __init__(self, model: UniversalModel, body: Body, notices: tuple[str, ...] = ()) -> None:
         if not 1 <= body.n_segments <= 3:
@@ -86,6 +88,7 @@ class UniversalIdentifier:
                              "no intervals",)
         self.descriptors = body_descriptors(body)
         self.com = com_weights(body)
+        self._layouts: dict = {}
         self.defaults = default_parameters(body)
         self.body_outside = self._outside(self.descriptors, range(0, DESCRIPTORS - 4),
                                           f"body '{body.name}'")
@@ -126,12 +129,20 @@ class UniversalIdentifier:
                 "periodic: use --method fit, which takes any tilt")
         trial.require_whole_cycle()
         rec = trial.recording
-        try:
-            return harmonic_layout(rec.tilt, rec.sample_rate_hz, stimulus.period_s,
-                                   stimulus.periodic_from_s, trial.name)
-        except PostureIdError as error:
-            raise RecordingError(f"{error} (the universal network needs whole cycles of "
-                                 "its stimulus)") from None
+        # the recordings of a study share their stimulus: its layout is made once
+        key = (hash(rec.tilt.tobytes()), len(rec.tilt), rec.sample_rate_hz, stimulus.period_s,
+               stimulus.periodic_from_s)
+        if key not in self._layouts:
+            try:
+                layout = harmonic_layout(rec.tilt, rec.sample_rate_hz, stimulus.period_s,
+                                         stimulus.periodic_from_s, trial.name)
+            except PostureIdError as error:
+                raise RecordingError(f"{error} (the universal network needs whole cycles of "
+                                     "its stimulus)") from None
+            if len(self._layouts) >= _LAYOUTS_KEPT:
+                self._layouts.pop(next(iter(self._layouts)))
+            self._layouts[key] = layout
+        return self._layouts[key]
 
     def features(self, trial: PreparedTrial) -> np.ndarray:
         """(N, N_INPUTS) the network's inputs for a prepared trial."""
@@ -194,6 +205,8 @@ class UniversalIdentifier:
                         "body": body_identity(self.body)})
 
 
+#: Stimulus layouts an identifier keeps (a study has few stimuli).
+_LAYOUTS_KEPT = 8
 #: The smallest parameter the identifier gives, as a share of the body's default.
 FLOOR = 0.01
 #: The highest interval level calibrated.

@@ -66,10 +66,12 @@ class UniversalModel:
     def standardise(self, inputs: np.ndarray) -> torch.Tensor:
         return torch.from_numpy(((inputs - self.input_mean) / self.input_std).astype(np.float32))
 
-    @torch.no_grad()
+    @torch.inference_mode()
     def predict(self, inputs: np.ndarray, batch_size: int = 8192) -> UniversalPrediction:
-        """Predictions for (M, N_INPUTS) unstandardised inputs."""
-        self.network.eval()
+        """Predictions for (M, N_INPUTS) unstandardised inputs (the network in evaluation
+        mode: no dropout)."""
+        if self.network.training:
+            self.network.eval()
         outs = [self.network(self.standardise(inputs[i : i + batch_size])).numpy()
                 for i in range(0, len(inputs), batch_size)]
         out = np.concatenate(outs) if outs else np.zeros((0, 9), np.float32)

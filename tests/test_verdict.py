@@ -42,6 +42,7 @@ def test_people_like_sway_is_inside_the_universal_models_scope(tip):
     verdict = result.verdict
     assert verdict.locked_share < PEOPLE_LIKE_SHARE
     assert not any("stimulus-locked; the network" in r for r in verdict.reasons)
+    assert not any("least squares on the raw sway" in r for r in verdict.reasons)
     assert verdict.suggestion in ("", "--method hybrid --locked --prior-sd 0.5")
 
 

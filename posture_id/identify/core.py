@@ -276,7 +276,7 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
         outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked; the "
                        "network was trained on sway that is the stimulus's response and "
                        "sensor noise")
-    elif people_like and not locked_fit:
+    elif people_like and not locked_fit and method is not Method.CNN:
         outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked: "
                        "least squares on the raw sway fits the subject's own sway too")
     on_bounds = () if fit is None else fit.on_bounds

@@ -94,7 +94,13 @@ class FamilyTable:
         return {" | ".join(k): v.to_dict() for k, v in self.cells.items()}
 
     def markdown(self) -> str:
-        lines = ["Errors: median |identified / true − 1| per module, from the ankle up.", "",
+        lines = ["# The universal model over body families, stimuli and sway", "",
+                 "Made by `posture-id universal table` (posture_id.universal.table: "
+                 "trials simulated for the table alone, their own seeds). Clean: sensor "
+                 "noise 0–0.1°, no motor noise. People-like: motor noise leaving 15–40 % of "
+                 "the body COM sway locked, sensor noise 0.02–0.1°, drift up to 0.5° per "
+                 "minute. Errors: median |identified / true − 1| per module, from the ankle "
+                 "up.", "",
                  "| body | stimulus | sway | trials | classes % | all right % | Kp err % | "
                  "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay |",
                  "|" + "---|" * 10]

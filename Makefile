@@ -70,7 +70,7 @@ models: $(STAMP)
 # The universal identifier (docs/universal.md): the set (UNIVERSAL_SHARDS drawn bodies and
 # PRTSs, 64 parameter sets each), training, calibration and check, its bundled copy, and
 # the table over body families and stimuli (docs/results/universal). Resumable.
-UNIVERSAL_SHARDS ?= 1500
+UNIVERSAL_SHARDS ?= 3000
 UNIVERSAL_DIR    := posture_id/universal/models/universal
 universal-model: $(STAMP)
 	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
@@ -121,23 +121,7 @@ real-like-models: $(STAMP)
 	$(MAKE) real-like-model STATES=242 CYCLES=2 REAL_TRIALS=36000
 	$(MAKE) real-like-model STATES=80 CYCLES=6 REAL_TRIALS=36000
 
-real-like-# The universal identifier (docs/universal.md): the set (UNIVERSAL_SHARDS drawn bodies and
-# PRTSs, 64 parameter sets each), training, calibration and check, its bundled copy, and
-# the table over body families and stimuli (docs/results/universal). Resumable.
-UNIVERSAL_SHARDS ?= 1500
-UNIVERSAL_DIR    := posture_id/universal/models/universal
-universal-model: $(STAMP)
-	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
-	$(BIN)/posture-id universal train data/universal --out data/models/universal --quiet
-	$(BIN)/posture-id universal check data/models/universal data/universal > /dev/null
-	mkdir -p $(UNIVERSAL_DIR) docs/models/universal
-	cp data/models/universal/model.safetensors data/models/universal/model.json \
-	  data/models/universal/calibration.json $(UNIVERSAL_DIR)/
-	cp data/models/universal/model.json data/models/universal/check.md \
-	  data/models/universal/check.json docs/models/universal/
-	$(BIN)/posture-id universal table --out docs/results/universal > /dev/null
-
-model: $(STAMP)
+real-like-model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(REAL_TRIALS) --states $(STATES) \
 	  --cycles $(CYCLES) --motor-noise 0.8 --sensor-noise-deg 0.05 --out data/real_$(STATES) --quiet
 	$(BIN)/posture-id train data/real_$(STATES) --layout frf --epochs 30 \

@@ -31,9 +31,9 @@ from posture_id.dec.parameters import _column
 from posture_id.frf.locked import noise_levels
 from posture_id.universal.harmonics import HarmonicLayout
 
-__all__ = ["GRID_HZ", "CHANNELS", "com_weights", "DESCRIPTORS", "FEATURE_MAX_HZ", "band_weights",
-           "module_features", "body_descriptors", "stimulus_descriptors", "noise_ratio",
-           "UNIVERSAL_FEATURE_DEFINITION", "N_INPUTS"]
+__all__ = ["GRID_HZ", "CHANNELS", "com_weights", "features_and_noise_ratio", "DESCRIPTORS",
+           "FEATURE_MAX_HZ", "band_weights", "module_features", "body_descriptors",
+           "stimulus_descriptors", "noise_ratio", "UNIVERSAL_FEATURE_DEFINITION", "N_INPUTS"]
 
 #: Highest frequency the features hold, Hz.
 FEATURE_MAX_HZ = 2.5
@@ -114,10 +114,12 @@ def com_weights(body: Body) -> np.ndarray:
     return w
 
 
-def _frf_channels(y: np.ndarray, rows: np.ndarray, excited: np.ndarray, w: np.ndarray
-                  ) -> np.ndarray:
-    """(B, N, 3, G) Re H, Im H, log10 σ_H of harmonics ``y`` (K, B, N) in the bands."""
-    sigma = noise_levels(np.abs(y) ** 2, excited, rows, _NEIGHBOURS)  # (R, B, N)
+def _frf_channels(y: np.ndarray, rows: np.ndarray, excited: np.ndarray, w: np.ndarray,
+                  sigma: np.ndarray | None = None) -> np.ndarray:
+    """(B, N, 3, G) Re H, Im H, log10 σ_H of harmonics ``y`` (K, B, N) in the bands;
+    ``sigma``: their noise levels at ``rows`` when already known."""
+    if sigma is None:
+        sigma = noise_levels(np.abs(y) ** 2, excited, rows, _NEIGHBOURS)  # (R, B, N)
     h = np.einsum("gr,rbn->gbn", w, y[rows])  # (G, B, N)
     sd = np.sqrt(np.einsum("gr,rbn->gbn", np.abs(w) ** 2, sigma**2))
     log_sd = np.clip(np.log10(np.maximum(sd, 1e-12)), _LOG_FLOOR, _LOG_CEIL)
@@ -130,10 +132,20 @@ def module_features(layout: HarmonicLayout, sway: np.ndarray,
                     com: np.ndarray | None = None) -> np.ndarray:
     """(B, N, CHANNELS, G) float32 features of B sways' harmonics ``sway`` (K, B, N);
     ``com``: the body's :func:`com_weights` (default: each segment its own COM)."""
+    return features_and_noise_ratio(layout, sway, com)[0]
+
+
+def features_and_noise_ratio(layout: HarmonicLayout, sway: np.ndarray,
+                             com: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(:func:`module_features`, :func:`noise_ratio`) of the same sways, their noise
+    levels estimated once."""
     k, b, n = sway.shape
     rows = _rows(layout)
     w, count = band_weights(layout)
-    seg = _frf_channels(sway, rows, layout.excited, w)  # (B, N, 3, G)
+    power = np.abs(sway) ** 2
+    sigma = noise_levels(power, layout.excited, rows, _NEIGHBOURS)  # (R, B, N)
+    ratio = _ratio(power, sigma, rows)
+    seg = _frf_channels(sway, rows, layout.excited, w, sigma)  # (B, N, 3, G)
     com = np.eye(n) if com is None else np.asarray(com)
     above = _frf_channels(np.einsum("ij,kbj->kbi", com, sway), rows, layout.excited, w)
     g = len(GRID_HZ)
@@ -149,7 +161,7 @@ def module_features(layout: HarmonicLayout, sway: np.ndarray,
     out[:, :, 6:9] = padded[:, 2:]
     out[:, :, 9:12] = above
     out[:, :, 12] = np.log1p(count)
-    return out
+    return out, ratio
 
 
 def noise_ratio(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
@@ -157,7 +169,10 @@ def noise_ratio(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
     segment: the share of the locked harmonics that is noise (0 clean, → 1 all noise)."""
     rows = _rows(layout)
     power = np.abs(sway) ** 2
-    sigma = noise_levels(power, layout.excited, rows, _NEIGHBOURS)
+    return _ratio(power, noise_levels(power, layout.excited, rows, _NEIGHBOURS), rows)
+
+
+def _ratio(power: np.ndarray, sigma: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return (2 * sigma**2).sum(axis=(0, 2)) / np.maximum(power[rows].sum(axis=(0, 2)), 1e-30)
 
 

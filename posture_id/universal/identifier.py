@@ -35,11 +35,10 @@ from posture_id.universal.features import (
     DESCRIPTORS,
     body_descriptors,
     com_weights,
-    noise_ratio,
 )
 from posture_id.universal.harmonics import harmonic_layout, sway_harmonics
 from posture_id.universal.model import SIDECAR, ModelError, UniversalModel
-from posture_id.universal.samples import module_inputs
+from posture_id.universal.samples import inputs_and_noise_ratio, module_inputs
 
 __all__ = ["UniversalIdentifier", "BUNDLED_DIR", "is_universal_model"]
 
@@ -158,10 +157,10 @@ class UniversalIdentifier:
         layout = self._layout(trial)
         theta = trial.recording.theta
         y = sway_harmonics(layout, theta)[:, None, :]
-        inputs = module_inputs(layout, y, self.descriptors, self.com)
+        inputs, ratios = inputs_and_noise_ratio(layout, y, self.descriptors, self.com)
         prediction = self.model.predict(inputs)
         n = self.body.n_segments
-        ratio = float(noise_ratio(layout, y)[0])
+        ratio = float(ratios[0])
         regime = str(regime_of(n, ratio))
         outside = list(self.body_outside) + self._outside(
             inputs[0, -4:], range(DESCRIPTORS - 4, DESCRIPTORS), f"{trial.name}, stimulus")

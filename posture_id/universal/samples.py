@@ -9,14 +9,14 @@ import numpy as np
 
 from posture_id.universal.data import UniversalSet, shard_com_weights, shard_layout
 from posture_id.universal.features import (
-    module_features,
-    noise_ratio,
+    features_and_noise_ratio,
     stimulus_descriptors,
 )
 from posture_id.universal.harmonics import drift_parts, sensor_noise_parts
 from posture_id.universal.scope import UniversalScope
 
-__all__ = ["LoadedShard", "Samples", "load_split", "make_samples", "module_inputs"]
+__all__ = ["LoadedShard", "Samples", "load_split", "make_samples", "module_inputs",
+           "inputs_and_noise_ratio"]
 
 
 @dataclass(frozen=True)
@@ -76,12 +76,18 @@ def module_inputs(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarr
     """(B·N, N_INPUTS) float32 inputs of B sways' harmonics (K, B, N) on a body whose
     descriptors are ``body`` (N, 11) and COM weights ``com`` (N, N), module after module
     within each trial."""
-    feats = module_features(layout, harmonics, com)  # (B, N, C, G)
+    return inputs_and_noise_ratio(layout, harmonics, body, com)[0]
+
+
+def inputs_and_noise_ratio(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarray
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """(:func:`module_inputs`, (B,) :func:`~.features.noise_ratio`), noise estimated once."""
+    feats, ratio = features_and_noise_ratio(layout, harmonics, com)  # (B, N, C, G)
     b, n = feats.shape[:2]
     stim = np.broadcast_to(stimulus_descriptors(layout), (b, n, 4))
     desc = np.broadcast_to(body, (b, n, body.shape[1]))
     return np.concatenate([feats.reshape(b, n, -1), desc, stim], axis=2).reshape(
-        b * n, -1).astype(np.float32)
+        b * n, -1).astype(np.float32), ratio
 
 
 def make_samples(shards: list[LoadedShard], scope: UniversalScope,
@@ -102,9 +108,9 @@ def make_samples(shards: list[LoadedShard], scope: UniversalScope,
                      + drift_parts(layout.frequencies_hz, layout.cycles * layout.period_samples
                                    / layout.sample_rate_hz, drift).T ** 2)  # (K, T)
         y = y + sd[:, :, None] * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
-        parts["inputs"].append(module_inputs(layout, y, a["body"], shard.com))
+        inputs, rho = inputs_and_noise_ratio(layout, y, a["body"], shard.com)
+        parts["inputs"].append(inputs)
         parts["targets"].append(a["targets"].reshape(t * n, 5))
-        rho = noise_ratio(layout, y)
         per_module = {"trial": first + np.arange(t), "noise_ratio": rho,
                       "locked_share": a["locked_share"], "sensor_noise_deg": sensor,
                       "drift_deg": drift}

@@ -57,8 +57,12 @@ def test_hybrid_on_a_noisy_recording_recovers_classes_and_kp(tip, tmp_path):
     csv = tmp_path / "noisy.csv"
     recording.to_csv(csv)
     out = tmp_path / "hybrid.json"
-    assert main(["identify", str(csv), "--method", "hybrid", "--out", str(out),
-                 "--plot", str(tmp_path / "hybrid.png")]) == 0
+    # the hybrid's least-squares scales are calibrated from the TIP specialist's answers
+    from posture_id.learning.bundled import bundled_model_dir
+
+    specialist = str(bundled_model_dir(tip)[0])
+    assert main(["identify", str(csv), "--method", "hybrid", "--model", specialist,
+                 "--out", str(out), "--plot", str(tmp_path / "hybrid.png")]) == 0
     data = json.loads(out.read_text())
     for joint in tip.joint_names:
         assert data["parameters"][joint]["controls"] == truth[joint].controls
@@ -93,10 +97,10 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     the classes and the fit recovers the truth; the verdict on the answer is good."""
     from dataclasses import replace
 
-    from posture_id.learning.identifier import CnnIdentifier
+    from posture_id.universal.identifier import UniversalIdentifier
 
     truth, recording = _noisy_trial(tip, 12, 0.01)
-    honest = CnnIdentifier.identify
+    honest = UniversalIdentifier.identify
 
     def confidently_wrong(self, trial, level=0.9):
         answer = honest(self, trial, level)
@@ -108,7 +112,7 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
         return replace(answer, parameters=answer.parameters.replace("knee", controls=wrong),
                        class_probability=probability)
 
-    monkeypatch.setattr(CnnIdentifier, "identify", confidently_wrong)
+    monkeypatch.setattr(UniversalIdentifier, "identify", confidently_wrong)
     result = identify(recording, tip, Method.HYBRID)
     assert result.cnn.parameters["knee"].controls != truth["knee"].controls
     assert any("fitted again with the classes relaxed" in n for n in result.notices)

@@ -122,3 +122,33 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     for joint in tip.joint_names:
         assert abs(result.parameters[joint].kp / truth[joint].kp - 1) <= 0.05, joint
     assert not result.verdict.doubtful, result.verdict.line()
+
+
+@pytest.mark.slow
+def test_auto_refines_a_doubtful_answer_and_keeps_a_good_one(tip, monkeypatch):
+    """--method auto: a network's answer whose re-simulation is far from the recording is
+    refined by least squares (and says so); a good answer is kept as it is."""
+    from dataclasses import replace
+
+    from posture_id.universal.identifier import UniversalIdentifier
+
+    truth, recording = _noisy_trial(tip, 12, 0.01)
+    good = identify(recording, tip, Method.AUTO)
+    if not good.verdict.doubtful:
+        assert good.method is Method.CNN and good.fit is None
+    honest = UniversalIdentifier.identify
+
+    def feeble(self, trial, level=0.9):
+        answer = honest(self, trial, level)
+        weak = answer.parameters
+        for joint in tip.joint_names:
+            weak = weak.replace(joint, kd=0.3 * weak[joint].kd)
+        return replace(answer, parameters=weak)
+
+    monkeypatch.setattr(UniversalIdentifier, "identify", feeble)
+    assert identify(recording, tip, Method.CNN).verdict.doubtful
+    refined = identify(recording, tip, Method.AUTO)
+    assert refined.method is Method.HYBRID and refined.fit is not None
+    assert any("refined by least squares (--method auto)" in n for n in refined.notices)
+    for joint in tip.joint_names:
+        assert abs(refined.parameters[joint].kp / truth[joint].kp - 1) <= 0.05, joint

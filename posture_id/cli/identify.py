@@ -27,7 +27,7 @@ from posture_id.fitting.options import FitOptions
 
 __all__ = ["add_parser"]
 
-METHODS = ("cnn", "fit", "hybrid")
+METHODS = ("cnn", "fit", "hybrid", "auto")
 #: identify.core.DEFAULT_METHOD, named here without importing torch (a test keeps them equal)
 DEFAULT_METHOD_NAME = "cnn"
 
@@ -39,11 +39,13 @@ def add_parser(sub) -> None:
                         "pattern identifies a cohort into the --out folder")
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     p.add_argument("--model", type=Path,
-                   help="model directory (default: the bundled model for the body)")
+                   help="model directory: a universal model or a per-body specialist "
+                        "(default: the bundled universal model)")
     p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD_NAME,
                    help="cnn: the network alone, milliseconds; fit: least squares "
-                        "from the defaults; hybrid: least squares from the CNN's answer "
-                        "(default %(default)s)")
+                        "from the defaults; hybrid: least squares from the CNN's answer; "
+                        "auto: the network, then the hybrid where its answer is doubtful "
+                        "and the sway is not people-like (default %(default)s)")
     p.add_argument("--out", type=Path, required=True,
                    help="result JSON (its \"parameters\" object is a parameter file); for a "
                         "cohort, a folder: one JSON per recording and summary.csv")

@@ -22,6 +22,7 @@ body-sway errors E_id and E_rel (MODEL §7) and each segment's residual.
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from dataclasses import replace
@@ -120,6 +121,8 @@ class Identifier:
                        start: float | None = None) -> IdentificationResult:
         """Identify a trial already prepared by :meth:`prepare`."""
         start = time.perf_counter() if start is None else start
+        if self.method is Method.AUTO:
+            return self._auto(trial, progress, start)
         method, body, options = self.method, self.body, self.fit_options
         notices: list[str] = []
         cnn = fit = None
@@ -172,6 +175,30 @@ class Identifier:
                                   recording=trial.name, method=method.value),
             verdict=verdict, relaxed_refit=relaxed_refit, **checked,
         )
+
+
+    def _as(self, method: Method) -> Identifier:
+        """This identifier with another method, sharing its network."""
+        other = copy.copy(self)
+        other.method = method
+        return other
+
+    def _auto(self, trial: PreparedTrial, progress: Progress | None,
+              start: float) -> IdentificationResult:
+        """:attr:`Method.AUTO`: the network's answer, refined by least squares (the hybrid)
+        when its verdict is doubtful and the sway is not people-like (least squares on
+        sway that is mostly the subject's own fits that too)."""
+        answer = self._as(Method.CNN).identify_trial(trial, progress, start)
+        verdict = answer.verdict
+        share = verdict.locked_share
+        people_like = share is not None and share < PEOPLE_LIKE_SHARE
+        if not verdict.doubtful or people_like:
+            return answer
+        refined = self._as(Method.HYBRID).identify_trial(trial, progress, start)
+        why = "; ".join(verdict.reasons)
+        return replace(refined, notices=(
+            f"{trial.name}: the network's answer was doubtful ({why}): refined by least "
+            "squares (--method auto)", *refined.notices))
 
 
 def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,

@@ -13,6 +13,9 @@ class Method(enum.Enum):
     CNN = "cnn"
     FIT = "fit"
     HYBRID = "hybrid"
+    #: the network alone, then least squares from its answer (the hybrid) when its trust
+    #: verdict is doubtful and the sway is not people-like (docs/universal.md)
+    AUTO = "auto"
 
 
 #: The one default method of :func:`~posture_id.identify.identify`,

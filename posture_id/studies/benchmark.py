@@ -49,7 +49,7 @@ __all__ = ["BenchmarkReport", "MethodStatistics", "run_benchmark", "FAR_E_REL", 
 FAR_E_REL = 0.10
 #: The file in the report folder that finished identifications are appended to.
 JOURNAL = "cnn_vs_optimizer.journal.jsonl"
-METHODS = (Method.CNN, Method.FIT, Method.HYBRID)
+METHODS = (Method.CNN, Method.FIT, Method.HYBRID, Method.AUTO)
 
 
 def _held_out(body: Body, trials: int, seed: int) -> ParameterArrays:

@@ -71,7 +71,7 @@ models: $(STAMP)
 # PRTSs, 64 parameter sets each), training, calibration and check, its bundled copy, and
 # the table over body families and stimuli (docs/results/universal). Resumable.
 UNIVERSAL_SHARDS ?= 3000
-UNIVERSAL_DIR    := posture_id/universal/models/universal
+UNIVERSAL_DIR    := posture_id/learning/universal/models/universal
 universal-model: $(STAMP)
 	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
 	$(BIN)/posture-id universal train data/universal --out data/models/universal --quiet

@@ -97,7 +97,7 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     the classes and the fit recovers the truth; the verdict on the answer is good."""
     from dataclasses import replace
 
-    from posture_id.universal.identifier import UniversalIdentifier
+    from posture_id.learning.universal.identifier import UniversalIdentifier
 
     truth, recording = _noisy_trial(tip, 12, 0.01)
     honest = UniversalIdentifier.identify
@@ -130,7 +130,7 @@ def test_auto_refines_a_doubtful_answer_and_keeps_a_good_one(tip, monkeypatch):
     refined by least squares (and says so); a good answer is kept as it is."""
     from dataclasses import replace
 
-    from posture_id.universal.identifier import UniversalIdentifier
+    from posture_id.learning.universal.identifier import UniversalIdentifier
 
     truth, recording = _noisy_trial(tip, 12, 0.01)
     good = identify(recording, tip, Method.AUTO)

@@ -29,8 +29,7 @@ def test_the_package_keeps_every_contract():
 
 
 @pytest.mark.parametrize(("module", "line", "broken"), [
-    ("simulation/leak.py", "import torch",
-     "torch is imported only by the learning and universal layers"),
+    ("simulation/leak.py", "import torch", "torch is imported only by the learning layer"),
     ("datasets/leak.py", "import casadi", "CasADi is imported only by the fitting layer"),
     ("learning/leak.py", "import casadi", "CasADi is imported only by the fitting layer"),
     ("fitting/leak.py", "import matplotlib.pyplot",

@@ -202,9 +202,9 @@ def test_evaluate_puts_the_universal_model_beside_a_specialist(trained, tiny_set
     its class accuracy is what identifying each test trial's recording gives."""
     from posture_id.cli import main
     from posture_id.datasets import Dataset
+    from posture_id.learning.universal.identifier import UniversalIdentifier
     from posture_id.recording import Recording
     from posture_id.simulation import prts
-    from posture_id.universal.identifier import UniversalIdentifier
 
     out, _ = trained
     report = tmp_path / "report"

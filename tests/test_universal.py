@@ -9,20 +9,20 @@ import math
 import numpy as np
 import pytest
 
-from posture_id.universal.features import (
+from posture_id.learning.universal.features import (
     CHANNELS,
     GRID_HZ,
     band_weights,
     body_descriptors,
     module_features,
 )
-from posture_id.universal.harmonics import (
+from posture_id.learning.universal.harmonics import (
     drift_parts,
     harmonic_layout,
     sensor_noise_parts,
     sway_harmonics,
 )
-from posture_id.universal.scope import UniversalScope, draw_body, draw_stimulus
+from posture_id.learning.universal.scope import UniversalScope, draw_body, draw_stimulus
 
 
 def _layout(states=80, state_s=0.25, cycles=4, amp=1.0):
@@ -127,7 +127,7 @@ def test_draws_stay_in_the_scope_and_cycles_fit_the_sample_grid():
 @pytest.fixture(scope="module")
 def tiny_set(tmp_path_factory):
     """A 20-shard set of 6 trials each: enough for every split."""
-    from posture_id.universal.data import UniversalDataConfig, generate_universal
+    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
 
     out = tmp_path_factory.mktemp("universal") / "set"
     return generate_universal(UniversalDataConfig(shards=20, trials=6, seed=5), out, workers=2)
@@ -136,7 +136,7 @@ def tiny_set(tmp_path_factory):
 @pytest.mark.slow
 def test_shards_are_reproducible_and_a_killed_run_resumes(tiny_set, tmp_path):
     from posture_id.datasets.config import DatasetError
-    from posture_id.universal.data import (
+    from posture_id.learning.universal.data import (
         UniversalDataConfig,
         UniversalSet,
         generate_universal,
@@ -167,9 +167,9 @@ def test_shards_are_reproducible_and_a_killed_run_resumes(tiny_set, tmp_path):
 def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
     import torch
 
-    from posture_id.universal.model import ModelError, UniversalModel
-    from posture_id.universal.network import UniversalNetworkConfig
-    from posture_id.universal.training import UniversalTrainingConfig, train_universal
+    from posture_id.learning.universal.model import ModelError, UniversalModel
+    from posture_id.learning.universal.network import UniversalNetworkConfig
+    from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
 
     config = UniversalTrainingConfig(epochs=3, batch_size=64, threads=1, patience=10)
     net = UniversalNetworkConfig(hidden=(32, 32))
@@ -198,7 +198,7 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
 
 @pytest.mark.parametrize("body_name", ["tip", "winter", "winter2"])
 def test_com_weights_linearise_the_com_above_each_joint(body_name, request):
-    from posture_id.universal.features import com_weights
+    from posture_id.learning.universal.features import com_weights
 
     body = request.getfixturevalue(body_name)
     w = com_weights(body)
@@ -237,7 +237,12 @@ def test_identify_by_default_reads_a_body_and_prts_no_network_was_trained_on(tmp
 
 
 def test_conformal_quantiles_and_temperature_recover_known_answers():
-    from posture_id.universal.calibration import LEVELS, _conformal, _temperature, regime_of
+    from posture_id.learning.universal.calibration import (
+        LEVELS,
+        _conformal,
+        _temperature,
+        regime_of,
+    )
 
     rng = np.random.default_rng(6)
     scores = np.abs(rng.standard_normal((40000, 4)))
@@ -271,7 +276,7 @@ def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_
 def test_a_table_cell_draws_until_enough_trials_stay_up():
     """TALOS falls under many prior draws: its cells draw more batches until they hold
     the trials asked for; every per-trial array is cut alike."""
-    from posture_id.universal.table import _cell, _cells
+    from posture_id.learning.universal.table import _cell, _cells
 
     cells = list(_cells())
     index = next(i for i, (family, stim, sway) in enumerate(cells)
@@ -283,7 +288,7 @@ def test_a_table_cell_draws_until_enough_trials_stay_up():
 
 
 def test_ece_of_calibrated_and_overconfident_probabilities():
-    from posture_id.universal.evaluation import _ece
+    from posture_id.learning.universal.evaluation import _ece
 
     rng = np.random.default_rng(9)
     p = rng.uniform(0, 1, 200000)

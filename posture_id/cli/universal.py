@@ -68,7 +68,7 @@ def add_parser(sub) -> None:
 
 def run_data(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
-    from posture_id.universal.data import UniversalDataConfig, generate_universal
+    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
 
     given = {"trials": args.trials} if args.trials else {}
     config = UniversalDataConfig(shards=args.shards, seed=args.seed, **given)
@@ -83,8 +83,8 @@ def run_data(args: argparse.Namespace) -> int:
 
 def run_train(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=(args.data,))
-    from posture_id.universal.network import UniversalNetworkConfig
-    from posture_id.universal.training import UniversalTrainingConfig, train_universal
+    from posture_id.learning.universal.network import UniversalNetworkConfig
+    from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
 
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
                                ("weight_decay", args.weight_decay)) if v is not None}
@@ -99,7 +99,7 @@ def run_train(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
-    from posture_id.universal.checking import calibrate_model
+    from posture_id.learning.universal.checking import calibrate_model
 
     report = calibrate_model(args.model, args.data)
     print(report.markdown())
@@ -109,8 +109,8 @@ def run_check(args: argparse.Namespace) -> int:
 
 def run_table(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
-    from posture_id.universal.identifier import BUNDLED_DIR
-    from posture_id.universal.table import family_table
+    from posture_id.learning.universal.identifier import BUNDLED_DIR
+    from posture_id.learning.universal.table import family_table
 
     table = family_table(args.model or BUNDLED_DIR, args.out, args.trials, args.workers)
     print(table.markdown())

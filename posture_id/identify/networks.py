@@ -7,7 +7,7 @@ from pathlib import Path
 
 from posture_id.bodies.body import Body
 from posture_id.learning.identifier import CnnIdentifier
-from posture_id.universal.identifier import UniversalIdentifier, is_universal_model
+from posture_id.learning.universal.identifier import UniversalIdentifier, is_universal_model
 
 __all__ = ["network_for", "Network"]
 

@@ -16,9 +16,9 @@ from safetensors.torch import load_file, save_file
 from posture_id._version import __version__
 from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
-from posture_id.universal.features import UNIVERSAL_FEATURE_DEFINITION
-from posture_id.universal.network import UniversalNetwork, UniversalNetworkConfig
-from posture_id.universal.scope import UniversalScope
+from posture_id.learning.universal.features import UNIVERSAL_FEATURE_DEFINITION
+from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+from posture_id.learning.universal.scope import UniversalScope
 
 __all__ = ["UniversalModel", "UniversalPrediction", "ModelError", "FORMAT", "WEIGHTS",
            "SIDECAR"]

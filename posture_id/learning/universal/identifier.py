@@ -3,7 +3,7 @@ a lab runs, clean or people-like sway (docs/universal.md).
 
     >>> from posture_id import load_body, Recording
     >>> from posture_id.trials import prepare_trial
-    >>> from posture_id.universal.identifier import UniversalIdentifier
+    >>> from posture_id.learning.universal.identifier import UniversalIdentifier
     >>> body = load_body("subject.urdf")
     >>> identifier = UniversalIdentifier.bundled(body)
     >>> result = identifier.identify(prepare_trial(Recording.from_csv("rec.csv")))
@@ -26,19 +26,19 @@ from posture_id.dec.parameters import TARGET_FIELDS, default_parameters, denorma
 from posture_id.errors import PostureIdError, RecordingError
 from posture_id.learning.config import LearningError
 from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentification
-from posture_id.provenance import body_identity, provenance
-from posture_id.trials import PreparedTrial
-from posture_id.uncertainty.intervals import ParameterIntervals
-from posture_id.uncertainty.noise import sensor_noise_deg
-from posture_id.universal.calibration import UniversalCalibration, regime_of
-from posture_id.universal.features import (
+from posture_id.learning.universal.calibration import UniversalCalibration, regime_of
+from posture_id.learning.universal.features import (
     DESCRIPTORS,
     body_descriptors,
     com_weights,
 )
-from posture_id.universal.harmonics import harmonic_layout, sway_harmonics
-from posture_id.universal.model import SIDECAR, ModelError, UniversalModel
-from posture_id.universal.samples import inputs_and_noise_ratio, module_inputs
+from posture_id.learning.universal.harmonics import harmonic_layout, sway_harmonics
+from posture_id.learning.universal.model import SIDECAR, ModelError, UniversalModel
+from posture_id.learning.universal.samples import inputs_and_noise_ratio, module_inputs
+from posture_id.provenance import body_identity, provenance
+from posture_id.trials import PreparedTrial
+from posture_id.uncertainty.intervals import ParameterIntervals
+from posture_id.uncertainty.noise import sensor_noise_deg
 
 __all__ = ["UniversalIdentifier", "BUNDLED_DIR", "is_universal_model"]
 

@@ -22,8 +22,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from posture_id.fileio import atomic_write_text, json_text
-from posture_id.universal.model import ModelError, UniversalModel, UniversalPrediction
-from posture_id.universal.samples import Samples
+from posture_id.learning.universal.model import ModelError, UniversalModel, UniversalPrediction
+from posture_id.learning.universal.samples import Samples
 
 __all__ = ["RATIO_EDGES", "LEVELS", "MIN_CELL", "UniversalCalibration", "calibrate",
            "regime_of", "CALIBRATION_FILE"]

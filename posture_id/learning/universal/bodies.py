@@ -11,7 +11,7 @@ from pathlib import Path
 from posture_id.bodies.anthropometry import straight_links, winter_segments
 from posture_id.bodies.body import DEFAULT_URDF, Body, load_body
 from posture_id.bodies.urdf_writer import chain_urdf
-from posture_id.universal.scope import BodyDraw
+from posture_id.learning.universal.scope import BodyDraw
 
 __all__ = ["body_urdf", "build_body"]
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from posture_id.universal.features import N_INPUTS
+from posture_id.learning.universal.features import N_INPUTS
 
 __all__ = ["UniversalNetworkConfig", "UniversalNetwork", "OUTPUTS"]
 

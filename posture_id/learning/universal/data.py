@@ -39,20 +39,20 @@ from posture_id.dec.parameters import ParameterArrays, default_parameters, norma
 from posture_id.dec.prior import sample_parameters
 from posture_id.executors import executor_for
 from posture_id.fileio import atomic_write_text, file_sha256, json_text
-from posture_id.progress import Progress, report
-from posture_id.simulation.batch import simulate_batch
-from posture_id.simulation.noise import MotorNoise
-from posture_id.simulation.options import SimulationOptions
-from posture_id.universal.bodies import build_body
-from posture_id.universal.features import body_descriptors, com_weights
-from posture_id.universal.harmonics import HarmonicLayout, harmonic_layout, sway_harmonics
-from posture_id.universal.scope import (
+from posture_id.learning.universal.bodies import build_body
+from posture_id.learning.universal.features import body_descriptors, com_weights
+from posture_id.learning.universal.harmonics import HarmonicLayout, harmonic_layout, sway_harmonics
+from posture_id.learning.universal.scope import (
     BodyDraw,
     StimulusDraw,
     UniversalScope,
     draw_body,
     draw_stimulus,
 )
+from posture_id.progress import Progress, report
+from posture_id.simulation.batch import simulate_batch
+from posture_id.simulation.noise import MotorNoise
+from posture_id.simulation.options import SimulationOptions
 
 __all__ = ["UniversalDataConfig", "shard_layout", "shard_com_weights", "make_shard",
            "simulate_trials", "generate_universal", "UniversalSet", "split_of", "UNIVERSAL_STREAM"]

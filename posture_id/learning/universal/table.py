@@ -19,13 +19,13 @@ import numpy as np
 
 from posture_id.executors import executor_for
 from posture_id.fileio import atomic_write_text, json_text
+from posture_id.learning.universal.calibration import UniversalCalibration
+from posture_id.learning.universal.data import simulate_trials
+from posture_id.learning.universal.evaluation import GroupScore, score_samples
+from posture_id.learning.universal.model import UniversalModel
+from posture_id.learning.universal.samples import LoadedShard, make_samples
+from posture_id.learning.universal.scope import BodyDraw, StimulusDraw, UniversalScope
 from posture_id.plotting import plot_score_grid
-from posture_id.universal.calibration import UniversalCalibration
-from posture_id.universal.data import simulate_trials
-from posture_id.universal.evaluation import GroupScore, score_samples
-from posture_id.universal.model import UniversalModel
-from posture_id.universal.samples import LoadedShard, make_samples
-from posture_id.universal.scope import BodyDraw, StimulusDraw, UniversalScope
 
 __all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "TABLE_SEED"]
 
@@ -95,7 +95,7 @@ class FamilyTable:
 
     def markdown(self) -> str:
         lines = ["# The universal model over body families, stimuli and sway", "",
-                 "Made by `posture-id universal table` (posture_id.universal.table: "
+                 "Made by `posture-id universal table` (posture_id.learning.universal.table: "
                  "trials simulated for the table alone, their own seeds). Clean: sensor "
                  "noise 0–0.1°, no motor noise. People-like: motor noise leaving 15–40 % of "
                  "the body COM sway locked, sensor noise 0.02–0.1°, drift up to 0.5° per "

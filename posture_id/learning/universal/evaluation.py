@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posture_id.universal.calibration import UniversalCalibration, regime_of
-from posture_id.universal.model import UniversalModel
-from posture_id.universal.samples import Samples
+from posture_id.learning.universal.calibration import UniversalCalibration, regime_of
+from posture_id.learning.universal.model import UniversalModel
+from posture_id.learning.universal.samples import Samples
 
 __all__ = ["GroupScore", "score_samples", "relative_errors"]
 

@@ -30,12 +30,12 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from posture_id.fileio import atomic_write, atomic_write_text, json_text
+from posture_id.learning.universal.data import UniversalSet
+from posture_id.learning.universal.model import UniversalModel
+from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+from posture_id.learning.universal.samples import Samples, load_split, make_samples
+from posture_id.learning.universal.scope import UniversalScope
 from posture_id.progress import Progress, report
-from posture_id.universal.data import UniversalSet
-from posture_id.universal.model import UniversalModel
-from posture_id.universal.network import UniversalNetwork, UniversalNetworkConfig
-from posture_id.universal.samples import Samples, load_split, make_samples
-from posture_id.universal.scope import UniversalScope
 
 __all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED"]
 
@@ -173,7 +173,7 @@ def train_universal(data_path: str | Path, out: str | Path,
 def _ranges(samples: Samples) -> dict:
     """Per input column, the 0.5 % and 99.5 % points of the training inputs' descriptors
     (what a recording is checked against)."""
-    from posture_id.universal.features import DESCRIPTORS
+    from posture_id.learning.universal.features import DESCRIPTORS
 
     desc = samples.inputs[:, -DESCRIPTORS:]
     return {"descriptors_low": np.percentile(desc, 0.5, axis=0).tolist(),

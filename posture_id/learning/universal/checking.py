@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.fileio import atomic_write_text, json_text
-from posture_id.universal.calibration import UniversalCalibration, calibrate
-from posture_id.universal.data import UniversalSet
-from posture_id.universal.evaluation import GroupScore, score_samples
-from posture_id.universal.model import UniversalModel
-from posture_id.universal.samples import Samples, load_split, make_samples
+from posture_id.learning.universal.calibration import UniversalCalibration, calibrate
+from posture_id.learning.universal.data import UniversalSet
+from posture_id.learning.universal.evaluation import GroupScore, score_samples
+from posture_id.learning.universal.model import UniversalModel
+from posture_id.learning.universal.samples import Samples, load_split, make_samples
 
 __all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes"]
 
@@ -51,7 +51,7 @@ class CheckReport:
                 "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay | class ECE % |")
         lines = ["# The universal model on its held-out test shards", "",
                  "Made by `posture-id universal check MODEL_DIR DATA_DIR` "
-                 "(posture_id.universal.checking): calibrated on the calibration shards, "
+                 "(posture_id.learning.universal.checking): calibrated on the calibration shards, "
                  "checked on the test shards (bodies and stimuli no training trial had). "
                  "People-like: under 60 % of the body COM sway locked; part-locked: 60–99.5 "
                  "%; clean: no motor noise. Errors: median |identified / true − 1|.", "",

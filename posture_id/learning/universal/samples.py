@@ -7,13 +7,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posture_id.universal.data import UniversalSet, shard_com_weights, shard_layout
-from posture_id.universal.features import (
+from posture_id.learning.universal.data import UniversalSet, shard_com_weights, shard_layout
+from posture_id.learning.universal.features import (
     features_and_noise_ratio,
     stimulus_descriptors,
 )
-from posture_id.universal.harmonics import drift_parts, sensor_noise_parts
-from posture_id.universal.scope import UniversalScope
+from posture_id.learning.universal.harmonics import drift_parts, sensor_noise_parts
+from posture_id.learning.universal.scope import UniversalScope
 
 __all__ = ["LoadedShard", "Samples", "load_split", "make_samples", "module_inputs",
            "inputs_and_noise_ratio"]

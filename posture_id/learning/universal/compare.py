@@ -10,11 +10,11 @@ import numpy as np
 from posture_id.bodies.body import load_body
 from posture_id.datasets.store import Dataset
 from posture_id.learning.samples import stimulus_of
-from posture_id.universal.evaluation import relative_errors
-from posture_id.universal.features import body_descriptors, com_weights
-from posture_id.universal.harmonics import harmonic_layout, sway_harmonics
-from posture_id.universal.model import UniversalModel
-from posture_id.universal.samples import module_inputs
+from posture_id.learning.universal.evaluation import relative_errors
+from posture_id.learning.universal.features import body_descriptors, com_weights
+from posture_id.learning.universal.harmonics import harmonic_layout, sway_harmonics
+from posture_id.learning.universal.model import UniversalModel
+from posture_id.learning.universal.samples import module_inputs
 
 __all__ = ["universal_on_dataset", "NOISE_STREAM"]
 

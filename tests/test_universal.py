@@ -196,6 +196,54 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
         UniversalModel.load(tmp_path / "whole")
 
 
+def test_sets_trained_together_must_agree_but_on_their_motor_noise(tmp_path):
+    from dataclasses import replace
+
+    from posture_id.datasets.config import DatasetError
+    from posture_id.learning.universal.data import UniversalSet, merged_scope
+    from posture_id.learning.universal.scope import UniversalScope
+
+    def a_set(name, scope):
+        return UniversalSet(tmp_path / name, {"config": {"scope": scope.to_dict()}})
+
+    base = UniversalScope()
+    people = replace(base, clean_share=0.0, locked_share=(0.05, 0.4))
+    merged = merged_scope([a_set("a", base), a_set("b", people)])
+    assert merged.locked_share == (0.05, 1.0) and merged.clean_share == base.clean_share
+    assert merged.sensor_noise_deg == base.sensor_noise_deg
+    with pytest.raises(DatasetError, match=r"b: scope field sensor_noise_deg"):
+        merged_scope([a_set("a", base), a_set("b", replace(base, sensor_noise_deg=(0, 0.3)))])
+
+
+@pytest.mark.slow
+def test_training_on_two_sets_reads_both(tiny_set, tmp_path):
+    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
+    from posture_id.learning.universal.network import UniversalNetworkConfig
+    from posture_id.learning.universal.samples import SET_STRIDE, load_split
+    from posture_id.learning.universal.scope import UniversalScope
+    from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
+
+    people = generate_universal(UniversalDataConfig(
+        shards=10, trials=4, seed=6, scope=UniversalScope(clean_share=0.0,
+                                                          locked_share=(0.1, 0.4))),
+        tmp_path / "people", workers=2)
+    shards = load_split([tiny_set, people], "train")
+    labels = {int(s.arrays["index"]) for s in shards}
+    assert labels == ({e["index"] for e in tiny_set.shards("train") if e["kept"]}
+                      | {SET_STRIDE + e["index"] for e in people.shards("train") if e["kept"]})
+    for shard in shards:
+        if shard.arrays["index"] >= SET_STRIDE:
+            assert np.all(shard.arrays["motor_noise_deg"] > 0)
+    model = train_universal([tiny_set.path, people.path], tmp_path / "model",
+                            UniversalTrainingConfig(epochs=1, batch_size=64, threads=1),
+                            UniversalNetworkConfig(hidden=(16,)), log=lambda m: None)
+    assert [d["path"] for d in model.sidecar["datasets"]] == [
+        str(tiny_set.path.resolve()), str(people.path.resolve())]
+    assert model.scope.locked_share == (0.1, 1.0)
+    assert model.sidecar["training"]["train_samples"] == sum(
+        s.arrays["y"].shape[0] * s.n_segments for s in shards)
+
+
 @pytest.mark.parametrize("body_name", ["tip", "winter", "winter2"])
 def test_com_weights_linearise_the_com_above_each_joint(body_name, request):
     from posture_id.learning.universal.features import com_weights

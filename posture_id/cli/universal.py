@@ -31,12 +31,18 @@ def add_parser(sub) -> None:
     d.add_argument("--trials", type=positive_int,
                    help="parameter sets per shard (default: UniversalDataConfig's, 64)")
     d.add_argument("--seed", type=non_negative_int, default=0, help="root seed (default 0)")
+    d.add_argument("--clean-share", type=non_negative_float,
+                   help="share of trials without motor noise (default: the scope's, 0.25)")
+    d.add_argument("--locked-share", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
+                   help="range of the locked share of the other trials' body COM sway "
+                        "(default: the scope's, 0.1 1)")
     d.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=run_data)
 
     t = u.add_parser("train", help="train the universal network on a set (resumable)")
-    t.add_argument("data", type=Path, help="set directory (posture-id universal data)")
+    t.add_argument("data", type=Path, nargs="+",
+                   help="set directories (posture-id universal data), trained on together")
     t.add_argument("--out", type=Path, required=True, help="model directory")
     t.add_argument("--epochs", type=positive_int,
                    help="at most this many epochs (default: UniversalTrainingConfig's, 60)")
@@ -54,7 +60,7 @@ def add_parser(sub) -> None:
     c = u.add_parser("check", help="calibrate a model on its set's calibration split and "
                      "check it on the test split")
     c.add_argument("model", type=Path, help="model directory")
-    c.add_argument("data", type=Path, help="the set it was trained on")
+    c.add_argument("data", type=Path, nargs="+", help="the sets it was trained on")
     c.set_defaults(func=run_check)
 
     b = u.add_parser("table", help="the table over body families, stimuli and sway")
@@ -69,8 +75,19 @@ def add_parser(sub) -> None:
 def run_data(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
+    from posture_id.learning.universal.scope import ScopeError, UniversalScope
 
     given = {"trials": args.trials} if args.trials else {}
+    scope = {k: v for k, v in (("clean_share", args.clean_share),
+                               ("locked_share", args.locked_share)) if v is not None}
+    if scope.get("clean_share", 0) > 1:
+        raise SystemExit(f"posture-id universal data: --clean-share must be within [0, 1], "
+                         f"got {args.clean_share}")
+    try:
+        given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
+                                           for k, v in scope.items()})
+    except ScopeError as exc:
+        raise SystemExit(f"posture-id universal data: {exc}") from None
     config = UniversalDataConfig(shards=args.shards, seed=args.seed, **given)
     with TerminalProgress("shard", prefix="posture-id universal data",
                           quiet=args.quiet) as progress:
@@ -82,7 +99,7 @@ def run_data(args: argparse.Namespace) -> int:
 
 
 def run_train(args: argparse.Namespace) -> int:
-    check_output_folder(args.out, "--out", inputs=(args.data,))
+    check_output_folder(args.out, "--out", inputs=tuple(args.data))
     from posture_id.learning.universal.network import UniversalNetworkConfig
     from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
 

@@ -3,6 +3,7 @@ split, per regime: the numbers docs/universal.md quotes."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import numpy as np
 
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.universal.calibration import UniversalCalibration, calibrate
-from posture_id.learning.universal.data import UniversalSet
+from posture_id.learning.universal.data import open_sets
 from posture_id.learning.universal.evaluation import GroupScore, score_samples
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.samples import Samples, load_split, make_samples
@@ -67,12 +68,13 @@ class CheckReport:
         return "\n".join(lines)
 
 
-def calibrate_model(model_dir: str | Path, data_path: str | Path,
+def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str | Path],
                     level: float = 0.9) -> CheckReport:
-    """Calibrate the model at ``model_dir`` (written there as calibration.json) and check
-    it on the test split; the report is written there as check.json and check.md."""
+    """Calibrate the model at ``model_dir`` (written there as calibration.json) on the
+    calibration split of the set (or sets) it was trained on, and check it on the test
+    split; the report is written there as check.json and check.md."""
     model = UniversalModel.load(model_dir)
-    data = UniversalSet.open(data_path)
+    data = open_sets(data_path)
     scope = model.scope
     cal = make_samples(load_split(data, "calibration"), scope,
                        np.random.default_rng(CALIBRATION_SEED))

@@ -25,8 +25,8 @@ bodies and stimuli no training trial had.
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -55,7 +55,8 @@ from posture_id.simulation.noise import MotorNoise
 from posture_id.simulation.options import SimulationOptions
 
 __all__ = ["UniversalDataConfig", "shard_layout", "shard_com_weights", "make_shard",
-           "simulate_trials", "generate_universal", "UniversalSet", "split_of", "UNIVERSAL_STREAM"]
+           "simulate_trials", "generate_universal", "UniversalSet", "open_sets", "merged_scope",
+           "split_of", "UNIVERSAL_STREAM"]
 
 UNIVERSAL_STREAM = 0x554E49
 FORMAT = "posture_id-universal-set"
@@ -280,3 +281,39 @@ class UniversalSet:
         for entry in self.shards(split):
             if entry["kept"]:
                 yield self.load(entry)
+
+
+def open_sets(paths: str | Path | Sequence[str | Path]) -> list[UniversalSet]:
+    """One or more finished sets, to be trained on together (for example the default set
+    and a set of people-like sway only)."""
+    if isinstance(paths, (str, Path)):
+        paths = [paths]
+    sets = [UniversalSet.open(p) for p in paths]
+    if not sets:
+        raise DatasetError("no universal set given")
+    merged_scope(sets)
+    return sets
+
+
+#: Scope fields that may differ between sets trained on together: what share of the
+#: trials has motor noise and how much.
+_SWAY_FIELDS = ("clean_share", "locked_share")
+
+
+def merged_scope(sets: Sequence[UniversalSet]) -> UniversalScope:
+    """The scope of sets trained on together: they must agree on bodies, stimuli, sensor
+    noise and drift; the locked share spans all of theirs; the clean share is the
+    largest."""
+    scopes = [UniversalScope.from_dict(d.manifest["config"]["scope"]) for d in sets]
+    first = scopes[0]
+    for data, scope in zip(sets[1:], scopes[1:], strict=True):
+        for name in UniversalScope.__dataclass_fields__:
+            if name not in _SWAY_FIELDS and getattr(scope, name) != getattr(first, name):
+                raise DatasetError(
+                    f"{data.path}: scope field {name} is {getattr(scope, name)}, but "
+                    f"{sets[0].path} has {getattr(first, name)}; sets trained on together "
+                    "may differ only in their motor noise (clean_share, locked_share)")
+    return replace(first,
+                   clean_share=max(s.clean_share for s in scopes),
+                   locked_share=(min(s.locked_share[0] for s in scopes),
+                                 max(s.locked_share[1] for s in scopes)))

@@ -3,6 +3,7 @@ shard's stored harmonics with fresh sensor noise and drift (:mod:`.harmonics`)."
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,7 +16,7 @@ from posture_id.learning.universal.features import (
 from posture_id.learning.universal.harmonics import drift_parts, sensor_noise_parts
 from posture_id.learning.universal.scope import UniversalScope
 
-__all__ = ["LoadedShard", "Samples", "load_split", "make_samples", "module_inputs",
+__all__ = ["LoadedShard", "Samples", "SET_STRIDE", "load_split", "make_samples", "module_inputs",
            "inputs_and_noise_ratio"]
 
 
@@ -60,14 +61,21 @@ class Samples:
         return len(self.inputs)
 
 
-def load_split(data: UniversalSet, split: str) -> list[LoadedShard]:
-    """Every non-empty shard of a split, in memory (a few kB per trial)."""
+#: Shard labels of the i-th set trained on together start at i × this.
+SET_STRIDE = 1_000_000
+
+
+def load_split(data: UniversalSet | Sequence[UniversalSet], split: str) -> list[LoadedShard]:
+    """Every non-empty shard of a split of one set or of several (shard labels of the
+    i-th set offset by i × :data:`SET_STRIDE`), in memory (a few kB per trial)."""
+    sets = [data] if isinstance(data, UniversalSet) else list(data)
     out = []
-    for entry in data.shards(split):
-        if entry["kept"]:
-            arrays = data.load(entry)
-            arrays["index"] = entry["index"]
-            out.append(LoadedShard.of(arrays))
+    for i, one in enumerate(sets):
+        for entry in one.shards(split):
+            if entry["kept"]:
+                arrays = one.load(entry)
+                arrays["index"] = i * SET_STRIDE + entry["index"]
+                out.append(LoadedShard.of(arrays))
     return out
 
 

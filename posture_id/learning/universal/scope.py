@@ -78,8 +78,11 @@ class UniversalScope:
             raise ScopeError(f"scope states must be among 80, 242, got {self.states}")
         if not 0 <= self.tip_share + self.preset_share <= 1:
             raise ScopeError("scope tip_share + preset_share must be within [0, 1]")
-        if not 0 < self.locked_share[0]:
-            raise ScopeError("scope locked_share must be above 0")
+        if not 0 < self.locked_share[0] <= self.locked_share[1] <= 1:
+            raise ScopeError(f"scope locked_share must be a range within (0, 1], got "
+                             f"{self.locked_share}")
+        if not 0 <= self.clean_share <= 1:
+            raise ScopeError(f"scope clean_share must be within [0, 1], got {self.clean_share}")
 
     def to_dict(self) -> dict:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}

@@ -22,6 +22,7 @@ import json
 import math
 import os
 import time
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -30,11 +31,10 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from posture_id.fileio import atomic_write, atomic_write_text, json_text
-from posture_id.learning.universal.data import UniversalSet
+from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
 from posture_id.learning.universal.samples import Samples, load_split, make_samples
-from posture_id.learning.universal.scope import UniversalScope
 from posture_id.progress import Progress, report
 
 __all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED"]
@@ -78,19 +78,20 @@ def _targets(samples: Samples, mean: np.ndarray, std: np.ndarray) -> torch.Tenso
     return torch.from_numpy(t.astype(np.float32))
 
 
-def train_universal(data_path: str | Path, out: str | Path,
+def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Path,
                     config: UniversalTrainingConfig | None = None,
                     network: UniversalNetworkConfig | None = None,
                     progress: Progress | None = None, log=print) -> UniversalModel:
-    """Train on the set at ``data_path``; the best model is written to ``out``."""
+    """Train on the set at ``data_path`` (or the sets, together: :func:`.data.open_sets`);
+    the best model is written to ``out``."""
     config = config or UniversalTrainingConfig()
     network_config = network or UniversalNetworkConfig()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(config.threads or os.cpu_count() or 1)
     device = _device()
-    data = UniversalSet.open(data_path)
-    scope = UniversalScope.from_dict(data.manifest["config"]["scope"])
+    data = open_sets(data_path)
+    scope = merged_scope(data)
     t0 = time.perf_counter()
     train_shards = load_split(data, "train")
     validation = make_samples(load_split(data, "validation"), scope,
@@ -157,8 +158,11 @@ def train_universal(data_path: str | Path, out: str | Path,
     net.cpu()
     model.sidecar = {
         "scope": scope.to_dict(),
-        "dataset": {"path": str(Path(data_path).resolve()),
-                    "config": data.manifest["config"], "counts": data.manifest.get("counts")},
+        "dataset": {"path": str(data[0].path.resolve()),
+                    "config": data[0].manifest["config"],
+                    "counts": data[0].manifest.get("counts")},
+        "datasets": [{"path": str(d.path.resolve()), "config": d.manifest["config"],
+                      "counts": d.manifest.get("counts")} for d in data],
         "training": {**asdict(config), "history": history,
                      "best_epoch": int(np.argmin([h["validation_loss"] for h in history])) + 1,
                      "device": str(device), "train_samples": len(first)},

@@ -1,5 +1,5 @@
 """Command line: ``posture-id body | simulate | fit | frf | dataset | train | evaluate |
-calibration | identify | demo | benchmark | universal``,
+calibration | identify | demo | benchmark | universal | design | stimulus``,
 one module per command.
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
@@ -20,10 +20,12 @@ from posture_id.cli import (
     calibration,
     dataset,
     demo,
+    design,
     evaluate,
     fit,
     frf,
     identify,
+    platform_command,
     simulate,
     train,
     universal,
@@ -41,7 +43,7 @@ def build_parser() -> Parser:
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for command in (body, simulate, fit, frf, dataset, train, evaluate, calibration, identify,
-                    demo, benchmark, universal):
+                    demo, benchmark, universal, design, platform_command):
         command.add_parser(sub)
     return parser
 

@@ -15,6 +15,7 @@ from posture_id.cli.arguments import (
 )
 from posture_id.errors import PostureIdError
 from posture_id.recording import AngleUnit, Recording, RecordingColumns
+from posture_id.simulation.protocols import Protocol, read_protocol
 from posture_id.simulation.stimulus import (
     PRTS_REGISTERS,
     PRTS_STATE_S,
@@ -24,6 +25,7 @@ from posture_id.simulation.stimulus import (
 )
 
 __all__ = ["add_stimulus_arguments", "add_lab_stimulus_arguments", "prts_arguments",
+           "protocol_profile",
            "stimulus_from_args", "recording_and_stimulus", "add_column_arguments",
            "columns_from_args"]
 
@@ -60,6 +62,11 @@ def add_lab_stimulus_arguments(parser: argparse.ArgumentParser, tilt_help: str) 
     parser.add_argument("--lag-s", type=non_negative_float,
                         help="the platform follows its command this late, s (default 0)")
     parser.add_argument("--tilt", type=Path, help=tilt_help)
+    parser.add_argument("--protocol", type=Path, metavar="FILE",
+                        help="the stimulus as a protocol file (JSON: posture-id design "
+                             "writes them); replaces the PRTS flags")
+    parser.add_argument("--part", type=positive_int,
+                        help="which recording of a two-amplitude protocol (1 or 2)")
 
 
 def prts_arguments(args: argparse.Namespace) -> dict:
@@ -78,6 +85,14 @@ def stimulus_from_args(args: argparse.Namespace, default: TiltProfile | None
     ``default``. A PRTS flag next to ``--tilt`` is refused."""
     given = [flag for key, flag in {**_PRTS_FLAGS, **_LAB_FLAGS}.items()
              if getattr(args, key, None) is not None]
+    if getattr(args, "protocol", None):
+        if given or getattr(args, "tilt", None):
+            raise PostureIdError(f"--protocol replaces the PRTS and --tilt: "
+                                 f"{', '.join(given or ['--tilt'])} do not apply")
+        return protocol_profile(read_protocol(args.protocol), getattr(args, "part", None),
+                                args.protocol)
+    if getattr(args, "part", None) is not None:
+        raise PostureIdError("--part goes with --protocol")
     if getattr(args, "tilt", None):
         if given:
             raise PostureIdError(f"--tilt replaces the PRTS: {', '.join(given)} do not apply")
@@ -85,6 +100,18 @@ def stimulus_from_args(args: argparse.Namespace, default: TiltProfile | None
     if given:
         return prts(**prts_arguments(args))
     return default
+
+
+def protocol_profile(protocol: Protocol, part: int | None, where) -> TiltProfile:
+    """The tilt of one recording of a protocol: the protocol's own, or recording ``part``
+    (1-based) of a two-amplitude protocol, which needs it."""
+    recordings = protocol.recordings
+    if len(recordings) > 1 and part is None:
+        raise PostureIdError(f"{where}: {protocol.label()} is {len(recordings)} recordings; "
+                             f"name one with --part 1..{len(recordings)}")
+    if part is not None and not 1 <= part <= len(recordings):
+        raise PostureIdError(f"{where}: --part must be within 1..{len(recordings)}, got {part}")
+    return recordings[(part or 1) - 1].profile()
 
 
 def add_column_arguments(parser: argparse.ArgumentParser) -> None:

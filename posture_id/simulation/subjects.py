@@ -20,16 +20,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from posture_id.bodies.body import Body
-from posture_id.dec.parameters import DecParameters
+from posture_id.dec.parameters import DecParameters, ParameterArrays
 from posture_id.errors import SimulationError
 from posture_id.recording import Recording
-from posture_id.simulation.batch import simulate
+from posture_id.simulation.batch import simulate, simulate_batch
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorNoise
 from posture_id.simulation.options import SimulationOptions
-from posture_id.simulation.results import SimulationResult
+from posture_id.simulation.results import BatchResult, SimulationResult
 from posture_id.simulation.stimulus import TiltProfile
 
-__all__ = ["PeopleLike", "people_like"]
+__all__ = ["PeopleLike", "people_like", "MotorLevels", "motor_levels_for_share"]
 
 
 @dataclass(frozen=True)
@@ -83,3 +83,38 @@ def people_like(body: Body, params: DecParameters, stimulus: TiltProfile,
     if sensor_noise_deg > 0:
         recording = recording.with_sensor_noise(sensor_noise_deg, seed)
     return PeopleLike(recording, locked, motor, realised)
+
+
+@dataclass(frozen=True)
+class MotorLevels:
+    """Motor-noise levels that leave chosen shares of B trials' body COM sway locked.
+
+    Attributes:
+        level: (B,) σ, degrees (NaN where none was found: the trial fell or needs > 10°).
+        usable: (B,) bool, a level was found. clean: the trials without motor noise.
+        response: (B,) variance of the clean body COM sway, rad².
+    """
+
+    level: np.ndarray
+    usable: np.ndarray
+    clean: BatchResult
+    response: np.ndarray
+
+
+def motor_levels_for_share(body: Body, params: ParameterArrays, stimulus: TiltProfile,
+                           share: np.ndarray, seeds: np.ndarray, unit_level: float,
+                           cutoff_hz: float = DEFAULT_CUTOFF_HZ,
+                           options: SimulationOptions | None = None) -> MotorLevels:
+    """The batched form of :func:`people_like`'s calibration: B trials simulated without
+    motor noise and with ``unit_level`` (trial b seeded by ``seeds[b]``), and the level
+    that leaves ``share[b]`` of trial b's body COM sway locked (the body is nearly linear:
+    the noise's variance scales with the level squared)."""
+    clean = simulate_batch(body, params, stimulus, options, workers=1)
+    unit = simulate_batch(body, params, stimulus, options, workers=1, motor_noise=[
+        MotorNoise(unit_level, cutoff_hz, int(s)) for s in seeds])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        response = np.var(clean.alpha[:, :, 0], axis=1)
+        per_level = np.var(unit.alpha[:, :, 0] - clean.alpha[:, :, 0], axis=1) / unit_level**2
+        level = np.sqrt(response * (1 - share) / share / per_level)
+    usable = clean.stable & unit.stable & np.isfinite(level) & (level <= 10)
+    return MotorLevels(np.where(usable, level, np.nan), usable, clean, response)

@@ -53,6 +53,7 @@ from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.noise import MotorNoise
 from posture_id.simulation.options import SimulationOptions
+from posture_id.simulation.subjects import motor_levels_for_share
 
 __all__ = ["UniversalDataConfig", "shard_layout", "shard_com_weights", "make_shard",
            "simulate_trials", "generate_universal", "UniversalSet", "open_sets", "merged_scope",
@@ -118,19 +119,14 @@ def simulate_trials(body_draw: BodyDraw, stim: StimulusDraw, trials: int,
     body = build_body(body_draw)
     profile = stim.profile()
     params = sample_parameters(body, trials, rng)
-    clean = simulate_batch(body, params, profile, options, workers=1)
     noisy_trial = rng.random(trials) >= scope.clean_share
     share = np.where(noisy_trial, rng.uniform(*scope.locked_share, trials), 1.0)
     seeds = rng.integers(0, 2**62, trials)
-    unit_level = _UNIT_LEVEL_PER_DEG * stim.amplitude_deg
-    unit = simulate_batch(body, params, profile, options, workers=1, motor_noise=[
-        MotorNoise(unit_level, scope.cutoff_hz, int(s)) for s in seeds])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        response = _var(clean.alpha[:, :, 0])
-        per_level = _var(unit.alpha[:, :, 0] - clean.alpha[:, :, 0]) / unit_level**2
-        level = np.sqrt(response * (1 - share) / share / per_level)
-    usable = clean.stable & unit.stable & np.isfinite(level) & (level <= 10)
-    level = np.where(usable & noisy_trial, level, 0.0)
+    levels = motor_levels_for_share(body, params, profile, share, seeds,
+                                    _UNIT_LEVEL_PER_DEG * stim.amplitude_deg, scope.cutoff_hz,
+                                    options)
+    clean, usable, response = levels.clean, levels.usable, levels.response
+    level = np.where(usable & noisy_trial, levels.level, 0.0)
     final = simulate_batch(body, params, profile, options, workers=1, motor_noise=[
         MotorNoise(float(v), scope.cutoff_hz, int(s)) for v, s in zip(level, seeds, strict=True)])
     kept = usable & final.stable

@@ -1,0 +1,78 @@
+"""``posture-id design``: predict which protocol identifies which parameter, before
+anyone stands on the platform (docs/design.md)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.cli.arguments import (
+    check_output_folder,
+    non_negative_float,
+    non_negative_int,
+    positive_float,
+    positive_int,
+    say,
+)
+from posture_id.cli.progress import TerminalProgress
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("design", help="predict, per candidate protocol, how well each "
+                       "module's Kp, Ki, Kd, delay and class will be identified; rank them")
+    p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    p.add_argument("--protocol", type=Path, nargs="+", metavar="FILE",
+                   help="candidate protocol files (JSON; default: ten built-in candidates, "
+                        "today's PRTS first)")
+    p.add_argument("--sensor-noise-deg", type=non_negative_float, default=0.05,
+                   help="white sensor noise SD, degrees (default %(default)g)")
+    motor = p.add_mutually_exclusive_group()
+    motor.add_argument("--locked-share", type=positive_float,
+                       help="motor noise leaving this share of the body COM sway locked "
+                            "(people: 0.15–0.4; default: no motor noise)")
+    motor.add_argument("--motor-sd-deg", type=non_negative_float,
+                       help="motor noise of this level, degrees (MotorNoise's σ)")
+    p.add_argument("--goal", nargs="+", choices=("kp", "ki", "kd", "delay_s"),
+                   help="rank by these parameters of every module (default: all four)")
+    p.add_argument("--max-minutes", type=positive_float,
+                   help="recording time in all, minutes")
+    p.add_argument("--max-peak-to-peak-deg", type=positive_float,
+                   help="largest peak-to-peak tilt, degrees")
+    p.add_argument("--max-velocity-deg-s", type=positive_float,
+                   help="largest tilt velocity, degrees per second")
+    p.add_argument("--draws", type=positive_int, default=8,
+                   help="subjects drawn from the prior (default %(default)d)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
+    p.add_argument("--out", type=Path, required=True,
+                   help="report folder: design.md, design.json, design.png, protocols/, "
+                        "recommended.json")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out", inputs=tuple(args.protocol or ()) + (args.body,))
+    from posture_id.bodies.body import DEFAULT_URDF, load_body
+    from posture_id.design.candidates import default_candidates
+    from posture_id.design.goal import PARAMETERS, DesignGoal
+    from posture_id.design.noise import SwayNoise
+    from posture_id.design.predict import DesignOptions, design
+    from posture_id.simulation.protocols import read_protocol
+
+    body = load_body(args.body or DEFAULT_URDF)
+    protocols = ([read_protocol(f) for f in args.protocol] if args.protocol
+                 else default_candidates())
+    noise = SwayNoise(args.sensor_noise_deg, args.locked_share, args.motor_sd_deg)
+    goal = DesignGoal(tuple(args.goal or PARAMETERS), args.max_minutes,
+                      args.max_peak_to_peak_deg, args.max_velocity_deg_s)
+    options = DesignOptions(draws=args.draws, seed=args.seed)
+    with TerminalProgress("recording", prefix="posture-id design",
+                          quiet=args.quiet) as progress:
+        result = design(body, protocols, noise, goal, options, progress)
+    result.write(args.out)
+    print(result.markdown())
+    say(f"wrote {args.out / 'design.md'}, design.json, design.png and the protocols "
+        f"({result.seconds:.0f} s)")
+    return 0

@@ -1,0 +1,284 @@
+"""Predict, for a body, a noise model and candidate protocols, how well a locked
+least-squares fit will determine every module's Kp, Ki, Kd, delay and class.
+
+For each of ``draws`` subjects drawn from MODEL §5's prior (the same subjects for every
+protocol, so protocols are compared on equal terms):
+
+1. the exact Jacobian of the CasADi model (:class:`~posture_id.fitting.problem.
+   FitProblem`, the fit's own model) with respect to the normalised gains, delays and
+   relaxed classes, along the protocol's tilt over a horizon that holds a transient of at
+   least ``transient_s`` and one whole cycle; the last cycle's harmonics that the tilt
+   excites up to ``max_frequency_hz`` are what the locked fit compares;
+2. the noise of those harmonics: white sensor noise, and the simulated noise-driven sway
+   of that subject (:func:`.noise.noise_spectra`), divided by the cycles averaged;
+3. the information (:mod:`.information`) of every recording and repetition, summed; the
+   weighted fit's covariance A⁻¹BA⁻¹ with the classes known (the fit's final polish)
+   gives the standard errors of K̃p, K̃i, K̃d, Δ̃, and with the relaxed classes free the
+   standard error of each class c, whose sign is the class: the chance of calling it
+   wrong is Φ(−1/SE(c)).
+
+The predicted 90 % interval width is 2·z₀.₉₅·SE, reported against the prior's own 90 %
+width (:func:`prior_width`); the per-protocol summary is the median over the subjects
+that stayed up, and the predicted RMS error is √(mean SE²).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+from scipy.stats import norm
+
+from posture_id.bodies.body import Body
+from posture_id.dec.parameters import default_parameters, normalise_arrays
+from posture_id.dec.prior import SIGMA, sample_parameters
+from posture_id.design.information import Information, harmonic_information
+from posture_id.design.noise import DesignError, NoiseSpectra, SwayNoise, noise_spectra
+from posture_id.fitting.options import FitOptions
+from posture_id.fitting.problem import FitProblem
+from posture_id.fitting.symbolic import step_inputs
+from posture_id.fitting.unknowns import q_from_targets
+from posture_id.frf.locked import cycle_spectrum
+from posture_id.progress import Progress, report
+from posture_id.simulation.batch import simulate_batch
+from posture_id.simulation.options import SimulationOptions
+from posture_id.simulation.protocols import Protocol, SingleProtocol
+
+__all__ = ["DesignOptions", "ProtocolPrediction", "predict_protocols", "design", "prior_width",
+           "HORIZONS_S"]
+
+#: Horizons of the compiled model, s: the shortest that holds transient + one cycle is
+#: used (one compiled model per horizon and segment count, cached on disk).
+HORIZONS_S = (80.0, 100.0, 140.0, 200.0, 320.0)
+
+
+@dataclass(frozen=True)
+class DesignOptions:
+    """How a design is computed.
+
+    Attributes:
+        draws: subjects drawn from the prior. seed: their seed.
+        level: the interval's level (0.9).
+        dt: integration step of the Jacobian's model, s (5 ms: about 3× faster than the
+            fit's 2 ms; 10 ms makes the semi-implicit Euler step unstable for many
+            subjects; docs/design.md checks 5 ms against 2.5 ms by step-halving).
+        transient_s: least time simulated before the analysed cycle, s.
+        max_frequency_hz: highest harmonic compared (as the locked fit's).
+        excited_threshold: a harmonic is compared when the tilt's amplitude there exceeds
+            this share of its largest (as the locked fit's).
+        noise_cycles: cycles of noise-driven sway simulated for its spectrum.
+    """
+
+    draws: int = 8
+    seed: int = 0
+    level: float = 0.9
+    dt: float = 0.005
+    transient_s: float = 20.0
+    max_frequency_hz: float = 2.0
+    excited_threshold: float = 1e-3
+    noise_cycles: int = 8
+
+    def __post_init__(self) -> None:
+        if self.draws < 1 or self.noise_cycles < 1:
+            raise DesignError("draws and noise_cycles must be ≥ 1")
+        if not 0 < self.level < 1:
+            raise DesignError(f"level must be in (0, 1), got {self.level}")
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def prior_width(level: float = 0.9, sigma: float = SIGMA) -> float:
+    """The width of the prior's central ``level`` interval of a normalised gain or delay
+    p̃ = |1 + X| − 1, X ~ N(0, σ²) (MODEL §5)."""
+
+    def cdf(y: float) -> float:  # P(|1 + X| ≤ y)
+        return float(norm.cdf((y - 1) / sigma) - norm.cdf((-y - 1) / sigma))
+
+    lo = brentq(lambda y: cdf(y) - (1 - level) / 2, 0.0, 1 + 10 * sigma)
+    hi = brentq(lambda y: cdf(y) - (1 + level) / 2, 0.0, 1 + 10 * sigma)
+    return hi - lo
+
+
+@dataclass(frozen=True)
+class ProtocolPrediction:
+    """What a protocol is predicted to determine.
+
+    Attributes:
+        protocol: the protocol. label: its name.
+        minutes, peak_to_peak_deg, peak_velocity_deg_s: what it asks of the lab.
+        standard_errors: (D, N, 4) normalised SE of K̃p, K̃i, K̃d, Δ̃ per subject (NaN for
+            a subject who fell), ∞ where the harmonics do not see a parameter.
+        class_se: (D, N) SE of the relaxed class c.
+        widths: (N, 4) median over subjects of the predicted 90 % width / the prior's.
+        rms_error: (N, 4) predicted RMS error of the normalised parameters.
+        class_wrong: (N,) mean chance of calling the class wrong.
+        subjects: subjects that stayed up. seconds: time taken.
+    """
+
+    protocol: Protocol
+    label: str
+    minutes: float
+    peak_to_peak_deg: float
+    peak_velocity_deg_s: float
+    standard_errors: np.ndarray = field(repr=False)
+    class_se: np.ndarray = field(repr=False)
+    widths: np.ndarray
+    rms_error: np.ndarray
+    class_wrong: np.ndarray
+    subjects: int
+    seconds: float
+
+    def to_dict(self) -> dict:
+        def clean(a):
+            return np.where(np.isfinite(a), a, None).tolist()
+
+        return {"protocol": self.protocol.to_dict(), "label": self.label,
+                "minutes": self.minutes, "peak_to_peak_deg": self.peak_to_peak_deg,
+                "peak_velocity_deg_s": self.peak_velocity_deg_s,
+                "widths": clean(self.widths), "rms_error": clean(self.rms_error),
+                "class_wrong": clean(self.class_wrong), "subjects": self.subjects,
+                "standard_errors": clean(self.standard_errors), "class_se": clean(self.class_se),
+                "seconds": self.seconds}
+
+
+def _horizon(period_s: float, transient_s: float) -> float:
+    for h in HORIZONS_S:
+        if h >= period_s + transient_s - 1e-9:
+            return h
+    raise DesignError(f"a cycle of {period_s:g} s is longer than the design's longest "
+                      f"horizon ({HORIZONS_S[-1]:g} s with {transient_s:g} s of transient)")
+
+
+class _Recording:
+    """One single protocol's compiled model, tilt input and compared harmonics."""
+
+    def __init__(self, body: Body, protocol: SingleProtocol, options: DesignOptions,
+                 notify) -> None:
+        sim = SimulationOptions(dt=options.dt)
+        rate = sim.sample_rate_hz
+        self.protocol = protocol
+        self.period = int(round(protocol.period_s * rate))
+        horizon = _horizon(protocol.period_s, options.transient_s)
+        self.n_samples = int(round(horizon * rate)) + 1
+        self.problem = FitProblem.get(body, self.n_samples, FitOptions(simulation=sim),
+                                      notify=notify)
+        filled = protocol.with_cycles(math.ceil(horizon / protocol.period_s) + 1).profile()
+        self.filled = filled
+        self.simulation = sim
+        tilt, velocity = filled.on_grid(options.dt, self.problem.n_steps_u)
+        self.u = step_inputs(tilt, velocity, self.problem.n_steps_u)
+        self.start = self.n_samples - 1 - self.period
+        on_samples = filled.angle(np.arange(self.n_samples) / rate)
+        spectrum = np.abs(cycle_spectrum(on_samples, self.start, self.period, 1, 0))
+        frequencies = np.arange(1, self.period // 2 + 1) * rate / self.period
+        self.rows = np.flatnonzero((spectrum > options.excited_threshold * spectrum.max())
+                                   & (frequencies <= options.max_frequency_hz))
+        if not len(self.rows):
+            raise DesignError(f"{protocol.label()}: the tilt excites no frequency up to "
+                              f"{options.max_frequency_hz:g} Hz")
+
+    def stays_up(self, body: Body, params) -> np.ndarray:
+        """(D,) the subjects who stay within the sway limit over the horizon (the fast
+        simulator, the Jacobian's step)."""
+        span = (self.n_samples - 1) / self.simulation.sample_rate_hz
+        return simulate_batch(body, params, self.filled.spanning(span), self.simulation,
+                              workers=1).stable
+
+    def harmonics_jacobian(self, q: np.ndarray, columns: list[int]) -> np.ndarray:
+        """(K, N, len(columns)) complex, degrees: ∂(compared harmonics)/∂q."""
+        n = self.problem.n
+        jac = self.problem.jacobian(q, self.u, columns).reshape(self.n_samples, n, -1)
+        full = cycle_spectrum(np.degrees(jac), self.start, self.period, 1, 0)
+        return full[self.rows]
+
+
+def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
+                      options: DesignOptions | None = None,
+                      progress: Progress | None = None) -> list[ProtocolPrediction]:
+    """Predictions for every protocol (module docstring)."""
+    options = options or DesignOptions()
+    if not protocols:
+        raise DesignError("no protocol to predict")
+    n = body.n_segments
+    gains_delays = list(range(4 * n))
+    classes = list(range(4 * n, 5 * n))
+    params = sample_parameters(body, options.draws, np.random.default_rng(
+        np.random.SeedSequence([options.seed, 0x44455349])))
+    targets = normalise_arrays(params, default_parameters(body))  # (D, N, 5)
+    z = norm.ppf(0.5 + options.level / 2)
+    width0 = prior_width(options.level)
+    recordings: dict = {}
+    out = []
+    total = sum(len(p.recordings) for p in protocols)
+    done = 0
+
+    def say(message: str) -> None:
+        report(progress, done, total, "message", message)
+
+    for protocol in protocols:
+        started = time.perf_counter()
+        info: list[Information | None] = [None] * options.draws
+        stable = np.ones(options.draws, bool)
+        for single in protocol.recordings:
+            key = single
+            if key not in recordings:
+                recordings[key] = _Recording(body, single, options, say)
+            rec = recordings[key]
+            spectra: NoiseSpectra = noise_spectra(
+                body, params, single, noise, options.seed, options.noise_cycles,
+                options=SimulationOptions())
+            stable &= spectra.stable & rec.stays_up(body, params)
+            for d in range(options.draws):
+                if not stable[d]:
+                    continue
+                q = q_from_targets(targets[d])
+                jac = rec.harmonics_jacobian(q, gains_delays + classes)
+                if not np.all(np.isfinite(jac)):  # the model's rollout diverged
+                    stable[d] = False
+                    continue
+                cov = spectra.covariance[d][rec.rows] / single.cycles
+                one = single.repetitions * harmonic_information(jac, cov)
+                info[d] = one if info[d] is None else info[d] + one
+            done += 1
+            report(progress, done, total, "recording", single.label())
+        se = np.full((options.draws, n, 4), np.nan)
+        class_se = np.full((options.draws, n), np.nan)
+        for d in range(options.draws):
+            if not stable[d] or info[d] is None:
+                continue
+            known = info[d].marginal(np.arange(4 * n)).fit_covariance()
+            se[d] = np.sqrt(np.diag(known)).reshape(4, n).T
+            free = info[d].fit_covariance()
+            class_se[d] = np.sqrt(np.diag(free))[4 * n:5 * n]
+        used = int(stable.sum())
+        if used == 0:
+            raise DesignError(f"{protocol.label()}: every drawn subject fell; draw more")
+        with np.errstate(invalid="ignore"):
+            widths = np.nanmedian(2 * z * se, axis=0) / width0
+            rms = np.sqrt(np.nanmean(se**2, axis=0))
+            wrong = np.nanmean(norm.cdf(-1.0 / class_se), axis=0)
+        out.append(ProtocolPrediction(
+            protocol, protocol.label(), protocol.recording_minutes, protocol.peak_to_peak_deg,
+            protocol.peak_velocity_deg_s, se, class_se, widths, rms, wrong, used,
+            time.perf_counter() - started))
+    return out
+
+
+def design(body: Body, protocols: list[Protocol], noise: SwayNoise,
+           goal=None, options: DesignOptions | None = None,
+           progress: Progress | None = None):
+    """Predict every protocol and rank them for ``goal``
+    (:class:`~posture_id.design.report.DesignResult`)."""
+    from posture_id.design.goal import DesignGoal
+    from posture_id.design.report import DesignResult
+
+    options = options or DesignOptions()
+    started = time.perf_counter()
+    predictions = predict_protocols(body, protocols, noise, options, progress)
+    return DesignResult(body.name, tuple(body.joint_names), noise, options,
+                        goal or DesignGoal(), tuple(predictions),
+                        time.perf_counter() - started)

@@ -1,0 +1,140 @@
+"""A design's result: the predictions, the ranking for a goal, a report and a plot."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.design.goal import PARAMETERS, DesignGoal
+from posture_id.design.noise import SwayNoise
+from posture_id.design.predict import DesignOptions, ProtocolPrediction
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.simulation.protocols import write_protocol
+
+__all__ = ["DesignResult", "Ranked"]
+
+_NAMES = {"kp": "Kp", "ki": "Ki", "kd": "Kd", "delay_s": "Δ"}
+
+
+@dataclass(frozen=True)
+class Ranked:
+    """One protocol's place: its score for the goal (∞: a chosen parameter unbounded) and
+    the limits it breaks (then it is not ranked)."""
+
+    prediction: ProtocolPrediction
+    score: float
+    breaks: tuple[str, ...]
+
+    @property
+    def allowed(self) -> bool:
+        return not self.breaks
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """Predictions for a body, a noise model and candidate protocols, ranked for a goal.
+
+    Attributes:
+        body: the body's name. joints: its joints. noise, options, goal: what was asked.
+        predictions: one per protocol, in the order given. seconds: time taken.
+    """
+
+    body: str
+    joints: tuple[str, ...]
+    noise: SwayNoise
+    options: DesignOptions
+    goal: DesignGoal
+    predictions: tuple[ProtocolPrediction, ...]
+    seconds: float
+
+    def ranking(self, goal: DesignGoal | None = None) -> list[Ranked]:
+        """Every protocol, the allowed ones best first, then those breaking a limit."""
+        goal = goal or self.goal
+        ranked = [Ranked(p, goal.score(p.widths), tuple(goal.breaks(
+            p.minutes, p.peak_to_peak_deg, p.peak_velocity_deg_s))) for p in self.predictions]
+        return sorted(ranked, key=lambda r: (not r.allowed, r.score))
+
+    @property
+    def best(self) -> ProtocolPrediction | None:
+        first = self.ranking()[0]
+        return first.prediction if first.allowed and math.isfinite(first.score) else None
+
+    def narrowing(self, parameter: str, reference: int = 0) -> np.ndarray:
+        """(N,) the best allowed protocol's predicted width of ``parameter`` per module
+        against the protocol at index ``reference`` (< 1: narrower)."""
+        best = self.best
+        if best is None:
+            return np.full(len(self.joints), np.nan)
+        k = PARAMETERS.index(parameter)
+        return best.widths[:, k] / self.predictions[reference].widths[:, k]
+
+    def to_dict(self) -> dict:
+        return {"body": self.body, "joints": list(self.joints), "noise": self.noise.to_dict(),
+                "options": self.options.to_dict(), "goal": self.goal.to_dict(),
+                "ranking": [{"label": r.prediction.label, "score": _finite(r.score),
+                             "breaks": list(r.breaks)} for r in self.ranking()],
+                "predictions": [p.to_dict() for p in self.predictions],
+                "seconds": self.seconds}
+
+    def markdown(self) -> str:
+        head = "| rank | protocol | min | ° p-p | °/s | score | " + " | ".join(
+            f"{_NAMES[p]} {j}" for j in self.joints for p in PARAMETERS) + " | class wrong % |"
+        lines = [f"# Experiment design for {self.body}", "",
+                 f"Noise: {self.noise.label()}. Goal: {self.goal.label()}. "
+                 f"{self.options.draws} subjects drawn from the prior (seed "
+                 f"{self.options.seed}); {self.seconds:.0f} s.", "",
+                 "Each cell: the predicted 90 % interval width of the locked least-squares "
+                 "fit against the prior's (median over subjects; below 0.25 well "
+                 "determined, above 0.75 not). Score: geometric mean over the goal's "
+                 "parameters (smaller is better). Class wrong: mean predicted chance per "
+                 "module. Made by `posture-id design` (docs/design.md).", "",
+                 head, "|" + "---|" * (7 + 4 * len(self.joints))]
+        for i, r in enumerate(self.ranking(), 1):
+            p = r.prediction
+            rank = str(i) if r.allowed else "–"
+            cells = " | ".join(_cell(v) for v in p.widths.ravel())
+            wrong = " / ".join(f"{100 * v:.1f}" for v in p.class_wrong)
+            note = f" (breaks {', '.join(r.breaks)})" if r.breaks else ""
+            lines.append(f"| {rank} | {p.label}{note} | {p.minutes:.2f} | "
+                         f"{p.peak_to_peak_deg:.2g} | {p.peak_velocity_deg_s:.2g} | "
+                         f"{_cell(r.score)} | {cells} | {wrong} |")
+        best = self.best
+        if best is not None:
+            lines += ["", f"Recommended: **{best.label}** ({best.subjects} of "
+                          f"{self.options.draws} subjects stayed up)."]
+        return "\n".join(lines)
+
+    def plot(self, path: str | Path | None = None, ax=None):
+        from posture_id.plotting import plot_identifiability
+
+        labels = [f"{_NAMES[p]} {j}" for j in self.joints for p in PARAMETERS]
+        ratios = {p.label: np.minimum(p.widths.ravel(), 3.0) for p in self.predictions}
+        return plot_identifiability(ratios, labels, path, ax)
+
+    def write(self, out: str | Path) -> list[Path]:
+        """design.md, design.json, design.png and protocols/NN.json (each candidate's
+        protocol, for ``posture-id stimulus`` and ``--protocol``) into ``out``."""
+        out = Path(out)
+        (out / "protocols").mkdir(parents=True, exist_ok=True)
+        files = [atomic_write_text(out / "design.md", self.markdown() + "\n"),
+                 atomic_write_text(out / "design.json", json_text(self.to_dict()))]
+        self.plot(out / "design.png")
+        files.append(out / "design.png")
+        for i, p in enumerate(self.predictions, 1):
+            files.append(write_protocol(p.protocol, out / "protocols" / f"{i:02d}.json"))
+        if self.best is not None:
+            files.append(write_protocol(self.best.protocol, out / "recommended.json"))
+        return files
+
+
+def _finite(value: float):
+    return value if math.isfinite(value) else None
+
+
+def _cell(value: float) -> str:
+    if not math.isfinite(value):
+        return "∞"
+    return f"{value:.2f}" if value < 10 else f"{value:.0f}"

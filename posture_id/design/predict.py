@@ -33,7 +33,7 @@ from scipy.optimize import brentq
 from scipy.stats import norm
 
 from posture_id.bodies.body import Body
-from posture_id.dec.parameters import default_parameters, normalise_arrays
+from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
 from posture_id.dec.prior import SIGMA, sample_parameters
 from posture_id.design.information import Information, harmonic_information
 from posture_id.design.noise import DesignError, NoiseSpectra, SwayNoise, noise_spectra
@@ -198,16 +198,21 @@ class _Recording:
 
 def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
                       options: DesignOptions | None = None,
-                      progress: Progress | None = None) -> list[ProtocolPrediction]:
-    """Predictions for every protocol (module docstring)."""
+                      progress: Progress | None = None,
+                      params: ParameterArrays | None = None) -> list[ProtocolPrediction]:
+    """Predictions for every protocol (module docstring); for the subjects ``params``
+    (D, N) when given (a check against fits of those subjects), else ``options.draws``
+    drawn from the prior."""
     options = options or DesignOptions()
     if not protocols:
         raise DesignError("no protocol to predict")
     n = body.n_segments
     gains_delays = list(range(4 * n))
     classes = list(range(4 * n, 5 * n))
-    params = sample_parameters(body, options.draws, np.random.default_rng(
-        np.random.SeedSequence([options.seed, 0x44455349])))
+    if params is None:
+        params = sample_parameters(body, options.draws, np.random.default_rng(
+            np.random.SeedSequence([options.seed, 0x44455349])))
+    draws = params.kp.shape[0]
     targets = normalise_arrays(params, default_parameters(body))  # (D, N, 5)
     z = norm.ppf(0.5 + options.level / 2)
     width0 = prior_width(options.level)
@@ -221,8 +226,8 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
 
     for protocol in protocols:
         started = time.perf_counter()
-        info: list[Information | None] = [None] * options.draws
-        stable = np.ones(options.draws, bool)
+        info: list[Information | None] = [None] * draws
+        stable = np.ones(draws, bool)
         for single in protocol.recordings:
             key = single
             if key not in recordings:
@@ -230,9 +235,9 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
             rec = recordings[key]
             spectra: NoiseSpectra = noise_spectra(
                 body, params, single, noise, options.seed, options.noise_cycles,
-                options=SimulationOptions())
+                options=SimulationOptions(dt=options.dt))
             stable &= spectra.stable & rec.stays_up(body, params)
-            for d in range(options.draws):
+            for d in range(draws):
                 if not stable[d]:
                     continue
                 q = q_from_targets(targets[d])
@@ -245,9 +250,9 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
                 info[d] = one if info[d] is None else info[d] + one
             done += 1
             report(progress, done, total, "recording", single.label())
-        se = np.full((options.draws, n, 4), np.nan)
-        class_se = np.full((options.draws, n), np.nan)
-        for d in range(options.draws):
+        se = np.full((draws, n, 4), np.nan)
+        class_se = np.full((draws, n), np.nan)
+        for d in range(draws):
             if not stable[d] or info[d] is None:
                 continue
             known = info[d].marginal(np.arange(4 * n)).fit_covariance()

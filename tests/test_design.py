@@ -1,0 +1,136 @@
+"""Experiment design: the information of harmonics against closed forms and Monte Carlo,
+unbounded widths for what a protocol does not see, and the prediction on a real body."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from posture_id.design.information import covariance, harmonic_information
+
+
+def _first_order(omega: np.ndarray, a: float, b: float, c: float, omega_c: float):
+    """Harmonics Y(ω) = b/(a + iω)·U + c·[ω > ω_c]·U of a unit input, and their
+    derivatives with respect to (a, b, c): a linear system whose parameter c acts only
+    above ω_c."""
+    s = a + 1j * omega
+    high = (omega > omega_c).astype(float)
+    y = b / s + c * high
+    jac = np.stack([-b / s**2, 1 / s, high], axis=-1)  # (K, 3)
+    return y, jac
+
+
+def test_a_gain_alone_has_the_closed_form_variance():
+    # y_k = b·u_k + e_k, e_k circular with E|e|² = σ²: var(b̂) = σ² / (2 Σ|u_k|²)
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(20) + 1j * rng.standard_normal(20)
+    sigma2 = 0.3
+    info = harmonic_information(u[:, None, None], np.full((20, 1, 1), sigma2))
+    expected = sigma2 / (2 * np.sum(np.abs(u) ** 2))
+    assert info.fit_covariance()[0, 0] == pytest.approx(expected, rel=1e-12)
+    assert info.bound()[0, 0] == pytest.approx(expected, rel=1e-12)
+
+
+def test_the_sandwich_is_the_weighted_fit_s_covariance_under_correlated_noise():
+    """Monte Carlo: weight each channel by its own variance (as the locked fit does) when
+    the noise is correlated between channels; the estimates' covariance is A⁻¹BA⁻¹,
+    larger than the Cramér–Rao bound F⁻¹."""
+    rng = np.random.default_rng(1)
+    k, m, p = 30, 2, 3
+    jac = rng.standard_normal((k, m, p)) + 1j * rng.standard_normal((k, m, p))
+    root = np.array([[1.0, 0.0], [0.8, 0.6]])  # correlation 0.8 between the channels
+    scales = np.exp(rng.uniform(-1, 1, (k, 1)))
+    cov = np.einsum("ij,kj->ki", root, root)[None] * np.ones((k, 1, 1))
+    cov = cov * scales[:, :, None] ** 2
+    info = harmonic_information(jac, cov.astype(complex))
+    # the weighted least-squares estimate of many noise draws
+    jr = np.concatenate([jac.real, jac.imag], axis=1).reshape(-1, p)
+    weights = np.concatenate([np.einsum("kii->ki", cov)] * 2, axis=1).reshape(-1) / 2
+    draws = 20000
+    e = (rng.standard_normal((draws, k, m)) + 1j * rng.standard_normal((draws, k, m))) / np.sqrt(2)
+    e = np.einsum("ij,dkj->dki", root, e) * scales[None]
+    z = np.concatenate([e.real, e.imag], axis=2).reshape(draws, -1)
+    w = 1 / weights
+    est = np.linalg.solve(jr.T @ (w[:, None] * jr), (jr.T * w) @ z.T).T
+    empirical = np.cov(est.T)
+    np.testing.assert_allclose(np.diag(empirical), np.diag(info.fit_covariance()), rtol=0.05)
+    assert np.all(np.diag(info.fit_covariance()) > np.diag(info.bound()) * 1.05)
+
+
+def test_a_parameter_the_protocol_does_not_excite_is_unbounded():
+    omega_c = 2 * np.pi * 1.0
+    low = 2 * np.pi * np.arange(1, 20) / 20.0  # a protocol up to 0.95 Hz
+    wide = 2 * np.pi * np.arange(1, 60) / 20.0  # one up to 2.95 Hz
+    for omega, blind in ((low, True), (wide, False)):
+        _, jac = _first_order(omega, 2.0, 3.0, 0.5, omega_c)
+        noise = np.full((len(omega), 1, 1), 0.01 + 0j)
+        cov = harmonic_information(jac[:, None, :], noise).fit_covariance()
+        sd = np.sqrt(np.diag(cov))
+        assert np.all(np.isfinite(sd[:2]))
+        assert np.isinf(sd[2]) == blind
+    # two parameters acting alike are unbounded together, the others not
+    jac = np.random.default_rng(2).standard_normal((10, 1, 3)) + 0j
+    jac[:, :, 2] = 2 * jac[:, :, 1]
+    sd = np.sqrt(np.diag(covariance(harmonic_information(jac, np.ones((10, 1, 1)) + 0j)
+                                    .weighted)))
+    assert np.isfinite(sd[0]) and np.isinf(sd[1]) and np.isinf(sd[2])
+
+
+def test_the_prior_width_is_the_prior_s_own():
+    from posture_id.dec.prior import relative_factors
+    from posture_id.design.predict import prior_width
+
+    x = relative_factors(np.random.default_rng(3), 400000) - 1
+    lo, hi = np.percentile(x, [5, 95])
+    assert prior_width(0.9) == pytest.approx(hi - lo, rel=0.01)
+
+
+@pytest.mark.slow
+def test_predictions_on_a_real_body_scale_with_cycles_and_repetitions(winter1):
+    """On the exact model of a 1-segment body with sensor noise only, the predicted SE
+    falls as 1/√(cycles × repetitions): the cycle average's noise does."""
+    from posture_id.design.noise import SwayNoise
+    from posture_id.design.predict import DesignOptions, predict_protocols
+    from posture_id.simulation.protocols import PrtsProtocol
+
+    options = DesignOptions(draws=3, seed=4)
+    base = PrtsProtocol(80, 0.25, 2.0, 2)
+    more = [base, PrtsProtocol(80, 0.25, 2.0, 8), PrtsProtocol(80, 0.25, 2.0, 2, 4)]
+    preds = predict_protocols(winter1, more, SwayNoise(0.05), options)
+    se = [p.standard_errors for p in preds]
+    assert np.all(np.isfinite(se[0]))
+    np.testing.assert_allclose(se[1], se[0] / 2, rtol=1e-9)
+    np.testing.assert_allclose(se[2], se[0] / 2, rtol=1e-9)
+    assert np.all(preds[0].widths < 1)
+    # a 10× larger sensor noise: 10× the SE
+    noisier = predict_protocols(winter1, [base], SwayNoise(0.5), options)[0]
+    np.testing.assert_allclose(noisier.standard_errors, se[0] * 10, rtol=1e-9)
+
+
+@pytest.mark.slow
+def test_design_command_ranks_and_writes_the_report(winter1, tmp_path, capsys):
+    from posture_id.cli import main
+    from posture_id.simulation.protocols import PrtsProtocol, read_protocol, write_protocol
+
+    files = [write_protocol(PrtsProtocol(80, 0.25, a, 3), tmp_path / f"p{a:g}.json")
+             for a in (0.5, 3.0)]
+    out = tmp_path / "design"
+    assert main(["design", "--body", str(winter1.urdf_path), "--protocol", *map(str, files),
+                 "--draws", "3", "--goal", "kp", "kd", "--max-minutes", "5", "--out",
+                 str(out), "--quiet"]) == 0
+    report = json.loads((out / "design.json").read_text())
+    assert [r["label"] for r in report["ranking"]][0].startswith("PRTS 80×0.25 s, 3°")
+    assert read_protocol(out / "recommended.json") == PrtsProtocol(80, 0.25, 3.0, 3)
+    assert (out / "design.png").stat().st_size > 0 and "Recommended" in (
+        out / "design.md").read_text()
+    # a limit the larger amplitude breaks leaves the smaller one
+    assert main(["design", "--body", str(winter1.urdf_path), "--protocol", *map(str, files),
+                 "--draws", "3", "--max-peak-to-peak-deg", "1", "--out", str(out),
+                 "--quiet"]) == 0
+    assert read_protocol(out / "recommended.json") == PrtsProtocol(80, 0.25, 0.5, 3)
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"kind": "prts", "cycles": 0}')
+    assert main(["design", "--protocol", str(bad), "--out", str(out)]) == 2
+    assert "bad.json" in capsys.readouterr().err

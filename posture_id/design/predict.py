@@ -19,14 +19,15 @@ protocol, so protocols are compared on equal terms):
 
 The predicted 90 % interval width is 2·z₀.₉₅·SE, reported against the prior's own 90 %
 width (:func:`prior_width`); the per-protocol summary is the median over the subjects
-that stayed up, and the predicted RMS error is √(mean SE²).
+that stayed up under every protocol (the protocols are compared on the same subjects),
+and the predicted RMS error is √(mean SE²).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import brentq
@@ -116,7 +117,8 @@ class ProtocolPrediction:
         widths: (N, 4) median over subjects of the predicted 90 % width / the prior's.
         rms_error: (N, 4) predicted RMS error of the normalised parameters.
         class_wrong: (N,) mean chance of calling the class wrong.
-        subjects: subjects that stayed up. seconds: time taken.
+        subjects: the subjects summarised: those who stayed up under every protocol
+            predicted together (else under this one). seconds: time taken.
     """
 
     protocol: Protocol
@@ -259,18 +261,32 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
             se[d] = np.sqrt(np.diag(known)).reshape(4, n).T
             free = info[d].fit_covariance()
             class_se[d] = np.sqrt(np.diag(free))[4 * n:5 * n]
-        used = int(stable.sum())
-        if used == 0:
+        if not stable.any():
             raise DesignError(f"{protocol.label()}: every drawn subject fell; draw more")
-        with np.errstate(invalid="ignore"):
-            widths = np.nanmedian(2 * z * se, axis=0) / width0
-            rms = np.sqrt(np.nanmean(se**2, axis=0))
-            wrong = np.nanmean(norm.cdf(-1.0 / class_se), axis=0)
         out.append(ProtocolPrediction(
             protocol, protocol.label(), protocol.recording_minutes, protocol.peak_to_peak_deg,
-            protocol.peak_velocity_deg_s, se, class_se, widths, rms, wrong, used,
+            protocol.peak_velocity_deg_s, se, class_se, *_summary(se, class_se, stable, z,
+                                                                  width0),
             time.perf_counter() - started))
+    # compare the protocols on the subjects who stay up under every one of them
+    common = np.all([~np.isnan(p.standard_errors).any(axis=(1, 2)) for p in out], axis=0)
+    if common.any():
+        out = [replace(p, **dict(zip(("widths", "rms_error", "class_wrong", "subjects"),
+                                     _summary(p.standard_errors, p.class_se, common, z,
+                                              width0), strict=True)))
+               for p in out]
     return out
+
+
+def _summary(se: np.ndarray, class_se: np.ndarray, subjects: np.ndarray, z: float,
+             width0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """(widths, rms_error, class_wrong, count) of ``subjects`` (mask)."""
+    se, class_se = se[subjects], class_se[subjects]
+    with np.errstate(invalid="ignore"):
+        widths = np.median(2 * z * se, axis=0) / width0
+        rms = np.sqrt(np.mean(se**2, axis=0))
+        wrong = np.mean(norm.cdf(-1.0 / class_se), axis=0)
+    return widths, rms, wrong, int(subjects.sum())
 
 
 def design(body: Body, protocols: list[Protocol], noise: SwayNoise,

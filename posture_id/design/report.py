@@ -104,7 +104,8 @@ class DesignResult:
         best = self.best
         if best is not None:
             lines += ["", f"Recommended: **{best.label}** ({best.subjects} of "
-                          f"{self.options.draws} subjects stayed up)."]
+                          f"{self.options.draws} drawn subjects stayed up under every "
+                          "protocol; every protocol is summarised on them)."]
         return "\n".join(lines)
 
     def plot(self, path: str | Path | None = None, ax=None):

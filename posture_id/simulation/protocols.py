@@ -342,8 +342,11 @@ class TwoAmplitudeProtocol:
                             "recordings (--part 1 or 2 on the command line)")
 
     def label(self) -> str:
-        return (f"{self.base.label()} at " + " and ".join(f"{a:g}" for a in self.amplitudes_deg)
-                + "° p-p")
+        both = " + ".join(f"{a:g}" for a in self.amplitudes_deg) + "° p-p"
+        base = self.base.label()
+        if isinstance(self.base, SumOfSinesProtocol):
+            return f"{base} at {both}, two recordings"
+        return base.replace(f"{self.base.amplitude_deg:g}° p-p", both, 1) + ", two recordings"
 
 
 Protocol = SingleProtocol | TwoAmplitudeProtocol

@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: universal-model demo test test-fast lint bench bodies models model calibration examples real-like \
+.PHONY: design-results universal-model demo test test-fast lint bench bodies models model calibration examples real-like \
         real-like-models real-like-model clean
 
 $(STAMP): pyproject.toml
@@ -135,6 +135,16 @@ real-like: real-like-models
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/simulation.py
+
+# Experiment design (docs/design.md): the Ki question under sensor noise and people-like
+# sway on the TIP, then the predictions checked against least-squares fits (resumable).
+design-results: $(STAMP)
+	$(BIN)/posture-id design --goal ki --max-minutes 3 --max-peak-to-peak-deg 4 --draws 16 \
+	  --out docs/results/design/ki_sensor --quiet > /dev/null
+	$(BIN)/posture-id design --goal ki --max-minutes 3 --max-peak-to-peak-deg 4 --draws 16 \
+	  --locked-share 0.3 --out docs/results/design/ki_people --quiet > /dev/null
+	$(BIN)/python benchmarks/design_check.py --subjects 50 --workers 2 \
+	  --body urdf/winter_1.75m_70kg_2seg.urdf --out docs/results/design
 
 clean:
 	rm -rf $(VENV) demo

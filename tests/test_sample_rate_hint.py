@@ -65,7 +65,8 @@ def test_fit_and_identify_say_it(tip, tmp_path, capsys):
     assert len(err.strip().splitlines()) == 1
     assert not (tmp_path / "r.json").exists()
     # the universal model reads the PRTS it finds (0.5 s states) and says what is odd
-    assert main(["identify", str(csv), "--out", str(tmp_path / "u.json")]) == 0
+    assert main(["identify", str(csv), "--method", "cnn", "--out",
+                 str(tmp_path / "u.json")]) == 0
     out = capsys.readouterr().out
     assert "sampled at 50 Hz" in out and "period outside what the universal model" in out
     assert json.loads((tmp_path / "u.json").read_text())["trust"]["doubtful"]

@@ -62,7 +62,8 @@ def test_another_bodys_network_is_named_and_its_intervals_labelled_for_what_they
 
     recording = simulate(winter, default_parameters(winter)).to_recording()
     specialist = bundled_model_dir(winter)[0]
-    result = identify(recording.with_sensor_noise(0.01, 5), winter, model=specialist)
+    result = identify(recording.with_sensor_noise(0.01, 5), winter, Method.CNN,
+                      model=specialist)
     assert any("trained on body 'tip_default'" in r for r in result.verdict.outside)
     assert result.verdict.doubtful and result.verdict.suggestion == "--method hybrid"
     assert "not on this one" in result.intervals.method

@@ -29,7 +29,7 @@ __all__ = ["add_parser"]
 
 METHODS = ("cnn", "fit", "hybrid", "auto")
 #: identify.core.DEFAULT_METHOD, named here without importing torch (a test keeps them equal)
-DEFAULT_METHOD_NAME = "cnn"
+DEFAULT_METHOD_NAME = "auto"
 
 
 def add_parser(sub) -> None:

@@ -22,4 +22,4 @@ class Method(enum.Enum):
 #: :class:`~posture_id.identify.Identifier`, the command line and cohorts: the CNN alone
 #: (milliseconds, calibrated intervals); the hybrid, least squares from the CNN's answer, on
 #: request when seconds per recording are worth its precision (docs/identify.md).
-DEFAULT_METHOD = Method.CNN
+DEFAULT_METHOD = Method.AUTO

@@ -134,3 +134,16 @@ def test_design_command_ranks_and_writes_the_report(winter1, tmp_path, capsys):
     bad.write_text('{"kind": "prts", "cycles": 0}')
     assert main(["design", "--protocol", str(bad), "--out", str(out)]) == 2
     assert "bad.json" in capsys.readouterr().err
+
+
+def test_the_raw_fit_weighs_harmonics_alike_and_loses_to_the_locked_one_on_coloured_noise():
+    rng = np.random.default_rng(5)
+    jac = rng.standard_normal((40, 1, 2)) + 1j * rng.standard_normal((40, 1, 2))
+    white = np.full((40, 1, 1), 0.2 + 0j)
+    raw = harmonic_information(jac, white, weighted=False).fit_covariance()
+    np.testing.assert_allclose(raw, harmonic_information(jac, white).fit_covariance(),
+                               rtol=1e-12)
+    coloured = (np.geomspace(0.01, 10, 40) + 0j)[:, None, None]
+    raw = harmonic_information(jac, coloured, weighted=False).fit_covariance()
+    locked = harmonic_information(jac, coloured).fit_covariance()
+    assert np.all(np.diag(raw) > 1.5 * np.diag(locked))

@@ -42,6 +42,8 @@ def add_parser(sub) -> None:
                    help="largest peak-to-peak tilt, degrees")
     p.add_argument("--max-velocity-deg-s", type=positive_float,
                    help="largest tilt velocity, degrees per second")
+    p.add_argument("--residual", choices=("locked", "raw"), default="locked",
+                   help="the fit planned for: locked (default; for people's sway) or raw")
     p.add_argument("--draws", type=positive_int, default=8,
                    help="subjects drawn from the prior (default %(default)d)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
@@ -67,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     noise = SwayNoise(args.sensor_noise_deg, args.locked_share, args.motor_sd_deg)
     goal = DesignGoal(tuple(args.goal or PARAMETERS), args.max_minutes,
                       args.max_peak_to_peak_deg, args.max_velocity_deg_s)
-    options = DesignOptions(draws=args.draws, seed=args.seed)
+    options = DesignOptions(draws=args.draws, seed=args.seed, residual=args.residual)
     with TerminalProgress("recording", prefix="posture-id design",
                           quiet=args.quiet) as progress:
         result = design(body, protocols, noise, goal, options, progress)

@@ -83,9 +83,12 @@ class Information:
                            self.fisher[np.ix_(k, k)])
 
 
-def harmonic_information(jacobian: np.ndarray, noise: np.ndarray) -> Information:
+def harmonic_information(jacobian: np.ndarray, noise: np.ndarray,
+                         weighted: bool = True) -> Information:
     """:class:`Information` of harmonics with complex Jacobian ``jacobian`` (K, M, P) and
-    circular noise covariances ``noise`` (K, M, M) (module docstring)."""
+    circular noise covariances ``noise`` (K, M, M) (module docstring). ``weighted``
+    False: the fit weighs every harmonic and channel alike (W̄ = I, the raw fit's
+    least squares on every sample, by Parseval, in steady state)."""
     jacobian = np.asarray(jacobian, dtype=complex)
     noise = np.asarray(noise, dtype=complex)
     if jacobian.ndim != 3 or noise.shape != (jacobian.shape[0],) + (jacobian.shape[1],) * 2:
@@ -95,7 +98,7 @@ def harmonic_information(jacobian: np.ndarray, noise: np.ndarray) -> Information
     variance = np.einsum("kii->ki", cr)  # (K, 2M): ½ Σ_mm for Re and for Im
     if np.any(variance <= 0):
         raise ValueError("every harmonic's noise variance must be > 0")
-    wj = jr / variance[:, :, None]
+    wj = jr / variance[:, :, None] if weighted else jr
     weighted = np.einsum("kip,kiq->pq", jr, wj)
     spread = np.einsum("kip,kij,kjq->pq", wj, cr, wj)
     fisher = np.einsum("kip,kiq->pq", jr, np.linalg.solve(cr, jr))

@@ -71,6 +71,11 @@ class DesignOptions:
         excited_threshold: a harmonic is compared when the tilt's amplitude there exceeds
             this share of its largest (as the locked fit's).
         noise_cycles: cycles of noise-driven sway simulated for its spectrum.
+        residual: 'locked' (default): the locked fit, each harmonic and channel weighted
+            by its own noise; 'raw': least squares on every sample, which weighs every
+            frequency alike (by Parseval; in steady state the tilt's response lives at
+            its harmonics, so the same harmonics, unweighted, with the noise there). The
+            transient's own information is left out of both.
     """
 
     draws: int = 8
@@ -81,12 +86,15 @@ class DesignOptions:
     max_frequency_hz: float = 2.0
     excited_threshold: float = 1e-3
     noise_cycles: int = 8
+    residual: str = "locked"
 
     def __post_init__(self) -> None:
         if self.draws < 1 or self.noise_cycles < 1:
             raise DesignError("draws and noise_cycles must be ≥ 1")
         if not 0 < self.level < 1:
             raise DesignError(f"level must be in (0, 1), got {self.level}")
+        if self.residual not in ("locked", "raw"):
+            raise DesignError(f"residual must be 'locked' or 'raw', got {self.residual!r}")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -248,7 +256,8 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
                     stable[d] = False
                     continue
                 cov = spectra.covariance[d][rec.rows] / single.cycles
-                one = single.repetitions * harmonic_information(jac, cov)
+                one = single.repetitions * harmonic_information(
+                    jac, cov, weighted=options.residual == "locked")
                 info[d] = one if info[d] is None else info[d] + one
             done += 1
             report(progress, done, total, "recording", single.label())

@@ -86,7 +86,8 @@ class DesignResult:
                  f"Noise: {self.noise.label()}. Goal: {self.goal.label()}. "
                  f"{self.options.draws} subjects drawn from the prior (seed "
                  f"{self.options.seed}); {self.seconds:.0f} s.", "",
-                 "Each cell: the predicted 90 % interval width of the locked least-squares "
+                 f"Each cell: the predicted 90 % interval width of the {self.options.residual} "
+                 "least-squares "
                  "fit against the prior's (median over subjects; below 0.25 well "
                  "determined, above 0.75 not). Score: geometric mean over the goal's "
                  "parameters (smaller is better). Class wrong: mean predicted chance per "

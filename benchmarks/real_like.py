@@ -114,7 +114,10 @@ def _models(stimulus_key: str, folders: dict, urdf: str):
             threads=1, locked=LockedOptions(), prior_sd=0.5))
         nets["hybrid"] = Identifier(body, Method.HYBRID, start, raw)
         nets["locked hybrid"] = Identifier(body, Method.HYBRID, start, locked)
-        nets["universal"] = Identifier(body, Method.CNN)  # the default: the universal model
+        # the default's network: the bundled universal model, or the one --universal names
+        universal = folders.get("universal")
+        nets["universal"] = Identifier(body, Method.CNN,
+                                       None if universal in (None, "bundled") else universal)
         _LOADED[urdf, stimulus_key] = (body, nets)
     return _LOADED[urdf, stimulus_key]
 
@@ -268,6 +271,9 @@ def main() -> None:
     parser.add_argument("--methods", nargs="*", choices=METHODS, default=list(METHODS),
                         help="methods to run (default: all; none, with --reuse: rewrite the "
                              "report from the earlier rows)")
+    parser.add_argument("--universal", type=Path,
+                        help="a universal model directory for the universal rows (default: "
+                             "the bundled one)")
     parser.add_argument("--reuse", type=Path,
                         help="an earlier real_like.json of the same subjects and seed: the "
                              "rows of the methods not run now are taken from it (e.g. the "
@@ -287,6 +293,7 @@ def main() -> None:
     for stimulus_key in args.stimuli:
         folders = {kind: str(args.models / f"real_{stimulus_key}_{kind}")
                    for kind in ("cnn", "frf")}
+        folders["universal"] = str(args.universal) if args.universal else "bundled"
         for method, kind in (("CNN", "cnn"), ("FRF net", "frf")):
             if method in args.methods and not (Path(folders[kind]) / "model.json").exists():
                 raise SystemExit(f"{folders[kind]}: no model for the {method} rows; make it "

@@ -90,7 +90,9 @@ def test_the_prior_width_is_the_prior_s_own():
 @pytest.mark.slow
 def test_predictions_on_a_real_body_scale_with_cycles_and_repetitions(winter1):
     """On the exact model of a 1-segment body with sensor noise only, the predicted SE
-    falls as 1/√(cycles × repetitions): the cycle average's noise does."""
+    falls as 1/√repetitions exactly, and with more cycles about as 1/√cycles (the cycle
+    average's noise does; the transient from rest, a larger share of a short recording,
+    informs too)."""
     from posture_id.design.noise import SwayNoise
     from posture_id.design.predict import DesignOptions, predict_protocols
     from posture_id.simulation.protocols import PrtsProtocol
@@ -101,7 +103,7 @@ def test_predictions_on_a_real_body_scale_with_cycles_and_repetitions(winter1):
     preds = predict_protocols(winter1, more, SwayNoise(0.05), options)
     se = [p.standard_errors for p in preds]
     assert np.all(np.isfinite(se[0]))
-    np.testing.assert_allclose(se[1], se[0] / 2, rtol=1e-9)
+    assert np.all(se[1] < se[0]) and 0.4 < np.median(se[1] / se[0]) < 0.75
     np.testing.assert_allclose(se[2], se[0] / 2, rtol=1e-9)
     assert np.all(preds[0].widths < 1)
     # a 10× larger sensor noise: 10× the SE

@@ -6,9 +6,10 @@ protocol, so protocols are compared on equal terms):
 
 1. the exact Jacobian of the CasADi model (:class:`~posture_id.fitting.problem.
    FitProblem`, the fit's own model) with respect to the normalised gains, delays and
-   relaxed classes, along the protocol's tilt over a horizon that holds a transient of at
-   least ``transient_s`` and one whole cycle; the last cycle's harmonics that the tilt
-   excites up to ``max_frequency_hz`` are what the locked fit compares;
+   relaxed classes, along the protocol's whole recording from rest, projected as the
+   locked fit projects the sway (:class:`~posture_id.frf.locked.LockedProjection`,
+   unweighted: the cycle average of every cycle, drift removed, at the harmonics the tilt
+   excites up to ``max_frequency_hz``); the transient is in it, as it is in the fit;
 2. the noise of those harmonics: white sensor noise, and the simulated noise-driven sway
    of that subject (:func:`.noise.noise_spectra`), divided by the cycles averaged;
 3. the information (:mod:`.information`) of every recording and repetition, summed; the
@@ -25,7 +26,6 @@ and the predicted RMS error is √(mean SE²).
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import asdict, dataclass, field, replace
 
@@ -38,23 +38,18 @@ from posture_id.dec.parameters import ParameterArrays, default_parameters, norma
 from posture_id.dec.prior import SIGMA, sample_parameters
 from posture_id.design.information import Information, harmonic_information
 from posture_id.design.noise import DesignError, NoiseSpectra, SwayNoise, noise_spectra
+from posture_id.errors import PostureIdError
 from posture_id.fitting.options import FitOptions
 from posture_id.fitting.problem import FitProblem
 from posture_id.fitting.symbolic import step_inputs
 from posture_id.fitting.unknowns import q_from_targets
-from posture_id.frf.locked import cycle_spectrum
+from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.protocols import Protocol, SingleProtocol
 
-__all__ = ["DesignOptions", "ProtocolPrediction", "predict_protocols", "design", "prior_width",
-           "HORIZONS_S"]
-
-#: Horizons of the compiled model, s: the shortest that holds transient + one cycle is
-#: used (one compiled model per horizon and segment count, cached on disk).
-HORIZONS_S = (80.0, 100.0, 140.0, 200.0, 320.0)
-
+__all__ = ["DesignOptions", "ProtocolPrediction", "predict_protocols", "design", "prior_width"]
 
 @dataclass(frozen=True)
 class DesignOptions:
@@ -66,7 +61,6 @@ class DesignOptions:
         dt: integration step of the Jacobian's model, s (5 ms: about 3× faster than the
             fit's 2 ms; 10 ms makes the semi-implicit Euler step unstable for many
             subjects; docs/design.md checks 5 ms against 2.5 ms by step-halving).
-        transient_s: least time simulated before the analysed cycle, s.
         max_frequency_hz: highest harmonic compared (as the locked fit's).
         excited_threshold: a harmonic is compared when the tilt's amplitude there exceeds
             this share of its largest (as the locked fit's).
@@ -74,15 +68,14 @@ class DesignOptions:
         residual: 'locked' (default): the locked fit, each harmonic and channel weighted
             by its own noise; 'raw': least squares on every sample, which weighs every
             frequency alike (by Parseval; in steady state the tilt's response lives at
-            its harmonics, so the same harmonics, unweighted, with the noise there). The
-            transient's own information is left out of both.
+            its harmonics, so the same harmonics, unweighted, with the noise there; what
+            the raw fit gains from the transient outside them is left out).
     """
 
     draws: int = 8
     seed: int = 0
     level: float = 0.9
     dt: float = 0.005
-    transient_s: float = 20.0
     max_frequency_hz: float = 2.0
     excited_threshold: float = 1e-3
     noise_cycles: int = 8
@@ -155,55 +148,46 @@ class ProtocolPrediction:
                 "seconds": self.seconds}
 
 
-def _horizon(period_s: float, transient_s: float) -> float:
-    for h in HORIZONS_S:
-        if h >= period_s + transient_s - 1e-9:
-            return h
-    raise DesignError(f"a cycle of {period_s:g} s is longer than the design's longest "
-                      f"horizon ({HORIZONS_S[-1]:g} s with {transient_s:g} s of transient)")
-
-
 class _Recording:
-    """One single protocol's compiled model, tilt input and compared harmonics."""
+    """One single protocol's compiled model over its whole recording, its tilt input, and
+    the locked fit's own (unweighted) projection of the sway onto the compared harmonics:
+    the cycle average of every cycle from rest, drift removed, its excited harmonics up to
+    ``max_frequency_hz``."""
 
     def __init__(self, body: Body, protocol: SingleProtocol, options: DesignOptions,
                  notify) -> None:
         sim = SimulationOptions(dt=options.dt)
         rate = sim.sample_rate_hz
         self.protocol = protocol
-        self.period = int(round(protocol.period_s * rate))
-        horizon = _horizon(protocol.period_s, options.transient_s)
-        self.n_samples = int(round(horizon * rate)) + 1
+        self.profile = protocol.profile()
+        self.n_samples = int(round(self.profile.duration * rate)) + 1
         self.problem = FitProblem.get(body, self.n_samples, FitOptions(simulation=sim),
                                       notify=notify)
-        filled = protocol.with_cycles(math.ceil(horizon / protocol.period_s) + 1).profile()
-        self.filled = filled
         self.simulation = sim
-        tilt, velocity = filled.on_grid(options.dt, self.problem.n_steps_u)
+        tilt, velocity = self.profile.on_grid(options.dt, self.problem.n_steps_u)
         self.u = step_inputs(tilt, velocity, self.problem.n_steps_u)
-        self.start = self.n_samples - 1 - self.period
-        on_samples = filled.angle(np.arange(self.n_samples) / rate)
-        spectrum = np.abs(cycle_spectrum(on_samples, self.start, self.period, 1, 0))
-        frequencies = np.arange(1, self.period // 2 + 1) * rate / self.period
-        self.rows = np.flatnonzero((spectrum > options.excited_threshold * spectrum.max())
-                                   & (frequencies <= options.max_frequency_hz))
-        if not len(self.rows):
-            raise DesignError(f"{protocol.label()}: the tilt excites no frequency up to "
-                              f"{options.max_frequency_hz:g} Hz")
+        on_samples = self.profile.angle(np.arange(self.n_samples) / rate)
+        try:
+            self.projection = LockedProjection.for_recording(
+                on_samples, np.zeros((self.n_samples, 1)), rate, protocol.period_s,
+                self.profile.periodic_from_s,
+                LockedOptions(weighted=False, max_frequency_hz=options.max_frequency_hz,
+                              excited_threshold=options.excited_threshold),
+                protocol.label())
+        except PostureIdError as exc:
+            raise DesignError(str(exc)) from None
+        self.rows = self.projection.harmonics - 1
 
     def stays_up(self, body: Body, params) -> np.ndarray:
-        """(D,) the subjects who stay within the sway limit over the horizon (the fast
+        """(D,) the subjects who stay within the sway limit over the recording (the fast
         simulator, the Jacobian's step)."""
-        span = (self.n_samples - 1) / self.simulation.sample_rate_hz
-        return simulate_batch(body, params, self.filled.spanning(span), self.simulation,
-                              workers=1).stable
+        return simulate_batch(body, params, self.profile, self.simulation, workers=1).stable
 
     def harmonics_jacobian(self, q: np.ndarray, columns: list[int]) -> np.ndarray:
         """(K, N, len(columns)) complex, degrees: ∂(compared harmonics)/∂q."""
         n = self.problem.n
         jac = self.problem.jacobian(q, self.u, columns).reshape(self.n_samples, n, -1)
-        full = cycle_spectrum(np.degrees(jac), self.start, self.period, 1, 0)
-        return full[self.rows]
+        return self.projection.spectrum(np.degrees(jac))
 
 
 def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,

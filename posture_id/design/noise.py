@@ -16,12 +16,10 @@ from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorNoise
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.protocols import SingleProtocol
-from posture_id.simulation.subjects import motor_levels_for_share
+from posture_id.simulation.subjects import UNIT_LEVEL_PER_DEG, motor_levels_for_share
 
 __all__ = ["SwayNoise", "NoiseSpectra", "noise_spectra", "DesignError"]
 
-#: Motor-noise calibration level per degree of peak-to-peak tilt (as the universal set).
-_UNIT_LEVEL_PER_DEG = 0.05
 
 
 class DesignError(PostureIdError):
@@ -116,7 +114,7 @@ def noise_spectra(body: Body, params: ParameterArrays, protocol: SingleProtocol,
         if noise.locked_share is not None:
             found = motor_levels_for_share(
                 body, params, protocol.profile(), np.full(b, noise.locked_share), seeds,
-                _UNIT_LEVEL_PER_DEG * protocol.peak_to_peak_deg, noise.cutoff_hz, options)
+                UNIT_LEVEL_PER_DEG * protocol.peak_to_peak_deg, noise.cutoff_hz, options)
             levels = np.nan_to_num(found.level)
             stable &= found.usable
         else:

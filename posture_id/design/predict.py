@@ -27,7 +27,7 @@ and the predicted RMS error is √(mean SE²).
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy.optimize import brentq
@@ -136,16 +136,13 @@ class ProtocolPrediction:
     seconds: float
 
     def to_dict(self) -> dict:
-        def clean(a):
-            return np.where(np.isfinite(a), a, None).tolist()
-
+        """JSON-ready through :func:`~posture_id.fileio.json_text` (∞ becomes null)."""
         return {"protocol": self.protocol.to_dict(), "label": self.label,
                 "minutes": self.minutes, "peak_to_peak_deg": self.peak_to_peak_deg,
-                "peak_velocity_deg_s": self.peak_velocity_deg_s,
-                "widths": clean(self.widths), "rms_error": clean(self.rms_error),
-                "class_wrong": clean(self.class_wrong), "subjects": self.subjects,
-                "standard_errors": clean(self.standard_errors), "class_se": clean(self.class_se),
-                "seconds": self.seconds}
+                "peak_velocity_deg_s": self.peak_velocity_deg_s, "widths": self.widths,
+                "rms_error": self.rms_error, "class_wrong": self.class_wrong,
+                "subjects": self.subjects, "standard_errors": self.standard_errors,
+                "class_se": self.class_se, "seconds": self.seconds}
 
 
 class _Recording:
@@ -211,7 +208,7 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
     z = norm.ppf(0.5 + options.level / 2)
     width0 = prior_width(options.level)
     recordings: dict = {}
-    out = []
+    per_protocol = []
     total = sum(len(p.recordings) for p in protocols)
     done = 0
 
@@ -223,10 +220,9 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
         info: list[Information | None] = [None] * draws
         stable = np.ones(draws, bool)
         for single in protocol.recordings:
-            key = single
-            if key not in recordings:
-                recordings[key] = _Recording(body, single, options, say)
-            rec = recordings[key]
+            if single not in recordings:
+                recordings[single] = _Recording(body, single, options, say)
+            rec = recordings[single]
             spectra: NoiseSpectra = noise_spectra(
                 body, params, single, noise, options.seed, options.noise_cycles,
                 options=SimulationOptions(dt=options.dt))
@@ -256,19 +252,15 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
             class_se[d] = np.sqrt(np.diag(free))[4 * n:5 * n]
         if not stable.any():
             raise DesignError(f"{protocol.label()}: every drawn subject fell; draw more")
-        out.append(ProtocolPrediction(
-            protocol, protocol.label(), protocol.recording_minutes, protocol.peak_to_peak_deg,
-            protocol.peak_velocity_deg_s, se, class_se, *_summary(se, class_se, stable, z,
-                                                                  width0),
-            time.perf_counter() - started))
-    # compare the protocols on the subjects who stay up under every one of them
-    common = np.all([~np.isnan(p.standard_errors).any(axis=(1, 2)) for p in out], axis=0)
-    if common.any():
-        out = [replace(p, **dict(zip(("widths", "rms_error", "class_wrong", "subjects"),
-                                     _summary(p.standard_errors, p.class_se, common, z,
-                                              width0), strict=True)))
-               for p in out]
-    return out
+        per_protocol.append((protocol, se, class_se, stable, time.perf_counter() - started))
+    # compare the protocols on the subjects who stay up under every one of them (each on
+    # its own where none does)
+    common = np.all([stable for *_, stable, _ in per_protocol], axis=0)
+    return [ProtocolPrediction(
+        protocol, protocol.label(), protocol.recording_minutes, protocol.peak_to_peak_deg,
+        protocol.peak_velocity_deg_s, se, class_se,
+        *_summary(se, class_se, common if common.any() else stable, z, width0), seconds)
+        for protocol, se, class_se, stable, seconds in per_protocol]
 
 
 def _summary(se: np.ndarray, class_se: np.ndarray, subjects: np.ndarray, z: float,

@@ -62,19 +62,10 @@ class DesignResult:
         first = self.ranking()[0]
         return first.prediction if first.allowed and math.isfinite(first.score) else None
 
-    def narrowing(self, parameter: str, reference: int = 0) -> np.ndarray:
-        """(N,) the best allowed protocol's predicted width of ``parameter`` per module
-        against the protocol at index ``reference`` (< 1: narrower)."""
-        best = self.best
-        if best is None:
-            return np.full(len(self.joints), np.nan)
-        k = PARAMETERS.index(parameter)
-        return best.widths[:, k] / self.predictions[reference].widths[:, k]
-
     def to_dict(self) -> dict:
         return {"body": self.body, "joints": list(self.joints), "noise": self.noise.to_dict(),
                 "options": self.options.to_dict(), "goal": self.goal.to_dict(),
-                "ranking": [{"label": r.prediction.label, "score": _finite(r.score),
+                "ranking": [{"label": r.prediction.label, "score": r.score,
                              "breaks": list(r.breaks)} for r in self.ranking()],
                 "predictions": [p.to_dict() for p in self.predictions],
                 "seconds": self.seconds}
@@ -130,10 +121,6 @@ class DesignResult:
         if self.best is not None:
             files.append(write_protocol(self.best.protocol, out / "recommended.json"))
         return files
-
-
-def _finite(value: float):
-    return value if math.isfinite(value) else None
 
 
 def _cell(value: float) -> str:

@@ -29,7 +29,11 @@ from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.results import BatchResult, SimulationResult
 from posture_id.simulation.stimulus import TiltProfile
 
-__all__ = ["PeopleLike", "people_like", "MotorLevels", "motor_levels_for_share"]
+__all__ = ["PeopleLike", "people_like", "MotorLevels", "motor_levels_for_share",
+           "UNIT_LEVEL_PER_DEG"]
+
+#: The motor-noise level of a batched calibration run, per degree of peak-to-peak tilt.
+UNIT_LEVEL_PER_DEG = 0.05
 
 
 @dataclass(frozen=True)

@@ -53,7 +53,7 @@ from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.noise import MotorNoise
 from posture_id.simulation.options import SimulationOptions
-from posture_id.simulation.subjects import motor_levels_for_share
+from posture_id.simulation.subjects import UNIT_LEVEL_PER_DEG, motor_levels_for_share
 
 __all__ = ["UniversalDataConfig", "shard_layout", "shard_com_weights", "make_shard",
            "simulate_trials", "generate_universal", "UniversalSet", "open_sets", "merged_scope",
@@ -61,8 +61,6 @@ __all__ = ["UniversalDataConfig", "shard_layout", "shard_com_weights", "make_sha
 
 UNIVERSAL_STREAM = 0x554E49
 FORMAT = "posture_id-universal-set"
-#: The motor-noise level of the calibration run, per degree of peak-to-peak tilt.
-_UNIT_LEVEL_PER_DEG = 0.05
 
 
 @dataclass(frozen=True)
@@ -123,7 +121,7 @@ def simulate_trials(body_draw: BodyDraw, stim: StimulusDraw, trials: int,
     share = np.where(noisy_trial, rng.uniform(*scope.locked_share, trials), 1.0)
     seeds = rng.integers(0, 2**62, trials)
     levels = motor_levels_for_share(body, params, profile, share, seeds,
-                                    _UNIT_LEVEL_PER_DEG * stim.amplitude_deg, scope.cutoff_hz,
+                                    UNIT_LEVEL_PER_DEG * stim.amplitude_deg, scope.cutoff_hz,
                                     options)
     clean, usable, response = levels.clean, levels.usable, levels.response
     level = np.where(usable & noisy_trial, levels.level, 0.0)

@@ -149,3 +149,28 @@ def test_the_raw_fit_weighs_harmonics_alike_and_loses_to_the_locked_one_on_colou
     raw = harmonic_information(jac, coloured, weighted=False).fit_covariance()
     locked = harmonic_information(jac, coloured).fit_covariance()
     assert np.all(np.diag(raw) > 1.5 * np.diag(locked))
+
+
+def test_a_protocol_leaving_parameters_undetermined_gets_a_notice():
+    """The report warns where its predictions are beyond the fit's linear range: a
+    protocol whose median width of some parameter is at least half the prior's."""
+    from posture_id.design.goal import DesignGoal
+    from posture_id.design.noise import SwayNoise
+    from posture_id.design.predict import DesignOptions, ProtocolPrediction
+    from posture_id.design.report import UNDETERMINED, DesignResult
+    from posture_id.simulation.protocols import PrtsProtocol
+
+    def prediction(amplitude: float, widths: np.ndarray) -> ProtocolPrediction:
+        protocol = PrtsProtocol(80, 0.25, amplitude, 2)
+        return ProtocolPrediction(protocol, protocol.label(), 1.0, amplitude, 1.0,
+                                  np.zeros((1, 1, 4)), np.zeros((1, 1)), widths,
+                                  widths, np.zeros(1), 1, 0.1)
+
+    tight = prediction(3.0, np.array([[0.1, 0.3, 0.2, UNDETERMINED * 0.99]]))
+    loose = prediction(1.0, np.array([[0.1, np.inf, 0.2, UNDETERMINED]]))
+    result = DesignResult("b", ("ankle",), SwayNoise(0.05), DesignOptions(), DesignGoal(),
+                          (tight, loose), 1.0)
+    assert len(result.notices) == 1
+    assert result.notices[0].startswith(loose.label) and "2 of 4" in result.notices[0]
+    assert result.notices[0] in result.markdown()
+    assert result.to_dict()["notices"] == list(result.notices)

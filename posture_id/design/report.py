@@ -14,9 +14,12 @@ from posture_id.design.predict import DesignOptions, ProtocolPrediction
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.simulation.protocols import write_protocol
 
-__all__ = ["DesignResult", "Ranked"]
+__all__ = ["DesignResult", "Ranked", "UNDETERMINED"]
 
 _NAMES = {"kp": "Kp", "ki": "Ki", "kd": "Kd", "delay_s": "Δ"}
+#: A parameter whose median predicted width is at least this share of the prior's is not
+#: determined: beyond the fit's linear range (docs/design.md, the check).
+UNDETERMINED = 0.5
 
 
 @dataclass(frozen=True)
@@ -58,6 +61,23 @@ class DesignResult:
         return sorted(ranked, key=lambda r: (not r.allowed, r.score))
 
     @property
+    def notices(self) -> tuple[str, ...]:
+        """Where the predictions should not be trusted as they stand: a protocol that
+        leaves parameters undetermined (median predicted width at least
+        :data:`UNDETERMINED` of the prior's). The fit then works beyond its linear range
+        for them, and the widths predicted for the others are likely too narrow
+        (docs/design.md: 1.3–1.75× on people-like sway)."""
+        out = []
+        for p in self.predictions:
+            loose = int(np.sum(~(p.widths < UNDETERMINED)))
+            if loose:
+                out.append(f"{p.label}: {loose} of {p.widths.size} parameters are not "
+                           f"determined (width ≥ {UNDETERMINED:g} of the prior's); the fit "
+                           "works beyond its linear range for them, and the widths predicted "
+                           "for the others are likely too narrow")
+        return tuple(out)
+
+    @property
     def best(self) -> ProtocolPrediction | None:
         first = self.ranking()[0]
         return first.prediction if first.allowed and math.isfinite(first.score) else None
@@ -68,7 +88,7 @@ class DesignResult:
                 "ranking": [{"label": r.prediction.label, "score": r.score,
                              "breaks": list(r.breaks)} for r in self.ranking()],
                 "predictions": [p.to_dict() for p in self.predictions],
-                "seconds": self.seconds}
+                "notices": list(self.notices), "seconds": self.seconds}
 
     def markdown(self) -> str:
         head = "| rank | protocol | min | ° p-p | °/s | score | " + " | ".join(
@@ -98,6 +118,8 @@ class DesignResult:
             lines += ["", f"Recommended: **{best.label}** ({best.subjects} of "
                           f"{self.options.draws} drawn subjects stayed up under every "
                           "protocol; every protocol is summarised on them)."]
+        if self.notices:
+            lines += ["", "Notices:", ""] + [f"- {n}" for n in self.notices]
         return "\n".join(lines)
 
     def plot(self, path: str | Path | None = None, ax=None):

@@ -4,6 +4,7 @@ body descriptors against Pinocchio, the draws, the shards, training and resumpti
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -188,6 +189,17 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
                               log=lambda m: None)
     for key, value in whole.network.state_dict().items():
         assert torch.equal(value, resumed.network.state_dict()[key]), key
+    # an interrupted run on other data (here: its set had another shard count) is not
+    # resumed: the run starts afresh
+    with pytest.raises(Stop):
+        train_universal(tiny_set.path, tmp_path / "other", config, net, log=stop_after_first)
+    state_file = tmp_path / "other" / "train-state.json"
+    state = json.loads(state_file.read_text())
+    state["sets"][0]["shards"] += 1
+    state_file.write_text(json.dumps(state))
+    said: list[str] = []
+    train_universal(tiny_set.path, tmp_path / "other", config, net, log=said.append)
+    assert [m for m in said if m.startswith("epoch")][0].startswith("epoch 1/")
     loaded = UniversalModel.load(tmp_path / "whole")
     x = np.random.default_rng(0).standard_normal((5, whole.input_mean.size)).astype(np.float32)
     assert np.allclose(loaded.predict(x).mean, whole.predict(x).mean)

@@ -111,7 +111,8 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
                                   weight_decay=config.weight_decay)
     schedule = torch.optim.lr_scheduler.OneCycleLR(
         optimiser, max_lr=config.max_learning_rate, total_steps=config.epochs * steps + 1)
-    state = _resume(out, net, optimiser, schedule, config)
+    sets = _sets_identity(data)
+    state = _resume(out, net, optimiser, schedule, config, sets)
     best_state = state.pop("best_weights", None)
     history = state.get("history", [])
     best = state.get("best", math.inf)
@@ -146,7 +147,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
         if val < best:
             best = val
             best_state = {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
-        _save_state(out, net, optimiser, schedule, best_state, history, best, config)
+        _save_state(out, net, optimiser, schedule, best_state, history, best, config, sets)
         log(f"epoch {epoch + 1}/{config.epochs}: train {total / len(x):.4f}, validation "
             f"{val:.4f}{' (best)' if val == best else ''}, {time.perf_counter() - started:.0f} s")
         report(progress, epoch + 1, config.epochs, "epoch")
@@ -185,7 +186,15 @@ def _ranges(samples: Samples) -> dict:
             "noise_ratio_high": float(np.percentile(samples.noise_ratio, 99.5))}
 
 
-def _save_state(out: Path, net, optimiser, schedule, best_state, history, best, config) -> None:
+def _sets_identity(data) -> list[dict]:
+    """What a resumed run must share with the interrupted one about its data: each set's
+    path, configuration and shard count, in order."""
+    return [{"path": str(d.path.resolve()), "config": d.manifest["config"],
+             "shards": len(d.manifest["shards"])} for d in data]
+
+
+def _save_state(out: Path, net, optimiser, schedule, best_state, history, best, config,
+                sets: list[dict]) -> None:
     tensors = {f"net.{k}": v.detach().cpu().contiguous() for k, v in net.state_dict().items()}
     tensors |= {f"best.{k}": v.contiguous() for k, v in (best_state or {}).items()}
     for pid, group in optimiser.state_dict()["state"].items():
@@ -193,18 +202,20 @@ def _save_state(out: Path, net, optimiser, schedule, best_state, history, best, 
             tensors[f"opt.{pid}.{key}"] = torch.as_tensor(value).detach().cpu().contiguous()
     atomic_write(out / "train-state.safetensors", lambda tmp: save_file(tensors, str(tmp)))
     atomic_write_text(out / "train-state.json", json_text({
-        "config": asdict(config), "history": history, "best": best,
+        "config": asdict(config), "sets": sets, "history": history, "best": best,
         "schedule": schedule.state_dict(),
         "param_groups": optimiser.state_dict()["param_groups"]}))
 
 
-def _resume(out: Path, net, optimiser, schedule, config) -> dict:
-    """Load the state of an interrupted run of the same configuration (else nothing)."""
+def _resume(out: Path, net, optimiser, schedule, config, sets: list[dict]) -> dict:
+    """Load the state of an interrupted run of the same configuration on the same sets
+    (else nothing: the run starts afresh)."""
     meta_file, weights = out / "train-state.json", out / "train-state.safetensors"
     if not (meta_file.exists() and weights.exists()):
         return {}
     meta = json.loads(meta_file.read_text())
-    if meta.get("config") != json.loads(json_text(asdict(config))):
+    if meta.get("config") != json.loads(json_text(asdict(config))) or \
+            meta.get("sets") != json.loads(json_text(sets)):
         return {}
     tensors = load_file(str(weights))
     net.load_state_dict({k[4:]: v for k, v in tensors.items() if k.startswith("net.")})

@@ -70,3 +70,15 @@ def test_fit_and_identify_say_it(tip, tmp_path, capsys):
     out = capsys.readouterr().out
     assert "sampled at 50 Hz" in out and "period outside what the universal model" in out
     assert json.loads((tmp_path / "u.json").read_text())["trust"]["doubtful"]
+
+
+def test_a_lab_s_other_state_duration_is_not_called_a_wrong_time_column(tip):
+    """0.3 s states at 50 Hz are the same samples as 0.25 s states at 60 Hz: both are
+    protocols labs run, so the entrance names both instead of blaming the time column."""
+    stimulus = prts(2.0, 2, 80, state_s=0.3)
+    recording = simulate(tip, stimulus=stimulus).to_recording()
+    notices = prepare_trial(recording).notices
+    said = [n for n in notices if "60 Hz" in n]
+    assert len(said) == 1, notices
+    assert "80-state PRTS of 0.25 s states at 60 Hz" in said[0]
+    assert "state 0.3 s" in said[0] and "check the time column" not in said[0]

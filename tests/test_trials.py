@@ -16,7 +16,8 @@ from posture_id.simulation import SimulationOptions, prts, simulate
 from posture_id.simulation import stimulus as stimulus_module
 from posture_id.trials import prepare_trial
 
-ENTRANCE = ("recognise_prts", "sample_rate_hint", "check_recorded_tilt", "tilt_from_array")
+ENTRANCE = ("recognise_prts", "likely_sample_rate", "sample_rate_hint", "check_recorded_tilt",
+            "tilt_from_array")
 
 
 def test_a_recording_checks_itself_and_names_itself():
@@ -81,8 +82,8 @@ def test_the_cnn_route_enters_the_stimulus_module_once(tip, monkeypatch):
     calls = _count_entrance(monkeypatch)
     result = identify(recording, tip, Method.CNN)
     # a PRTS of 0.25 s states recognised at the stated rate: no rate to hint at
-    assert calls == {"recognise_prts": 1, "sample_rate_hint": 0, "check_recorded_tilt": 0,
-                     "tilt_from_array": 0}
+    assert calls == {"recognise_prts": 1, "likely_sample_rate": 0, "sample_rate_hint": 0,
+                     "check_recorded_tilt": 0, "tilt_from_array": 0}
     assert sum("the exact profile is used" in n for n in result.notices) == 1
 
 
@@ -92,5 +93,5 @@ def test_the_fit_route_enters_the_stimulus_module_once(tip, monkeypatch):
     recording = simulate(tip, stimulus=named).to_recording()
     calls = _count_entrance(monkeypatch)
     identify(recording, tip, Method.FIT, stimulus=named)
-    assert calls == {"recognise_prts": 0, "sample_rate_hint": 0, "check_recorded_tilt": 1,
-                     "tilt_from_array": 0}
+    assert calls == {"recognise_prts": 0, "likely_sample_rate": 0, "sample_rate_hint": 0,
+                     "check_recorded_tilt": 1, "tilt_from_array": 0}

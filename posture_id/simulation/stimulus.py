@@ -29,6 +29,9 @@ __all__ = [
     "check_recorded_tilt",
     "prts_match",
     "sample_rate_hint",
+    "likely_sample_rate",
+    "RateMatch",
+    "LAB_STATE_RANGE_S",
     "COMMON_RATES_HZ",
     "PRTS_REGISTERS",
 ]
@@ -40,6 +43,8 @@ PRTS_REGISTERS = {
 }
 #: Duration of one PRTS state, s (Peterka 2002).
 PRTS_STATE_S = 0.25
+#: The range of state durations posture labs usually run, s.
+LAB_STATE_RANGE_S = (0.2, 0.3)
 
 
 @dataclass(frozen=True)
@@ -421,11 +426,34 @@ def prts_match(tilt_rad: np.ndarray, rate_hz: float, states: int,
     return float(np.max(np.abs(correlation)) / norm)
 
 
-def sample_rate_hint(times_s: np.ndarray, tilt_rad: np.ndarray, name: str,
-                     state_s: float = PRTS_STATE_S) -> str | None:
-    """A warning when the tilt is a PRTS (242 or 80 states of ``state_s``) sampled at a
-    rate other than the one the time column gives, naming the likely true rate; None when
-    the stated rate fits or no PRTS fits at any common rate (:data:`COMMON_RATES_HZ`).
+@dataclass(frozen=True)
+class RateMatch:
+    """A PRTS found in a tilt at a rate other than its time column's.
+
+    Attributes:
+        rate_hz: the common rate it matches at. states: its length.
+        match: its correlation there. stated_hz: the time column's rate.
+        at_stated: the best match at the stated rate.
+    """
+
+    rate_hz: float
+    states: int
+    match: float
+    stated_hz: float
+    at_stated: float
+
+    def hint(self, name: str) -> str:
+        """The warning for recording ``name``."""
+        return (f"{name}: the tilt is a {self.states}-state PRTS sampled at {self.rate_hz:g} "
+                f"Hz (match {self.match:.2f}), not at the {self.stated_hz:.4g} Hz the time "
+                f"column says (match {self.at_stated:.2f}): check the time column")
+
+
+def likely_sample_rate(times_s: np.ndarray, tilt_rad: np.ndarray,
+                       state_s: float = PRTS_STATE_S) -> RateMatch | None:
+    """The common rate (:data:`COMMON_RATES_HZ`) at which the tilt is a PRTS (242 or 80
+    states of ``state_s``) when the time column's rate is not it; None when the stated
+    rate fits or no PRTS fits at any common rate.
 
     A PRTS matches at its true rate with a correlation near 1 and poorly at any other
     rate, because the cycle then spans another number of samples.
@@ -442,9 +470,16 @@ def sample_rate_hint(times_s: np.ndarray, tilt_rad: np.ndarray, name: str,
     match, rate, states = best
     if match < 0.9 or abs(rate / stated - 1) <= 0.01 or at_stated >= match - 0.05:
         return None
-    return (f"{name}: the tilt is a {states}-state PRTS sampled at {rate:g} Hz "
-            f"(match {match:.2f}), not at the {stated:.4g} Hz the time column says "
-            f"(match {at_stated:.2f}): check the time column")
+    return RateMatch(rate, states, match, stated, at_stated)
+
+
+def sample_rate_hint(times_s: np.ndarray, tilt_rad: np.ndarray, name: str,
+                     state_s: float = PRTS_STATE_S) -> str | None:
+    """A warning when the tilt is a PRTS sampled at a rate other than the one the time
+    column gives, naming the likely true rate (:func:`likely_sample_rate`); None when
+    there is none."""
+    found = likely_sample_rate(times_s, tilt_rad, state_s)
+    return None if found is None else found.hint(name)
 
 
 def check_recorded_tilt(times_s: np.ndarray, tilt_rad: np.ndarray, stimulus: TiltProfile,

@@ -17,10 +17,12 @@ import numpy as np
 from posture_id.errors import RecordingError, StimulusError
 from posture_id.recording import Recording
 from posture_id.simulation.stimulus import (
+    LAB_STATE_RANGE_S,
     PRTS_REGISTERS,
     PRTS_STATE_S,
     TiltProfile,
     check_recorded_tilt,
+    likely_sample_rate,
     recognise_prts,
     sample_rate_hint,
     tilt_from_array,
@@ -145,7 +147,17 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
         if stimulus is None or not any(
                 abs(stimulus.period_s - states * PRTS_STATE_S) < 1e-9
                 for states in PRTS_REGISTERS):
-            hint = sample_rate_hint(recording.time, recording.tilt, name)
+            found = likely_sample_rate(recording.time, recording.tilt)
+            if found is not None and stimulus is not None and _lab_states(stimulus):
+                # states a lab runs at the stated rate are as likely as 0.25 s states at
+                # another rate: the samples alone cannot tell, so say both
+                hint = (f"{name}: the tilt is a {stimulus.description} at the "
+                        f"{found.stated_hz:.4g} Hz the time column says; the same samples are "
+                        f"a {found.states}-state PRTS of {PRTS_STATE_S:g} s states at "
+                        f"{found.rate_hz:g} Hz: if the lab's states last {PRTS_STATE_S:g} s, "
+                        "the time column is wrong")
+            elif found is not None:
+                hint = found.hint(name)
             notices += [] if hint is None else [hint]
         if stimulus is not None:
             notices.append(f"{name}: the tilt is a {stimulus.description}; the exact profile "
@@ -164,3 +176,11 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
     # (a level tail) is held, one that ends after it (a shorter recording) is cut
     stimulus = stimulus.spanning(resampled.duration_s)
     return PreparedTrial(resampled, stimulus, tuple(notices), original, rate_hint=hint)
+
+
+def _lab_states(stimulus: TiltProfile) -> bool:
+    """A periodic stimulus whose cycle is a PRTS of states lasting as long as a lab's
+    (:data:`~posture_id.simulation.stimulus.LAB_STATE_RANGE_S`, rounding aside)."""
+    low, high = LAB_STATE_RANGE_S
+    return stimulus.period_s is not None and any(
+        low - 1e-6 <= stimulus.period_s / states <= high + 1e-6 for states in PRTS_REGISTERS)

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from posture_id.errors import PostureIdError
-from posture_id.simulation.stimulus import TiltProfile, prts
+from posture_id.simulation.stimulus import LAB_STATE_RANGE_S, TiltProfile, prts
 
 __all__ = ["UniversalScope", "BodyDraw", "StimulusDraw", "draw_body", "draw_stimulus",
            "ScopeError"]
@@ -56,7 +56,7 @@ class UniversalScope:
     preset_share: float = 0.15
     presets: tuple[str, ...] = ("talos", "g1", "human")
     states: tuple[int, ...] = (242, 80)
-    state_s: tuple[float, float] = (0.2, 0.3)
+    state_s: tuple[float, float] = LAB_STATE_RANGE_S
     amplitude_deg: tuple[float, float] = (0.5, 4.0)
     duration_s: tuple[float, float] = (40.0, 250.0)
     sensor_noise_deg: tuple[float, float] = (0.0, 0.1)

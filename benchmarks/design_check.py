@@ -63,7 +63,6 @@ PROTOCOLS = [PrtsProtocol(242, 0.25, 1.0, 2), PrtsProtocol(80, 0.25, 1.0, 6),
              MultisineProtocol(60.0, (1, 2, 3, 5, 8, 12, 18, 27, 40, 60, 90), 2.0, cycles=2)]
 REGIMES = {"sensor only": SwayNoise(0.05), "people-like": SwayNoise(0.05, locked_share=0.3)}
 SUBJECT_SEED = 0x44434B
-DETERMINED = UNDETERMINED  # one threshold with the report's notices
 #: parameters determined for fewer subjects than this are left out of the per-subject ratio
 MIN_SUBJECTS = 10
 
@@ -175,17 +174,18 @@ def _row(regime, protocol, pred, fits, truth, predict_seconds) -> dict:
     err = (est - truth)[ok]
     realised = np.sqrt(np.mean(err**2, axis=0))  # (N, 4)
     robust = 1.4826 * np.median(np.abs(err - np.median(err, axis=0)), axis=0)
-    predicted = np.sqrt(np.mean(pred.standard_errors[ok] ** 2, axis=0))
+    se = pred.standard_errors[ok]  # (S, N, 4)
+    predicted = np.sqrt(np.mean(se**2, axis=0))
     width0 = prior_width()
-    predicted_width = np.median(2 * 1.645 * pred.standard_errors[ok], axis=0) / width0
+    widths = 2 * 1.645 * se / width0  # (S, N, 4) each subject's predicted width
+    predicted_width = np.median(widths, axis=0)
     fit_width = np.median(2 * 1.645 * fit_se[ok], axis=0) / width0
-    determined = predicted_width < DETERMINED
+    determined = predicted_width < UNDETERMINED
     ratio = predicted / realised
     # per subject: only where that subject's prediction calls the parameter determined
-    # (its own 90 % width under DETERMINED of the prior's); elsewhere the fit's bounds,
+    # (its own 90 % width under UNDETERMINED of the prior's); elsewhere the fit's bounds,
     # not the noise, limit the error, and one such subject dominates an RMS
-    se = pred.standard_errors[ok]
-    own = 2 * 1.645 * se / width0 < DETERMINED  # (S, N, 4)
+    own = widths < UNDETERMINED
     counts = own.sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
         own_predicted = np.sqrt(np.sum(np.where(own, se, 0.0) ** 2, axis=0) / counts)
@@ -240,7 +240,7 @@ def _markdown(report: dict) -> str:
              f"Made by `benchmarks/design_check.py --subjects {report['subjects']}` on "
              f"{Path(report['body']).name}. Ratio: predicted / realised RMS error of the "
              "normalised parameters (median over the parameters predicted as determined, "
-             f"90 % width < {DETERMINED} of the prior's; and over all 4N). Width ratio: "
+             f"90 % width < {UNDETERMINED} of the prior's; and over all 4N). Width ratio: "
              "predicted / the fit's own Gauss-Newton 90 % width (median over parameters). "
              "Per subject: the same ratio over the subjects whose own prediction calls the "
              f"parameter determined (parameters with at least {MIN_SUBJECTS} such subjects), "
@@ -255,13 +255,13 @@ def _markdown(report: dict) -> str:
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in report["rows"]:
         det, own = r["median_ratio_determined"], r["median_subject_determined_ratio"]
-        own_text = "–" if own is None else (f"{own:.2f} ({r['subject_determined_params']} "
-                                            f"params) | {r['median_z_rms']:.2f} | "
-                                            f"{r['median_z_robust']:.2f}")
+        own_text = "– | – | –" if own is None else (
+            f"{own:.2f} ({r['subject_determined_params']} params) | {r['median_z_rms']:.2f} | "
+            f"{r['median_z_robust']:.2f}")
         lines.append(f"| {r['regime']} | {r['protocol']} | {r['subjects']} | "
                      f"{'–' if det is None else f'{det:.2f}'} ({sum(map(sum, r['determined']))}"
                      f" params) | {r['median_ratio_all']:.2f} | "
-                     f"{own_text if own is not None else '– | – | –'} | "
+                     f"{own_text} | "
                      f"{r['median_width_ratio']:.2f} | "
                      f"{r['predicted_score']:.3g} | {r['realised_score']:.3g} | "
                      f"{r['fit_seconds_median']:.1f} |")

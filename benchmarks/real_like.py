@@ -115,9 +115,7 @@ def _models(stimulus_key: str, folders: dict, urdf: str):
         nets["hybrid"] = Identifier(body, Method.HYBRID, start, raw)
         nets["locked hybrid"] = Identifier(body, Method.HYBRID, start, locked)
         # the default's network: the bundled universal model, or the one --universal names
-        universal = folders.get("universal")
-        nets["universal"] = Identifier(body, Method.CNN,
-                                       None if universal in (None, "bundled") else universal)
+        nets["universal"] = Identifier(body, Method.CNN, folders.get("universal"))
         _LOADED[urdf, stimulus_key] = (body, nets)
     return _LOADED[urdf, stimulus_key]
 
@@ -293,7 +291,7 @@ def main() -> None:
     for stimulus_key in args.stimuli:
         folders = {kind: str(args.models / f"real_{stimulus_key}_{kind}")
                    for kind in ("cnn", "frf")}
-        folders["universal"] = str(args.universal) if args.universal else "bundled"
+        folders["universal"] = str(args.universal) if args.universal else None
         for method, kind in (("CNN", "cnn"), ("FRF net", "frf")):
             if method in args.methods and not (Path(folders[kind]) / "model.json").exists():
                 raise SystemExit(f"{folders[kind]}: no model for the {method} rows; make it "

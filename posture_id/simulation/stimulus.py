@@ -448,6 +448,15 @@ class RateMatch:
                 f"Hz (match {self.match:.2f}), not at the {self.stated_hz:.4g} Hz the time "
                 f"column says (match {self.at_stated:.2f}): check the time column")
 
+    def alternative(self, name: str, found: str) -> str:
+        """The notice for recording ``name`` whose tilt is also ``found`` (a description
+        of a PRTS of lab-length states) at the stated rate: the samples alone cannot tell
+        the two apart, so both are named."""
+        return (f"{name}: the tilt is a {found} at the {self.stated_hz:.4g} Hz the time "
+                f"column says; the same samples are a {self.states}-state PRTS of "
+                f"{PRTS_STATE_S:g} s states at {self.rate_hz:g} Hz: if the lab's states last "
+                f"{PRTS_STATE_S:g} s, the time column is wrong")
+
 
 def likely_sample_rate(times_s: np.ndarray, tilt_rad: np.ndarray,
                        state_s: float = PRTS_STATE_S) -> RateMatch | None:

@@ -151,11 +151,7 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
             if found is not None and stimulus is not None and _lab_states(stimulus):
                 # states a lab runs at the stated rate are as likely as 0.25 s states at
                 # another rate: the samples alone cannot tell, so say both
-                hint = (f"{name}: the tilt is a {stimulus.description} at the "
-                        f"{found.stated_hz:.4g} Hz the time column says; the same samples are "
-                        f"a {found.states}-state PRTS of {PRTS_STATE_S:g} s states at "
-                        f"{found.rate_hz:g} Hz: if the lab's states last {PRTS_STATE_S:g} s, "
-                        "the time column is wrong")
+                hint = found.alternative(name, stimulus.description)
             elif found is not None:
                 hint = found.hint(name)
             notices += [] if hint is None else [hint]

@@ -87,6 +87,52 @@ def test_the_prior_width_is_the_prior_s_own():
     assert prior_width(0.9) == pytest.approx(hi - lo, rel=0.01)
 
 
+
+def test_the_bounded_fit_s_error_is_the_censored_normal_s():
+    """One parameter, SE 0.5, true value 0.3 within bounds (−1, 0.8): the bounded fit's
+    estimate is the unbounded one clipped, whose RMS error has a closed form."""
+    from scipy.stats import norm
+
+    from posture_id.design.bounded import bounded_errors
+    from posture_id.design.information import Information
+
+    a = np.array([[4.0]])
+    errors = bounded_errors(Information(a, a, a), np.array([0.3]), np.array([-1.0]),
+                            np.array([0.8]), 100000, np.random.default_rng(5))
+    lo, hi = (-1.0 - 0.3) / 0.5, (0.8 - 0.3) / 0.5
+    inner = norm.cdf(hi) - norm.cdf(lo) - (hi * norm.pdf(hi) - lo * norm.pdf(lo))
+    expected = 0.5 * np.sqrt(inner + lo**2 * norm.cdf(lo) + hi**2 * norm.sf(hi))
+    assert np.sqrt(np.mean(errors**2)) == pytest.approx(expected, rel=0.01)
+    assert errors.min() >= -1.3 - 1e-9 and errors.max() <= 0.5 + 1e-9
+
+
+def test_far_bounds_leave_the_sandwich_and_near_ones_cap_a_correlated_partner():
+    """With bounds far away the bounded errors have the weighted fit's covariance
+    A⁻¹BA⁻¹; when one of two strongly correlated parameters is poorly determined, its
+    bounds cap its error and, through the correlation, its partner's."""
+    from posture_id.design.bounded import bounded_errors
+    from posture_id.design.information import Information
+
+    rng = np.random.default_rng(6)
+    jac = rng.standard_normal((40, 1, 2)) + 1j * rng.standard_normal((40, 1, 2))
+    noise = np.full((40, 1, 1), 0.02 + 0j)
+    info = harmonic_information(jac, noise)
+    far = bounded_errors(info, np.zeros(2), np.full(2, -1e6), np.full(2, 1e6), 40000, rng)
+    np.testing.assert_allclose(np.cov(far.T), info.fit_covariance(), rtol=0.05, atol=1e-12)
+    # a nearly collinear pair: both marginal SEs large, the box [−1, 1] caps both
+    jac[:, :, 1] = jac[:, :, 0] + 0.01 * (rng.standard_normal((40, 1)) + 0j)
+    info = harmonic_information(jac, noise)
+    se = np.sqrt(np.diag(info.fit_covariance()))
+    assert np.all(se > 1.0)
+    capped = bounded_errors(info, np.zeros(2), -np.ones(2), np.ones(2), 4000, rng)
+    rms = np.sqrt(np.mean(capped**2, axis=0))
+    assert np.all(rms < 1.0) and np.all(rms < 0.6 * se)
+    assert np.all(np.abs(capped) <= 1.0 + 1e-9)
+    # a parameter with no information of its own: unbounded, as its width is
+    blind = Information(np.diag([4.0, 0.0]), np.diag([4.0, 0.0]), np.diag([4.0, 0.0]))
+    out = bounded_errors(blind, np.zeros(2), -np.ones(2), np.ones(2), 10, rng)
+    assert np.all(np.isfinite(out[:, 0])) and np.all(np.isinf(out[:, 1]))
+
 @pytest.mark.slow
 def test_predictions_on_a_real_body_scale_with_cycles_and_repetitions(winter1):
     """On the exact model of a 1-segment body with sensor noise only, the predicted SE
@@ -163,8 +209,8 @@ def test_a_protocol_leaving_parameters_undetermined_gets_a_notice():
     def prediction(amplitude: float, widths: np.ndarray) -> ProtocolPrediction:
         protocol = PrtsProtocol(80, 0.25, amplitude, 2)
         return ProtocolPrediction(protocol, protocol.label(), 1.0, amplitude, 1.0,
-                                  np.zeros((1, 1, 4)), np.zeros((1, 1)), widths,
-                                  widths, np.zeros(1), 1, 0.1)
+                                  np.zeros((1, 1, 4)), np.zeros((1, 1)),
+                                  np.zeros((1, 1, 4)), widths, widths, np.zeros(1), 1, 0.1)
 
     tight = prediction(3.0, np.array([[0.1, 0.3, 0.2, UNDETERMINED * 0.99]]))
     loose = prediction(1.0, np.array([[0.1, np.inf, 0.2, UNDETERMINED]]))

@@ -16,12 +16,16 @@ protocol, so protocols are compared on equal terms):
    weighted fit's covariance A⁻¹BA⁻¹ with the classes known (the fit's final polish)
    gives the standard errors of K̃p, K̃i, K̃d, Δ̃, and with the relaxed classes free the
    standard error of each class c, whose sign is the class: the chance of calling it
-   wrong is Φ(−1/SE(c)).
+   wrong is Φ(−1/SE(c));
+4. the errors of that fit held within its search bounds (:mod:`.bounded`, Monte Carlo of
+   the linearised fit): where the sway says little about a parameter the bounds, not the
+   noise, cap its error and those of the parameters estimated with it.
 
-The predicted 90 % interval width is 2·z₀.₉₅·SE, reported against the prior's own 90 %
-width (:func:`prior_width`); the per-protocol summary is the median over the subjects
-that stayed up under every protocol (the protocols are compared on the same subjects),
-and the predicted RMS error is √(mean SE²).
+The predicted 90 % interval width is 2·z₀.₉₅·SE (unbounded where the sway does not see a
+parameter), reported against the prior's own 90 % width (:func:`prior_width`); the
+per-protocol summary is the median over the subjects that stayed up under every protocol
+(the protocols are compared on the same subjects), and the predicted RMS error is that of
+the bounded fit over those subjects and their noise draws.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from scipy.stats import norm
 from posture_id.bodies.body import Body
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
 from posture_id.dec.prior import SIGMA, sample_parameters
+from posture_id.design.bounded import bounded_errors, fit_bounds
 from posture_id.design.information import Information, harmonic_information
 from posture_id.design.noise import DesignError, NoiseSpectra, SwayNoise, noise_spectra
 from posture_id.errors import PostureIdError
@@ -65,6 +70,7 @@ class DesignOptions:
         excited_threshold: a harmonic is compared when the tilt's amplitude there exceeds
             this share of its largest (as the locked fit's).
         noise_cycles: cycles of noise-driven sway simulated for its spectrum.
+        error_draws: noise draws per subject of the bounded fit's error (:mod:`.bounded`).
         residual: 'locked' (default): the locked fit, each harmonic and channel weighted
             by its own noise; 'raw': least squares on every sample, which weighs every
             frequency alike (by Parseval; in steady state the tilt's response lives at
@@ -80,10 +86,11 @@ class DesignOptions:
     excited_threshold: float = 1e-3
     noise_cycles: int = 8
     residual: str = "locked"
+    error_draws: int = 256
 
     def __post_init__(self) -> None:
-        if self.draws < 1 or self.noise_cycles < 1:
-            raise DesignError("draws and noise_cycles must be ≥ 1")
+        if self.draws < 1 or self.noise_cycles < 1 or self.error_draws < 1:
+            raise DesignError("draws, noise_cycles and error_draws must be ≥ 1")
         if not 0 < self.level < 1:
             raise DesignError(f"level must be in (0, 1), got {self.level}")
         if self.residual not in ("locked", "raw"):
@@ -115,8 +122,11 @@ class ProtocolPrediction:
         standard_errors: (D, N, 4) normalised SE of K̃p, K̃i, K̃d, Δ̃ per subject (NaN for
             a subject who fell), ∞ where the harmonics do not see a parameter.
         class_se: (D, N) SE of the relaxed class c.
+        bounded_rms: (D, N, 4) RMS error of the fit held within its bounds, per subject
+            (:mod:`.bounded`; NaN for a subject who fell).
         widths: (N, 4) median over subjects of the predicted 90 % width / the prior's.
-        rms_error: (N, 4) predicted RMS error of the normalised parameters.
+        rms_error: (N, 4) predicted RMS error of the normalised parameters (the bounded
+            fit's, over the subjects summarised).
         class_wrong: (N,) mean chance of calling the class wrong.
         subjects: the subjects summarised: those who stayed up under every protocol
             predicted together (else under this one). seconds: time taken.
@@ -129,6 +139,7 @@ class ProtocolPrediction:
     peak_velocity_deg_s: float
     standard_errors: np.ndarray = field(repr=False)
     class_se: np.ndarray = field(repr=False)
+    bounded_rms: np.ndarray = field(repr=False)
     widths: np.ndarray
     rms_error: np.ndarray
     class_wrong: np.ndarray
@@ -142,7 +153,8 @@ class ProtocolPrediction:
                 "peak_velocity_deg_s": self.peak_velocity_deg_s, "widths": self.widths,
                 "rms_error": self.rms_error, "class_wrong": self.class_wrong,
                 "subjects": self.subjects, "standard_errors": self.standard_errors,
-                "class_se": self.class_se, "seconds": self.seconds}
+                "class_se": self.class_se, "bounded_rms": self.bounded_rms,
+                "seconds": self.seconds}
 
 
 class _Recording:
@@ -207,6 +219,7 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
     targets = normalise_arrays(params, default_parameters(body))  # (D, N, 5)
     z = norm.ppf(0.5 + options.level / 2)
     width0 = prior_width(options.level)
+    lower, upper = fit_bounds(n)
     recordings: dict = {}
     per_protocol = []
     total = sum(len(p.recordings) for p in protocols)
@@ -243,33 +256,41 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
             report(progress, done, total, "recording", single.label())
         se = np.full((draws, n, 4), np.nan)
         class_se = np.full((draws, n), np.nan)
+        bounded = np.full((draws, n, 4), np.nan)
         for d in range(draws):
             if not stable[d] or info[d] is None:
                 continue
-            known = info[d].marginal(np.arange(4 * n)).fit_covariance()
-            se[d] = np.sqrt(np.diag(known)).reshape(4, n).T
+            known = info[d].marginal(np.arange(4 * n))
+            se[d] = np.sqrt(np.diag(known.fit_covariance())).reshape(4, n).T
             free = info[d].fit_covariance()
             class_se[d] = np.sqrt(np.diag(free))[4 * n:5 * n]
+            errors = bounded_errors(known, targets[d, :, :4].T.ravel(), lower, upper,
+                                    options.error_draws,
+                                    np.random.default_rng([options.seed, 0x424F, d]))
+            bounded[d] = np.sqrt(np.mean(errors**2, axis=0)).reshape(4, n).T
         if not stable.any():
             raise DesignError(f"{protocol.label()}: every drawn subject fell; draw more")
-        per_protocol.append((protocol, se, class_se, stable, time.perf_counter() - started))
+        per_protocol.append((protocol, se, class_se, bounded, stable,
+                             time.perf_counter() - started))
     # compare the protocols on the subjects who stay up under every one of them (each on
     # its own where none does)
     common = np.all([stable for *_, stable, _ in per_protocol], axis=0)
     return [ProtocolPrediction(
         protocol, protocol.label(), protocol.recording_minutes, protocol.peak_to_peak_deg,
-        protocol.peak_velocity_deg_s, se, class_se,
-        *_summary(se, class_se, common if common.any() else stable, z, width0), seconds)
-        for protocol, se, class_se, stable, seconds in per_protocol]
+        protocol.peak_velocity_deg_s, se, class_se, bounded,
+        *_summary(se, class_se, bounded, common if common.any() else stable, z, width0),
+        seconds)
+        for protocol, se, class_se, bounded, stable, seconds in per_protocol]
 
 
-def _summary(se: np.ndarray, class_se: np.ndarray, subjects: np.ndarray, z: float,
-             width0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def _summary(se: np.ndarray, class_se: np.ndarray, bounded: np.ndarray,
+             subjects: np.ndarray, z: float, width0: float
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """(widths, rms_error, class_wrong, count) of ``subjects`` (mask)."""
-    se, class_se = se[subjects], class_se[subjects]
+    se, class_se, bounded = se[subjects], class_se[subjects], bounded[subjects]
     with np.errstate(invalid="ignore"):
         widths = np.median(2 * z * se, axis=0) / width0
-        rms = np.sqrt(np.mean(se**2, axis=0))
+        rms = np.sqrt(np.mean(bounded**2, axis=0))
         wrong = np.mean(norm.cdf(-1.0 / class_se), axis=0)
     return widths, rms, wrong, int(subjects.sum())
 

@@ -152,3 +152,41 @@ def test_auto_refines_a_doubtful_answer_and_keeps_a_good_one(tip, monkeypatch):
     assert any("refined by least squares (--method auto)" in n for n in refined.notices)
     for joint in tip.joint_names:
         assert abs(refined.parameters[joint].kp / truth[joint].kp - 1) <= 0.05, joint
+
+
+@pytest.mark.slow
+def test_auto_fits_a_tilt_the_network_cannot_read(winter1):
+    """The default method on a tilt that is not periodic (a sum of sines, 30 s): the
+    network reads only whole cycles of a periodic tilt, so ``auto`` fits the recording by
+    least squares from the body's defaults and says so."""
+    from posture_id.dec import default_parameters
+    from posture_id.simulation.stimulus import tilt_from_array
+
+    t = np.arange(0, 30.0001, 0.02)
+    tilt = np.radians(0.8) * (np.sin(2 * np.pi * 0.13 * t) + 0.6 * np.sin(2 * np.pi * 0.41 * t)
+                              + 0.4 * np.sin(2 * np.pi * 0.97 * t))
+    stimulus = tilt_from_array(t, tilt, "sum of sines")
+    (joint,) = winter1.joint_names
+    defaults = default_parameters(winter1)
+    truth = defaults.replace(joint, kp=1.2 * defaults[joint].kp)
+    recording = simulate(winter1, truth, stimulus).to_recording().with_sensor_noise(0.01, 2)
+    result = identify(recording, winter1, stimulus=stimulus)  # the default: auto
+    assert result.method is Method.FIT and result.cnn is None
+    assert any("identified by least squares from the body's defaults (--method auto)" in n
+               for n in result.notices)
+    assert result.parameters[joint].kp == pytest.approx(truth[joint].kp, rel=0.02)
+    assert not result.verdict.suggestion.startswith("--method")
+
+
+def test_a_doubtful_fit_of_a_tilt_the_network_cannot_read_is_not_sent_to_it():
+    from types import SimpleNamespace
+
+    from posture_id.identify.verdict import suggestion
+
+    noisy = SimpleNamespace(acceptable=False, noise_relative=0.01)
+    assert suggestion(Method.FIT, False, None, (), noisy) == "--method hybrid"
+    instead = suggestion(Method.FIT, False, None, (), noisy, whole_cycles=False)
+    assert "--method" not in instead and "whole cycle of a periodic tilt" in instead
+    assert "--locked" not in suggestion(Method.FIT, False, None, ("ankle kp at its upper "
+                                                                  "bound (3)",), noisy,
+                                        whole_cycles=False)

@@ -302,6 +302,7 @@ def test_conformal_quantiles_and_temperature_recover_known_answers():
         _conformal,
         _temperature,
         regime_of,
+        regime_text,
     )
 
     rng = np.random.default_rng(6)
@@ -313,7 +314,10 @@ def test_conformal_quantiles_and_temperature_recover_known_answers():
     true_logit = rng.normal(0, 2, 50000)
     truth = np.where(rng.random(50000) < 1 / (1 + np.exp(-true_logit)), 1.0, -1.0)
     assert _temperature(2 * true_logit, truth) == pytest.approx(2.0, rel=0.05)
-    assert list(regime_of(np.array([1, 3]), np.array([0.01, 0.5]))) == ["1:0", "3:3"]
+    keys = list(regime_of(np.array([1, 3, 2, 3]), np.array([0.0005, 0.5, 0.015, 0.05])))
+    assert keys == ["1:0", "3:6", "2:3", "3:4"]
+    assert [regime_text(k) for k in keys] == ["1 segment, clean", "3 segments, mostly noise",
+                                              "2 segments, clean", "3 segments, a little noisy"]
 
 
 def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_path):

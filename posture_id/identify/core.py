@@ -178,16 +178,27 @@ class Identifier:
 
 
     def _as(self, method: Method) -> Identifier:
-        """This identifier with another method, sharing its network."""
+        """This identifier with another method, sharing its network (none for least
+        squares alone)."""
         other = copy.copy(self)
         other.method = method
+        if method is Method.FIT:
+            other.cnn = None
         return other
 
     def _auto(self, trial: PreparedTrial, progress: Progress | None,
               start: float) -> IdentificationResult:
         """:attr:`Method.AUTO`: the network's answer, refined by least squares (the hybrid)
         when its verdict is doubtful and the sway is not people-like (least squares on
-        sway that is mostly the subject's own fits that too)."""
+        sway that is mostly the subject's own fits that too); least squares from the
+        body's defaults when the network cannot read the recording (a tilt that is not
+        periodic, or less than one whole cycle of it)."""
+        unread = _unreadable_by_network(trial)
+        if unread is not None:
+            fitted = self._as(Method.FIT).identify_trial(trial, progress, start)
+            return replace(fitted, notices=(
+                f"{trial.name}: {unread}: identified by least squares from the body's "
+                "defaults (--method auto)", *fitted.notices))
         answer = self._as(Method.CNN).identify_trial(trial, progress, start)
         verdict = answer.verdict
         share = verdict.locked_share
@@ -199,6 +210,20 @@ class Identifier:
         return replace(refined, notices=(
             f"{trial.name}: the network's answer was doubtful ({why}): refined by least "
             "squares (--method auto)", *refined.notices))
+
+
+def _unreadable_by_network(trial: PreparedTrial) -> str | None:
+    """Why the network cannot read ``trial`` (it reads the stimulus-locked response over
+    whole cycles of a periodic tilt), or None when it can."""
+    stimulus = trial.stimulus
+    if stimulus.period_s is None:
+        return (f"its tilt is not periodic over the {trial.recording.duration_s:.1f} s "
+                "recorded, and the network reads the response to a periodic one")
+    needed = stimulus.whole_cycles_s
+    if needed is not None and trial.recording.duration_s < needed - 1e-9:
+        return (f"it lasts {trial.recording.duration_s:.1f} s, less than the one whole "
+                f"cycle of its stimulus ({needed:g} s) the network reads")
+    return None
 
 
 def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,
@@ -312,4 +337,5 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
         return verdict
     return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,
                                                   options.prior_sd is not None,
-                                                  reads_people_like))
+                                                  reads_people_like,
+                                                  _unreadable_by_network(trial) is None))

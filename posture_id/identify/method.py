@@ -14,7 +14,9 @@ class Method(enum.Enum):
     FIT = "fit"
     HYBRID = "hybrid"
     #: the network alone, then least squares from its answer (the hybrid) when its trust
-    #: verdict is doubtful and the sway is not people-like (docs/universal.md)
+    #: verdict is doubtful and the sway is not people-like; least squares from the body's
+    #: defaults when the network cannot read the recording (a tilt that is not periodic,
+    #: or less than one whole cycle of it) (docs/universal.md)
     AUTO = "auto"
 
 

@@ -129,7 +129,8 @@ class TrustVerdict:
 
 def suggestion(method: Method, locked: bool, locked_share: float | None,
                on_bounds: tuple[str, ...], noise: NoiseCheck | None,
-               prior: bool = False, network_reads_people_like: bool = False) -> str:
+               prior: bool = False, network_reads_people_like: bool = False,
+               whole_cycles: bool = True) -> str:
     """What suits a recording whose answer is doubtful, by the documented rule:
 
     - people-like sway (locked share below :data:`PEOPLE_LIKE_SHARE`) identified without
@@ -147,7 +148,18 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
       start from the CNN's answer, away from the local minimum);
     - the hybrid or a locked fit left more than the noise: ``--locked --max-offset-s 1
       --prior-sd 0.5`` (a stimulus that is not where the lab's clock says, and the prior).
+
+    Without ``whole_cycles`` (a tilt that is not periodic, or less than one whole cycle of
+    it) neither the network, nor the hybrid, nor the locked fit can read the recording:
+    what would need them suggests a recording they can read instead.
     """
+    if not whole_cycles and method is Method.FIT:
+        if any(b.split()[1] in DOUBTFUL_ON_BOUND for b in on_bounds):
+            return "a wider --gain-range MIN MAX / --delay-range MIN MAX"
+        if noise is not None and not noise.acceptable:
+            return ("a recording of at least one whole cycle of a periodic tilt (a PRTS): "
+                    "the network, the hybrid and the locked fit read only those")
+        return ""
     people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
     if people_like and not locked and not (method is Method.CNN and network_reads_people_like):
         return LOCKED_FLAGS

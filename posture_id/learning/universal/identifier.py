@@ -26,7 +26,11 @@ from posture_id.dec.parameters import TARGET_FIELDS, default_parameters, denorma
 from posture_id.errors import PostureIdError, RecordingError
 from posture_id.learning.config import LearningError
 from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentification
-from posture_id.learning.universal.calibration import UniversalCalibration, regime_of
+from posture_id.learning.universal.calibration import (
+    UniversalCalibration,
+    regime_of,
+    regime_text,
+)
 from posture_id.learning.universal.features import (
     DESCRIPTORS,
     body_descriptors,
@@ -36,6 +40,7 @@ from posture_id.learning.universal.harmonics import harmonic_layout, sway_harmon
 from posture_id.learning.universal.model import SIDECAR, ModelError, UniversalModel
 from posture_id.learning.universal.samples import inputs_and_noise_ratio, module_inputs
 from posture_id.provenance import body_identity, provenance
+from posture_id.simulation.stimulus import LAB_STATE_RANGE_S
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
@@ -122,10 +127,15 @@ class UniversalIdentifier:
     def _layout(self, trial: PreparedTrial):
         stimulus = trial.stimulus
         if stimulus.period_s is None:
+            lo, hi = LAB_STATE_RANGE_S
             raise RecordingError(
                 f"{trial.name}: the universal network reads the stimulus-locked response to "
                 f"a periodic stimulus (a PRTS); this tilt ({stimulus.description}) is not "
-                "periodic: use --method fit, which takes any tilt")
+                f"periodic over the {trial.recording.duration_s:.1f} s recorded. A PRTS is "
+                f"recognised from at least one whole cycle ({80 * lo:.0f}–{80 * hi:.0f} s "
+                f"for 80 states, {242 * lo:.0f}–{242 * hi:.0f} s for 242, at the "
+                f"{lo}–{hi} s states labs run): record one, or use --method fit, which "
+                "takes any tilt")
         trial.require_whole_cycle()
         rec = trial.recording
         # the recordings of a study share their stimulus: its layout is made once
@@ -183,7 +193,7 @@ class UniversalIdentifier:
             defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
             intervals = ParameterIntervals.around(
                 normalised[:, :4], half, defaults, level,
-                f"conformal, universal network (regime {_regime_text(regime)}, held-out "
+                f"conformal, universal network (regime {regime_text(regime)}, held-out "
                 "bodies and stimuli)", noise, self.body.joint_names)
         else:
             probability = 1.0 / (1.0 + np.exp(-prediction.logit))
@@ -210,9 +220,3 @@ _LAYOUTS_KEPT = 8
 FLOOR = 0.01
 #: The highest interval level calibrated.
 LEVEL_MAX = 0.99
-
-
-def _regime_text(regime: str) -> str:
-    n, b = regime.split(":")
-    words = ("clean", "a little noisy", "noisy", "mostly noise")[int(b)]
-    return f"{n} segment{'s' if n != '1' else ''}, {words}"

@@ -123,18 +123,22 @@ class LocalExecutor(TaskExecutor):
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
+#: How long a Dask scheduler is waited for before it is called unreachable, s.
+CONNECT_TIMEOUT_S = 30.0
+
+
 class DaskExecutor(TaskExecutor):
     """Tasks on a running Dask distributed cluster (``tcp://host:port``); up to two per
     cluster thread in flight, each released once its result is here."""
 
-    def __init__(self, address: str) -> None:
+    def __init__(self, address: str, connect_timeout_s: float = CONNECT_TIMEOUT_S) -> None:
         try:
             from distributed import Client, as_completed
         except ImportError:
             raise PostureIdError("--scheduler needs dask.distributed (pip install "
                                  "'dask[distributed]')") from None
         try:
-            self.client = Client(address, timeout=30)
+            self.client = Client(address, timeout=connect_timeout_s)
         except OSError as exc:
             raise PostureIdError(f"cannot reach the Dask scheduler at {address} "
                                  f"({exc})") from None

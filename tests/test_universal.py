@@ -213,7 +213,7 @@ def test_sets_trained_together_must_agree_but_on_their_motor_noise(tmp_path):
 
     from posture_id.datasets.config import DatasetError
     from posture_id.learning.universal.data import UniversalSet, merged_scope
-    from posture_id.learning.universal.scope import UniversalScope
+    from posture_id.learning.universal.scope import ScopeError, UniversalScope
 
     def a_set(name, scope):
         return UniversalSet(tmp_path / name, {"config": {"scope": scope.to_dict()}})
@@ -225,6 +225,14 @@ def test_sets_trained_together_must_agree_but_on_their_motor_noise(tmp_path):
     assert merged.sensor_noise_deg == base.sensor_noise_deg
     with pytest.raises(DatasetError, match=r"b: scope field sensor_noise_deg"):
         merged_scope([a_set("a", base), a_set("b", replace(base, sensor_noise_deg=(0, 0.3)))])
+    # a set of more varied bodies joins; the proportions span the wider jitter
+    varied = replace(base, proportion_jitter=0.35, tip_share=0.05, preset_share=0.3)
+    merged = merged_scope([a_set("a", base), a_set("c", varied)])
+    assert merged.proportion_jitter == 0.35 and merged.preset_share == base.preset_share
+    with pytest.raises(ScopeError, match="proportion_jitter must be within"):
+        replace(base, proportion_jitter=1.0)
+    with pytest.raises(ScopeError, match="tip_share and preset_share"):
+        replace(base, tip_share=-0.1)
 
 
 @pytest.mark.slow

@@ -36,6 +36,13 @@ def add_parser(sub) -> None:
     d.add_argument("--locked-share", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
                    help="range of the locked share of the other trials' body COM sway "
                         "(default: the scope's, 0.1 1)")
+    d.add_argument("--proportion-jitter", type=non_negative_float,
+                   help="each Winter segment's mass and length scaled by a factor within "
+                        "± this (default: the scope's, 0.15)")
+    d.add_argument("--tip-share", type=non_negative_float,
+                   help="share of shards on the default TIP (default: the scope's, 0.1)")
+    d.add_argument("--preset-share", type=non_negative_float,
+                   help="share of shards on lumped humanoids (default: the scope's, 0.15)")
     d.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=run_data)
@@ -79,7 +86,10 @@ def run_data(args: argparse.Namespace) -> int:
 
     given = {"trials": args.trials} if args.trials else {}
     scope = {k: v for k, v in (("clean_share", args.clean_share),
-                               ("locked_share", args.locked_share)) if v is not None}
+                               ("locked_share", args.locked_share),
+                               ("proportion_jitter", args.proportion_jitter),
+                               ("tip_share", args.tip_share),
+                               ("preset_share", args.preset_share)) if v is not None}
     if scope.get("clean_share", 0) > 1:
         raise SystemExit(f"posture-id universal data: --clean-share must be within [0, 1], "
                          f"got {args.clean_share}")

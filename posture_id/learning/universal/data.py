@@ -292,22 +292,29 @@ def open_sets(paths: str | Path | Sequence[str | Path]) -> list[UniversalSet]:
 #: Scope fields that may differ between sets trained on together: what share of the
 #: trials has motor noise and how much.
 _SWAY_FIELDS = ("clean_share", "locked_share")
+#: Scope fields of the mix of bodies drawn, which may differ too.
+_MIX_FIELDS = ("proportion_jitter", "tip_share", "preset_share")
 
 
 def merged_scope(sets: Sequence[UniversalSet]) -> UniversalScope:
     """The scope of sets trained on together: they must agree on bodies, stimuli, sensor
     noise and drift; the locked share spans all of theirs; the clean share is the
-    largest."""
+    largest; the mix of bodies may differ (the proportion jitter is the largest, the TIP
+    and preset shares the first set's: they say how bodies were drawn, not a range a
+    recording is checked against)."""
     scopes = [UniversalScope.from_dict(d.manifest["config"]["scope"]) for d in sets]
     first = scopes[0]
     for data, scope in zip(sets[1:], scopes[1:], strict=True):
         for name in UniversalScope.__dataclass_fields__:
-            if name not in _SWAY_FIELDS and getattr(scope, name) != getattr(first, name):
+            if name not in _SWAY_FIELDS + _MIX_FIELDS and \
+                    getattr(scope, name) != getattr(first, name):
                 raise DatasetError(
                     f"{data.path}: scope field {name} is {getattr(scope, name)}, but "
                     f"{sets[0].path} has {getattr(first, name)}; sets trained on together "
-                    "may differ only in their motor noise (clean_share, locked_share)")
+                    "may differ only in their motor noise (clean_share, locked_share) and "
+                    "their mix of bodies (proportion_jitter, tip_share, preset_share)")
     return replace(first,
+                   proportion_jitter=max(s.proportion_jitter for s in scopes),
                    clean_share=max(s.clean_share for s in scopes),
                    locked_share=(min(s.locked_share[0] for s in scopes),
                                  max(s.locked_share[1] for s in scopes)))

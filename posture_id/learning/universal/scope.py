@@ -76,8 +76,13 @@ class UniversalScope:
             raise ScopeError(f"scope segments must be among 1, 2, 3, got {self.segments}")
         if not set(self.states) <= {80, 242} or not self.states:
             raise ScopeError(f"scope states must be among 80, 242, got {self.states}")
-        if not 0 <= self.tip_share + self.preset_share <= 1:
-            raise ScopeError("scope tip_share + preset_share must be within [0, 1]")
+        if not (self.tip_share >= 0 and self.preset_share >= 0
+                and self.tip_share + self.preset_share <= 1):
+            raise ScopeError(f"scope tip_share and preset_share must be ≥ 0 with a sum "
+                             f"within [0, 1], got {self.tip_share} and {self.preset_share}")
+        if not 0 <= self.proportion_jitter < 1:
+            raise ScopeError(f"scope proportion_jitter must be within [0, 1), got "
+                             f"{self.proportion_jitter}")
         if not 0 < self.locked_share[0] <= self.locked_share[1] <= 1:
             raise ScopeError(f"scope locked_share must be a range within (0, 1], got "
                              f"{self.locked_share}")

@@ -126,3 +126,28 @@ def test_people_like_subject_has_the_asked_locked_share(tip, share):
     assert np.std(subject.recording.theta - subject.locked.theta) > 0
     np.testing.assert_allclose(subject.locked.theta, simulate(
         tip, default_parameters(tip), prts(states=80, cycles=6)).theta)
+
+
+def test_a_kept_unit_noise_is_the_fresh_draw_of_its_seed():
+    """Trials simulated at several levels of one noise draw it once (the kept unit noise);
+    what is kept is exactly the fresh draw of its seed, for every kind of seed."""
+    import math
+
+    from posture_id.simulation.noise import _unit_noise
+
+    mgh = np.array([700.0, 300.0])
+    trials = [(MotorNoise(0.3, 0.2, 7), np.random.SeedSequence([7, 3])),
+              (MotorNoise(0.5, 0.3, 2**61 + 5), np.random.SeedSequence([2**61 + 5, 11])),
+              (MotorNoise(0.2), np.random.SeedSequence(12345678901234567890)),
+              (MotorNoise(0.2), np.random.SeedSequence(5).spawn(2)[1])]
+    _unit_noise.cache_clear()
+    first = motor_noise_torques(trials, 500, 0.002, mgh, 5)
+    again = motor_noise_torques(trials, 500, 0.002, mgh, 5)
+    assert _unit_noise.cache_info().hits == len(trials)
+    for lane, (noise, seed) in enumerate(trials):
+        fresh = noise.unit_noise(500, 2, 0.002, seed) * (mgh * math.radians(noise.sd_deg))
+        assert np.array_equal(first[:, :, lane], fresh)
+        assert np.array_equal(again[:, :, lane], fresh)
+    assert not first[:, :, 4].any()  # the lane past the trials stays zero
+    kept = _unit_noise(0.2, 7, (), 4, 10, 1, 0.002)
+    assert not kept.flags.writeable

@@ -30,12 +30,16 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from posture_id.errors import SimulationError
 
 __all__ = ["MotorNoise", "DEFAULT_CUTOFF_HZ", "motor_noise_torques", "per_trial"]
+
+#: Unit-noise draws kept (a batch's trials: 64 per universal shard).
+UNIT_NOISE_KEPT = 128
 
 #: Second word of a trial's own seed sequence: motor noise never shares a stream with
 #: ``default_rng(seed)`` (the sensor noise of the same seed).
@@ -132,5 +136,21 @@ def motor_noise_torques(trials: list[tuple[MotorNoise, np.random.SeedSequence]],
         if noise.sd_deg == 0:
             continue
         scale = np.asarray(mgh, dtype=float) * math.radians(noise.sd_deg)
-        out[:, :, lane] = noise.unit_noise(n_steps, n, dt, seed) * scale
+        entropy = seed.entropy if isinstance(seed.entropy, int) else tuple(
+            int(e) for e in seed.entropy)
+        out[:, :, lane] = _unit_noise(noise.cutoff_hz, entropy, tuple(seed.spawn_key),
+                                      seed.pool_size, n_steps, n, dt) * scale
     return out
+
+
+@lru_cache(maxsize=UNIT_NOISE_KEPT)
+def _unit_noise(cutoff_hz: float, entropy: int | tuple, spawn_key: tuple, pool_size: int,
+                n_steps: int, n_joints: int, dt: float) -> np.ndarray:
+    """:meth:`MotorNoise.unit_noise` of one seed, kept: a trial simulated at several
+    levels of the same noise (:func:`~.subjects.motor_levels_for_share` and the level it
+    finds) draws it once. Read-only."""
+    seed = np.random.SeedSequence(entropy if isinstance(entropy, int) else list(entropy),
+                                  spawn_key=spawn_key, pool_size=pool_size)
+    eta = MotorNoise(1.0, cutoff_hz).unit_noise(n_steps, n_joints, dt, seed)
+    eta.flags.writeable = False
+    return eta

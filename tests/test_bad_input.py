@@ -393,6 +393,19 @@ def test_a_hopeless_data_set_stops(tmp_path, capsys):
     assert not out.exists()  # the folder it made holds nothing worth keeping: cleared
 
 
+@pytest.mark.parametrize(("flags", "problem"), [
+    (["--proportion-jitter", "1"], "scope proportion_jitter must be within [0, 1), got 1.0"),
+    (["--tip-share", "0.6", "--preset-share", "0.5"],
+     "scope tip_share and preset_share must be ≥ 0 with a sum within [0, 1]"),
+    (["--clean-share", "1.5"], "scope clean_share must be within [0, 1], got 1.5"),
+])
+def test_a_universal_set_s_scope_is_checked_before_anything_runs(tmp_path, capsys, flags,
+                                                                  problem):
+    _run(tmp_path, ["universal", "data", "--out", str(tmp_path / "set"), "--shards", "1",
+                    *flags], capsys, problem)
+    assert not (tmp_path / "set").exists()
+
+
 # ------------------------------------------------------------------ output paths
 def _files(folder: Path):
     (folder / "params.json").write_text(json.dumps(_params()))

@@ -82,7 +82,7 @@ def add_parser(sub) -> None:
 def run_data(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
-    from posture_id.learning.universal.scope import ScopeError, UniversalScope
+    from posture_id.learning.universal.scope import UniversalScope
 
     given = {"trials": args.trials} if args.trials else {}
     scope = {k: v for k, v in (("clean_share", args.clean_share),
@@ -90,14 +90,9 @@ def run_data(args: argparse.Namespace) -> int:
                                ("proportion_jitter", args.proportion_jitter),
                                ("tip_share", args.tip_share),
                                ("preset_share", args.preset_share)) if v is not None}
-    if scope.get("clean_share", 0) > 1:
-        raise SystemExit(f"posture-id universal data: --clean-share must be within [0, 1], "
-                         f"got {args.clean_share}")
-    try:
-        given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
-                                           for k, v in scope.items()})
-    except ScopeError as exc:
-        raise SystemExit(f"posture-id universal data: {exc}") from None
+    # a scope out of range is a ScopeError: one line, exit status 2 (cli.main)
+    given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
+                                       for k, v in scope.items()})
     config = UniversalDataConfig(shards=args.shards, seed=args.seed, **given)
     with TerminalProgress("shard", prefix="posture-id universal data",
                           quiet=args.quiet) as progress:

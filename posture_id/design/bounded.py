@@ -13,9 +13,9 @@ box-constrained quadratic's minimiser, which this module draws by Monte Carlo:
     δ̂ = argmin ½ δᵀAδ − gᵀδ   subject to   lower − θ ≤ δ ≤ upper − θ,
 
 for ``draws`` independent g. Directions A does not see (eigenvalue below
-:data:`~.information.RANK_TOLERANCE` of the largest) are left where the fit starts
-(δ = 0 there); a parameter with no information of its own at all is reported with an
-unbounded error, as its width is.
+:data:`~.information.RANK_TOLERANCE` of the largest, :func:`~.information.unit_diagonal`)
+are left where the fit starts (δ = 0 there); a parameter with no information of its own
+at all is reported with an unbounded error, as its width is.
 """
 
 from __future__ import annotations
@@ -23,8 +23,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import lsq_linear
 
-from posture_id.design.information import RANK_TOLERANCE, Information
+from posture_id.design.information import Information, unit_diagonal
+from posture_id.fitting.least_squares import search_bounds
 from posture_id.fitting.options import FitOptions
+from posture_id.fitting.unknowns import UnknownLayout
 
 __all__ = ["bounded_errors", "fit_bounds"]
 
@@ -35,13 +37,11 @@ RIDGE = 1e-10
 
 def fit_bounds(n_modules: int) -> tuple[np.ndarray, np.ndarray]:
     """(4N,) lower and upper bounds of [K̃p×N, K̃i×N, K̃d×N, Δ̃×N]: the fit's own
-    (:class:`~posture_id.fitting.options.FitOptions` defaults)."""
-    options = FitOptions()
-    lower = np.r_[np.full(3 * n_modules, options.gain_bounds[0]),
-                  np.full(n_modules, options.delay_bounds[0])]
-    upper = np.r_[np.full(3 * n_modules, options.gain_bounds[1]),
-                  np.full(n_modules, options.delay_bounds[1])]
-    return lower, upper
+    (:func:`~posture_id.fitting.least_squares.search_bounds` with the
+    :class:`~posture_id.fitting.options.FitOptions` defaults)."""
+    layout = UnknownLayout(n_modules)
+    lower, upper = search_bounds(FitOptions(), layout)
+    return lower[layout.gains_delays], upper[layout.gains_delays]
 
 
 def bounded_errors(info: Information, truth: np.ndarray, lower: np.ndarray,
@@ -51,19 +51,14 @@ def bounded_errors(info: Information, truth: np.ndarray, lower: np.ndarray,
     columns of parameters with no information of their own."""
     a = 0.5 * (info.weighted + info.weighted.T)
     b = 0.5 * (info.spread + info.spread.T)
-    p = len(truth)
-    diag = np.diag(a).copy()
-    own = diag > 1e-300 + 1e-14 * max(float(diag.max(initial=0.0)), 0.0)
-    out = np.zeros((draws, p))
+    own, scale, values, vectors, seen = unit_diagonal(a)
+    out = np.zeros((draws, len(truth)))
     out[:, ~own] = np.inf
     if not own.any():
         return out
-    scale = 1.0 / np.sqrt(diag[own])  # x = δ / scale: every parameter's information 1
-    a_s = a[np.ix_(own, own)] * np.outer(scale, scale)
+    scale = scale[own]  # x = δ / scale: every parameter's information 1
     b_s = b[np.ix_(own, own)] * np.outer(scale, scale)
-    values, vectors = np.linalg.eigh(a_s)
     largest = float(values.max())
-    seen = values > RANK_TOLERANCE * largest
     # g ~ N(0, B): through B's own square root (B is positive semi-definite)
     b_values, b_vectors = np.linalg.eigh(b_s)
     root = b_vectors * np.sqrt(np.clip(b_values, 0.0, None))

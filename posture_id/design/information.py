@@ -28,7 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Information", "harmonic_information", "covariance", "real_blocks"]
+__all__ = ["Information", "harmonic_information", "covariance", "real_blocks",
+           "unit_diagonal"]
 
 #: An eigenvalue of A below this share of the largest is no information.
 RANK_TOLERANCE = 1e-13
@@ -105,13 +106,13 @@ def harmonic_information(jacobian: np.ndarray, noise: np.ndarray,
     return Information(weighted, spread, fisher)
 
 
-def covariance(information: np.ndarray, spread: np.ndarray | None = None) -> np.ndarray:
-    """(P, P) A⁻¹ (or A⁻¹BA⁻¹ with ``spread`` B); ∞ on the rows and columns of parameters
-    that a direction A does not see involves. A is first scaled to unit diagonal (its
-    parameters' units and sizes differ by many orders); a parameter with no information
-    of its own, or in a direction whose eigenvalue of the scaled A is below
-    :data:`RANK_TOLERANCE` of the largest, is not seen."""
-    a = 0.5 * (information + information.T)
+def unit_diagonal(a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                         np.ndarray]:
+    """The symmetric information ``a`` (P, P) scaled to unit diagonal (its parameters'
+    units and sizes differ by many orders) and decomposed: ``own`` (P,) the parameters with
+    information of their own; ``scale`` (P,) 1/√a_ii for them (0 for the others);
+    ``values``, ``vectors`` the eigen-decomposition of the scaled a over ``own``;
+    ``seen`` the eigenvalues above :data:`RANK_TOLERANCE` of the largest."""
     diag = np.diag(a).copy()
     top = max(float(diag.max(initial=0.0)), 0.0)
     own = diag > 1e-300 + 1e-14 * top
@@ -120,6 +121,17 @@ def covariance(information: np.ndarray, spread: np.ndarray | None = None) -> np.
     values, vectors = np.linalg.eigh(scaled[np.ix_(own, own)])
     largest = float(values.max(initial=0.0))
     seen = values > RANK_TOLERANCE * largest if largest > 0 else np.zeros(len(values), bool)
+    return own, scale, values, vectors, seen
+
+
+def covariance(information: np.ndarray, spread: np.ndarray | None = None) -> np.ndarray:
+    """(P, P) A⁻¹ (or A⁻¹BA⁻¹ with ``spread`` B); ∞ on the rows and columns of parameters
+    that a direction A does not see involves. A is first scaled to unit diagonal (its
+    parameters' units and sizes differ by many orders); a parameter with no information
+    of its own, or in a direction whose eigenvalue of the scaled A is below
+    :data:`RANK_TOLERANCE` of the largest, is not seen."""
+    a = 0.5 * (information + information.T)
+    own, scale, values, vectors, seen = unit_diagonal(a)
     inverse = np.zeros_like(a)
     inverse[np.ix_(own, own)] = (vectors[:, seen] / values[seen]) @ vectors[:, seen].T
     inverse *= np.outer(scale, scale)

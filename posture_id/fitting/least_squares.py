@@ -114,7 +114,7 @@ class FitRun:
         self.trial, self.body, self.options, self.progress = trial, body, options, progress
         self.problem, self.notices = problem, notices
         self.layout = UnknownLayout(body.n_segments)
-        self.lower, self.upper = _bounds(options, self.layout)
+        self.lower, self.upper = search_bounds(options, self.layout)
         sim = options.simulation
         tilt, tilt_vel = trial.stimulus.on_grid(sim.dt, problem.n_steps_u)
         self.u = step_inputs(tilt, tilt_vel, problem.n_steps_u)
@@ -330,7 +330,7 @@ def _standard_errors(best: StageResult, params: DecParameters, defaults: DecPara
     return se_norm, se_phys, poorly, residual_sd
 
 
-def _bounds(options: FitOptions, layout: UnknownLayout) -> tuple[np.ndarray, np.ndarray]:
+def search_bounds(options: FitOptions, layout: UnknownLayout) -> tuple[np.ndarray, np.ndarray]:
     """(7N,) lower and upper bounds of q: gains, delays, classes in [−1, 1], and the
     passive terms within the gains' bounds."""
     bounds = []

@@ -215,15 +215,10 @@ class Identifier:
 def _unreadable_by_network(trial: PreparedTrial) -> str | None:
     """Why the network cannot read ``trial`` (it reads the stimulus-locked response over
     whole cycles of a periodic tilt), or None when it can."""
-    stimulus = trial.stimulus
-    if stimulus.period_s is None:
+    if trial.stimulus.period_s is None:
         return (f"its tilt is not periodic over the {trial.recording.duration_s:.1f} s "
                 "recorded, and the network reads the response to a periodic one")
-    needed = stimulus.whole_cycles_s
-    if needed is not None and trial.recording.duration_s < needed - 1e-9:
-        return (f"it lasts {trial.recording.duration_s:.1f} s, less than the one whole "
-                f"cycle of its stimulus ({needed:g} s) the network reads")
-    return None
+    return trial.whole_cycle_shortfall()
 
 
 def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,

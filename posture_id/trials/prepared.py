@@ -83,23 +83,36 @@ class PreparedTrial:
         """Refuse a trial whose segment columns are not ``segments`` (a body's)."""
         self.recording.check_segments(segments)
 
+    def shorter_than(self, needed_s: float, what: str) -> str | None:
+        """Why the trial is shorter than ``needed_s`` seconds (``what`` says why that
+        long), or None when it is not."""
+        if self.recording.duration_s < needed_s - 1e-9:
+            return (f"the recording lasts {self.recording.duration_s:.2f} s, shorter than "
+                    f"{what}")
+        return None
+
     def require_duration(self, needed_s: float, what: str) -> None:
         """Refuse a trial shorter than ``needed_s`` seconds; ``what`` says why that long."""
-        if self.recording.duration_s < needed_s - 1e-9:
-            raise RecordingError(f"{self.name}: the recording lasts "
-                                 f"{self.recording.duration_s:.2f} s, shorter than {what}")
+        short = self.shorter_than(needed_s, what)
+        if short is not None:
+            raise RecordingError(f"{self.name}: {short}")
 
-    def require_whole_cycle(self) -> None:
-        """Refuse a trial shorter than one whole cycle of its stimulus (after its lead-in),
-        or than :data:`MIN_ANY_TILT_S` for a tilt that is not periodic."""
+    def whole_cycle_shortfall(self) -> str | None:
+        """Why the trial is shorter than one whole cycle of its stimulus (after its
+        lead-in), or than :data:`MIN_ANY_TILT_S` for a tilt that is not periodic; None
+        when it is not."""
         needed = self.stimulus.whole_cycles_s
         if needed is None:
-            self.require_duration(MIN_ANY_TILT_S,
-                                  f"{MIN_ANY_TILT_S:g} s (the least for a tilt that is not "
-                                  "periodic)")
-        else:
-            self.require_duration(needed, f"one whole cycle of its stimulus "
-                                          f"({self.stimulus.description}: {needed:g} s)")
+            return self.shorter_than(MIN_ANY_TILT_S, f"{MIN_ANY_TILT_S:g} s (the least for a "
+                                                     "tilt that is not periodic)")
+        return self.shorter_than(needed, f"one whole cycle of its stimulus "
+                                         f"({self.stimulus.description}: {needed:g} s)")
+
+    def require_whole_cycle(self) -> None:
+        """Refuse a trial :meth:`whole_cycle_shortfall` finds too short."""
+        short = self.whole_cycle_shortfall()
+        if short is not None:
+            raise RecordingError(f"{self.name}: {short}")
 
 
 def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,

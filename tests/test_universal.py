@@ -340,7 +340,7 @@ def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_
     assert main(["identify", str(rec), "--method", "cnn", "--out", str(out)]) == 0
     result = json.loads(out.read_text())
     outside = result["cnn"]["outside"]
-    assert any("stimulus: peak-to-peak tilt outside" in o for o in outside), outside
+    assert any("stimulus: peak-to-peak tilt 0.3° outside the 0.5–4°" in o for o in outside), outside
     assert not any("body" in o for o in outside)  # the TIP itself is inside
     assert result["trust"]["doubtful"]
 
@@ -369,3 +369,34 @@ def test_ece_of_calibrated_and_overconfident_probabilities():
     assert _ece(p, truth) < 0.005  # calibrated
     sharp = np.where(p > 0.5, 0.999, 0.001)  # always sure, right 75 % of the time
     assert _ece(sharp, truth) == pytest.approx(0.249, abs=0.005)
+
+
+@pytest.mark.parametrize(("states", "state_s", "amplitude", "cycles", "expected"), [
+    (80, 0.2, 4.0, 3, ""),            # the scope's edges are inside it
+    (242, 0.3, 0.5, 1, ""),
+    (80, 0.25, 1.0, 2, ""),           # 40 s: two 80-state cycles
+    (80, 0.25, 1.0, 12, ""),          # 240 s
+    (80, 0.25, 4.5, 2, "peak-to-peak tilt 4.46° outside the 0.5–4°"),
+    (80, 0.35, 1.0, 2, "states of 0.35 s outside the 0.2–0.3 s"),
+    (80, 0.25, 1.0, 1, "1 whole cycle of 20 s analysed; the universal model was trained on 2–12"),
+    (80, 0.25, 1.0, 14, "14 whole cycles of 20 s analysed"),
+])
+def test_the_stimulus_is_checked_against_the_scope_s_own_ranges(states, state_s, amplitude,
+                                                                  cycles, expected):
+    from posture_id.learning.universal.harmonics import harmonic_layout
+    from posture_id.learning.universal.identifier import stimulus_outside
+    from posture_id.learning.universal.scope import UniversalScope
+    from posture_id.simulation.stimulus import prts
+
+    stimulus = prts(amplitude, cycles, states, state_s)
+    t = np.arange(round(stimulus.duration * 50) + 1) / 50
+    layout = harmonic_layout(stimulus.angle(t), 50.0, stimulus.period_s)
+    out = stimulus_outside(UniversalScope(), layout, stimulus.states, "rec.csv, stimulus")
+    if expected:
+        assert len(out) == 1 and expected in out[0], out
+    else:
+        assert out == []
+    # a periodic tilt of unknown states: its period is checked
+    out = stimulus_outside(UniversalScope(), layout, None, "rec.csv, stimulus")
+    period_ok = 16 <= stimulus.period_s <= 72.6
+    assert any("a cycle of" in o for o in out) == (not period_ok)

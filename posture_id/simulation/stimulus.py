@@ -58,6 +58,7 @@ class TiltProfile:
         period_s: s, the period of a periodic stimulus (one PRTS cycle), None otherwise.
         periodic_from_s: s, when the periodic part starts (after a lead-in and the
             platform's lag); 0 for a stimulus that starts at once.
+        states: the states of a PRTS's cycle (242 or 80), None for another tilt.
     """
 
     times: np.ndarray
@@ -65,6 +66,7 @@ class TiltProfile:
     description: str = "tilt"
     period_s: float | None = None
     periodic_from_s: float = 0.0
+    states: int | None = None
 
     @property
     def whole_cycles_s(self) -> float | None:
@@ -103,7 +105,7 @@ class TiltProfile:
                            np.interp(np.concatenate([[0.0], times[keep], [end]]) - offset_s,
                                      self.times, self.angles),
                            f"{self.description}, offset {offset_s:+.3f} s", self.period_s,
-                           self.periodic_from_s)
+                           self.periodic_from_s, self.states)
 
     def spanning(self, duration_s: float) -> TiltProfile:
         """The same tilt over exactly ``duration_s``: cut there (a recording shorter than
@@ -121,7 +123,7 @@ class TiltProfile:
             times = np.concatenate([self.times, [duration_s]])
             angles = np.concatenate([self.angles, [self.angles[-1]]])
         return TiltProfile(times, angles, self.description, self.period_s,
-                           self.periodic_from_s)
+                           self.periodic_from_s, self.states)
 
     def on_grid(self, dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
         """Tilt and tilt velocity at t = n·dt, n = 0..n_steps → two (n_steps + 1,) arrays."""
@@ -226,6 +228,7 @@ def prts(
                     + "".join(f", {e}" for e in extras),
         period_s=states * state_s,
         periodic_from_s=delay,
+        states=states,
     )
 
 

@@ -36,23 +36,28 @@ from posture_id.learning.universal.features import (
     body_descriptors,
     com_weights,
 )
-from posture_id.learning.universal.harmonics import harmonic_layout, sway_harmonics
+from posture_id.learning.universal.harmonics import (
+    HarmonicLayout,
+    harmonic_layout,
+    sway_harmonics,
+)
 from posture_id.learning.universal.model import SIDECAR, ModelError, UniversalModel
 from posture_id.learning.universal.samples import inputs_and_noise_ratio, module_inputs
+from posture_id.learning.universal.scope import UniversalScope
 from posture_id.provenance import body_identity, provenance
 from posture_id.simulation.stimulus import LAB_STATE_RANGE_S
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
 
-__all__ = ["UniversalIdentifier", "BUNDLED_DIR", "is_universal_model"]
+__all__ = ["UniversalIdentifier", "BUNDLED_DIR", "is_universal_model", "stimulus_outside"]
 
 #: The bundled universal model (made by ``make models``).
 BUNDLED_DIR = Path(__file__).resolve().parent / "models" / "universal"
+#: The body's descriptors (:func:`~.features.body_descriptors`) in words.
 _DESCRIPTOR_NAMES = ("ankle column", "knee column", "hip column", "1 segment", "2 segments",
                      "3 segments", "time scale", "coupling below", "coupling above",
-                     "m·g·h ratio below", "m·g·h ratio above", "peak-to-peak tilt",
-                     "tilt velocity", "period", "number of cycles")
+                     "m·g·h ratio below", "m·g·h ratio above")
 
 
 def is_universal_model(folder: str | Path) -> bool:
@@ -110,7 +115,8 @@ class UniversalIdentifier:
 
     def _outside(self, values: np.ndarray, columns: range, what: str) -> list[str]:
         """What of ``values`` (…, len(columns)), the descriptors ``columns``, lies outside
-        the training inputs' 0.5–99.5 % range."""
+        the training inputs' 0.5–99.5 % range (the body's: drawn bodies have no simpler
+        bounds; the stimulus is checked against the scope, :func:`stimulus_outside`)."""
         ranges = self.model.sidecar.get("ranges", {})
         low, high = ranges.get("descriptors_low"), ranges.get("descriptors_high")
         if low is None:
@@ -172,9 +178,9 @@ class UniversalIdentifier:
         n = self.body.n_segments
         ratio = float(ratios[0])
         regime = str(regime_of(n, ratio))
-        outside = list(self.body_outside) + self._outside(
-            inputs[0, -4:], range(DESCRIPTORS - 4, DESCRIPTORS), f"{trial.name}, stimulus")
-        if not trial.stimulus.description.startswith("PRTS"):
+        outside = list(self.body_outside) + stimulus_outside(
+            self.model.scope, layout, trial.stimulus.states, f"{trial.name}, stimulus")
+        if trial.stimulus.states is None:
             outside.append(f"{trial.name}: the stimulus ({trial.stimulus.description}) is "
                            "periodic but not a PRTS; the model was trained on PRTSs only")
         if ratio > self.model.sidecar.get("ranges", {}).get("noise_ratio_high", math.inf):
@@ -212,6 +218,50 @@ class UniversalIdentifier:
             notices=notices, outside=tuple(outside),
             provenance={**provenance(None, self.body, recording=trial.name),
                         "body": body_identity(self.body)})
+
+
+#: Relative slack of the stimulus checks: a lab's 4° is 4° however it was rounded or
+#: sampled (samples miss a PRTS's corners: 4.5° reads 4.46°).
+_SCOPE_SLACK = 0.02
+
+
+def stimulus_outside(scope: UniversalScope, layout: HarmonicLayout, states: int | None,
+                     what: str) -> list[str]:
+    """What of a recording's stimulus lies outside the scope the model was trained on,
+    in sentences: the peak-to-peak tilt, the PRTS's length and state duration (for a
+    periodic tilt of unknown states, its period), and the whole cycles analysed (training
+    drew a recording's length within ``scope.duration_s`` and analysed the whole cycles in
+    it, at least one). Each is checked against the scope's own range (with
+    :data:`_SCOPE_SLACK`), so a stimulus at its edge (a 4° or a 0.5° tilt, 0.2 s states)
+    is inside."""
+    def within(value: float, low: float, high: float) -> bool:
+        return low * (1 - _SCOPE_SLACK) <= value <= high * (1 + _SCOPE_SLACK)
+
+    out = []
+    lo, hi = scope.amplitude_deg
+    if not within(layout.amplitude_deg, lo, hi):
+        out.append(f"{what}: peak-to-peak tilt {layout.amplitude_deg:.3g}° outside the "
+                   f"{lo:g}–{hi:g}° the universal model was trained on")
+    period = layout.period_samples / layout.sample_rate_hz
+    lo, hi = scope.state_s
+    if states is not None and states not in scope.states:
+        out.append(f"{what}: a PRTS of {states} states; the universal model was trained on "
+                   f"{' and '.join(str(n) for n in scope.states)} states")
+    elif states is not None and not within(period / states, lo, hi):
+        out.append(f"{what}: states of {period / states:.3g} s outside the {lo:g}–{hi:g} s "
+                   "the universal model was trained on")
+    elif states is None and not within(period, min(scope.states) * lo, max(scope.states) * hi):
+        out.append(f"{what}: a cycle of {period:.3g} s outside the "
+                   f"{min(scope.states) * lo:.3g}–{max(scope.states) * hi:.3g} s the universal "
+                   "model was trained on")
+    shortest, longest = scope.duration_s
+    fewest = max(1, math.floor(shortest / period * (1 + _SCOPE_SLACK)))
+    most = max(1, math.floor(longest / period * (1 + _SCOPE_SLACK)))
+    if not fewest <= layout.cycles <= most:
+        out.append(f"{what}: {layout.cycles} whole cycle{'s' if layout.cycles > 1 else ''} "
+                   f"of {period:.3g} s analysed; the universal model was trained on "
+                   f"{fewest}–{most} of them (recordings of {shortest:g}–{longest:g} s)")
+    return out
 
 
 #: Stimulus layouts an identifier keeps (a study has few stimuli).

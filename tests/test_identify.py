@@ -190,3 +190,27 @@ def test_a_doubtful_fit_of_a_tilt_the_network_cannot_read_is_not_sent_to_it():
     assert "--locked" not in suggestion(Method.FIT, False, None, ("ankle kp at its upper "
                                                                   "bound (3)",), noisy,
                                         whole_cycles=False)
+
+
+def test_auto_keeps_the_network_s_answer_when_noise_leaves_least_squares_nothing_to_add(tip):
+    """Motor-noisy sway, three quarters of it stimulus-locked (not people-like): the
+    network's answer explains the locked sway as well as its noise allows, and that noise
+    leaves about a quarter of it, so no answer can be checked to 10 %. Least squares on the
+    same sway would end further from the truth (docs/universal.md, "The default method"):
+    ``auto`` keeps the network's answer and suggests a longer recording."""
+    from posture_id.dec.parameters import default_parameters
+    from posture_id.simulation.noise import MotorNoise
+
+    truth = default_parameters(tip)
+    trial = simulate(tip, truth, motor_noise=MotorNoise(0.1, seed=1))
+    rng = np.random.default_rng(1)
+    noisy = trial.theta + np.radians(0.05) * rng.standard_normal(trial.theta.shape)
+    result = identify(Recording(trial.time, trial.tilt, noisy, trial.segments), tip)
+    verdict = result.verdict
+    assert verdict.locked_share > 0.6 and verdict.noise.consistent
+    assert verdict.noise.noise_relative > 0.1 and verdict.doubtful
+    assert result.method is Method.CNN and result.fit is None
+    assert not any("refined by least squares" in n for n in result.notices)
+    assert verdict.suggestion.startswith("a longer recording")
+    for joint in tip.joint_names:
+        assert abs(result.parameters[joint].kp / truth[joint].kp - 1) <= 0.15, joint

@@ -400,3 +400,53 @@ def test_the_stimulus_is_checked_against_the_scope_s_own_ranges(states, state_s,
     out = stimulus_outside(UniversalScope(), layout, None, "rec.csv, stimulus")
     period_ok = 16 <= stimulus.period_s <= 72.6
     assert any("a cycle of" in o for o in out) == (not period_ok)
+
+
+def test_an_ensemble_s_members_combine_into_their_mixture_and_round_trip(tmp_path):
+    """Two members whose outputs are constants: the prediction is the mean of their means
+    and logits, with the SD of their mixture; saved and loaded alike; a one-perceptron
+    state dict of before (keys ``layers.*``) loads into today's network."""
+    import torch
+
+    from posture_id.learning.universal.model import UniversalModel
+    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+    from posture_id.learning.universal.training import _loss
+
+    config = UniversalNetworkConfig(inputs=6, hidden=(4,), members=2)
+    net = UniversalNetwork(config)
+    outputs = torch.tensor([[0.2, -0.1, 0.0, 0.4, np.log(0.1), 0, 0, 0, 2.0],
+                            [0.6, -0.1, 0.0, 0.0, np.log(0.2), 0, 0, 0, -1.0]])
+    with torch.no_grad():
+        for member, out in zip(net.members, outputs, strict=True):
+            member[-1].weight.zero_()
+            member[-1].bias.copy_(out)
+    std = np.array([2.0, 1.0, 1.0, 1.0])
+    model = UniversalModel(net, np.zeros(6), np.ones(6), np.zeros(4), std)
+    pred = model.predict(np.ones((3, 6), np.float32))
+    assert np.allclose(pred.mean[:, 0], 2.0 * 0.4) and np.allclose(pred.mean[:, 3], 0.2)
+    assert np.allclose(pred.logit, 0.5)
+    expected = np.sqrt(np.mean(np.square([0.1 * 2, 0.2 * 2])) + np.var([0.4, 1.2]))
+    assert np.allclose(pred.sd[:, 0], expected)
+    assert np.allclose(pred.sd[:, 1], 1.0)  # exp(0) × 1, members agreeing
+    model.save(tmp_path / "ens")
+    loaded = UniversalModel.load(tmp_path / "ens")
+    assert loaded.network.config.members == 2
+    assert np.allclose(loaded.predict(np.ones((3, 6), np.float32)).sd, pred.sd)
+    # a one-perceptron network saved before members existed
+    one = UniversalNetwork(UniversalNetworkConfig(inputs=6, hidden=(4,)))
+    old = {k.replace("members.0.", "layers."): v for k, v in one.state_dict().items()}
+    again = UniversalNetwork(UniversalNetworkConfig(inputs=6, hidden=(4,)))
+    again.load_state_dict(UniversalNetwork.upgrade_state(old))
+    x = torch.ones(2, 6)
+    assert torch.equal(one.eval()(x), again.eval()(x))
+    # the loss: members' own losses averaged for training, the deployed mean validated
+    target = torch.tensor([[0.5, 0.0, 0.0, 0.0, 1.0]])
+    same = torch.stack([outputs[0], outputs[0]])[:, None, :]
+    train_two, val_two = _loss(same, target)
+    train_one, val_one = _loss(same[:1], target)
+    assert torch.isclose(train_two, train_one) and torch.isclose(val_two, val_one)
+    _, val_mixed = _loss(outputs[:, None, :], target)
+    mean = outputs[:, :4].mean(0)
+    deployed = ((target[0, :4] - mean) ** 2).mean() + torch.nn.functional.softplus(
+        -outputs[:, 8].mean())
+    assert torch.isclose(val_mixed, deployed)

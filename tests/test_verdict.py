@@ -116,3 +116,25 @@ def test_a_parameter_on_a_search_bound_is_named(tip):
     assert any("on a search bound: ankle kp at its upper bound" in r
                for r in result.verdict.reasons)
     assert "--gain-range" in result.verdict.suggestion
+
+
+@pytest.mark.parametrize(("share", "ratio", "noise_relative", "outside", "helps", "suggested"), [
+    (0.8, 1.0, 0.3, (), False, "a longer recording"),   # unchecked: as good as the noise
+    (0.8, 3.0, 0.05, (), True, "--method hybrid"),       # a far answer on clean sway
+    (0.8, 3.0, 0.3, (), True, "--method hybrid"),        # more than the noise leaves
+    (0.4, 3.0, 0.05, (), False, "--method hybrid --locked --prior-sd 0.5"),  # people-like
+    (0.9, 1.0, 0.05, ("the body is outside",), True, "--method hybrid"),
+])
+def test_auto_refines_only_where_least_squares_can_do_better(share, ratio, noise_relative,
+                                                             outside, helps, suggested):
+    from posture_id.identify.core import refinement_can_help
+    from posture_id.identify.noise_check import NoiseCheck
+    from posture_id.identify.verdict import TrustVerdict, suggestion
+
+    noise = NoiseCheck(ratio, "locked", 0.001, relative=max(noise_relative, 0.2) * ratio,
+                       noise_relative=noise_relative)
+    verdict = TrustVerdict(noise, (), outside, share)
+    assert verdict.doubtful
+    assert refinement_can_help(verdict) is helps
+    assert suggestion(Method.CNN, False, share, (), noise,
+                      network_reads_people_like=True).startswith(suggested)

@@ -59,6 +59,8 @@ def add_parser(sub) -> None:
                    help="dropout after each hidden layer (default: UniversalNetworkConfig's)")
     t.add_argument("--weight-decay", type=non_negative_float,
                    help="AdamW's weight decay (default: UniversalTrainingConfig's)")
+    t.add_argument("--members", type=positive_int, default=1,
+                   help="perceptrons trained together as an ensemble (default 1)")
     t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     t.add_argument("--threads", type=positive_int, help="torch threads (default: all cores)")
     t.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -111,8 +113,8 @@ def run_train(args: argparse.Namespace) -> int:
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
                                ("weight_decay", args.weight_decay)) if v is not None}
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads, **given)
-    network = (UniversalNetworkConfig() if args.dropout is None
-               else UniversalNetworkConfig(dropout=args.dropout))
+    network = UniversalNetworkConfig(members=args.members, **(
+        {} if args.dropout is None else {"dropout": args.dropout}))
     with TerminalProgress("epoch", prefix="posture-id universal train",
                           quiet=args.quiet) as progress:
         train_universal(args.data, args.out, config, network, progress=progress, log=say)

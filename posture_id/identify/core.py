@@ -35,7 +35,7 @@ from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.networks import Network, network_for
-from posture_id.identify.noise_check import noise_check
+from posture_id.identify.noise_check import CLOSE_ENOUGH, noise_check
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.identify.verdict import PEOPLE_LIKE_SHARE, TrustVerdict, suggestion
 from posture_id.learning.identifier import DEFAULT_LEVEL
@@ -189,10 +189,10 @@ class Identifier:
     def _auto(self, trial: PreparedTrial, progress: Progress | None,
               start: float) -> IdentificationResult:
         """:attr:`Method.AUTO`: the network's answer, refined by least squares (the hybrid)
-        when its verdict is doubtful and the sway is not people-like (least squares on
-        sway that is mostly the subject's own fits that too); least squares from the
-        body's defaults when the network cannot read the recording (a tilt that is not
-        periodic, or less than one whole cycle of it)."""
+        when its verdict is doubtful and least squares can do better
+        (:func:`refinement_can_help`); least squares from the body's defaults when the
+        network cannot read the recording (a tilt that is not periodic, or less than one
+        whole cycle of it)."""
         unread = _unreadable_by_network(trial)
         if unread is not None:
             fitted = self._as(Method.FIT).identify_trial(trial, progress, start)
@@ -201,15 +201,30 @@ class Identifier:
                 "defaults (--method auto)", *fitted.notices))
         answer = self._as(Method.CNN).identify_trial(trial, progress, start)
         verdict = answer.verdict
-        share = verdict.locked_share
-        people_like = share is not None and share < PEOPLE_LIKE_SHARE
-        if not verdict.doubtful or people_like:
+        if not verdict.doubtful or not refinement_can_help(verdict):
             return answer
         refined = self._as(Method.HYBRID).identify_trial(trial, progress, start)
         why = "; ".join(verdict.reasons)
         return replace(refined, notices=(
             f"{trial.name}: the network's answer was doubtful ({why}): refined by least "
             "squares (--method auto)", *refined.notices))
+
+
+def refinement_can_help(verdict: TrustVerdict) -> bool:
+    """Whether least squares from the network's doubtful answer can be expected to do
+    better (``auto``'s rule, measured in docs/universal.md, "The default method"). Not
+    when the sway is people-like (least squares fits the subject's own sway too), nor when
+    the network's answer already explains the recording as well as its noise allows and
+    that noise alone leaves more than :data:`~posture_id.identify.noise_check.
+    CLOSE_ENOUGH` of the locked sway: then the doubt is that no answer can be checked on
+    this recording, and least squares on the same noisy sway ends further from the truth
+    than the network (motor-noisy sway, 45–94 % locked)."""
+    share = verdict.locked_share
+    if share is not None and share < PEOPLE_LIKE_SHARE:
+        return False
+    noise = verdict.noise
+    return not (noise is not None and noise.consistent
+                and noise.noise_relative > CLOSE_ENOUGH)
 
 
 def _unreadable_by_network(trial: PreparedTrial) -> str | None:

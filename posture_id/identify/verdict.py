@@ -137,8 +137,10 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
       ``--locked``, other than by a network trained on it (the universal model):
       :data:`LOCKED_FLAGS`;
     - least squares on a recording whose noise alone leaves more than
-      :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the locked sway: a longer
-      recording (nothing fitted to it can be checked);
+      :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the locked sway, or the
+      CNN whose answer explains such a recording as well as its noise allows: a longer
+      recording (nothing fitted to it can be checked, and least squares on the same sway
+      does no better);
     - the CNN alone: ``--method hybrid`` (least squares from its answer);
     - least squares on a bound: for a locked fit without a prior, ``--prior-sd 0.5`` (a
       noisy recording leaves some parameters free to run to a bound; the prior holds
@@ -163,8 +165,8 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
     if people_like and not locked and not (method is Method.CNN and network_reads_people_like):
         return LOCKED_FLAGS
-    if (noise is not None and not noise.acceptable
-            and noise.noise_relative > CLOSE_ENOUGH and method is not Method.CNN):
+    if (noise is not None and not noise.acceptable and noise.noise_relative > CLOSE_ENOUGH
+            and (method is not Method.CNN or (noise.consistent and not people_like))):
         return ("a longer recording (more stimulus cycles to average): its noise alone "
                 f"leaves {100 * noise.noise_relative:.0f} % of the locked sway, so no answer "
                 f"can be checked to {100 * CLOSE_ENOUGH:g} %")

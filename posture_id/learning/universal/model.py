@@ -17,7 +17,11 @@ from posture_id._version import __version__
 from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
 from posture_id.learning.universal.features import UNIVERSAL_FEATURE_DEFINITION
-from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+from posture_id.learning.universal.network import (
+    OUTPUTS,
+    UniversalNetwork,
+    UniversalNetworkConfig,
+)
 from posture_id.learning.universal.scope import UniversalScope
 
 __all__ = ["UniversalModel", "UniversalPrediction", "ModelError", "FORMAT", "WEIGHTS",
@@ -69,16 +73,20 @@ class UniversalModel:
     @torch.inference_mode()
     def predict(self, inputs: np.ndarray, batch_size: int = 8192) -> UniversalPrediction:
         """Predictions for (M, N_INPUTS) unstandardised inputs (the network in evaluation
-        mode: no dropout)."""
+        mode: no dropout). An ensemble's members are combined: the mean of their means and
+        logits, and the SD of their mixture, √(mean of their variances + the variance of
+        their means)."""
         if self.network.training:
             self.network.eval()
+        members = self.network.config.members
         outs = [self.network(self.standardise(inputs[i : i + batch_size])).numpy()
                 for i in range(0, len(inputs), batch_size)]
-        out = np.concatenate(outs) if outs else np.zeros((0, 9), np.float32)
-        out = out.astype(np.float64)
-        mean = out[:, :4] * self.target_std + self.target_mean
-        sd = np.exp(np.clip(out[:, 4:8], -12, 6)) * self.target_std
-        return UniversalPrediction(mean, sd, out[:, 8])
+        out = (np.concatenate(outs, axis=1) if outs
+               else np.zeros((members, 0, OUTPUTS), np.float32)).astype(np.float64)
+        means = out[..., :4] * self.target_std + self.target_mean
+        sds = np.exp(np.clip(out[..., 4:8], -12, 6)) * self.target_std
+        sd = np.sqrt(np.mean(sds**2, axis=0) + np.var(means, axis=0))
+        return UniversalPrediction(means.mean(axis=0), sd, out[..., 8].mean(axis=0))
 
     def tensors(self) -> dict[str, torch.Tensor]:
         out = {f"network.{k}": v.detach().contiguous()
@@ -126,14 +134,15 @@ class UniversalModel:
                              "(SHA-256 differs)")
         arch = sidecar["architecture"]
         config = UniversalNetworkConfig(int(arch["inputs"]), tuple(arch["hidden"]),
-                                        float(arch["dropout"]))
+                                        float(arch["dropout"]), int(arch.get("members", 1)))
         try:
             tensors = load_file(str(weights))
         except SafetensorError as exc:
             raise ModelError(f"{weights}: cannot be read ({exc})") from None
         network = UniversalNetwork(config)
-        network.load_state_dict({k.removeprefix("network."): v for k, v in tensors.items()
-                                 if k.startswith("network.")})
+        network.load_state_dict(UniversalNetwork.upgrade_state(
+            {k.removeprefix("network."): v for k, v in tensors.items()
+             if k.startswith("network.")}))
         network.eval()
         std = {k.removeprefix("standardiser."): v.numpy() for k, v in tensors.items()
                if k.startswith("standardiser.")}

@@ -62,14 +62,19 @@ def _device() -> torch.device:
 
 
 def _loss(out: torch.Tensor, target: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """(training loss, validation loss) of a batch; ``target`` (B, 5) standardised
-    continuous targets then the class (±1)."""
-    mean, log_sd, logit = out[:, :4], out[:, 4:8].clamp(-8, 6), out[:, 8]
+    """(training loss, validation loss) of a batch: ``out`` (K, B, 9) of K members,
+    ``target`` (B, 5) standardised continuous targets then the class (±1). The training
+    loss is the members' mean of their own; the validation loss is that of what is
+    deployed, the members' mean estimate and logit (for one member, the same thing)."""
+    mean, log_sd, logit = out[..., :4], out[..., 4:8].clamp(-8, 6), out[..., 8]
+    label = (target[:, 4] > 0).float()
     err = target[:, :4] - mean
     mse = (err**2).mean()
     nll = (log_sd + 0.5 * (err.detach() ** 2) * torch.exp(-2 * log_sd)).mean()
-    bce = torch.nn.functional.binary_cross_entropy_with_logits(logit, (target[:, 4] > 0).float())
-    return mse + 0.5 * nll + bce, mse + bce
+    bce = torch.nn.functional.binary_cross_entropy_with_logits(logit, label.expand_as(logit))
+    deployed = ((target[:, :4] - mean.mean(0)) ** 2).mean() \
+        + torch.nn.functional.binary_cross_entropy_with_logits(logit.mean(0), label)
+    return mse + 0.5 * nll + bce, deployed
 
 
 def _targets(samples: Samples, mean: np.ndarray, std: np.ndarray) -> torch.Tensor:
@@ -111,7 +116,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
                                   weight_decay=config.weight_decay)
     schedule = torch.optim.lr_scheduler.OneCycleLR(
         optimiser, max_lr=config.max_learning_rate, total_steps=config.epochs * steps + 1)
-    sets = _sets_identity(data)
+    sets = _sets_identity(data) + [{"network": asdict(network_config)}]
     state = _resume(out, net, optimiser, schedule, config, sets)
     best_state = state.pop("best_weights", None)
     history = state.get("history", [])
@@ -188,7 +193,8 @@ def _ranges(samples: Samples) -> dict:
 
 def _sets_identity(data) -> list[dict]:
     """What a resumed run must share with the interrupted one about its data: each set's
-    path, configuration and shard count, in order."""
+    path, configuration and shard count, in order (the network's configuration is added
+    to it)."""
     return [{"path": str(d.path.resolve()), "config": d.manifest["config"],
              "shards": len(d.manifest["shards"])} for d in data]
 

@@ -1,0 +1,157 @@
+"""When should ``auto`` refine the network's answer by least squares? Part-locked subjects.
+
+Run:  .venv/bin/python benchmarks/auto_rule.py [--subjects 40] [--workers 2]
+
+Subjects whose body COM sway is 60–95 % stimulus-locked (motor noise, not people-like:
+the sway the old rule refined whenever the network's verdict was doubtful), parameters
+from MODEL §5's prior, 0.05° sensor noise, the 242-state PRTS ×2 at 1°, on the TIP and
+Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg), the subjects' own seeds. Each is
+identified by the network alone, by the hybrid (least squares from the network's answer)
+on the raw sway and on the stimulus-locked sway, and by ``auto`` as it is now
+(:func:`~posture_id.identify.core.refinement_can_help`). Per method: subjects with every
+class right, the median and 90th percentile of |Kp error| over modules, and subjects
+with a module's Kp off by more than 10 %. Written to
+``benchmarks/results/auto_rule.{json,md}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.bodies.body import load_body
+from posture_id.dec.prior import sample_parameters
+from posture_id.errors import PostureIdError
+from posture_id.executors import executor_for
+from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fitting.options import FitOptions
+from posture_id.frf.locked import LockedOptions
+from posture_id.identify.core import Identifier, refinement_can_help
+from posture_id.identify.method import Method
+from posture_id.learning.universal.bodies import build_body
+from posture_id.learning.universal.scope import BodyDraw
+from posture_id.simulation.stimulus import prts
+from posture_id.simulation.subjects import people_like
+
+SEED = 0x4155544F
+BODIES = ("TIP", "Winter 1-seg", "Winter 2-seg", "Winter 3-seg")
+METHODS = ("network alone", "hybrid, raw sway", "hybrid, locked sway", "auto (this rule)",
+           "auto (before: every doubtful answer)")
+OUT = Path(__file__).resolve().parent / "results"
+
+
+def _body(name: str):
+    if name == "TIP":
+        return load_body()
+    n = int(name.split()[1][0])
+    return build_body(BodyDraw("winter", n, 1.75, 70.0, ((1.0, 1.0),) * n))
+
+
+def _subject(index: int, subjects: int) -> dict:
+    """One subject, identified every way: its row."""
+    rng = np.random.default_rng([SEED, index])
+    name = BODIES[index % len(BODIES)]
+    body = _body(name)
+    stimulus = prts(1.0, 2, 242)
+    for _attempt in range(20):
+        truth = sample_parameters(body, 1, rng).trial(0, body.joint_names)
+        share = float(rng.uniform(0.6, 0.95))
+        try:
+            subject = people_like(body, truth, stimulus, share, seed=int(rng.integers(2**31)))
+            break
+        except PostureIdError:
+            continue
+    else:
+        return {"index": index, "body": name, "skipped": True}
+    network = Identifier(body, Method.CNN)
+    recording = subject.recording
+    trial = network.prepare(recording, stimulus)
+    answers, seconds = {}, {}
+    began = time.perf_counter()
+    answers["network alone"] = cnn = network.identify_trial(trial)
+    seconds["network alone"] = time.perf_counter() - began
+    for method, options in (("hybrid, raw sway", FitOptions()),
+                            ("hybrid, locked sway", FitOptions(locked=LockedOptions()))):
+        began = time.perf_counter()
+        hybrid = Identifier(body, Method.HYBRID, fit_options=options)
+        hybrid.cnn = network.cnn
+        answers[method] = hybrid.identify_trial(trial)
+        seconds[method] = time.perf_counter() - began
+    refine_now = cnn.verdict.doubtful and refinement_can_help(cnn.verdict)
+    refine_before = cnn.verdict.doubtful
+    answers["auto (this rule)"] = answers["hybrid, raw sway"] if refine_now else cnn
+    answers["auto (before: every doubtful answer)"] = (answers["hybrid, raw sway"]
+                                                      if refine_before else cnn)
+    row = {"index": index, "body": name, "locked_share": subject.locked_share,
+           "verdict_doubtful": cnn.verdict.doubtful, "refined_now": refine_now,
+           "noise_relative": cnn.verdict.noise.noise_relative, "seconds": seconds}
+    for method, result in answers.items():
+        row[method] = {
+            "kp_error": [abs(result.parameters[j].kp / truth[j].kp - 1)
+                         for j in body.joint_names],
+            "classes_right": [result.parameters[j].controls == truth[j].controls
+                              for j in body.joint_names]}
+    return row
+
+
+def _summary(rows: list[dict]) -> dict:
+    out = {}
+    for method in METHODS:
+        kp = np.concatenate([r[method]["kp_error"] for r in rows])
+        worst = np.array([max(r[method]["kp_error"]) for r in rows])
+        out[method] = {
+            "subjects": len(rows),
+            "every_class_right_pct": 100 * float(np.mean(
+                [all(r[method]["classes_right"]) for r in rows])),
+            "kp_error_median_pct": 100 * float(np.median(kp)),
+            "kp_error_p90_pct": 100 * float(np.percentile(kp, 90)),
+            "kp_over_10pct": int(np.sum(worst > 0.10))}
+    return out
+
+
+def _markdown(summary: dict, rows: list[dict]) -> str:
+    refined = sum(r["refined_now"] for r in rows)
+    doubtful = sum(r["verdict_doubtful"] for r in rows)
+    lines = ["# `auto`'s rule on part-locked subjects", "",
+             "Made by `.venv/bin/python benchmarks/auto_rule.py` (its docstring says what). "
+             f"{len(rows)} subjects, 60–95 % of the body COM sway locked; the network's "
+             f"verdict was doubtful for {doubtful}, and this rule refined {refined} of them.",
+             "", "| method | every class right | median \\|Kp error\\| | 90th percentile | "
+             "subjects with a Kp off by > 10 % |", "|---|---|---|---|---|"]
+    for method, s in summary.items():
+        lines.append(f"| {method} | {s['every_class_right_pct']:.0f} % | "
+                     f"{s['kp_error_median_pct']:.1f} % | {s['kp_error_p90_pct']:.1f} % | "
+                     f"{s['kp_over_10pct']} of {s['subjects']} |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--subjects", type=int, default=40)
+    parser.add_argument("--workers", type=int, default=None)
+    parser.add_argument("--out", type=Path, default=OUT)
+    args = parser.parse_args()
+    executor = executor_for(None, args.workers, processes=True)
+    rows = []
+    try:
+        for index, row in executor.unordered(_subject, range(args.subjects), args.subjects):
+            rows.append(row)
+            print(f"subject {index + 1}: done ({len(rows)}/{args.subjects})", flush=True)
+    finally:
+        executor.close()
+    rows = sorted((r for r in rows if not r.get("skipped")), key=lambda r: r["index"])
+    summary = _summary(rows)
+    args.out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(args.out / "auto_rule.json", json_text({"summary": summary,
+                                                              "rows": rows}))
+    atomic_write_text(args.out / "auto_rule.md", _markdown(summary, rows))
+    print(_markdown(summary, rows))
+    print(json.dumps({m: s["kp_error_median_pct"] for m, s in summary.items()}))
+
+
+if __name__ == "__main__":
+    main()

@@ -214,3 +214,25 @@ def test_auto_keeps_the_network_s_answer_when_noise_leaves_least_squares_nothing
     assert verdict.suggestion.startswith("a longer recording")
     for joint in tip.joint_names:
         assert abs(result.parameters[joint].kp / truth[joint].kp - 1) <= 0.15, joint
+
+
+def test_auto_fits_a_body_the_network_does_not_identify(tmp_path):
+    """A chain of 4 segments is beyond the universal network (1 to 3 modules): ``auto``
+    takes least squares from the body's defaults for it, and says why; the network alone
+    is refused in one sentence."""
+    from posture_id.bodies.anthropometry import SegmentSpec, straight_links
+    from posture_id.bodies.body import load_body
+    from posture_id.bodies.urdf_writer import chain_urdf
+    from posture_id.identify import Identifier
+    from posture_id.learning.config import LearningError
+
+    parts = [SegmentSpec(link, joint, 0.5, mass, 0.25, mass * 0.5**2 / 12) for link, joint, mass
+             in (("shank", "ankle", 8.0), ("thigh", "knee", 12.0), ("trunk", "hip", 25.0),
+                 ("head", "neck", 5.0))]
+    urdf = tmp_path / "four.urdf"
+    urdf.write_text(chain_urdf("four_segments", straight_links(parts)))
+    body = load_body(urdf)
+    auto = Identifier(body)
+    assert auto.cnn is None and "1 to 3 segments" in auto.network_refusal
+    with pytest.raises(LearningError, match="1 to 3 segments; 'four_segments' has 4"):
+        Identifier(body, Method.CNN)

@@ -38,6 +38,7 @@ from posture_id.identify.networks import Network, network_for
 from posture_id.identify.noise_check import CLOSE_ENOUGH, noise_check
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.identify.verdict import PEOPLE_LIKE_SHARE, TrustVerdict, suggestion
+from posture_id.learning.config import LearningError
 from posture_id.learning.identifier import DEFAULT_LEVEL
 from posture_id.progress import Progress
 from posture_id.provenance import provenance
@@ -101,7 +102,16 @@ class Identifier:
         self.method = Method(method)
         self.fit_options = fit_options or FitOptions()
         self.level = level
-        self.cnn = None if self.method is Method.FIT else network_for(model, body)
+        #: why the bundled network cannot identify this body (``auto`` then fits), or None
+        self.network_refusal: str | None = None
+        self.cnn = None
+        if self.method is not Method.FIT:
+            try:
+                self.cnn = network_for(model, body)
+            except LearningError as error:
+                if self.method is not Method.AUTO or model is not None:
+                    raise
+                self.network_refusal = str(error)
 
     def prepare(self, recording: Recording, stimulus: TiltProfile | None = None
                 ) -> PreparedTrial:
@@ -192,8 +202,8 @@ class Identifier:
         when its verdict is doubtful and least squares can do better
         (:func:`refinement_can_help`); least squares from the body's defaults when the
         network cannot read the recording (a tilt that is not periodic, or less than one
-        whole cycle of it)."""
-        unread = _unreadable_by_network(trial)
+        whole cycle of it) or identify the body (more than 3 segments)."""
+        unread = self.network_refusal or _unreadable_by_network(trial)
         if unread is not None:
             fitted = self._as(Method.FIT).identify_trial(trial, progress, start)
             return replace(fitted, notices=(

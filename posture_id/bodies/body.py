@@ -318,7 +318,10 @@ def load_body(path: str | Path = DEFAULT_URDF) -> Body:
             parent = "the support" if up_joint == 0 else f"'{model.names[up_joint]}'"
             raise BodyError(
                 f"{path}: joint '{model.names[j]}' branches off {parent} instead of following "
-                f"'{model.names[j - 1]}': the body must be a single serial chain, not a tree"
+                f"'{model.names[j - 1]}': the body must be a single serial chain, not a tree "
+                f"(a whole humanoid: lump its legs and trunk into one first, `posture-id body "
+                f"--lump {path} --segments 3 --ankle-joints L R --knee-joints L R "
+                f"--hip-joints L R --out body.urdf`)"
             )
 
     data = model.createData()

@@ -7,8 +7,9 @@ the sway the old rule refined whenever the network's verdict was doubtful), para
 from MODEL §5's prior, 0.05° sensor noise, the 242-state PRTS ×2 at 1°, on the TIP and
 Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg), the subjects' own seeds. Each is
 identified by the network alone, by the hybrid (least squares from the network's answer)
-on the raw sway and on the stimulus-locked sway, and by ``auto`` as it is now
-(:func:`~posture_id.identify.core.refinement_can_help`). Per method: subjects with every
+on the raw sway and on the stimulus-locked sway, by ``auto`` as it is now
+(:func:`~posture_id.identify.core.auto_refinement`) and as it was (the raw hybrid for
+every doubtful answer on sway that is not people-like). Per method: subjects with every
 class right, the median and 90th percentile of |Kp error| over modules, and subjects
 with a module's Kp off by more than 10 %. Written to
 ``benchmarks/results/auto_rule.{json,md}``.
@@ -30,8 +31,9 @@ from posture_id.executors import executor_for
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.fitting.options import FitOptions
 from posture_id.frf.locked import LockedOptions
-from posture_id.identify.core import Identifier, refinement_can_help
+from posture_id.identify.core import Identifier, Refinement, auto_refinement
 from posture_id.identify.method import Method
+from posture_id.identify.verdict import PEOPLE_LIKE_SHARE
 from posture_id.learning.universal.bodies import build_body
 from posture_id.learning.universal.scope import BodyDraw
 from posture_id.simulation.stimulus import prts
@@ -81,13 +83,16 @@ def _subject(index: int, subjects: int) -> dict:
         hybrid.cnn = network.cnn
         answers[method] = hybrid.identify_trial(trial)
         seconds[method] = time.perf_counter() - began
-    refine_now = cnn.verdict.doubtful and refinement_can_help(cnn.verdict)
-    refine_before = cnn.verdict.doubtful
-    answers["auto (this rule)"] = answers["hybrid, raw sway"] if refine_now else cnn
-    answers["auto (before: every doubtful answer)"] = (answers["hybrid, raw sway"]
-                                                      if refine_before else cnn)
+    how = auto_refinement(cnn.verdict)
+    share = cnn.verdict.locked_share
+    unlocked = share is not None and share < PEOPLE_LIKE_SHARE
+    answers["auto (this rule)"] = {Refinement.KEEP: cnn,
+                                   Refinement.RAW: answers["hybrid, raw sway"],
+                                   Refinement.LOCKED: answers["hybrid, locked sway"]}[how]
+    answers["auto (before: every doubtful answer)"] = (
+        answers["hybrid, raw sway"] if cnn.verdict.doubtful and not unlocked else cnn)
     row = {"index": index, "body": name, "locked_share": subject.locked_share,
-           "verdict_doubtful": cnn.verdict.doubtful, "refined_now": refine_now,
+           "verdict_doubtful": cnn.verdict.doubtful, "refinement": how.value,
            "noise_relative": cnn.verdict.noise.noise_relative, "seconds": seconds}
     for method, result in answers.items():
         row[method] = {
@@ -114,12 +119,14 @@ def _summary(rows: list[dict]) -> dict:
 
 
 def _markdown(summary: dict, rows: list[dict]) -> str:
-    refined = sum(r["refined_now"] for r in rows)
+    counts = {k: sum(r["refinement"] == k for r in rows) for k in ("keep", "raw", "locked")}
     doubtful = sum(r["verdict_doubtful"] for r in rows)
     lines = ["# `auto`'s rule on part-locked subjects", "",
              "Made by `.venv/bin/python benchmarks/auto_rule.py` (its docstring says what). "
              f"{len(rows)} subjects, 60–95 % of the body COM sway locked; the network's "
-             f"verdict was doubtful for {doubtful}, and this rule refined {refined} of them.",
+             f"verdict was doubtful for {doubtful}; this rule kept {counts['keep']} answers, "
+             f"refined {counts['locked']} on the locked sway and {counts['raw']} on the raw "
+             "sway.",
              "", "| method | every class right | median \\|Kp error\\| | 90th percentile | "
              "subjects with a Kp off by > 10 % |", "|---|---|---|---|---|"]
     for method, s in summary.items():

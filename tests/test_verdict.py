@@ -118,16 +118,16 @@ def test_a_parameter_on_a_search_bound_is_named(tip):
     assert "--gain-range" in result.verdict.suggestion
 
 
-@pytest.mark.parametrize(("share", "ratio", "noise_relative", "outside", "helps", "suggested"), [
-    (0.8, 1.0, 0.3, (), False, "a longer recording"),   # unchecked: as good as the noise
-    (0.8, 3.0, 0.05, (), True, "--method hybrid"),       # a far answer on clean sway
-    (0.8, 3.0, 0.3, (), True, "--method hybrid"),        # more than the noise leaves
-    (0.4, 3.0, 0.05, (), False, "--method hybrid --locked --prior-sd 0.5"),  # people-like
-    (0.9, 1.0, 0.05, ("the body is outside",), True, "--method hybrid"),
+@pytest.mark.parametrize(("share", "ratio", "noise_relative", "outside", "how", "suggested"), [
+    (0.8, 1.0, 0.3, (), "locked", "--method hybrid --locked"),  # as good as the noise
+    (0.8, 3.0, 0.05, (), "raw", "--method hybrid"),       # a far answer on clean sway
+    (0.8, 3.0, 0.3, (), "raw", "--method hybrid"),        # more than the noise leaves
+    (0.4, 3.0, 0.05, (), "keep", "--method hybrid --locked --prior-sd 0.5"),  # people-like
+    (0.9, 1.0, 0.05, ("the body is outside",), "raw", "--method hybrid"),
 ])
-def test_auto_refines_only_where_least_squares_can_do_better(share, ratio, noise_relative,
-                                                             outside, helps, suggested):
-    from posture_id.identify.core import refinement_can_help
+def test_auto_refines_a_doubtful_answer_on_the_sway_that_suits_it(share, ratio, noise_relative,
+                                                                  outside, how, suggested):
+    from posture_id.identify.core import auto_refinement
     from posture_id.identify.noise_check import NoiseCheck
     from posture_id.identify.verdict import TrustVerdict, suggestion
 
@@ -135,6 +135,7 @@ def test_auto_refines_only_where_least_squares_can_do_better(share, ratio, noise
                        noise_relative=noise_relative)
     verdict = TrustVerdict(noise, (), outside, share)
     assert verdict.doubtful
-    assert refinement_can_help(verdict) is helps
-    assert suggestion(Method.CNN, False, share, (), noise,
-                      network_reads_people_like=True).startswith(suggested)
+    assert auto_refinement(verdict).value == how
+    line = suggestion(Method.CNN, False, share, (), noise, network_reads_people_like=True)
+    assert line == suggested
+    assert auto_refinement(TrustVerdict(None, (), (), share)).value == "keep"

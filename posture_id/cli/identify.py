@@ -45,9 +45,9 @@ def add_parser(sub) -> None:
                    help="cnn: the network alone, milliseconds; fit: least squares "
                         "from the defaults; hybrid: least squares from the CNN's answer; "
                         "auto: the network, then the hybrid where its answer is doubtful "
-                        "and least squares can do better: not on people-like sway, nor on "
-                        "sway too noisy to check an answer that explains it as well as "
-                        "its noise allows (default %(default)s)")
+                        "and the sway is not people-like (on the stimulus-locked sway when "
+                        "the recording is too noisy to check an answer) (default "
+                        "%(default)s)")
     p.add_argument("--out", type=Path, required=True,
                    help="result JSON (its \"parameters\" object is a parameter file); for a "
                         "cohort, a folder: one JSON per recording and summary.csv")

@@ -23,6 +23,7 @@ body-sway errors E_id and E_rel (MODEL §7) and each segment's residual.
 from __future__ import annotations
 
 import copy
+import enum
 import math
 import time
 from dataclasses import replace
@@ -199,8 +200,8 @@ class Identifier:
     def _auto(self, trial: PreparedTrial, progress: Progress | None,
               start: float) -> IdentificationResult:
         """:attr:`Method.AUTO`: the network's answer, refined by least squares (the hybrid)
-        when its verdict is doubtful and least squares can do better
-        (:func:`refinement_can_help`); least squares from the body's defaults when the
+        when its verdict is doubtful (:func:`auto_refinement`: on the locked sway when the
+        recording is too noisy to check it); least squares from the body's defaults when the
         network cannot read the recording (a tilt that is not periodic, or less than one
         whole cycle of it) or identify the body (more than 3 segments)."""
         unread = self.network_refusal or _unreadable_by_network(trial)
@@ -211,30 +212,52 @@ class Identifier:
                 "defaults (--method auto)", *fitted.notices))
         answer = self._as(Method.CNN).identify_trial(trial, progress, start)
         verdict = answer.verdict
-        if not verdict.doubtful or not refinement_can_help(verdict):
+        how = auto_refinement(verdict)
+        if how is Refinement.KEEP:
             return answer
-        refined = self._as(Method.HYBRID).identify_trial(trial, progress, start)
+        hybrid = self._as(Method.HYBRID)
+        on = "the sway"
+        if how is Refinement.LOCKED:
+            on = "the stimulus-locked sway"
+            if self.fit_options.locked is None:
+                hybrid.fit_options = replace(self.fit_options, locked=LockedOptions())
+        refined = hybrid.identify_trial(trial, progress, start)
         why = "; ".join(verdict.reasons)
         return replace(refined, notices=(
             f"{trial.name}: the network's answer was doubtful ({why}): refined by least "
-            "squares (--method auto)", *refined.notices))
+            f"squares on {on} (--method auto)", *refined.notices))
 
 
-def refinement_can_help(verdict: TrustVerdict) -> bool:
-    """Whether least squares from the network's doubtful answer can be expected to do
-    better (``auto``'s rule, measured in docs/universal.md, "The default method"). Not
-    when the sway is people-like (least squares fits the subject's own sway too), nor when
-    the network's answer already explains the recording as well as its noise allows and
-    that noise alone leaves more than :data:`~posture_id.identify.noise_check.
-    CLOSE_ENOUGH` of the locked sway: then the doubt is that no answer can be checked on
-    this recording, and least squares on the same noisy sway ends further from the truth
-    than the network (motor-noisy sway, 45–94 % locked)."""
+class Refinement(enum.Enum):
+    """What ``auto`` does with the network's answer (:func:`auto_refinement`)."""
+
+    #: keep it
+    KEEP = "keep"
+    #: least squares from it on every sample of the sway (the hybrid)
+    RAW = "raw"
+    #: least squares from it on the stimulus-locked sway (the hybrid with ``--locked``)
+    LOCKED = "locked"
+
+
+def auto_refinement(verdict: TrustVerdict) -> Refinement:
+    """``auto``'s rule for the network's answer (measured in docs/universal.md, "The
+    default method"): keep an answer that is not doubtful, and one on people-like sway
+    (least squares fits the subject's own sway too; the network was trained on such
+    sway). Refine a doubtful answer from its own values: on the stimulus-locked sway when
+    the answer already explains the recording as well as its noise allows and that noise
+    alone leaves more than :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the
+    locked sway (motor-noisy sway: least squares on every sample fits the subject's own
+    sway and ends further from the truth, `benchmarks/auto_rule.py`), on every sample
+    otherwise."""
+    if not verdict.doubtful:
+        return Refinement.KEEP
     share = verdict.locked_share
     if share is not None and share < PEOPLE_LIKE_SHARE:
-        return False
+        return Refinement.KEEP
     noise = verdict.noise
-    return not (noise is not None and noise.consistent
-                and noise.noise_relative > CLOSE_ENOUGH)
+    if noise is not None and noise.consistent and noise.noise_relative > CLOSE_ENOUGH:
+        return Refinement.LOCKED
+    return Refinement.RAW
 
 
 def _unreadable_by_network(trial: PreparedTrial) -> str | None:

@@ -14,11 +14,11 @@ class Method(enum.Enum):
     FIT = "fit"
     HYBRID = "hybrid"
     #: the network alone, then least squares from its answer (the hybrid) when its trust
-    #: verdict is doubtful and least squares can do better (not on people-like sway, nor
-    #: on sway too noisy to check an answer that already explains it as well as its noise
-    #: allows); least squares from the body's defaults when the network cannot read the
-    #: recording (a tilt that is not periodic, or less than one whole cycle of it)
-    #: (docs/universal.md)
+    #: verdict is doubtful and the sway is not people-like (on the stimulus-locked sway
+    #: when the recording is too noisy to check an answer that explains it as well as its
+    #: noise allows); least squares from the body's defaults when the network cannot read
+    #: the recording (a tilt that is not periodic, or less than one whole cycle of it) or
+    #: identify the body (docs/universal.md)
     AUTO = "auto"
 
 

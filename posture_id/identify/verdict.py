@@ -137,11 +137,11 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
       ``--locked``, other than by a network trained on it (the universal model):
       :data:`LOCKED_FLAGS`;
     - least squares on a recording whose noise alone leaves more than
-      :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the locked sway, or the
-      CNN whose answer explains such a recording as well as its noise allows: a longer
-      recording (nothing fitted to it can be checked, and least squares on the same sway
-      does no better);
-    - the CNN alone: ``--method hybrid`` (least squares from its answer);
+      :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the locked sway: a longer
+      recording (nothing fitted to it can be checked);
+    - the CNN alone: ``--method hybrid`` (least squares from its answer), with
+      ``--locked`` when its answer explains such a noisy recording as well as its noise
+      allows (``auto``'s rule);
     - least squares on a bound: for a locked fit without a prior, ``--prior-sd 0.5`` (a
       noisy recording leaves some parameters free to run to a bound; the prior holds
       them); otherwise a wider ``--gain-range`` / ``--delay-range`` (and the locked fit
@@ -165,13 +165,16 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
     if people_like and not locked and not (method is Method.CNN and network_reads_people_like):
         return LOCKED_FLAGS
-    if (noise is not None and not noise.acceptable and noise.noise_relative > CLOSE_ENOUGH
-            and (method is not Method.CNN or (noise.consistent and not people_like))):
+    if (noise is not None and not noise.acceptable
+            and noise.noise_relative > CLOSE_ENOUGH and method is not Method.CNN):
         return ("a longer recording (more stimulus cycles to average): its noise alone "
                 f"leaves {100 * noise.noise_relative:.0f} % of the locked sway, so no answer "
                 f"can be checked to {100 * CLOSE_ENOUGH:g} %")
     if method is Method.CNN:
-        return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like else "")
+        noisy = (noise is not None and noise.consistent
+                 and noise.noise_relative > CLOSE_ENOUGH)
+        return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like
+                                    else " --locked" if noisy else "")
     if any(b.split()[1] in DOUBTFUL_ON_BOUND for b in on_bounds):
         if locked and not prior:
             return "--prior-sd 0.5 (or a wider --gain-range / --delay-range)"

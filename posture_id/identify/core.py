@@ -50,7 +50,7 @@ from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG, SimulationOptions
 from posture_id.simulation.stimulus import TiltProfile
 from posture_id.trials import PreparedTrial, prepare_trial
 
-__all__ = ["Method", "identify", "Identifier", "DEFAULT_METHOD"]
+__all__ = ["Method", "identify", "Identifier", "DEFAULT_METHOD", "Refinement", "auto_refinement"]
 
 #: The CNN is said to be unsure of a class when P(C = +1) is inside this band.
 UNSURE_CLASS = (0.05, 0.95)

@@ -450,3 +450,29 @@ def test_an_ensemble_s_members_combine_into_their_mixture_and_round_trip(tmp_pat
     deployed = ((target[0, :4] - mean) ** 2).mean() + torch.nn.functional.softplus(
         -outputs[:, 8].mean())
     assert torch.isclose(val_mixed, deployed)
+
+
+def test_the_scope_s_bodies_are_inside_and_a_small_robot_is_not(tmp_path):
+    """What docs/universal.md says of the body check: every corner of the Winter scope,
+    the TIP and the lumped presets are inside what the network was trained on; iCub
+    (about 1 m tall, lumped from example-robot-data) is outside, by its time scale."""
+    from posture_id.bodies.body import load_body
+    from posture_id.bodies.lumping import robots_dir
+    from posture_id.cli import main
+    from posture_id.learning.universal.bodies import build_body
+    from posture_id.learning.universal.identifier import UniversalIdentifier
+    from posture_id.learning.universal.scope import BodyDraw, UniversalScope
+
+    scope = UniversalScope()
+    draws = [BodyDraw("winter", n, h, m, ((1.0, 1.0),) * n) for n in (1, 2, 3)
+             for h in scope.heights_m for m in scope.masses_kg]
+    draws += [BodyDraw(p, n) for p in scope.presets for n in (2, 3)] + [BodyDraw("tip", 3)]
+    for draw in draws:
+        assert UniversalIdentifier.bundled(build_body(draw)).body_outside == [], draw
+    urdf = tmp_path / "icub.urdf"
+    assert main(["body", "--lump", str(robots_dir() / "icub_description/robots/icub_reduced.urdf"),
+                 "--segments", "3", "--ankle-joints", "l_ankle_pitch", "r_ankle_pitch",
+                 "--knee-joints", "l_knee", "r_knee", "--hip-joints", "l_hip_pitch",
+                 "r_hip_pitch", "--out", str(urdf)]) == 0
+    outside = UniversalIdentifier.bundled(load_body(urdf)).body_outside
+    assert outside and all("time scale outside" in o for o in outside), outside

@@ -36,7 +36,7 @@ from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.networks import Network, network_for
-from posture_id.identify.noise_check import CLOSE_ENOUGH, noise_check
+from posture_id.identify.noise_check import noise_check
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.identify.verdict import PEOPLE_LIKE_SHARE, TrustVerdict, suggestion
 from posture_id.learning.config import LearningError
@@ -244,18 +244,17 @@ def auto_refinement(verdict: TrustVerdict) -> Refinement:
     default method"): keep an answer that is not doubtful, and one on people-like sway
     (least squares fits the subject's own sway too; the network was trained on such
     sway). Refine a doubtful answer from its own values: on the stimulus-locked sway when
-    the answer already explains the recording as well as its noise allows and that noise
-    alone leaves more than :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the
-    locked sway (motor-noisy sway: least squares on every sample fits the subject's own
-    sway and ends further from the truth, `benchmarks/auto_rule.py`), on every sample
-    otherwise."""
+    the recording cannot check it (:attr:`~posture_id.identify.noise_check.NoiseCheck.
+    unchecked`: the answer explains the recording as well as its noise allows, and that
+    noise alone leaves more than 10 % of the locked sway; on motor-noisy sway, least
+    squares on every sample fits the subject's own sway and ends further from the truth,
+    `benchmarks/auto_rule.py`), on every sample otherwise."""
     if not verdict.doubtful:
         return Refinement.KEEP
     share = verdict.locked_share
     if share is not None and share < PEOPLE_LIKE_SHARE:
         return Refinement.KEEP
-    noise = verdict.noise
-    if noise is not None and noise.consistent and noise.noise_relative > CLOSE_ENOUGH:
+    if verdict.noise is not None and verdict.noise.unchecked:
         return Refinement.LOCKED
     return Refinement.RAW
 

@@ -91,6 +91,13 @@ class NoiseCheck:
         return self.ratio <= self.limit
 
     @property
+    def unchecked(self) -> bool:
+        """The residual is what the noise leaves, and the noise alone leaves more than
+        :data:`CLOSE_ENOUGH` of the recorded locked sway: the recording cannot tell this
+        answer from one a little off (False when that share cannot be estimated)."""
+        return self.consistent and self.noise_relative > CLOSE_ENOUGH
+
+    @property
     def acceptable(self) -> bool:
         """Close to the recording: the residual is at most :data:`CLOSE_ENOUGH` of the
         recorded (locked) sway."""

@@ -171,10 +171,9 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
                 f"leaves {100 * noise.noise_relative:.0f} % of the locked sway, so no answer "
                 f"can be checked to {100 * CLOSE_ENOUGH:g} %")
     if method is Method.CNN:
-        noisy = (noise is not None and noise.consistent
-                 and noise.noise_relative > CLOSE_ENOUGH)
+        unchecked = noise is not None and noise.unchecked
         return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like
-                                    else " --locked" if noisy else "")
+                                    else " --locked" if unchecked else "")
     if any(b.split()[1] in DOUBTFUL_ON_BOUND for b in on_bounds):
         if locked and not prior:
             return "--prior-sd 0.5 (or a wider --gain-range / --delay-range)"

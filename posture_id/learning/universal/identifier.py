@@ -95,6 +95,7 @@ class UniversalIdentifier:
         elif self.calibration is None:
             self.notices += (f"{model.path}: the model has no calibration, so its answer has "
                              "no intervals",)
+        self.scope = model.scope
         self.descriptors = body_descriptors(body)
         self.com = com_weights(body)
         self._layouts: dict = {}
@@ -179,7 +180,7 @@ class UniversalIdentifier:
         ratio = float(ratios[0])
         regime = str(regime_of(n, ratio))
         outside = list(self.body_outside) + stimulus_outside(
-            self.model.scope, layout, trial.stimulus.states, f"{trial.name}, stimulus")
+            self.scope, layout, trial.stimulus.states, f"{trial.name}, stimulus")
         if trial.stimulus.states is None:
             outside.append(f"{trial.name}: the stimulus ({trial.stimulus.description}) is "
                            "periodic but not a PRTS; the model was trained on PRTSs only")

@@ -116,7 +116,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
                                   weight_decay=config.weight_decay)
     schedule = torch.optim.lr_scheduler.OneCycleLR(
         optimiser, max_lr=config.max_learning_rate, total_steps=config.epochs * steps + 1)
-    sets = _sets_identity(data) + [{"network": asdict(network_config)}]
+    sets = _run_identity(data, network_config)
     state = _resume(out, net, optimiser, schedule, config, sets)
     best_state = state.pop("best_weights", None)
     history = state.get("history", [])
@@ -191,12 +191,12 @@ def _ranges(samples: Samples) -> dict:
             "noise_ratio_high": float(np.percentile(samples.noise_ratio, 99.5))}
 
 
-def _sets_identity(data) -> list[dict]:
-    """What a resumed run must share with the interrupted one about its data: each set's
-    path, configuration and shard count, in order (the network's configuration is added
-    to it)."""
+def _run_identity(data, network: UniversalNetworkConfig) -> list[dict]:
+    """What a resumed run must share with the interrupted one besides its training
+    configuration: each set's path, configuration and shard count, in order, then the
+    network's configuration."""
     return [{"path": str(d.path.resolve()), "config": d.manifest["config"],
-             "shards": len(d.manifest["shards"])} for d in data]
+             "shards": len(d.manifest["shards"])} for d in data] + [{"network": asdict(network)}]
 
 
 def _save_state(out: Path, net, optimiser, schedule, best_state, history, best, config,

@@ -1,6 +1,8 @@
-"""Shared fixtures: bodies (default TIP, Winter 3- and 2-segment) and seeding."""
+"""Shared fixtures: bodies (default TIP, Winter 3- and 2-segment, bent TALOS) and seeding."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -40,6 +42,13 @@ def winter1(tmp_path_factory):
     path = tmp_path_factory.mktemp("bodies") / "winter1.urdf"
     write_chain_urdf(path, "winter1", straight_links(winter_segments(1.80, 80.0, 1)))
     return load_body(path)
+
+
+@pytest.fixture(scope="session")
+def talos_bent():
+    """TALOS lumped into three segments (urdf/talos_tip.urdf, made by ``make bodies``): a
+    bent reference posture, its COM-above lines leaning up to 14° at θ = 0."""
+    return load_body(Path(__file__).resolve().parents[1] / "urdf" / "talos_tip.urdf")
 
 
 @pytest.fixture(params=["tip", "winter", "winter2"])

@@ -71,6 +71,15 @@ class Oracle:
         self.integral = np.zeros(n)
         self.estimate = 0.0
         self.history: list[np.ndarray] = []  # servo command at steps 0, 1, …
+        # the reference posture θ = 0: its COM-above angles from the geometry, and the
+        # servo command that held it at rest before the trial, from Pinocchio's gravity
+        # torques there (τ = −servo − Kp·sin α_ref at rest)
+        import pinocchio as pin
+
+        self.alpha_ref = com_above_angles(body, np.zeros(n))
+        hold_torques = pin.computeGeneralizedGravity(body.model, body.model.createData(),
+                                                     np.zeros(n))
+        self.hold = -np.asarray(hold_torques) - p["kp"] * np.sin(self.alpha_ref)
 
     def torques(self, step: int, theta, omega, tilt, tilt_vel) -> np.ndarray:
         body, p = self.body, self.p
@@ -87,13 +96,13 @@ class Oracle:
         est_rate = deadband(omega[0] - qd[0], self.theta_db)
         beta = self.estimate + np.concatenate([[0.0], np.cumsum(q)[:-1]])  # β̂_{i−1}
         beta_dot = est_rate + np.concatenate([[0.0], np.cumsum(qd)[:-1]])
-        x_com = (alpha - below) + beta
+        x_com = (alpha - self.alpha_ref - below) + beta
         xd_com = (alpha_dot - below_dot) + beta_dot
         x = np.where(p["sign"] > 0, x_com, q)
         xd = np.where(p["sign"] > 0, xd_com, qd)
         servo = p["kp"] * x + p["kd"] * xd + p["ki"] * self.integral
         self.history.append(servo)
-        delayed = np.zeros(n)
+        delayed = self.hold.copy()
         for i in range(n):
             d = p["delay_s"][i] / DT  # steps, fractional
             if step >= d - 1e-9:
@@ -111,7 +120,7 @@ class Oracle:
         return tau
 
 
-@pytest.mark.parametrize("fixture", ["tip", "winter2"])
+@pytest.mark.parametrize("fixture", ["tip", "winter2", "talos_bent"])
 def test_compiled_controller_matches_model_written_in_numpy(request, fixture):
     body = request.getfixturevalue(fixture)
     n = body.n_segments
@@ -133,7 +142,7 @@ def test_compiled_controller_matches_model_written_in_numpy(request, fixture):
     options = SimulationOptions(deadband_rad_s=deadband_rad_s)
     k = kernels(n)
     rows = k.rows
-    par, buf = block_arrays(k, params, options, 0, LANES)
+    par, buf = block_arrays(k, body, params, options, 0, LANES)
     w = np.zeros(rows.count * LANES)
     s_re = np.ascontiguousarray(body.gravity_lever.real)
     s_im = np.ascontiguousarray(body.gravity_lever.imag)

@@ -18,8 +18,10 @@ def _first_seconds(stim: TiltProfile, seconds: float, gain: float = 1.0) -> Tilt
     return TiltProfile(stim.times[:knots], stim.angles[:knots] * gain, f"first {seconds} s")
 
 
+@pytest.mark.parametrize("body_name", ["tip", "winter", "winter2", "talos_bent"])
 @pytest.mark.parametrize("seed", [0, 1])
-def test_compiled_matches_pinocchio_reference_over_5s(any_body, seed):
+def test_compiled_matches_pinocchio_reference_over_5s(request, body_name, seed):
+    any_body = request.getfixturevalue(body_name)
     rng = np.random.default_rng(seed)
     params = default_parameters(any_body) if seed == 0 else random_parameters(any_body, rng)
     stim = _first_seconds(prts(amplitude_deg=4.0), 5.0)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pinocchio as pin
+import pytest
 from conftest import random_parameters
 
 from posture_id.dec import ParameterArrays
@@ -44,8 +45,9 @@ def test_symbolic_dynamics_match_pinocchio(any_body):
                                    rtol=1e-9, atol=1e-9)
 
 
-def test_symbolic_rollout_equals_fast_simulator(any_body):
-    body = any_body
+@pytest.mark.parametrize("body_name", ["tip", "winter", "winter2", "talos_bent"])
+def test_symbolic_rollout_equals_fast_simulator(request, body_name):
+    body = request.getfixturevalue(body_name)
     params = random_parameters(body, np.random.default_rng(5))
     options = SimulationOptions()
     stim = prts(amplitude_deg=2.0)  # the full 121 s trial

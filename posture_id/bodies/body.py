@@ -202,6 +202,20 @@ class Body:
         return np.angle(above)
 
     @property
+    def reference_com_angles(self) -> np.ndarray:
+        """(N,) rad, α_i,S at the reference posture θ = 0 (the URDF's zero configuration):
+        0 for a straight chain, the lean of each COM-above line for a bent one (docs/model.md,
+        "Reference posture")."""
+        return self.com_angles(np.zeros(self.n_segments))
+
+    @property
+    def holding_torques(self) -> np.ndarray:
+        """(N,) N·m, the joint torques τ_i that hold the reference posture θ = 0 at rest
+        against gravity: −g·Im(Σ_{j≥i} S_j); 0 for a straight chain."""
+        s = self.gravity_lever
+        return -self.gravity * np.cumsum(s[::-1])[::-1].imag
+
+    @property
     def com_height_above(self) -> np.ndarray:
         """(N,) m, h_i: distance from joint i to the COM of the segments above, upright."""
         return np.abs(self.com_above)

@@ -218,6 +218,15 @@ def step_function(model: SymbolicModel) -> ca.Function:
         tg[i] = v_im / r
         tg_dot[i] = v_re / r * alpha_dot[i]
 
+    # the reference posture θ = 0 (docs/model.md): each module's COM-above angle there and
+    # the servo command that held it at rest before the trial (0 and 0 for a straight chain)
+    alpha_ref, hold = [None] * n, [None] * n
+    v0_re = v0_im = 0
+    for i in range(n - 1, -1, -1):
+        v0_re, v0_im = v0_re + s_re[i], v0_im + s_im[i]
+        alpha_ref[i] = ca.atan2(v0_im, v0_re)
+        hold[i] = terms.gravity * v0_im - kp[i] * v0_im / ca.sqrt(v0_re**2 + v0_im**2)
+
     # DEC controller (MODEL §2), as in posture_id.simulation.kernel
     ankle_rate = omega[0] - tilt_vel
     est_rate = _deadband(omega[0] - ankle_rate, model.deadband_rad_s, model.smooth)
@@ -229,7 +238,7 @@ def step_function(model: SymbolicModel) -> ca.Function:
     for i in range(n):
         q = theta[i] - below
         qd = omega[i] - below_rate
-        x_com = alpha[i] - below + beta
+        x_com = alpha[i] - alpha_ref[i] - below + beta
         xd_com = alpha_dot[i] - below_rate + beta_rate
         mix = (1 + cls[i]) / 2
         xi = mix * x_com + (1 - mix) * q
@@ -239,7 +248,7 @@ def step_function(model: SymbolicModel) -> ca.Function:
         old = x[offset : offset + size]
         buf = ca.vertcat(servo, old[: size - 1])
         elapsed = ca.if_else(step_n - delay[i] >= -1e-9, 1, 0)
-        delayed = elapsed * ca.dot(w[w_offset : w_offset + size], buf)
+        delayed = elapsed * ca.dot(w[w_offset : w_offset + size], buf) + (1 - elapsed) * hold[i]
         tau.append(-delayed - kp[i] * tg[i] - kd[i] * tg_dot[i] - kpas[i] * q - bpas[i] * qd)
         integ_next.append(integ[i] + dt * xi)
         buffers.append(buf)

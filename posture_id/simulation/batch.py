@@ -40,24 +40,30 @@ def _lane_rows(block: np.ndarray) -> np.ndarray:
     return block.T
 
 
-def block_arrays(k, params: ParameterArrays, options: SimulationOptions, first: int,
-                 count: int) -> tuple[np.ndarray, np.ndarray]:
+def block_arrays(k, body: Body, params: ParameterArrays, options: SimulationOptions,
+                 first: int, count: int) -> tuple[np.ndarray, np.ndarray]:
     """The flat parameter rows and zeroed delay buffers of one block of the kernel ``k``.
 
     Delays become Δ/dt steps (snapped to whole steps within 1e-9), with their ceiling and
     the interpolation weight the kernel reads; the buffers are sized for the block's
-    longest delay.
+    longest delay. The reference posture θ = 0 (docs/model.md) gives each module its
+    reference COM-above angle and the servo command that held it at rest before the trial,
+    hold = −τ_hold − Kp·sin α_ref (both 0 for a straight chain).
     """
     n = params.kp.shape[1]
     pr = k.par_rows
     trials = slice(first, first + count)
     delay = options.delay_steps(params.delay_s[trials])
     delay_ceil = np.ceil(delay)
+    alpha_ref = body.reference_com_angles
+    kp = params.kp[trials]
     rows = {
-        pr.kp: params.kp[trials], pr.ki: params.ki[trials], pr.kd: params.kd[trials],
+        pr.kp: kp, pr.ki: params.ki[trials], pr.kd: params.kd[trials],
         pr.sign: params.sign[trials], pr.kpas: params.kpas[trials],
         pr.bpas: params.bpas[trials], pr.delay: delay, pr.delay_ceil: delay_ceil,
         pr.delay_frac: delay_ceil - delay,
+        pr.alpha_ref: np.broadcast_to(alpha_ref, kp.shape),
+        pr.hold: -body.holding_torques - kp * np.sin(alpha_ref),
     }
     par = np.empty((pr.count, LANES))
     for row, values in rows.items():
@@ -121,7 +127,7 @@ def simulate_batch(
 
     def run_block(first: int) -> int:
         count = min(LANES, n_trials - first)
-        par, buf = block_arrays(k, params, options, first, count)
+        par, buf = block_arrays(k, body, params, options, first, count)
         w = np.zeros(k.rows.count * LANES)
         motor = (no_motor if noises is None else motor_noise_torques(
             noises[first : first + count], n_steps, options.dt, body.mgh, LANES).ravel())

@@ -129,4 +129,6 @@ class ParRows:
     delay = property(lambda self: 6 * self.n)  # Δ/dt, steps (fractional)
     delay_ceil = property(lambda self: 7 * self.n)  # ⌈Δ/dt⌉
     delay_frac = property(lambda self: 8 * self.n)  # ⌈Δ/dt⌉ − Δ/dt
-    count = property(lambda self: 9 * self.n)
+    alpha_ref = property(lambda self: 9 * self.n)  # α_i,S at the reference posture, rad
+    hold = property(lambda self: 10 * self.n)  # servo command holding it at rest, N·m
+    count = property(lambda self: 11 * self.n)

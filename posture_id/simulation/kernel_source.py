@@ -27,6 +27,7 @@ TAU, SERVO, Q, QD, ACC, MASS = R.tau, R.servo, R.q, R.qd, R.acc, R.mass
 EST, ESTR, INSIDE, VSUM = R.estimate, R.estimate_rate, R.inside, R.vsum
 KP, KI, KD, SIGN, KPAS, BPAS = P.kp, P.ki, P.kd, P.sign, P.kpas, P.bpas
 DLY, DCEIL, DFRAC = P.delay, P.delay_ceil, P.delay_frac
+AREF, HOLD = P.alpha_ref, P.hold
 
 
 
@@ -101,7 +102,9 @@ def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
             # class C = ±1 selects COM in space or joint angle; a value between
             # (the fit's relaxed class) mixes them linearly
             mix = 0.5 + 0.5 * par[(SIGN + i) * L + lane]
-            x = mix * (w[(AL + i) * L + lane] - below + beta) + (1.0 - mix) * q
+            # COM in space relative to the reference posture's (0 for a straight chain)
+            x = (mix * (w[(AL + i) * L + lane] - par[(AREF + i) * L + lane] - below + beta)
+                 + (1.0 - mix) * q)
             xd = mix * (w[(ALD + i) * L + lane] - below_rate + beta_rate) + (1.0 - mix) * qd
             integ = w[(INT + i) * L + lane]
             w[(SERVO + i) * L + lane] = (
@@ -124,7 +127,8 @@ def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
         row = i * n_buf + slot
         for lane in range(L):
             buf[row * L + lane] = w[(SERVO + i) * L + lane]
-    # ... and read it back Δ later, interpolated (scalar: one gather per lane)
+    # ... and read it back Δ later, interpolated (scalar: one gather per lane); before
+    # the first command is Δ old, the servo sent what held the reference posture at rest
     for i in range(N):
         base = i * n_buf * L
         for lane in range(L):
@@ -132,7 +136,8 @@ def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
             u0 = buf[base + (k & mask) * L + lane]
             u1 = buf[base + ((k + 1) & mask) * L + lane]
             delayed = u0 + par[(DFRAC + i) * L + lane] * (u1 - u0)
-            w[(TAU + i) * L + lane] = delayed if n >= par[(DLY + i) * L + lane] else 0.0
+            w[(TAU + i) * L + lane] = (delayed if n >= par[(DLY + i) * L + lane]
+                                       else par[(HOLD + i) * L + lane])
     # phase 3 (vectorised): τ = −servo(t − Δ) − PD on T_g (undelayed) − passive
     for lane in range(L):
         for i in range(N):

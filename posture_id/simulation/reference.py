@@ -87,7 +87,7 @@ def simulate_reference(
     n_steps = options.n_steps(stimulus)
     every = options.sample_every
     tilt, tilt_vel = stimulus.on_grid(options.dt, n_steps)
-    par, buf = block_arrays(k, params.arrays(), options, 0, 1)
+    par, buf = block_arrays(k, body, params.arrays(), options, 0, 1)
     w = np.zeros(rows.count * LANES)
     limit = math.radians(options.sway_limit_deg)
     motor = (None if motor_noise is None else motor_noise_torques(

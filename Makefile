@@ -67,21 +67,25 @@ models: $(STAMP)
 	$(MAKE) model NAME=tip_default URDF=urdf/tip_default.urdf FITS=500
 	$(MAKE) model NAME=winter_1.75m_70kg_2seg URDF=$(TWO_SEGMENT)
 
-# The universal identifier (docs/universal.md): two sets (UNIVERSAL_SHARDS drawn bodies and
-# PRTSs over the whole scope, and PEOPLE_SHARDS of people-like sway only, 10–40 % locked;
-# 64 parameter sets each), training on both, calibration and check, its bundled copy, and
-# the table over body families and stimuli (docs/results/universal). Resumable.
+# The universal identifier (docs/universal.md): three sets (UNIVERSAL_SHARDS drawn bodies
+# and PRTSs over the whole scope, PEOPLE_SHARDS of people-like sway only, 10–40 % locked,
+# and PRESET_SHARDS of lumped humanoids only, bent bodies; 64 parameter sets each),
+# training on all three, calibration and check, its bundled copy, and the table over body
+# families and stimuli (docs/results/universal). Resumable.
 UNIVERSAL_SHARDS ?= 3000
 PEOPLE_SHARDS    ?= 4500
+PRESET_SHARDS    ?= 1200
 UNIVERSAL_DIR    := posture_id/learning/universal/models/universal
 universal-model: $(STAMP)
 	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
 	$(BIN)/posture-id universal data --out data/universal_people --shards $(PEOPLE_SHARDS) \
 	  --seed 1 --clean-share 0 --locked-share 0.1 0.4 --quiet
+	$(BIN)/posture-id universal data --out data/universal_presets --shards $(PRESET_SHARDS) \
+	  --seed 2 --tip-share 0 --preset-share 1 --quiet
 	$(BIN)/posture-id universal train data/universal data/universal_people \
-	  --out data/models/universal --epochs 30 --quiet
+	  data/universal_presets --out data/models/universal --epochs 30 --quiet
 	$(BIN)/posture-id universal check data/models/universal data/universal \
-	  data/universal_people > /dev/null
+	  data/universal_people data/universal_presets > /dev/null
 	mkdir -p $(UNIVERSAL_DIR) docs/models/universal
 	cp data/models/universal/model.safetensors data/models/universal/model.json \
 	  data/models/universal/calibration.json $(UNIVERSAL_DIR)/

@@ -12,6 +12,9 @@ from posture_id.bodies.body import load_body
 from posture_id.bodies.urdf_writer import write_chain_urdf
 from posture_id.dec.parameters import default_parameters
 
+#: The project's shipped URDFs (``make bodies``).
+URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
+
 
 @pytest.fixture(autouse=True)
 def _seed():
@@ -48,7 +51,7 @@ def winter1(tmp_path_factory):
 def talos_bent():
     """TALOS lumped into three segments (urdf/talos_tip.urdf, made by ``make bodies``): a
     bent reference posture, its COM-above lines leaning up to 14° at θ = 0."""
-    return load_body(Path(__file__).resolve().parents[1] / "urdf" / "talos_tip.urdf")
+    return load_body(URDF_DIR / "talos_tip.urdf")
 
 
 @pytest.fixture(params=["tip", "winter", "winter2"])

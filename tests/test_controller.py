@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from posture_id.dec import ParameterArrays, default_parameters
@@ -74,8 +75,6 @@ class Oracle:
         # the reference posture θ = 0: its COM-above angles from the geometry, and the
         # servo command that held it at rest before the trial, from Pinocchio's gravity
         # torques there (τ = −servo − Kp·sin α_ref at rest)
-        import pinocchio as pin
-
         self.alpha_ref = com_above_angles(body, np.zeros(n))
         hold_torques = pin.computeGeneralizedGravity(body.model, body.model.createData(),
                                                      np.zeros(n))

@@ -4,11 +4,10 @@ linear in the tilt's amplitude as a straight chain's is."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import URDF_DIR
 
 from posture_id.bodies.body import load_body
 from posture_id.dec.parameters import default_parameters
@@ -16,7 +15,6 @@ from posture_id.simulation import SimulationOptions, prts, simulate
 from posture_id.simulation.reference import simulate_reference
 from posture_id.simulation.stimulus import tilt_from_array
 
-URDF = Path(__file__).resolve().parents[1] / "urdf"
 PRESETS = ["talos_tip", "g1_tip", "human_tip"]
 
 
@@ -26,7 +24,7 @@ def _flat(seconds: float):
 
 @pytest.mark.parametrize("name", PRESETS)
 def test_presets_are_bent_and_hold_their_posture_against_gravity(name):
-    body = load_body(URDF / f"{name}.urdf")
+    body = load_body(URDF_DIR / f"{name}.urdf")
     lean = np.degrees(np.abs(body.reference_com_angles))
     assert lean.max() > 1.0  # really bent: this test would not see a straight chain
     gravity = pin.computeGeneralizedGravity(body.model, body.model.createData(),
@@ -42,7 +40,7 @@ def test_a_straight_chain_has_no_reference_lean_and_needs_no_holding_torque(tip,
 
 @pytest.mark.parametrize("name", PRESETS)
 def test_a_bent_body_stands_still_without_a_tilt(name):
-    body = load_body(URDF / f"{name}.urdf")
+    body = load_body(URDF_DIR / f"{name}.urdf")
     params = default_parameters(body)
     fast = simulate(body, params, _flat(30.0))
     ref = simulate_reference(body, params, _flat(2.0))
@@ -54,7 +52,7 @@ def test_a_bent_body_stands_still_without_a_tilt(name):
 def test_a_bent_body_sways_in_proportion_to_the_tilt(talos_bent):
     """Without the dead-band the only non-linearity left is the geometry: six times the
     tilt gives six times the sway to well under 1 % (before the reference-posture start,
-    a transient independent of the tilt made it about 80 %)."""
+    a transient independent of the tilt made it 72 %: benchmarks/reference_posture.py)."""
     options = SimulationOptions(deadband_rad_s=0.0)
     params = default_parameters(talos_bent)
 

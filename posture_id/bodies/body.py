@@ -188,10 +188,16 @@ class Body:
         return np.cumsum(m[::-1])[::-1]
 
     @property
+    def lever_above(self) -> np.ndarray:
+        """(N,) complex kg·m, Σ_{j≥i} S_j: m_above,i times the vector from joint i to the COM
+        above it at θ = 0 (up + 1j·fwd)."""
+        s = self.gravity_lever
+        return np.cumsum(s[::-1])[::-1]
+
+    @property
     def com_above(self) -> np.ndarray:
         """(N,) complex m, vector from joint i to the COM above it at upright (up + 1j·fwd)."""
-        s = self.gravity_lever
-        return np.cumsum(s[::-1])[::-1] / self.mass_above
+        return self.lever_above / self.mass_above
 
     def com_angles(self, theta: np.ndarray) -> np.ndarray:
         """COM-above angles α_i,S (..., N) rad of segment angles θ (..., N) rad: the angle
@@ -205,15 +211,14 @@ class Body:
     def reference_com_angles(self) -> np.ndarray:
         """(N,) rad, α_i,S at the reference posture θ = 0 (the URDF's zero configuration):
         0 for a straight chain, the lean of each COM-above line for a bent one (docs/model.md,
-        "Reference posture")."""
-        return self.com_angles(np.zeros(self.n_segments))
+        "The reference posture of a bent body")."""
+        return np.angle(self.lever_above)
 
     @property
     def holding_torques(self) -> np.ndarray:
         """(N,) N·m, the joint torques τ_i that hold the reference posture θ = 0 at rest
         against gravity: −g·Im(Σ_{j≥i} S_j); 0 for a straight chain."""
-        s = self.gravity_lever
-        return -self.gravity * np.cumsum(s[::-1])[::-1].imag
+        return -self.gravity * self.lever_above.imag
 
     @property
     def com_height_above(self) -> np.ndarray:

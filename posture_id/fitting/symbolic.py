@@ -203,8 +203,11 @@ def step_function(model: SymbolicModel) -> ca.Function:
 
     # COM-above angles and rates from the running sum V_i = Σ_{j≥i} e^{iθ_j} S_j
     s_re, s_im = terms.s_re, terms.s_im
+    # and, at the reference posture θ = 0 (docs/model.md), each module's COM-above angle and
+    # the servo command that held it at rest before the trial (0 and 0 for a straight chain)
     alpha, alpha_dot, tg, tg_dot = [None] * n, [None] * n, [None] * n, [None] * n
-    v_re = v_im = vd_re = vd_im = 0
+    alpha_ref, hold = [None] * n, [None] * n
+    v_re = v_im = vd_re = vd_im = v0_re = v0_im = 0
     for i in range(n - 1, -1, -1):
         c, sn = ca.cos(theta[i]), ca.sin(theta[i])
         e_re = c * s_re[i] - sn * s_im[i]
@@ -217,12 +220,6 @@ def step_function(model: SymbolicModel) -> ca.Function:
         alpha_dot[i] = (vd_im * v_re - vd_re * v_im) / r2
         tg[i] = v_im / r
         tg_dot[i] = v_re / r * alpha_dot[i]
-
-    # the reference posture θ = 0 (docs/model.md): each module's COM-above angle there and
-    # the servo command that held it at rest before the trial (0 and 0 for a straight chain)
-    alpha_ref, hold = [None] * n, [None] * n
-    v0_re = v0_im = 0
-    for i in range(n - 1, -1, -1):
         v0_re, v0_im = v0_re + s_re[i], v0_im + s_im[i]
         alpha_ref[i] = ca.atan2(v0_im, v0_re)
         hold[i] = terms.gravity * v0_im - kp[i] * v0_im / ca.sqrt(v0_re**2 + v0_im**2)

@@ -43,6 +43,10 @@ def add_parser(sub) -> None:
                    help="share of shards on the default TIP (default: the scope's, 0.1)")
     d.add_argument("--preset-share", type=non_negative_float,
                    help="share of shards on lumped humanoids (default: the scope's, 0.15)")
+    d.add_argument("--amplitude-deg", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
+                   help="range of the PRTS's peak-to-peak tilt, degrees, drawn log-uniform "
+                        "(default: the scope's, 0.5 4); a set trained beside the default "
+                        "one may narrow it")
     d.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=run_data)
@@ -91,7 +95,8 @@ def run_data(args: argparse.Namespace) -> int:
                                ("locked_share", args.locked_share),
                                ("proportion_jitter", args.proportion_jitter),
                                ("tip_share", args.tip_share),
-                               ("preset_share", args.preset_share)) if v is not None}
+                               ("preset_share", args.preset_share),
+                               ("amplitude_deg", args.amplitude_deg)) if v is not None}
     # a scope out of range is a ScopeError: one line, exit status 2 (cli.main)
     given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
                                        for k, v in scope.items()})

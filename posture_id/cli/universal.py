@@ -46,7 +46,7 @@ def add_parser(sub) -> None:
     d.add_argument("--amplitude-deg", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
                    help="range of the PRTS's peak-to-peak tilt, degrees, drawn log-uniform "
                         "(default: the scope's, 0.5 4); a set trained beside the default "
-                        "one may narrow it")
+                        "one may draw over any range that overlaps it")
     d.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=run_data)

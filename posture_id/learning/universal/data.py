@@ -294,8 +294,9 @@ def open_sets(paths: str | Path | Sequence[str | Path]) -> list[UniversalSet]:
 _SWAY_FIELDS = ("clean_share", "locked_share")
 #: Scope fields of the mix of bodies drawn, which may differ too.
 _MIX_FIELDS = ("proportion_jitter", "tip_share", "preset_share")
-#: Scope ranges a later set may narrow to draw more of part of the first set's range
-#: (for example small tilts, where the dead-band makes sway least like its FRF).
+#: Scope ranges a later set may draw differently, overlapping the first set's: to draw
+#: more of part of it, or a margin beyond it so that its edge is not the edge of what the
+#: network saw (small tilts, where the dead-band weighs most, sit at the low edge).
 _FOCUS_FIELDS = ("amplitude_deg",)
 
 
@@ -304,17 +305,19 @@ def merged_scope(sets: Sequence[UniversalSet]) -> UniversalScope:
     noise and drift; the locked share spans all of theirs; the clean share is the
     largest; the mix of bodies may differ (the proportion jitter is the largest, the TIP
     and preset shares the first set's: they say how bodies were drawn, not a range a
-    recording is checked against); a later set may draw its tilt amplitudes from within
-    the first set's range (the merged range is the first set's)."""
+    recording is checked against); a later set may draw its tilt amplitudes over a range
+    that overlaps the first set's (the merged range, which recordings are checked
+    against, stays the first set's: what lies beyond it is a training margin)."""
     scopes = [UniversalScope.from_dict(d.manifest["config"]["scope"]) for d in sets]
     first = scopes[0]
     for data, scope in zip(sets[1:], scopes[1:], strict=True):
         for name in _FOCUS_FIELDS:
             (lo, hi), (first_lo, first_hi) = getattr(scope, name), getattr(first, name)
-            if not first_lo <= lo <= hi <= first_hi:
+            if hi < first_lo or lo > first_hi:
                 raise DatasetError(
-                    f"{data.path}: scope field {name} is {(lo, hi)}, outside {sets[0].path}'s "
-                    f"{(first_lo, first_hi)}; a later set may only narrow it")
+                    f"{data.path}: scope field {name} is {(lo, hi)}, apart from "
+                    f"{sets[0].path}'s {(first_lo, first_hi)}; a later set's range must "
+                    "overlap the first set's")
         for name in UniversalScope.__dataclass_fields__:
             if name not in _SWAY_FIELDS + _MIX_FIELDS + _FOCUS_FIELDS and \
                     getattr(scope, name) != getattr(first, name):
@@ -323,7 +326,7 @@ def merged_scope(sets: Sequence[UniversalSet]) -> UniversalScope:
                     f"{sets[0].path} has {getattr(first, name)}; sets trained on together "
                     "may differ only in their motor noise (clean_share, locked_share), "
                     "their mix of bodies (proportion_jitter, tip_share, preset_share) and "
-                    "a narrower amplitude_deg")
+                    "an overlapping amplitude_deg")
     return replace(first,
                    proportion_jitter=max(s.proportion_jitter for s in scopes),
                    clean_share=max(s.clean_share for s in scopes),

@@ -123,6 +123,12 @@ def test_draws_stay_in_the_scope_and_cycles_fit_the_sample_grid():
         assert stim.cycles >= 1
         assert stim.duration_s <= 250 or stim.cycles == 1
     assert kinds == {"winter", "tip", "talos", "g1", "human"}
+    # a set of small tilts draws within its own range, log-uniform (a third below 0.5°)
+    small = UniversalScope(amplitude_deg=(0.35, 1.0))
+    amps = np.array([draw_stimulus(small, rng).amplitude_deg for _ in range(600)])
+    assert amps.min() >= 0.35 - 1e-4 and amps.max() <= 1.0 + 1e-4
+    expected = math.log(0.5 / 0.35) / math.log(1.0 / 0.35)
+    assert abs(np.mean(amps < 0.5) - expected) < 0.06
 
 
 @pytest.fixture(scope="module")

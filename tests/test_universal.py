@@ -214,7 +214,7 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
         UniversalModel.load(tmp_path / "whole")
 
 
-def test_sets_trained_together_must_agree_but_on_their_motor_noise(tmp_path):
+def test_sets_trained_together_agree_but_on_motor_noise_body_mix_and_tilt_range(tmp_path):
     from dataclasses import replace
 
     from posture_id.datasets.config import DatasetError

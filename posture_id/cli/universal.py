@@ -43,6 +43,9 @@ def add_parser(sub) -> None:
                    help="share of shards on the default TIP (default: the scope's, 0.1)")
     d.add_argument("--preset-share", type=non_negative_float,
                    help="share of shards on lumped humanoids (default: the scope's, 0.15)")
+    d.add_argument("--preset-jitter", type=non_negative_float,
+                   help="each lumped humanoid segment's mass and length scaled by a factor "
+                        "within ± this (default: the scope's, 0: the robots as lumped)")
     d.add_argument("--amplitude-deg", type=positive_float, nargs=2, metavar=("LOW", "HIGH"),
                    help="range of the PRTS's peak-to-peak tilt, degrees, drawn log-uniform "
                         "(default: the scope's, 0.5 4); a set trained beside the default "
@@ -96,6 +99,7 @@ def run_data(args: argparse.Namespace) -> int:
                                ("proportion_jitter", args.proportion_jitter),
                                ("tip_share", args.tip_share),
                                ("preset_share", args.preset_share),
+                               ("preset_jitter", args.preset_jitter),
                                ("amplitude_deg", args.amplitude_deg)) if v is not None}
     # a scope out of range is a ScopeError: one line, exit status 2 (cli.main)
     given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v

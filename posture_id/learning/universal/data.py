@@ -293,7 +293,7 @@ def open_sets(paths: str | Path | Sequence[str | Path]) -> list[UniversalSet]:
 #: trials has motor noise and how much.
 _SWAY_FIELDS = ("clean_share", "locked_share")
 #: Scope fields of the mix of bodies drawn, which may differ too.
-_MIX_FIELDS = ("proportion_jitter", "tip_share", "preset_share")
+_MIX_FIELDS = ("proportion_jitter", "tip_share", "preset_share", "preset_jitter")
 #: Scope ranges a later set may draw differently, overlapping the first set's: to draw
 #: more of part of it, or a margin beyond it so that its edge is not the edge of what the
 #: network saw (small tilts, where the dead-band weighs most, sit at the low edge).
@@ -303,11 +303,12 @@ _FOCUS_FIELDS = ("amplitude_deg",)
 def merged_scope(sets: Sequence[UniversalSet]) -> UniversalScope:
     """The scope of sets trained on together: they must agree on bodies, stimuli, sensor
     noise and drift; the locked share spans all of theirs; the clean share is the
-    largest; the mix of bodies may differ (the proportion jitter is the largest, the TIP
-    and preset shares the first set's: they say how bodies were drawn, not a range a
-    recording is checked against); a later set may draw its tilt amplitudes over a range
-    that overlaps the first set's (the merged range, which recordings are checked
-    against, stays the first set's: what lies beyond it is a training margin)."""
+    largest; the mix of bodies may differ (the proportion and preset jitters are the
+    largest, the TIP and preset shares the first set's: they say how bodies were drawn,
+    not a range a recording is checked against); a later set may draw its tilt
+    amplitudes over a range that overlaps the first set's (the merged range, which
+    recordings are checked against, stays the first set's: what lies beyond it is a
+    training margin)."""
     scopes = [UniversalScope.from_dict(d.manifest["config"]["scope"]) for d in sets]
     first = scopes[0]
     for data, scope in zip(sets[1:], scopes[1:], strict=True):
@@ -325,10 +326,12 @@ def merged_scope(sets: Sequence[UniversalSet]) -> UniversalScope:
                     f"{data.path}: scope field {name} is {getattr(scope, name)}, but "
                     f"{sets[0].path} has {getattr(first, name)}; sets trained on together "
                     "may differ only in their motor noise (clean_share, locked_share), "
-                    "their mix of bodies (proportion_jitter, tip_share, preset_share) and "
+                    "their mix of bodies (proportion_jitter, tip_share, preset_share, "
+                    "preset_jitter) and "
                     "an overlapping amplitude_deg")
     return replace(first,
                    proportion_jitter=max(s.proportion_jitter for s in scopes),
+                   preset_jitter=max(s.preset_jitter for s in scopes),
                    clean_share=max(s.clean_share for s in scopes),
                    locked_share=(min(s.locked_share[0] for s in scopes),
                                  max(s.locked_share[1] for s in scopes)))

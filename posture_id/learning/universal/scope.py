@@ -36,6 +36,9 @@ class UniversalScope:
         tip_share: share of shards on the default triple inverted pendulum.
         preset_share: share of shards on lumped humanoids (:data:`presets`, 2 or 3
             segments).
+        preset_jitter: each lumped humanoid segment's mass and length scaled by a factor
+            drawn uniformly within ±this (0: the robots as lumped; above, robot-like
+            bodies around them, as a robot engineer's own humanoid would be).
         states: PRTS lengths (equally likely). state_s: range of a state's duration, s.
         amplitude_deg: range of peak-to-peak tilt, degrees (log-uniform).
         duration_s: range of the recording's length, s (at least one whole cycle).
@@ -54,6 +57,7 @@ class UniversalScope:
     proportion_jitter: float = 0.15
     tip_share: float = 0.1
     preset_share: float = 0.15
+    preset_jitter: float = 0.0
     presets: tuple[str, ...] = ("talos", "g1", "human")
     states: tuple[int, ...] = (242, 80)
     state_s: tuple[float, float] = LAB_STATE_RANGE_S
@@ -80,9 +84,10 @@ class UniversalScope:
                 and self.tip_share + self.preset_share <= 1):
             raise ScopeError(f"scope tip_share and preset_share must be ≥ 0 with a sum "
                              f"within [0, 1], got {self.tip_share} and {self.preset_share}")
-        if not 0 <= self.proportion_jitter < 1:
-            raise ScopeError(f"scope proportion_jitter must be within [0, 1), got "
-                             f"{self.proportion_jitter}")
+        for name in ("proportion_jitter", "preset_jitter"):
+            if not 0 <= getattr(self, name) < 1:
+                raise ScopeError(f"scope {name} must be within [0, 1), got "
+                                 f"{getattr(self, name)}")
         if not 0 < self.locked_share[0] <= self.locked_share[1] <= 1:
             raise ScopeError(f"scope locked_share must be a range within (0, 1], got "
                              f"{self.locked_share}")
@@ -100,7 +105,8 @@ class UniversalScope:
 @dataclass(frozen=True)
 class BodyDraw:
     """A drawn body: ``kind`` 'winter', 'tip' or a preset's name; for Winter bodies the
-    height, mass, segments and the per-segment (mass, length) factors."""
+    height, mass, segments and the per-segment (mass, length) factors; for a preset its
+    segments and (mass, length) factors (none: the robot as lumped)."""
 
     kind: str
     segments: int
@@ -113,7 +119,7 @@ class BodyDraw:
             return f"Winter {self.segments}-seg {self.height_m:.2f} m {self.mass_kg:.0f} kg"
         if self.kind == "tip":
             return "TIP (default)"
-        return f"{self.kind} {self.segments}-seg (lumped)"
+        return f"{self.kind} {self.segments}-seg (lumped{', jittered' if self.factors else ''})"
 
 
 @dataclass(frozen=True)
@@ -133,16 +139,23 @@ class StimulusDraw:
         return self.states * self.state_s * self.cycles
 
 
+def _factors(rng: np.random.Generator, n: int, jitter: float) -> tuple[tuple[float, float], ...]:
+    """(n,) per-segment (mass, length) factors, uniform within 1 ± jitter."""
+    return tuple((float(a), float(b)) for a, b in rng.uniform(1 - jitter, 1 + jitter, (n, 2)))
+
+
 def draw_body(scope: UniversalScope, rng: np.random.Generator) -> BodyDraw:
     """One body of the scope: the TIP, a lumped humanoid or a jittered Winter body."""
     u = rng.random()
     if u < scope.tip_share:
         return BodyDraw("tip", 3)
     if u < scope.tip_share + scope.preset_share and scope.presets:
-        return BodyDraw(str(rng.choice(scope.presets)), int(rng.choice([2, 3])))
+        name, n = str(rng.choice(scope.presets)), int(rng.choice([2, 3]))
+        # no draw without jitter: the sets made before it existed stay as they were
+        factors = _factors(rng, n, scope.preset_jitter) if scope.preset_jitter else ()
+        return BodyDraw(name, n, factors=factors)
     n = int(rng.choice(scope.segments))
-    j = scope.proportion_jitter
-    factors = tuple((float(a), float(b)) for a, b in rng.uniform(1 - j, 1 + j, (n, 2)))
+    factors = _factors(rng, n, scope.proportion_jitter)
     return BodyDraw("winter", n, float(rng.uniform(*scope.heights_m)),
                     float(rng.uniform(*scope.masses_kg)), factors)
 

@@ -67,17 +67,19 @@ models: $(STAMP)
 	$(MAKE) model NAME=tip_default URDF=urdf/tip_default.urdf FITS=500
 	$(MAKE) model NAME=winter_1.75m_70kg_2seg URDF=$(TWO_SEGMENT)
 
-# The universal identifier (docs/universal.md): four sets (UNIVERSAL_SHARDS drawn bodies
+# The universal identifier (docs/universal.md): five sets (UNIVERSAL_SHARDS drawn bodies
 # and PRTSs over the whole scope, PEOPLE_SHARDS of people-like sway only, 10–40 % locked,
-# PRESET_SHARDS of lumped humanoids only, bent bodies, and SMALL_SHARDS of small tilts,
-# 0.35–1°, two fifths lumped humanoids; 64 parameter sets each), training on all four,
-# calibration and check, its bundled copy, and the table over body families and stimuli
+# PRESET_SHARDS of lumped humanoids only, bent bodies, SMALL_SHARDS of small tilts,
+# 0.35–1°, two fifths lumped humanoids, and ROBOT_SHARDS of robot-like bodies, the lumped
+# humanoids' segments jittered ±15 %, at 0.35–1.5°; 64 parameter sets each), training on
+# all five,# calibration and check, its bundled copy, and the table over body families and stimuli
 # (docs/results/universal). Resumable.
 UNIVERSAL_SHARDS ?= 3000
 PEOPLE_SHARDS    ?= 4500
 PRESET_SHARDS    ?= 1200
 SMALL_SHARDS     ?= 1500
-UNIVERSAL_EPOCHS ?= 40
+ROBOT_SHARDS     ?= 900
+UNIVERSAL_EPOCHS ?= 45
 UNIVERSAL_DIR    := posture_id/learning/universal/models/universal
 universal-model: $(STAMP)
 	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
@@ -87,11 +89,15 @@ universal-model: $(STAMP)
 	  --seed 2 --tip-share 0 --preset-share 1 --quiet
 	$(BIN)/posture-id universal data --out data/universal_small --shards $(SMALL_SHARDS) \
 	  --seed 3 --amplitude-deg 0.35 1 --tip-share 0.1 --preset-share 0.4 --quiet
+	$(BIN)/posture-id universal data --out data/universal_robots --shards $(ROBOT_SHARDS) \
+	  --seed 4 --amplitude-deg 0.35 1.5 --tip-share 0.05 --preset-share 0.9 \
+	  --preset-jitter 0.15 --quiet
 	$(BIN)/posture-id universal train data/universal data/universal_people \
-	  data/universal_presets data/universal_small --out data/models/universal \
-	  --epochs $(UNIVERSAL_EPOCHS) --quiet
+	  data/universal_presets data/universal_small data/universal_robots \
+	  --out data/models/universal --epochs $(UNIVERSAL_EPOCHS) --quiet
 	$(BIN)/posture-id universal check data/models/universal data/universal \
-	  data/universal_people data/universal_presets data/universal_small > /dev/null
+	  data/universal_people data/universal_presets data/universal_small \
+	  data/universal_robots > /dev/null
 	mkdir -p $(UNIVERSAL_DIR) docs/models/universal
 	cp data/models/universal/model.safetensors data/models/universal/model.json \
 	  data/models/universal/calibration.json $(UNIVERSAL_DIR)/

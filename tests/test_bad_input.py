@@ -395,6 +395,7 @@ def test_a_hopeless_data_set_stops(tmp_path, capsys):
 
 @pytest.mark.parametrize(("flags", "problem"), [
     (["--proportion-jitter", "1"], "scope proportion_jitter must be within [0, 1), got 1.0"),
+    (["--preset-jitter", "1.5"], "scope preset_jitter must be within [0, 1), got 1.5"),
     (["--tip-share", "0.6", "--preset-share", "0.5"],
      "scope tip_share and preset_share must be ≥ 0 with a sum within [0, 1]"),
     (["--clean-share", "1.5"], "scope clean_share must be within [0, 1], got 1.5"),

@@ -23,7 +23,12 @@ from posture_id.learning.universal.harmonics import (
     sensor_noise_parts,
     sway_harmonics,
 )
-from posture_id.learning.universal.scope import UniversalScope, draw_body, draw_stimulus
+from posture_id.learning.universal.scope import (
+    BodyDraw,
+    UniversalScope,
+    draw_body,
+    draw_stimulus,
+)
 
 
 def _layout(states=80, state_s=0.25, cycles=4, amp=1.0):
@@ -131,6 +136,32 @@ def test_draws_stay_in_the_scope_and_cycles_fit_the_sample_grid():
     assert abs(np.mean(amps < 0.5) - expected) < 0.06
 
 
+def test_a_jittered_robot_is_the_lumped_robot_with_each_segment_scaled():
+    """Loaded by Pinocchio, a jittered preset's segment i has mass a_i·m_i, COM b_i·c_i,
+    inertia a_i·b_i²·I_i, and its joint b_(i-1) further up the segment below; the scope
+    draws the factors within 1 ± preset_jitter, and none without it."""
+    from posture_id.learning.universal.bodies import build_body
+
+    factors = ((1.2, 0.9), (0.85, 1.1), (1.05, 1.15))
+    lumped, jittered = build_body(BodyDraw("talos", 3)), build_body(
+        BodyDraw("talos", 3, factors=factors))
+    below = 1.0
+    for seg, new, (a, b) in zip(lumped.segments, jittered.segments, factors, strict=True):
+        assert new.mass == pytest.approx(a * seg.mass, rel=1e-9)
+        assert np.allclose(new.com, np.multiply(seg.com, b), atol=1e-12)
+        assert new.inertia == pytest.approx(a * b**2 * seg.inertia, rel=1e-9)
+        assert np.allclose(new.joint_origin, np.multiply(seg.joint_origin, below), atol=1e-12)
+        below = b
+    rng = np.random.default_rng(4)
+    robots = UniversalScope(tip_share=0.0, preset_share=1.0, preset_jitter=0.2)
+    draws = [draw_body(robots, rng) for _ in range(50)]
+    assert all(len(d.factors) == d.segments for d in draws)
+    spread = np.concatenate([np.ravel(d.factors) for d in draws])
+    assert spread.min() >= 0.8 and spread.max() <= 1.2 and spread.std() > 0.08
+    plain = UniversalScope(tip_share=0.0, preset_share=1.0)
+    assert all(draw_body(plain, rng).factors == () for _ in range(20))
+
+
 @pytest.fixture(scope="module")
 def tiny_set(tmp_path_factory):
     """A 20-shard set of 6 trials each: enough for every split."""
@@ -232,9 +263,11 @@ def test_sets_trained_together_agree_but_on_motor_noise_body_mix_and_tilt_range(
     with pytest.raises(DatasetError, match=r"b: scope field sensor_noise_deg"):
         merged_scope([a_set("a", base), a_set("b", replace(base, sensor_noise_deg=(0, 0.3)))])
     # a set of more varied bodies joins; the proportions span the wider jitter
-    varied = replace(base, proportion_jitter=0.35, tip_share=0.05, preset_share=0.3)
+    varied = replace(base, proportion_jitter=0.35, tip_share=0.05, preset_share=0.3,
+                     preset_jitter=0.15)
     merged = merged_scope([a_set("a", base), a_set("c", varied)])
     assert merged.proportion_jitter == 0.35 and merged.preset_share == base.preset_share
+    assert merged.preset_jitter == 0.15
     # a set of small tilts, with a margin below the range, joins; recordings are checked
     # against the first set's range
     small = replace(base, amplitude_deg=(0.35, 1.0))

@@ -72,7 +72,7 @@ models: $(STAMP)
 # PRESET_SHARDS of lumped humanoids only, bent bodies, SMALL_SHARDS of small tilts,
 # 0.35–1°, two fifths lumped humanoids, and ROBOT_SHARDS of robot-like bodies, the lumped
 # humanoids' segments jittered ±15 %, at 0.35–1.5°; 64 parameter sets each), training on
-# all five,# calibration and check, its bundled copy, and the table over body families and stimuli
+# all five, calibration and check, its bundled copy, and the table over body families and stimuli
 # (docs/results/universal). Resumable.
 UNIVERSAL_SHARDS ?= 3000
 PEOPLE_SHARDS    ?= 4500

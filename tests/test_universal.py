@@ -374,6 +374,26 @@ def test_conformal_quantiles_and_temperature_recover_known_answers():
                                               "2 segments, clean", "3 segments, a little noisy"]
 
 
+def test_a_body_the_calibration_had_none_of_gets_the_pooled_values_or_a_clear_error():
+    """Calibrated on 2- and 3-segment bodies only, a 1-segment body's intervals use the
+    values pooled over every sample (no KeyError); a calibration without them says what
+    is missing."""
+    from posture_id.learning.universal.calibration import POOLED, UniversalCalibration
+    from posture_id.learning.universal.model import ModelError
+
+    row = [[1.0, 2.0, 3.0, 4.0]] * 99
+    cal = UniversalCalibration({"2": row, "3:4": [[5.0] * 4] * 99, POOLED: [[7.0] * 4] * 99},
+                               {"2": 1.0, POOLED: 2.0}, {"2": 300, "3:4": 200, POOLED: 500},
+                               "x")
+    assert cal.scale("3:4", 0.9).tolist() == [5.0] * 4  # its own regime
+    assert cal.scale("2:5", 0.9).tolist() == [1.0, 2.0, 3.0, 4.0]  # its segment count's
+    assert cal.scale("1:3", 0.9).tolist() == [7.0] * 4  # pooled
+    assert cal.probability("1:3", np.array([2.0])) == pytest.approx(1 / (1 + np.exp(-1.0)))
+    old = UniversalCalibration({"2": row}, {"2": 1.0}, {"2": 300}, "x")
+    with pytest.raises(ModelError, match="no values for 1 segment, clean nor pooled"):
+        old.scale("1:0", 0.9)
+
+
 def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_path):
     import json
 

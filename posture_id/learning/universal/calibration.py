@@ -9,7 +9,8 @@ parameter, the conformal quantiles of the score |t − μ| / σ̂ (σ̂: the net
 an interval μ ± q_level·σ̂ covers the truth with probability ≥ level in that regime
 (split-conformal, normalised scores). Class probabilities get a temperature per regime
 (minimum negative log-likelihood). A regime with fewer than :data:`MIN_CELL` samples
-uses its segment count's pooled values.
+uses its segment count's pooled values, and a segment count with fewer (a set of 2- and
+3-segment bodies only) the values pooled over every sample (:data:`POOLED`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.universal.model import ModelError, UniversalModel, UniversalPrediction
 from posture_id.learning.universal.samples import Samples
 
-__all__ = ["RATIO_EDGES", "LEVELS", "MIN_CELL", "UniversalCalibration", "calibrate",
+__all__ = ["RATIO_EDGES", "LEVELS", "MIN_CELL", "POOLED", "UniversalCalibration", "calibrate",
            "regime_of", "regime_text", "CALIBRATION_FILE"]
 
 #: Bin edges of the noise ratio: clean below 0.02, in four bins there (the network's own
@@ -38,6 +39,8 @@ _RATIO_WORDS = ((0.02, "clean"), (0.1, "a little noisy"), (0.3, "noisy"), (1.0, 
 #: Nominal levels the quantiles are kept for.
 LEVELS = tuple(np.round(np.arange(0.5, 0.995, 0.005), 3).tolist())
 MIN_CELL = 100
+#: The key of the values pooled over every calibration sample.
+POOLED = "all"
 CALIBRATION_FILE = "calibration.json"
 
 
@@ -84,7 +87,13 @@ class UniversalCalibration:
     weights_sha256: str
 
     def _key(self, regime: str, table: dict) -> str:
-        return regime if regime in table else regime.split(":")[0]
+        """The regime, else its segment count, else :data:`POOLED`, whichever has values."""
+        for key in (regime, regime.split(":")[0], POOLED):
+            if key in table:
+                return key
+        raise ModelError(f"the universal calibration has no values for {regime_text(regime)} "
+                         f"nor pooled ones (its samples: {self.counts}); calibrate the "
+                         "model on sets with such bodies (posture-id universal check)")
 
     def scale(self, regime: str, level: float) -> np.ndarray:
         """(4,) the score quantile at ``level`` (nearest kept level at or above it)."""
@@ -126,8 +135,9 @@ def calibrate(model: UniversalModel, samples: Samples) -> UniversalCalibration:
     regimes = regime_of(samples.segments, samples.noise_ratio)
     quantiles, temperature, counts = {}, {}, {}
     keys = sorted(set(regimes.tolist()) | {str(n) for n in set(samples.segments.tolist())})
-    for key in keys:
-        sel = (regimes == key) if ":" in key else (samples.segments == int(key))
+    for key in [*keys, POOLED]:
+        sel = (np.ones(len(samples), bool) if key == POOLED else
+               (regimes == key) if ":" in key else (samples.segments == int(key)))
         if sel.sum() < MIN_CELL:
             continue
         quantiles[key] = _conformal(scores[sel])

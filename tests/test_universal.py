@@ -51,6 +51,37 @@ def test_sensor_noise_on_harmonics_matches_noise_on_the_sway():
     assert np.sqrt(np.mean(y.imag[5:] ** 2)) == pytest.approx(predicted, rel=0.03)
 
 
+def test_noise_colour_is_flat_for_white_noise_and_follows_a_known_spectrum():
+    """White sensor noise on the sway reads 0; harmonics whose noise SD falls as 1/f (power
+    ∝ 1/f², a random walk's) read the log ratio of the noise power expected below 0.3 Hz
+    to that above 0.8 Hz at the excited harmonics (each estimated, as the features do,
+    from the empty harmonics nearest it)."""
+    from posture_id.frf.locked import noise_levels
+    from posture_id.learning.universal.features import (
+        COLOUR_HIGH_HZ,
+        COLOUR_LOW_HZ,
+        _rows,
+        noise_colour,
+    )
+
+    layout, t = _layout(cycles=4)
+    rng = np.random.default_rng(3)
+    k = len(layout.frequencies_hz)
+    white = sway_harmonics(layout, 0.002 * rng.standard_normal((len(t), 400)))
+    assert abs(np.median(noise_colour(layout, white.reshape(k, 200, 2)))) < 0.05
+    sd = 1e-3 / layout.frequencies_hz  # (K,)
+    red = sd[:, None, None] * (rng.standard_normal((k, 200, 2))
+                               + 1j * rng.standard_normal((k, 200, 2)))
+    rows = _rows(layout)
+    f = layout.frequencies_hz[rows]
+    # the estimator is linear in power: its expectation is the neighbours' mean of E|Y|²
+    level = noise_levels((2 * sd**2)[:, None], layout.excited, rows, 3)[:, 0]
+    power = 2 * level**2 * 2  # two segments
+    expected = np.log10(power[f < COLOUR_LOW_HZ].mean() / power[f > COLOUR_HIGH_HZ].mean())
+    assert expected > 1.0
+    assert np.median(noise_colour(layout, red)) == pytest.approx(expected, abs=0.15)
+
+
 def test_drift_on_harmonics_matches_a_random_walk_of_the_sway():
     layout, t = _layout(cycles=4)
     rng = np.random.default_rng(2)
@@ -368,10 +399,12 @@ def test_conformal_quantiles_and_temperature_recover_known_answers():
     true_logit = rng.normal(0, 2, 50000)
     truth = np.where(rng.random(50000) < 1 / (1 + np.exp(-true_logit)), 1.0, -1.0)
     assert _temperature(2 * true_logit, truth) == pytest.approx(2.0, rel=0.05)
-    keys = list(regime_of(np.array([1, 3, 2, 3]), np.array([0.0005, 0.5, 0.015, 0.05])))
-    assert keys == ["1:0", "3:6", "2:3", "3:4"]
-    assert [regime_text(k) for k in keys] == ["1 segment, clean", "3 segments, mostly noise",
-                                              "2 segments, clean", "3 segments, a little noisy"]
+    keys = list(regime_of(np.array([1, 3, 2, 3]), np.array([0.0005, 0.5, 0.015, 0.05]),
+                          np.array([0.1, 1.5, 0.79, 0.81])))
+    assert keys == ["1:0w", "3:6c", "2:3w", "3:4c"]
+    assert [regime_text(k) for k in keys] == [
+        "1 segment, clean, white noise", "3 segments, mostly noise, noise shaped by the body",
+        "2 segments, clean, white noise", "3 segments, a little noisy, noise shaped by the body"]
 
 
 def test_a_body_the_calibration_had_none_of_gets_the_pooled_values_or_a_clear_error():
@@ -382,16 +415,18 @@ def test_a_body_the_calibration_had_none_of_gets_the_pooled_values_or_a_clear_er
     from posture_id.learning.universal.model import ModelError
 
     row = [[1.0, 2.0, 3.0, 4.0]] * 99
-    cal = UniversalCalibration({"2": row, "3:4": [[5.0] * 4] * 99, POOLED: [[7.0] * 4] * 99},
+    cal = UniversalCalibration({"2": row, "3:4": [[5.0] * 4] * 99, "3:4c": [[6.0] * 4] * 99,
+                                POOLED: [[7.0] * 4] * 99},
                                {"2": 1.0, POOLED: 2.0}, {"2": 300, "3:4": 200, POOLED: 500},
                                "x")
-    assert cal.scale("3:4", 0.9).tolist() == [5.0] * 4  # its own regime
-    assert cal.scale("2:5", 0.9).tolist() == [1.0, 2.0, 3.0, 4.0]  # its segment count's
-    assert cal.scale("1:3", 0.9).tolist() == [7.0] * 4  # pooled
-    assert cal.probability("1:3", np.array([2.0])) == pytest.approx(1 / (1 + np.exp(-1.0)))
+    assert cal.scale("3:4c", 0.9).tolist() == [6.0] * 4  # its own regime
+    assert cal.scale("3:4w", 0.9).tolist() == [5.0] * 4  # its noise bin over both colours
+    assert cal.scale("2:5w", 0.9).tolist() == [1.0, 2.0, 3.0, 4.0]  # its segment count's
+    assert cal.scale("1:3c", 0.9).tolist() == [7.0] * 4  # pooled
+    assert cal.probability("1:3w", np.array([2.0])) == pytest.approx(1 / (1 + np.exp(-1.0)))
     old = UniversalCalibration({"2": row}, {"2": 1.0}, {"2": 300}, "x")
-    with pytest.raises(ModelError, match="no values for 1 segment, clean nor pooled"):
-        old.scale("1:0", 0.9)
+    with pytest.raises(ModelError, match="no values for 1 segment, clean, white noise nor"):
+        old.scale("1:0w", 0.9)
 
 
 def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_path):

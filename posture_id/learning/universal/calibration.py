@@ -1,16 +1,20 @@
 """Calibrated answers of the universal network, per regime.
 
-A regime is (segment count, noise-ratio bin): the noise ratio is the share of the
-recording's stimulus-locked harmonics that is noise (:func:`.features.noise_ratio`),
-measured on the recording itself, so it tells a clean recording from a people-like one
+A regime is (segment count, noise-ratio bin, noise colour): the noise ratio is the share
+of the recording's stimulus-locked harmonics that is noise (:func:`.features.noise_ratio`),
+and the colour whether that noise is white, as a sensor's, or shaped by the body, as
+motor noise and drift are (:func:`.features.noise_colour` below or above
+:data:`COLOUR_EDGE`); both are measured on the recording itself, so they tell a clean
+recording from a people-like one, and one with a little motor noise from one with none,
 at identification time. On the calibration split (shards no training or validation
 trial came from, their noise drawn as in training) the calibration keeps, per regime and
 parameter, the conformal quantiles of the score |t − μ| / σ̂ (σ̂: the network's own SD):
 an interval μ ± q_level·σ̂ covers the truth with probability ≥ level in that regime
 (split-conformal, normalised scores). Class probabilities get a temperature per regime
 (minimum negative log-likelihood). A regime with fewer than :data:`MIN_CELL` samples
-uses its segment count's pooled values, and a segment count with fewer (a set of 2- and
-3-segment bodies only) the values pooled over every sample (:data:`POOLED`).
+uses its noise-ratio bin's values over both colours, then its segment count's, and a
+segment count with fewer (a set of 2- and 3-segment bodies only) the values pooled over
+every sample (:data:`POOLED`).
 """
 
 from __future__ import annotations
@@ -26,14 +30,19 @@ from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.universal.model import ModelError, UniversalModel, UniversalPrediction
 from posture_id.learning.universal.samples import Samples
 
-__all__ = ["RATIO_EDGES", "LEVELS", "MIN_CELL", "POOLED", "UniversalCalibration", "calibrate",
-           "regime_of", "regime_text", "CALIBRATION_FILE"]
+__all__ = ["RATIO_EDGES", "COLOUR_EDGE", "LEVELS", "MIN_CELL", "POOLED",
+           "UniversalCalibration", "calibrate", "regime_of", "regime_text", "CALIBRATION_FILE"]
 
 #: Bin edges of the noise ratio: clean below 0.02, in four bins there (the network's own
 #: SD shrinks less than its error does on the cleanest sway, a large tilt's, so one clean
 #: bin gave a 1-segment body's intervals 95–98 % coverage at 90 %); people-like sway
 #: mostly above 0.1.
 RATIO_EDGES = (0.001, 0.003, 0.01, 0.02, 0.1, 0.3)
+#: Noise colour (:func:`~.features.noise_colour`) from which noise counts as shaped by the
+#: body: within one noise-ratio bin, trials with a little motor noise had wider errors
+#: relative to the network's SD than trials with sensor noise only, and white sensor noise
+#: reads about 0, motor noise mostly above 1.
+COLOUR_EDGE = 0.8
 #: The words of a regime by the upper edge of its noise-ratio bin.
 _RATIO_WORDS = ((0.02, "clean"), (0.1, "a little noisy"), (0.3, "noisy"), (1.0, "mostly noise"))
 #: Nominal levels the quantiles are kept for.
@@ -44,18 +53,30 @@ POOLED = "all"
 CALIBRATION_FILE = "calibration.json"
 
 
-def regime_of(segments: np.ndarray | int, ratio: np.ndarray | float) -> np.ndarray:
-    """Regime keys 'N:b' (segment count, noise-ratio bin 0..len(RATIO_EDGES))."""
+def regime_of(segments: np.ndarray | int, ratio: np.ndarray | float,
+              colour: np.ndarray | float) -> np.ndarray:
+    """Regime keys 'N:bw' or 'N:bc' (segment count, noise-ratio bin 0..len(RATIO_EDGES),
+    white or coloured noise)."""
     bins = np.searchsorted(RATIO_EDGES, np.asarray(ratio, dtype=float))
-    return np.char.add(np.char.add(np.asarray(segments).astype(str), ":"), bins.astype(str))
+    tint = np.where(np.asarray(colour, dtype=float) < COLOUR_EDGE, "w", "c")
+    return np.char.add(np.char.add(np.char.add(np.asarray(segments).astype(str), ":"),
+                                   bins.astype(str)), tint)
+
+
+def _broader(regime: str) -> list[str]:
+    """The regime, its noise-ratio bin over both colours, its segment count."""
+    n, rest = regime.split(":")
+    return [regime, f"{n}:{rest.rstrip('wc')}", n]
 
 
 def regime_text(regime: str) -> str:
-    """A regime key in words: '3 segments, clean'."""
-    n, b = regime.split(":")
-    upper = RATIO_EDGES[int(b)] if int(b) < len(RATIO_EDGES) else 1.0
+    """A regime key in words: '3 segments, clean, white noise'."""
+    n, rest = regime.split(":")
+    b = int(rest.rstrip("wc"))
+    upper = RATIO_EDGES[b] if b < len(RATIO_EDGES) else 1.0
     words = next(w for edge, w in _RATIO_WORDS if upper <= edge)
-    return f"{n} segment{'s' if n != '1' else ''}, {words}"
+    tint = {"w": ", white noise", "c": ", noise shaped by the body"}.get(rest[-1], "")
+    return f"{n} segment{'s' if n != '1' else ''}, {words}{tint}"
 
 
 def _conformal(scores: np.ndarray) -> list[list[float]]:
@@ -87,8 +108,9 @@ class UniversalCalibration:
     weights_sha256: str
 
     def _key(self, regime: str, table: dict) -> str:
-        """The regime, else its segment count, else :data:`POOLED`, whichever has values."""
-        for key in (regime, regime.split(":")[0], POOLED):
+        """The regime, else its noise-ratio bin over both colours, else its segment count,
+        else :data:`POOLED`, whichever has values."""
+        for key in (*_broader(regime), POOLED):
             if key in table:
                 return key
         raise ModelError(f"the universal calibration has no values for {regime_text(regime)} "
@@ -107,6 +129,7 @@ class UniversalCalibration:
 
     def to_dict(self) -> dict:
         return {"levels": list(LEVELS), "ratio_edges": list(RATIO_EDGES),
+                "colour_edge": COLOUR_EDGE,
                 "quantiles": self.quantiles, "temperature": self.temperature,
                 "counts": self.counts, "weights_sha256": self.weights_sha256}
 
@@ -120,7 +143,8 @@ class UniversalCalibration:
             return None
         try:
             data = json.loads(file.read_text(encoding="utf-8"))
-            if data["levels"] != list(LEVELS) or data["ratio_edges"] != list(RATIO_EDGES):
+            if data["levels"] != list(LEVELS) or data["ratio_edges"] != list(RATIO_EDGES) \
+                    or data.get("colour_edge") != COLOUR_EDGE:
                 raise ModelError(f"{file}: made for other levels or regimes than this code's")
             return cls(data["quantiles"], data["temperature"], data["counts"],
                        data["weights_sha256"])
@@ -132,12 +156,13 @@ def calibrate(model: UniversalModel, samples: Samples) -> UniversalCalibration:
     """The calibration of ``model`` from held-out module samples."""
     pred: UniversalPrediction = model.predict(samples.inputs)
     scores = np.abs(samples.targets[:, :4] - pred.mean) / pred.sd
-    regimes = regime_of(samples.segments, samples.noise_ratio)
+    regimes = regime_of(samples.segments, samples.noise_ratio, samples.noise_colour)
     quantiles, temperature, counts = {}, {}, {}
-    keys = sorted(set(regimes.tolist()) | {str(n) for n in set(samples.segments.tolist())})
+    broader = np.array([_broader(r) for r in regimes.tolist()]).reshape(len(regimes), 3)
+    keys = sorted({k for row in set(map(tuple, broader.tolist())) for k in row})
     for key in [*keys, POOLED]:
         sel = (np.ones(len(samples), bool) if key == POOLED else
-               (regimes == key) if ":" in key else (samples.segments == int(key)))
+               (broader == key).any(axis=1))
         if sel.sum() < MIN_CELL:
             continue
         quantiles[key] = _conformal(scores[sel])

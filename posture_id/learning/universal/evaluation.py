@@ -78,7 +78,7 @@ def score_samples(model: UniversalModel, samples: Samples,
     inside = np.full(errors.shape, np.nan)
     probability = 1.0 / (1.0 + np.exp(-pred.logit))
     if calibration is not None:
-        regimes = regime_of(samples.segments, samples.noise_ratio)
+        regimes = regime_of(samples.segments, samples.noise_ratio, samples.noise_colour)
         probability = np.array([calibration.probability(r, z)
                                 for r, z in zip(regimes, pred.logit, strict=True)])
         half = np.stack([pred.sd[i] * calibration.scale(r, level)

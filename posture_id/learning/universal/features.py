@@ -31,9 +31,10 @@ from posture_id.dec.parameters import _column
 from posture_id.frf.locked import noise_levels
 from posture_id.learning.universal.harmonics import HarmonicLayout
 
-__all__ = ["GRID_HZ", "CHANNELS", "com_weights", "features_and_noise_ratio", "DESCRIPTORS",
+__all__ = ["GRID_HZ", "CHANNELS", "com_weights", "features_and_noise", "DESCRIPTORS",
            "FEATURE_MAX_HZ", "band_weights", "module_features", "body_descriptors",
-           "stimulus_descriptors", "noise_ratio", "UNIVERSAL_FEATURE_DEFINITION", "N_INPUTS"]
+           "stimulus_descriptors", "noise_ratio", "noise_colour", "UNIVERSAL_FEATURE_DEFINITION",
+           "N_INPUTS", "COLOUR_LOW_HZ", "COLOUR_HIGH_HZ"]
 
 #: Highest frequency the features hold, Hz.
 FEATURE_MAX_HZ = 2.5
@@ -45,6 +46,9 @@ DESCRIPTORS = 15
 N_INPUTS = CHANNELS * len(GRID_HZ) + DESCRIPTORS
 _NEIGHBOURS = 3
 _LOG_FLOOR, _LOG_CEIL, _H_LIMIT = -4.0, 1.0, 20.0
+#: The noise colour compares the noise power below this (Hz) with that above
+#: :data:`COLOUR_HIGH_HZ` (up to :data:`FEATURE_MAX_HZ`).
+COLOUR_LOW_HZ, COLOUR_HIGH_HZ = 0.3, 0.8
 
 UNIVERSAL_FEATURE_DEFINITION = {
     "version": 1,
@@ -132,19 +136,20 @@ def module_features(layout: HarmonicLayout, sway: np.ndarray,
                     com: np.ndarray | None = None) -> np.ndarray:
     """(B, N, CHANNELS, G) float32 features of B sways' harmonics ``sway`` (K, B, N);
     ``com``: the body's :func:`com_weights` (default: each segment its own COM)."""
-    return features_and_noise_ratio(layout, sway, com)[0]
+    return features_and_noise(layout, sway, com)[0]
 
 
-def features_and_noise_ratio(layout: HarmonicLayout, sway: np.ndarray,
-                             com: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(:func:`module_features`, :func:`noise_ratio`) of the same sways, their noise
-    levels estimated once."""
+def features_and_noise(layout: HarmonicLayout, sway: np.ndarray, com: np.ndarray | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(:func:`module_features`, :func:`noise_ratio`, :func:`noise_colour`) of the same
+    sways, their noise levels estimated once."""
     k, b, n = sway.shape
     rows = _rows(layout)
     w, count = band_weights(layout)
     power = np.abs(sway) ** 2
     sigma = noise_levels(power, layout.excited, rows, _NEIGHBOURS)  # (R, B, N)
     ratio = _ratio(power, sigma, rows)
+    colour = _colour(sigma, layout.frequencies_hz[rows])
     seg = _frf_channels(sway, rows, layout.excited, w, sigma)  # (B, N, 3, G)
     com = np.eye(n) if com is None else np.asarray(com)
     above = _frf_channels(np.einsum("ij,kbj->kbi", com, sway), rows, layout.excited, w)
@@ -161,7 +166,7 @@ def features_and_noise_ratio(layout: HarmonicLayout, sway: np.ndarray,
     out[:, :, 6:9] = padded[:, 2:]
     out[:, :, 9:12] = above
     out[:, :, 12] = np.log1p(count)
-    return out, ratio
+    return out, ratio, colour
 
 
 def noise_ratio(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
@@ -170,6 +175,27 @@ def noise_ratio(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
     rows = _rows(layout)
     power = np.abs(sway) ** 2
     return _ratio(power, noise_levels(power, layout.excited, rows, _NEIGHBOURS), rows)
+
+
+def noise_colour(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
+    """(B,) log10 of the mean noise power (summed over segments) at the excited harmonics
+    below :data:`COLOUR_LOW_HZ` over that above :data:`COLOUR_HIGH_HZ`: about 0 for white
+    noise (a sensor's), higher for noise shaped by the body (motor noise, drift); 0 when
+    either side has no harmonic or no noise."""
+    rows = _rows(layout)
+    power = np.abs(sway) ** 2
+    return _colour(noise_levels(power, layout.excited, rows, _NEIGHBOURS),
+                   layout.frequencies_hz[rows])
+
+
+def _colour(sigma: np.ndarray, frequencies_hz: np.ndarray) -> np.ndarray:
+    noise = (sigma**2).sum(axis=2)  # (R, B)
+    low, high = frequencies_hz < COLOUR_LOW_HZ, frequencies_hz > COLOUR_HIGH_HZ
+    if not low.any() or not high.any():
+        return np.zeros(noise.shape[1])
+    lo, hi = noise[low].mean(axis=0), noise[high].mean(axis=0)
+    ok = (lo > 0) & (hi > 0)
+    return np.where(ok, np.log10(np.where(ok, lo, 1.0) / np.where(ok, hi, 1.0)), 0.0)
 
 
 def _ratio(power: np.ndarray, sigma: np.ndarray, rows: np.ndarray) -> np.ndarray:

@@ -42,7 +42,7 @@ from posture_id.learning.universal.harmonics import (
     sway_harmonics,
 )
 from posture_id.learning.universal.model import SIDECAR, ModelError, UniversalModel
-from posture_id.learning.universal.samples import inputs_and_noise_ratio, module_inputs
+from posture_id.learning.universal.samples import inputs_and_noise, module_inputs
 from posture_id.learning.universal.scope import UniversalScope
 from posture_id.provenance import body_identity, provenance
 from posture_id.simulation.stimulus import LAB_STATE_RANGE_S
@@ -174,11 +174,11 @@ class UniversalIdentifier:
         layout = self._layout(trial)
         theta = trial.recording.theta
         y = sway_harmonics(layout, theta)[:, None, :]
-        inputs, ratios = inputs_and_noise_ratio(layout, y, self.descriptors, self.com)
+        inputs, ratios, colours = inputs_and_noise(layout, y, self.descriptors, self.com)
         prediction = self.model.predict(inputs)
         n = self.body.n_segments
-        ratio = float(ratios[0])
-        regime = str(regime_of(n, ratio))
+        ratio, colour = float(ratios[0]), float(colours[0])
+        regime = str(regime_of(n, ratio, colour))
         outside = list(self.body_outside) + stimulus_outside(
             self.scope, layout, trial.stimulus.states, f"{trial.name}, stimulus")
         if trial.stimulus.states is None:
@@ -212,7 +212,7 @@ class UniversalIdentifier:
                       "weights_sha256": self.model.sidecar.get("weights_sha256"),
                       "trained_on": self.trained_on,
                       "package_version": self.model.sidecar.get("package_version"),
-                      "regime": regime, "noise_ratio": ratio}
+                      "regime": regime, "noise_ratio": ratio, "noise_colour": colour}
         return CnnIdentification(
             parameters=params, normalised=normalised, class_probability=probability,
             joints=self.body.joint_names, model=model_info, intervals=intervals,

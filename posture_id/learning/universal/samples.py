@@ -10,14 +10,14 @@ import numpy as np
 
 from posture_id.learning.universal.data import UniversalSet, shard_com_weights, shard_layout
 from posture_id.learning.universal.features import (
-    features_and_noise_ratio,
+    features_and_noise,
     stimulus_descriptors,
 )
 from posture_id.learning.universal.harmonics import drift_parts, sensor_noise_parts
 from posture_id.learning.universal.scope import UniversalScope
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "load_split", "make_samples", "module_inputs",
-           "inputs_and_noise_ratio"]
+           "inputs_and_noise"]
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,8 @@ class Samples:
     """Module samples. inputs: (M, N_INPUTS) float32 (unstandardised). targets: (M, 5)
     normalised [K̃p, K̃i, K̃d, Δ̃, C]. trial: (M,) trial index within the set made;
     module: (M,) its index in the body; segments: (M,) N; noise_ratio: (M,) the trial's
-    share of locked harmonics that is noise; locked_share: (M,) its body COM sway's
+    share of locked harmonics that is noise; noise_colour: (M,) its noise's colour
+    (:func:`~.features.noise_colour`); locked_share: (M,) its body COM sway's
     realised locked share; sensor_noise_deg, drift_deg: (M,) what was added; shard: (M,)
     the shard index."""
 
@@ -52,6 +53,7 @@ class Samples:
     module: np.ndarray
     segments: np.ndarray
     noise_ratio: np.ndarray
+    noise_colour: np.ndarray
     locked_share: np.ndarray
     sensor_noise_deg: np.ndarray
     drift_deg: np.ndarray
@@ -84,18 +86,19 @@ def module_inputs(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarr
     """(B·N, N_INPUTS) float32 inputs of B sways' harmonics (K, B, N) on a body whose
     descriptors are ``body`` (N, 11) and COM weights ``com`` (N, N), module after module
     within each trial."""
-    return inputs_and_noise_ratio(layout, harmonics, body, com)[0]
+    return inputs_and_noise(layout, harmonics, body, com)[0]
 
 
-def inputs_and_noise_ratio(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarray
-                           ) -> tuple[np.ndarray, np.ndarray]:
-    """(:func:`module_inputs`, (B,) :func:`~.features.noise_ratio`), noise estimated once."""
-    feats, ratio = features_and_noise_ratio(layout, harmonics, com)  # (B, N, C, G)
+def inputs_and_noise(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(:func:`module_inputs`, (B,) :func:`~.features.noise_ratio`, (B,)
+    :func:`~.features.noise_colour`), noise estimated once."""
+    feats, ratio, colour = features_and_noise(layout, harmonics, com)  # (B, N, C, G)
     b, n = feats.shape[:2]
     stim = np.broadcast_to(stimulus_descriptors(layout), (b, n, 4))
     desc = np.broadcast_to(body, (b, n, body.shape[1]))
     return np.concatenate([feats.reshape(b, n, -1), desc, stim], axis=2).reshape(
-        b * n, -1).astype(np.float32), ratio
+        b * n, -1).astype(np.float32), ratio, colour
 
 
 def make_samples(shards: list[LoadedShard], scope: UniversalScope,
@@ -116,10 +119,10 @@ def make_samples(shards: list[LoadedShard], scope: UniversalScope,
                      + drift_parts(layout.frequencies_hz, layout.cycles * layout.period_samples
                                    / layout.sample_rate_hz, drift).T ** 2)  # (K, T)
         y = y + sd[:, :, None] * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
-        inputs, rho = inputs_and_noise_ratio(layout, y, a["body"], shard.com)
+        inputs, rho, colour = inputs_and_noise(layout, y, a["body"], shard.com)
         parts["inputs"].append(inputs)
         parts["targets"].append(a["targets"].reshape(t * n, 5))
-        per_module = {"trial": first + np.arange(t), "noise_ratio": rho,
+        per_module = {"trial": first + np.arange(t), "noise_ratio": rho, "noise_colour": colour,
                       "locked_share": a["locked_share"], "sensor_noise_deg": sensor,
                       "drift_deg": drift}
         for key, value in per_module.items():

@@ -74,8 +74,8 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
     assert all(len(r["inside_interval"]) == 3 for r in report.rows)
     assert clean.interval_recordings == 2
     assert "## Do the 90 % intervals hold the truth?" in text
-    assert "| 0° | cnn | conformal, universal network (regime 3 segments, clean, held-out " \
-        "bodies and stimuli) | 2 |" in text
+    assert "| 0° | cnn | conformal, universal network (regime 3 segments, clean, white noise, " \
+        "held-out bodies and stimuli) | 2 |" in text
 
 
 @pytest.mark.slow

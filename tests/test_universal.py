@@ -429,6 +429,21 @@ def test_a_body_the_calibration_had_none_of_gets_the_pooled_values_or_a_clear_er
         old.scale("1:0w", 0.9)
 
 
+def test_a_calibration_made_before_the_noise_colour_is_refused_with_the_fix(tmp_path):
+    from posture_id.learning.universal.calibration import POOLED, UniversalCalibration
+    from posture_id.learning.universal.model import ModelError
+
+    cal = UniversalCalibration({POOLED: [[1.0] * 4] * 99}, {POOLED: 1.0}, {POOLED: 500}, "x")
+    cal.save(tmp_path)
+    assert UniversalCalibration.load(tmp_path).counts == {POOLED: 500}
+    data = json.loads((tmp_path / "calibration.json").read_text())
+    del data["colour_edge"]
+    (tmp_path / "calibration.json").write_text(json.dumps(data))
+    with pytest.raises(ModelError, match="calibration.json: made for other levels or regimes.*"
+                                         "posture-id universal check"):
+        UniversalCalibration.load(tmp_path)
+
+
 def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_path):
     import json
 

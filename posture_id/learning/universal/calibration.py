@@ -145,7 +145,10 @@ class UniversalCalibration:
             data = json.loads(file.read_text(encoding="utf-8"))
             if data["levels"] != list(LEVELS) or data["ratio_edges"] != list(RATIO_EDGES) \
                     or data.get("colour_edge") != COLOUR_EDGE:
-                raise ModelError(f"{file}: made for other levels or regimes than this code's")
+                raise ModelError(f"{file}: made for other levels or regimes than this code's "
+                                 "(before the noise's colour was part of a regime, say); "
+                                 "calibrate the model again: posture-id universal check "
+                                 "MODEL_DIR SETS...")
             return cls(data["quantiles"], data["temperature"], data["counts"],
                        data["weights_sha256"])
         except (json.JSONDecodeError, KeyError, TypeError) as exc:

@@ -25,7 +25,8 @@ def _preset(name: str, segments: int):
     return preset_body(name, segments)
 
 
-def _jittered_links(links: list[LinkSpec], factors) -> list[LinkSpec]:
+def _jittered_links(links: list[LinkSpec], factors: tuple[tuple[float, float], ...]
+                    ) -> list[LinkSpec]:
     """Links with segment i's mass scaled by a_i and its length by b_i: its COM and far
     end by b_i, the next joint (its origin) with it, its inertia by a_i·b_i²."""
     out = []
@@ -49,14 +50,8 @@ def body_urdf(draw: BodyDraw) -> str:
             return lumped.urdf()
         return chain_urdf(lumped.name, _jittered_links(lumped.links, draw.factors),
                           foot=lumped.foot, comment=f"{lumped.origin}; segments jittered")
-    specs = winter_segments(draw.height_m, draw.mass_kg, draw.segments)
-    jittered = []
-    for spec, (mass_factor, length_factor) in zip(specs, draw.factors, strict=True):
-        jittered.append(replace(spec, mass=spec.mass * mass_factor,
-                                length=spec.length * length_factor,
-                                com=spec.com * length_factor,
-                                inertia=spec.inertia * mass_factor * length_factor**2))
-    return chain_urdf(f"winter_{draw.segments}seg", straight_links(jittered))
+    links = straight_links(winter_segments(draw.height_m, draw.mass_kg, draw.segments))
+    return chain_urdf(f"winter_{draw.segments}seg", _jittered_links(links, draw.factors))
 
 
 def build_body(draw: BodyDraw) -> Body:

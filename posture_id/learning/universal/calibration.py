@@ -39,9 +39,9 @@ __all__ = ["RATIO_EDGES", "COLOUR_EDGE", "LEVELS", "MIN_CELL", "POOLED",
 #: mostly above 0.1.
 RATIO_EDGES = (0.001, 0.003, 0.01, 0.02, 0.1, 0.3)
 #: Noise colour (:func:`~.features.noise_colour`) from which noise counts as shaped by the
-#: body: within one noise-ratio bin, trials with a little motor noise had wider errors
-#: relative to the network's SD than trials with sensor noise only, and white sensor noise
-#: reads about 0, motor noise mostly above 1.
+#: body (white sensor noise reads about 0): a noise-ratio bin below 0.1 holds trials with
+#: sensor noise only and trials with a little motor noise, which this tells apart
+#: (docs/universal.md, "Training and calibration", for what it changed).
 COLOUR_EDGE = 0.8
 #: The words of a regime by the upper edge of its noise-ratio bin.
 _RATIO_WORDS = ((0.02, "clean"), (0.1, "a little noisy"), (0.3, "noisy"), (1.0, "mostly noise"))
@@ -161,11 +161,10 @@ def calibrate(model: UniversalModel, samples: Samples) -> UniversalCalibration:
     scores = np.abs(samples.targets[:, :4] - pred.mean) / pred.sd
     regimes = regime_of(samples.segments, samples.noise_ratio, samples.noise_colour)
     quantiles, temperature, counts = {}, {}, {}
-    broader = np.array([_broader(r) for r in regimes.tolist()]).reshape(len(regimes), 3)
-    keys = sorted({k for row in set(map(tuple, broader.tolist())) for k in row})
-    for key in [*keys, POOLED]:
-        sel = (np.ones(len(samples), bool) if key == POOLED else
-               (broader == key).any(axis=1))
+    # each sample's keys from narrow to broad, as _broader gives them, and the pooled one
+    levels = (regimes, np.char.rstrip(regimes, "wc"), samples.segments.astype(str),
+              np.full(len(regimes), POOLED))
+    for key, sel in ((k, level == k) for level in levels for k in np.unique(level)):
         if sel.sum() < MIN_CELL:
             continue
         quantiles[key] = _conformal(scores[sel])

@@ -144,10 +144,8 @@ def features_and_noise(layout: HarmonicLayout, sway: np.ndarray, com: np.ndarray
     """(:func:`module_features`, :func:`noise_ratio`, :func:`noise_colour`) of the same
     sways, their noise levels estimated once."""
     k, b, n = sway.shape
-    rows = _rows(layout)
     w, count = band_weights(layout)
-    power = np.abs(sway) ** 2
-    sigma = noise_levels(power, layout.excited, rows, _NEIGHBOURS)  # (R, B, N)
+    rows, power, sigma = _noise(layout, sway)
     ratio = _ratio(power, sigma, rows)
     colour = _colour(sigma, layout.frequencies_hz[rows])
     seg = _frf_channels(sway, rows, layout.excited, w, sigma)  # (B, N, 3, G)
@@ -169,12 +167,20 @@ def features_and_noise(layout: HarmonicLayout, sway: np.ndarray, com: np.ndarray
     return out, ratio, colour
 
 
+def _noise(layout: HarmonicLayout, sway: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(R,) the excited harmonics up to :data:`FEATURE_MAX_HZ`, (K, B, N) the sway's power
+    and (R, B, N) its noise level there, from the nearest empty harmonics."""
+    rows = _rows(layout)
+    power = np.abs(sway) ** 2
+    return rows, power, noise_levels(power, layout.excited, rows, _NEIGHBOURS)
+
+
 def noise_ratio(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
     """(B,) Σσ²/Σ|Y|² over the excited harmonics up to :data:`FEATURE_MAX_HZ` and every
     segment: the share of the locked harmonics that is noise (0 clean, → 1 all noise)."""
-    rows = _rows(layout)
-    power = np.abs(sway) ** 2
-    return _ratio(power, noise_levels(power, layout.excited, rows, _NEIGHBOURS), rows)
+    rows, power, sigma = _noise(layout, sway)
+    return _ratio(power, sigma, rows)
 
 
 def noise_colour(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
@@ -182,10 +188,8 @@ def noise_colour(layout: HarmonicLayout, sway: np.ndarray) -> np.ndarray:
     below :data:`COLOUR_LOW_HZ` over that above :data:`COLOUR_HIGH_HZ`: about 0 for white
     noise (a sensor's), higher for noise shaped by the body (motor noise, drift); 0 when
     either side has no harmonic or no noise."""
-    rows = _rows(layout)
-    power = np.abs(sway) ** 2
-    return _colour(noise_levels(power, layout.excited, rows, _NEIGHBOURS),
-                   layout.frequencies_hz[rows])
+    rows, _, sigma = _noise(layout, sway)
+    return _colour(sigma, layout.frequencies_hz[rows])
 
 
 def _colour(sigma: np.ndarray, frequencies_hz: np.ndarray) -> np.ndarray:
@@ -194,8 +198,7 @@ def _colour(sigma: np.ndarray, frequencies_hz: np.ndarray) -> np.ndarray:
     if not low.any() or not high.any():
         return np.zeros(noise.shape[1])
     lo, hi = noise[low].mean(axis=0), noise[high].mean(axis=0)
-    ok = (lo > 0) & (hi > 0)
-    return np.where(ok, np.log10(np.where(ok, lo, 1.0) / np.where(ok, hi, 1.0)), 0.0)
+    return np.log10(np.divide(lo, hi, out=np.ones_like(lo), where=(lo > 0) & (hi > 0)))
 
 
 def _ratio(power: np.ndarray, sigma: np.ndarray, rows: np.ndarray) -> np.ndarray:

@@ -66,6 +66,9 @@ def add_parser(sub) -> None:
                    help="dropout after each hidden layer (default: UniversalNetworkConfig's)")
     t.add_argument("--weight-decay", type=non_negative_float,
                    help="AdamW's weight decay (default: UniversalTrainingConfig's)")
+    t.add_argument("--hidden", type=positive_int, nargs="+", metavar="WIDTH",
+                   help="hidden widths of each perceptron (default: UniversalNetworkConfig's, "
+                        "512 512 256)")
     t.add_argument("--members", type=positive_int, default=1,
                    help="perceptrons trained together as an ensemble (default 1)")
     t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
@@ -122,8 +125,10 @@ def run_train(args: argparse.Namespace) -> int:
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
                                ("weight_decay", args.weight_decay)) if v is not None}
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads, **given)
-    network = UniversalNetworkConfig(members=args.members, **(
-        {} if args.dropout is None else {"dropout": args.dropout}))
+    shape = {k: v for k, v in (("dropout", args.dropout),
+                               ("hidden", tuple(args.hidden) if args.hidden else None))
+             if v is not None}
+    network = UniversalNetworkConfig(members=args.members, **shape)
     with TerminalProgress("epoch", prefix="posture-id universal train",
                           quiet=args.quiet) as progress:
         train_universal(args.data, args.out, config, network, progress=progress, log=say)

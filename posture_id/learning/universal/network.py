@@ -34,6 +34,9 @@ class UniversalNetworkConfig:
     members: int = 1
 
     def __post_init__(self) -> None:
+        if not (self.hidden and all(isinstance(h, int) and h >= 1 for h in self.hidden)):
+            raise ValueError(f"hidden must be one or more positive integer widths, "
+                             f"got {self.hidden!r}")
         if not (isinstance(self.members, int) and self.members >= 1):
             raise ValueError(f"members must be an integer ≥ 1, got {self.members!r}")
 

@@ -592,3 +592,23 @@ def test_the_scope_s_bodies_are_inside_and_a_small_robot_is_not(tmp_path):
                  "r_hip_pitch", "--out", str(urdf)]) == 0
     outside = UniversalIdentifier.bundled(load_body(urdf)).body_outside
     assert outside and all("time scale outside" in o for o in outside), outside
+
+
+def test_the_network_s_shape_is_checked_and_kept_with_the_model(tmp_path):
+    """Widths given are the layers built and saved; a width that is not a positive integer,
+    or none at all, is refused naming the field."""
+    import torch
+
+    from posture_id.learning.universal.model import UniversalModel
+    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+
+    config = UniversalNetworkConfig(inputs=6, hidden=(7, 5, 3))
+    net = UniversalNetwork(config)
+    widths = [layer.out_features for layer in net.members[0]
+              if isinstance(layer, torch.nn.Linear)]
+    assert widths == [7, 5, 3, 9]
+    UniversalModel(net, np.zeros(6), np.ones(6), np.zeros(4), np.ones(4)).save(tmp_path / "m")
+    assert UniversalModel.load(tmp_path / "m").network.config.hidden == (7, 5, 3)
+    for bad in [(), (0,), (4, -1), (2.5,)]:
+        with pytest.raises(ValueError, match="hidden must be one or more positive integer"):
+            UniversalNetworkConfig(hidden=bad)

@@ -79,10 +79,11 @@ def score_samples(model: UniversalModel, samples: Samples,
     probability = 1.0 / (1.0 + np.exp(-pred.logit))
     if calibration is not None:
         regimes = regime_of(samples.segments, samples.noise_ratio, samples.noise_colour)
-        probability = np.array([calibration.probability(r, z)
-                                for r, z in zip(regimes, pred.logit, strict=True)])
-        half = np.stack([pred.sd[i] * calibration.scale(r, level)
-                         for i, r in enumerate(regimes)])
+        half = np.empty_like(pred.sd)
+        for regime in np.unique(regimes):
+            sel = regimes == regime
+            probability[sel] = calibration.probability(str(regime), pred.logit[sel])
+            half[sel] = pred.sd[sel] * calibration.scale(str(regime), level)
         low = np.maximum(pred.mean - half, -1.0)
         inside = ((samples.targets[:, :4] >= low)
                   & (samples.targets[:, :4] <= pred.mean + half)).astype(float)

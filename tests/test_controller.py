@@ -99,7 +99,9 @@ class Oracle:
         xd_com = (alpha_dot - below_dot) + beta_dot
         x = np.where(p["sign"] > 0, x_com, q)
         xd = np.where(p["sign"] > 0, xd_com, qd)
-        servo = p["kp"] * x + p["kd"] * xd + p["ki"] * self.integral
+        # the command that held the stance at rest stays in the servo: the integral of a
+        # subject who has stood there (hold/Ki), written so that Ki = 0 is well defined
+        servo = p["kp"] * x + p["kd"] * xd + p["ki"] * self.integral + self.hold
         self.history.append(servo)
         delayed = self.hold.copy()
         for i in range(n):

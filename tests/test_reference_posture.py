@@ -11,7 +11,9 @@ from conftest import URDF_DIR
 
 from posture_id.bodies.body import load_body
 from posture_id.dec.parameters import default_parameters
+from posture_id.dec.prior import sample_parameters
 from posture_id.simulation import SimulationOptions, prts, simulate
+from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.reference import simulate_reference
 from posture_id.simulation.stimulus import tilt_from_array
 
@@ -40,6 +42,10 @@ def test_a_straight_chain_has_no_reference_lean_and_needs_no_holding_torque(tip,
 
 @pytest.mark.parametrize("name", PRESETS)
 def test_a_bent_body_stands_still_without_a_tilt(name):
+    """With the defaults (Kp = m·g·h: gravity compensation alone holds the stance, the
+    holding command is 0) and with parameters from the prior (Kp ≠ m·g·h: the servo must
+    keep holding the stance after its first delay, not only before it: before that was
+    so, TALOS left its stance by up to 1.6° within 30 s and crept back over minutes)."""
     body = load_body(URDF_DIR / f"{name}.urdf")
     params = default_parameters(body)
     fast = simulate(body, params, _flat(30.0))
@@ -47,6 +53,15 @@ def test_a_bent_body_stands_still_without_a_tilt(name):
     assert fast.stable and ref.stable
     assert np.abs(fast.theta).max() < 1e-12
     assert np.abs(ref.theta).max() < 1e-12
+    drawn = sample_parameters(body, 6, np.random.default_rng(11))
+    hold = -body.holding_torques - drawn.kp * np.sin(body.reference_com_angles)
+    assert np.abs(hold).max() > 1.0  # N·m: the test holds something
+    still = simulate_batch(body, drawn, _flat(30.0))
+    for k in range(6):
+        trial = still.trial(k)
+        if trial.stable:  # a prior draw may be unstable at any posture
+            assert np.abs(trial.theta).max() < 1e-12, k
+    assert sum(still.trial(k).stable for k in range(6)) >= 3
 
 
 def test_a_bent_body_sways_in_proportion_to_the_tilt(talos_bent):

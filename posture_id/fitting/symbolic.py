@@ -240,7 +240,7 @@ def step_function(model: SymbolicModel) -> ca.Function:
         mix = (1 + cls[i]) / 2
         xi = mix * x_com + (1 - mix) * q
         xdi = mix * xd_com + (1 - mix) * qd
-        servo = kp[i] * xi + kd[i] * xdi + ki[i] * integ[i]
+        servo = kp[i] * xi + kd[i] * xdi + ki[i] * integ[i] + hold[i]
         size = model.sizes[i]
         old = x[offset : offset + size]
         buf = ca.vertcat(servo, old[: size - 1])

@@ -107,10 +107,13 @@ def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
                  + (1.0 - mix) * q)
             xd = mix * (w[(ALD + i) * L + lane] - below_rate + beta_rate) + (1.0 - mix) * qd
             integ = w[(INT + i) * L + lane]
+            # the servo command holding the reference posture at rest is part of it at
+            # every step (the integrator's state of a subject who has stood there)
             w[(SERVO + i) * L + lane] = (
                 par[(KP + i) * L + lane] * x
                 + par[(KD + i) * L + lane] * xd
                 + par[(KI + i) * L + lane] * integ
+                + par[(HOLD + i) * L + lane]
             )
             w[(INT + i) * L + lane] = integ + dt * x
             w[(Q + i) * L + lane] = q

@@ -222,9 +222,14 @@ def test_shards_are_reproducible_and_a_killed_run_resumes(tiny_set, tmp_path):
     assert np.all((kept > 0.03) & (kept < 1.2))
     assert {e["split"] for e in tiny_set.shards()} == {"train", "validation", "calibration",
                                                        "test"}
-    # a run killed after 2 shards finishes with the same bytes
+    # a run killed after 2 shards finishes with the same bytes, also when its manifest was
+    # written before a scope field with a neutral default existed (preset_jitter)
     partial = tmp_path / "set"
     generate_universal(UniversalDataConfig(shards=2, trials=6, seed=5), partial, workers=1)
+    manifest_file = partial / "manifest.json"
+    manifest = json.loads(manifest_file.read_text())
+    del manifest["config"]["scope"]["preset_jitter"]
+    manifest_file.write_text(json.dumps(manifest))
     finished = generate_universal(config, partial, workers=2)
     assert [e["sha256"] for e in finished.shards()] == [e["sha256"] for e in tiny_set.shards()]
     with pytest.raises(DatasetError, match="other arguments"):

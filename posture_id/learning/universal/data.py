@@ -189,6 +189,13 @@ def _manifest(config: UniversalDataConfig) -> dict:
             "shards": [], "complete": False}
 
 
+def _recorded_arguments(identity: dict) -> dict:
+    """A set's recorded arguments, any scope field added since it was made at its default
+    (every such field's default draws as the set did: ``preset_jitter`` 0 draws nothing)."""
+    return {**identity, "scope": json.loads(json_text(
+        UniversalScope.from_dict(identity["scope"]).to_dict()))}
+
+
 def generate_universal(config: UniversalDataConfig, out: str | Path, workers: int | None = None,
                        progress: Progress | None = None) -> UniversalSet:
     """Generate (or finish) the set ``config`` into ``out``; resumable (module doc)."""
@@ -198,7 +205,7 @@ def generate_universal(config: UniversalDataConfig, out: str | Path, workers: in
         if out.exists() and any(out.iterdir()):
             raise DatasetError(f"{out}: exists, is not empty and holds no universal set")
         manifest = _manifest(config)
-    elif manifest["config"] != json.loads(json_text(config.identity())):
+    elif _recorded_arguments(manifest["config"]) != json.loads(json_text(config.identity())):
         raise DatasetError(f"{out}: was made with other arguments; choose another directory "
                            "or repeat the original arguments")
     for entry in manifest["shards"]:

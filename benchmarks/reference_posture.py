@@ -67,6 +67,7 @@ def measure_drawn(name: str, body) -> dict:
     still = simulate_batch(body, params, tilt_from_array(np.array([0.0, 30.0]), np.zeros(2)))
     stim = prts(amplitude_deg=0.5, states=242, state_s=0.25, cycles=2)
     swayed = simulate_batch(body, params, stim)
+    period = int(round(stim.period_s * SimulationOptions().sample_rate_hz))
     shares, excursions = [], []
     for k in range(DRAWS):
         rest, trial = still.trial(k), swayed.trial(k)
@@ -74,7 +75,6 @@ def measure_drawn(name: str, body) -> dict:
             continue
         excursions.append(float(np.degrees(np.abs(rest.theta).max())))
         sway = np.degrees(body.com_angles(trial.theta)[:, 0])
-        period = int(round(stim.period_s * SimulationOptions().sample_rate_hz))
         shares.append(float(cycle_average(sway[:, None], period, 0, 1).locked_share[0]))
     return {"body": name, "stable_draws": len(shares),
             "max_abs_theta_without_tilt_deg": max(excursions) if excursions else None,

@@ -45,7 +45,8 @@ def test_a_bent_body_stands_still_without_a_tilt(name):
     """With the defaults (Kp = m·g·h: gravity compensation alone holds the stance, the
     holding command is 0) and with parameters from the prior (Kp ≠ m·g·h: the servo must
     keep holding the stance after its first delay, not only before it: before that was
-    so, TALOS left its stance by up to 1.6° within 30 s and crept back over minutes)."""
+    so, the presets left their stance by up to 4.4° within 30 s and crept back over
+    minutes, benchmarks/reference_posture.py)."""
     body = load_body(URDF_DIR / f"{name}.urdf")
     params = default_parameters(body)
     fast = simulate(body, params, _flat(30.0))
@@ -56,12 +57,12 @@ def test_a_bent_body_stands_still_without_a_tilt(name):
     drawn = sample_parameters(body, 6, np.random.default_rng(11))
     hold = -body.holding_torques - drawn.kp * np.sin(body.reference_com_angles)
     assert np.abs(hold).max() > 1.0  # N·m: the test holds something
-    still = simulate_batch(body, drawn, _flat(30.0))
-    for k in range(6):
-        trial = still.trial(k)
-        if trial.stable:  # a prior draw may be unstable at any posture
-            assert np.abs(trial.theta).max() < 1e-12, k
-    assert sum(still.trial(k).stable for k in range(6)) >= 3
+    batch = simulate_batch(body, drawn, _flat(30.0))
+    still = [batch.trial(k) for k in range(6)]
+    stable = [trial for trial in still if trial.stable]  # a prior draw may be unstable
+    assert len(stable) >= 3
+    for trial in stable:
+        assert np.abs(trial.theta).max() < 1e-12
 
 
 def test_a_bent_body_sways_in_proportion_to_the_tilt(talos_bent):

@@ -571,6 +571,15 @@ def test_an_ensemble_s_members_combine_into_their_mixture_and_round_trip(tmp_pat
     deployed = ((target[0, :4] - mean) ** 2).mean() + torch.nn.functional.softplus(
         -outputs[:, 8].mean())
     assert torch.isclose(val_mixed, deployed)
+    # the absolute point loss: the members' mean estimate's mean absolute error, and in
+    # training each member's own (the log-SD and class terms unchanged)
+    _, val_abs = _loss(outputs[:, None, :], target, "absolute")
+    assert torch.isclose(val_abs, (target[0, :4] - mean).abs().mean()
+                         + torch.nn.functional.softplus(-outputs[:, 8].mean()))
+    train_sq, _ = _loss(outputs[:, None, :], target, "squared")
+    train_abs, _ = _loss(outputs[:, None, :], target, "absolute")
+    err = target[:, :4] - outputs[:, None, :4]
+    assert torch.isclose(train_sq - train_abs, (err**2).mean() - err.abs().mean())
 
 
 def test_the_scope_s_bodies_are_inside_and_a_small_robot_is_not(tmp_path):
@@ -617,3 +626,18 @@ def test_the_network_s_shape_is_checked_and_kept_with_the_model(tmp_path):
     for bad in [(), (0,), (4, -1), (2.5,)]:
         with pytest.raises(ValueError, match="hidden must be one or more positive integer"):
             UniversalNetworkConfig(hidden=bad)
+
+
+def test_the_training_configuration_names_its_point_loss():
+    """The point loss is one of the two known; another is refused by name, and the command
+    line passes its choice through."""
+    from posture_id.cli import build_parser
+    from posture_id.learning.universal.training import UniversalTrainingConfig
+
+    assert UniversalTrainingConfig().point_loss == "squared"
+    assert UniversalTrainingConfig(point_loss="absolute").point_loss == "absolute"
+    with pytest.raises(ValueError, match="point_loss must be one of squared, absolute"):
+        UniversalTrainingConfig(point_loss="huber")
+    args = build_parser().parse_args(["universal", "train", "set", "--out", "m",
+                                      "--point-loss", "absolute"])
+    assert args.point_loss == "absolute"

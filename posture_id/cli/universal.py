@@ -71,6 +71,9 @@ def add_parser(sub) -> None:
                         "512 512 256)")
     t.add_argument("--members", type=positive_int, default=1,
                    help="perceptrons trained together as an ensemble (default 1)")
+    t.add_argument("--point-loss", choices=("squared", "absolute"),
+                   help="the estimates' loss: squared error (the posterior mean; default) or "
+                        "absolute error (the posterior median)")
     t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     t.add_argument("--threads", type=positive_int, help="torch threads (default: all cores)")
     t.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -123,7 +126,8 @@ def run_train(args: argparse.Namespace) -> int:
     from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
 
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
-                               ("weight_decay", args.weight_decay)) if v is not None}
+                               ("weight_decay", args.weight_decay),
+                               ("point_loss", args.point_loss)) if v is not None}
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads, **given)
     shape = {k: v for k, v in (("dropout", args.dropout),
                                ("hidden", tuple(args.hidden) if args.hidden else None))

@@ -25,6 +25,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 import torch
@@ -37,16 +38,21 @@ from posture_id.learning.universal.network import UniversalNetwork, UniversalNet
 from posture_id.learning.universal.samples import Samples, load_split, make_samples
 from posture_id.progress import Progress, report
 
-__all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED"]
+__all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED", "POINT_LOSSES"]
 
 #: Seed of the validation split's noise (fixed, so epochs are compared alike).
 VALIDATION_SEED = 0x56414C
+#: The point losses :class:`UniversalTrainingConfig` knows.
+POINT_LOSSES = ("squared", "absolute")
 
 
 @dataclass(frozen=True)
 class UniversalTrainingConfig:
     """How to train: epochs (at most), batch size, AdamW's peak learning rate and weight
-    decay, early-stopping patience, seed, torch threads (default: all cores)."""
+    decay, early-stopping patience, seed, torch threads (default: all cores), and the
+    point loss of the four parameters' estimates: 'squared' (their mean squared error:
+    the estimate learns the posterior mean) or 'absolute' (their mean absolute error: the
+    posterior median), in training and in the validation loss that picks the epoch."""
 
     epochs: int = 60
     batch_size: int = 512
@@ -55,26 +61,34 @@ class UniversalTrainingConfig:
     patience: int = 12
     seed: int = 0
     threads: int | None = None
+    point_loss: Literal["squared", "absolute"] = "squared"
+
+    def __post_init__(self) -> None:
+        if self.point_loss not in POINT_LOSSES:
+            raise ValueError(f"point_loss must be one of {', '.join(POINT_LOSSES)}, "
+                             f"got {self.point_loss!r}")
 
 
 def _device() -> torch.device:
     return torch.device("cuda" if torch.cuda.is_available() else "cpu")
 
 
-def _loss(out: torch.Tensor, target: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+def _loss(out: torch.Tensor, target: torch.Tensor, point_loss: str = "squared"
+          ) -> tuple[torch.Tensor, torch.Tensor]:
     """(training loss, validation loss) of a batch: ``out`` (K, B, 9) of K members,
     ``target`` (B, 5) standardised continuous targets then the class (±1). The training
     loss is the members' mean of their own; the validation loss is that of what is
-    deployed, the members' mean estimate and logit (for one member, the same thing)."""
+    deployed, the members' mean estimate and logit (for one member, the same thing).
+    ``point_loss`` (:data:`POINT_LOSSES`): the estimates' squared or absolute error."""
     mean, log_sd, logit = out[..., :4], out[..., 4:8].clamp(-8, 6), out[..., 8]
     label = (target[:, 4] > 0).float()
     err = target[:, :4] - mean
-    mse = (err**2).mean()
+    point = torch.square if point_loss == "squared" else torch.abs
     nll = (log_sd + 0.5 * (err.detach() ** 2) * torch.exp(-2 * log_sd)).mean()
     bce = torch.nn.functional.binary_cross_entropy_with_logits(logit, label.expand_as(logit))
-    deployed = ((target[:, :4] - mean.mean(0)) ** 2).mean() \
+    deployed = point(target[:, :4] - mean.mean(0)).mean() \
         + torch.nn.functional.binary_cross_entropy_with_logits(logit.mean(0), label)
-    return mse + 0.5 * nll + bce, deployed
+    return point(err).mean() + 0.5 * nll + bce, deployed
 
 
 def _targets(samples: Samples, mean: np.ndarray, std: np.ndarray) -> torch.Tensor:
@@ -137,7 +151,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
             pick = order[i * config.batch_size : (i + 1) * config.batch_size]
             if not len(pick):
                 continue
-            loss, _ = _loss(net(x[pick].to(device)), t[pick].to(device))
+            loss, _ = _loss(net(x[pick].to(device)), t[pick].to(device), config.point_loss)
             optimiser.zero_grad(set_to_none=True)
             loss.backward()
             optimiser.step()
@@ -145,7 +159,8 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
             total += loss.item() * len(pick)
         net.eval()
         with torch.no_grad():
-            val = float(np.mean([_loss(net(x_val[i:i + 8192]), t_val[i:i + 8192])[1].item()
+            val = float(np.mean([_loss(net(x_val[i:i + 8192]), t_val[i:i + 8192],
+                                       config.point_loss)[1].item()
                                  for i in range(0, len(x_val), 8192)]))
         history.append({"epoch": epoch + 1, "train_loss": total / len(x),
                         "validation_loss": val, "seconds": time.perf_counter() - started})

@@ -36,6 +36,25 @@ def test_identify_recovers_the_classes_of_a_simulated_recording(tip, tmp_path, c
     assert main(["simulate", "--params", str(params), "--out", str(tmp_path / "b.csv")]) == 0
 
 
+def test_identify_without_out_prints_the_result_and_writes_nothing(tip, tmp_path, capsys,
+                                                                     monkeypatch):
+    """``posture-id identify REC --body URDF``, the command outside checks run: the
+    parameter table on stdout, a line on stderr that nothing was written, no file made;
+    a cohort without --out is refused by name."""
+    csv = tmp_path / "rec.csv"
+    simulate(tip).to_csv(csv)
+    monkeypatch.chdir(tmp_path)
+    assert main(["identify", str(csv)]) == 0
+    out, err = capsys.readouterr()
+    assert "no --out: the result is printed, not written" in err
+    rows = [line.split() for line in out.splitlines() if line.split()[:1] in
+            (["ankle"], ["knee"], ["hip"])][:3]
+    assert [r[5] for r in rows] == ["com", "joint", "com"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.csv"]
+    assert main(["identify", str(tmp_path)]) == 2
+    assert "a cohort's results need a folder: --out FOLDER" in capsys.readouterr().err
+
+
 def test_identify_recovers_random_classes(tip):
     identifier = CnnIdentifier.for_body(tip)
     rng = np.random.default_rng(2024)

@@ -129,10 +129,12 @@ def check_output_folder(path: Path, flag: str, inputs=()) -> None:
             raise PostureIdError(f"{path}: {flag} is also an input of this command")
 
 
-def write_result(result, out: Path, plot: Path | None = None) -> None:
-    """Write a result's JSON (and its plot), say so on stderr, print its summary."""
-    result.to_json(out)
-    say(f"wrote {out}")
+def write_result(result, out: Path | None, plot: Path | None = None) -> None:
+    """Write a result's JSON (none without ``out``) and its plot, say so on stderr, print
+    its summary."""
+    if out is not None:
+        result.to_json(out)
+        say(f"wrote {out}")
     if plot:
         result.plot(plot)
         say(f"wrote {plot}")

@@ -48,9 +48,10 @@ def add_parser(sub) -> None:
                         "and the sway is not people-like (on the stimulus-locked sway when "
                         "the recording is too noisy to check an answer) (default "
                         "%(default)s)")
-    p.add_argument("--out", type=Path, required=True,
+    p.add_argument("--out", type=Path,
                    help="result JSON (its \"parameters\" object is a parameter file); for a "
-                        "cohort, a folder: one JSON per recording and summary.csv")
+                        "cohort, a folder: one JSON per recording and summary.csv (needed "
+                        "there). Without it one recording's result is printed only")
     p.add_argument("--scheduler", help="cohort: Dask distributed scheduler (tcp://host:port)")
     p.add_argument("--bodies", type=Path,
                    help="cohort: a folder of the subjects' own bodies, <recording name>.urdf "
@@ -91,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
     recording, stimulus = recording_and_stimulus(args, body)
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
         result = identifier.identify(recording, stimulus, progress)
+    if args.out is None:
+        say("no --out: the result is printed, not written (--out FILE.json keeps it)")
     write_result(result, args.out, args.plot)
     if result.fell:  # exit status 1: identified, but the model does not balance the body
         say(FELL.format(at="" if result.fell_at_s is None else f" at t = "
@@ -105,6 +108,9 @@ def run_cohort(args: argparse.Namespace) -> int:
 
     if args.plot:
         raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording")
+    if args.out is None:
+        raise PostureIdError(f"{args.recording}: a cohort's results need a folder: --out "
+                             "FOLDER (one JSON per recording and summary.csv)")
     fit_options = FitOptions(**search_keywords(args))
     recordings = find_recordings(args.recording)
     check_output_folder(args.out, "--out", inputs=(*recordings, args.body, args.tilt))

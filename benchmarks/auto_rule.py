@@ -1,6 +1,7 @@
 """When should ``auto`` refine the network's answer by least squares? Part-locked subjects.
 
 Run:  .venv/bin/python benchmarks/auto_rule.py [--subjects 40] [--workers 2]
+      [--cycles 2] [--share 0.6 0.95] [--name auto_rule]
 
 Subjects whose body COM sway is 60–95 % stimulus-locked (motor noise, not people-like:
 the sway the old rule refined whenever the network's verdict was doubtful), parameters
@@ -13,6 +14,11 @@ every doubtful answer on sway that is not people-like). Per method: subjects wit
 class right, the median and 90th percentile of |Kp error| over modules, and subjects
 with a module's Kp off by more than 10 %. Written to
 ``benchmarks/results/auto_rule.{json,md}``.
+
+``--cycles 1`` records one cycle of the PRTS (60.5 s), where the locked share cannot be
+measured (nothing to average over), and ``--share LO HI`` draws the locked share from
+another range (``--share 1 1``: no motor noise at all, 0.05° sensor noise alone);
+``--name`` names the result files.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ from posture_id.identify.method import Method
 from posture_id.identify.verdict import PEOPLE_LIKE_SHARE
 from posture_id.learning.universal.bodies import build_body
 from posture_id.learning.universal.scope import BodyDraw
+from posture_id.simulation import simulate
 from posture_id.simulation.stimulus import prts
 from posture_id.simulation.subjects import people_like
 
@@ -53,24 +60,32 @@ def _body(name: str):
     return build_body(BodyDraw("winter", n, 1.75, 70.0, ((1.0, 1.0),) * n))
 
 
-def _subject(index: int, subjects: int) -> dict:
+def _subject(index: int, subjects: int, cycles: int = 2,
+             share_range: tuple[float, float] = (0.6, 0.95)) -> dict:
     """One subject, identified every way: its row."""
     rng = np.random.default_rng([SEED, index])
     name = BODIES[index % len(BODIES)]
     body = _body(name)
-    stimulus = prts(1.0, 2, 242)
+    stimulus = prts(1.0, cycles, 242)
     for _attempt in range(20):
         truth = sample_parameters(body, 1, rng).trial(0, body.joint_names)
-        share = float(rng.uniform(0.6, 0.95))
+        share = float(rng.uniform(*share_range))
+        seed = int(rng.integers(2**31))
+        if share >= 1.0:  # no motor noise: the sensor's alone
+            clean = simulate(body, truth, stimulus)
+            if clean.stable:
+                recording, realised = clean.to_recording().with_sensor_noise(0.05, seed), 1.0
+                break
+            continue
         try:
-            subject = people_like(body, truth, stimulus, share, seed=int(rng.integers(2**31)))
+            subject = people_like(body, truth, stimulus, share, seed=seed)
+            recording, realised = subject.recording, subject.locked_share
             break
         except PostureIdError:
             continue
     else:
         return {"index": index, "body": name, "skipped": True}
     network = Identifier(body, Method.CNN)
-    recording = subject.recording
     trial = network.prepare(recording, stimulus)
     answers, seconds = {}, {}
     began = time.perf_counter()
@@ -91,7 +106,7 @@ def _subject(index: int, subjects: int) -> dict:
                                    Refinement.LOCKED: answers["hybrid, locked sway"]}[how]
     answers["auto (before: every doubtful answer)"] = (
         answers["hybrid, raw sway"] if cnn.verdict.doubtful and not unlocked else cnn)
-    row = {"index": index, "body": name, "locked_share": subject.locked_share,
+    row = {"index": index, "body": name, "locked_share": realised,
            "verdict_doubtful": cnn.verdict.doubtful, "refinement": how.value,
            "noise_relative": cnn.verdict.noise.noise_relative, "seconds": seconds}
     for method, result in answers.items():
@@ -118,12 +133,15 @@ def _summary(rows: list[dict]) -> dict:
     return out
 
 
-def _markdown(summary: dict, rows: list[dict]) -> str:
+def _markdown(summary: dict, rows: list[dict], cycles: int = 2,
+              share_range: tuple[float, float] = (0.6, 0.95)) -> str:
     counts = {k: sum(r["refinement"] == k for r in rows) for k in ("keep", "raw", "locked")}
     doubtful = sum(r["verdict_doubtful"] for r in rows)
     lines = ["# `auto`'s rule on part-locked subjects", "",
              "Made by `.venv/bin/python benchmarks/auto_rule.py` (its docstring says what). "
-             f"{len(rows)} subjects, 60–95 % of the body COM sway locked; the network's "
+             f"{len(rows)} subjects, the 242-state PRTS ×{cycles}, "
+             f"{100 * share_range[0]:.0f}–{100 * share_range[1]:.0f} % of the body COM sway "
+             "locked; the network's "
              f"verdict was doubtful for {doubtful}; this rule kept {counts['keep']} answers, "
              f"refined {counts['locked']} on the locked sway and {counts['raw']} on the raw "
              "sway.",
@@ -141,11 +159,17 @@ def main() -> None:
     parser.add_argument("--subjects", type=int, default=40)
     parser.add_argument("--workers", type=int, default=None)
     parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--cycles", type=int, default=2, help="PRTS cycles recorded")
+    parser.add_argument("--share", type=float, nargs=2, default=(0.6, 0.95),
+                        metavar=("LO", "HI"), help="locked share of the body COM sway")
+    parser.add_argument("--name", default="auto_rule", help="result files' name")
     args = parser.parse_args()
+    share_range = tuple(args.share)
     executor = executor_for(None, args.workers, processes=True)
     rows = []
     try:
-        for index, row in executor.unordered(_subject, range(args.subjects), args.subjects):
+        for index, row in executor.unordered(_subject, range(args.subjects), args.subjects,
+                                                args.cycles, share_range):
             rows.append(row)
             print(f"subject {index + 1}: done ({len(rows)}/{args.subjects})", flush=True)
     finally:
@@ -153,10 +177,11 @@ def main() -> None:
     rows = sorted((r for r in rows if not r.get("skipped")), key=lambda r: r["index"])
     summary = _summary(rows)
     args.out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(args.out / "auto_rule.json", json_text({"summary": summary,
-                                                              "rows": rows}))
-    atomic_write_text(args.out / "auto_rule.md", _markdown(summary, rows))
-    print(_markdown(summary, rows))
+    text = _markdown(summary, rows, args.cycles, share_range)
+    atomic_write_text(args.out / f"{args.name}.json", json_text({"summary": summary,
+                                                                 "rows": rows}))
+    atomic_write_text(args.out / f"{args.name}.md", text)
+    print(text)
     print(json.dumps({m: s["kp_error_median_pct"] for m, s in summary.items()}))
 
 

@@ -276,3 +276,28 @@ def test_lab_like_recordings_through_the_command_line(lab_subject, case, capsys)
     joint = body.joint_names[0]
     assert data["parameters"][joint]["controls"] == truth[joint].controls
     assert data["parameters"][joint]["kp"] == pytest.approx(truth[joint].kp, rel=0.02)
+
+
+@pytest.mark.parametrize("states, start, sign, negated", [
+    (242, 0.0, 1, False),    # from its start: nothing to say
+    (242, 150.0, 1, True),   # half a cycle on: the same sequence negated
+    (80, 47.0, -1, False),
+])
+def test_a_lab_prts_is_named_by_its_start_in_the_first_half_cycle(states, start, sign, negated):
+    """Half a cycle on, a PRTS is the same sequence negated; the recognised stimulus names
+    the start in the first half (a one-cycle recording of the plain PRTS at 0.3 s states
+    was told as "from state 121, negated"), and its tilt is the one run. (A first state
+    that does not move reads as a lead-in: the start named may be a state later.)"""
+    import re
+
+    run = prts(0.5, 1, states, 0.3, start_state=start, sign=sign)
+    t, tilt = _sampled(run, 50.0, 0.0)
+    found = recognise_prts(t, tilt)
+    assert found is not None
+    assert np.max(np.abs(found.angle(t) - tilt)) <= 1e-8 * np.ptp(tilt)
+    assert ("negated" in found.description) is negated
+    named = re.search(r"from state ([0-9.]+)", found.description)
+    if start == 0:
+        assert named is None
+    else:
+        assert 0 < float(named.group(1)) < states / 2

@@ -248,14 +248,19 @@ def auto_refinement(verdict: TrustVerdict) -> Refinement:
     unchecked`: the answer explains the recording as well as its noise allows, and that
     noise alone leaves more than 10 % of the locked sway; on motor-noisy sway, least
     squares on every sample fits the subject's own sway and ends further from the truth,
-    `benchmarks/auto_rule.py`), on every sample otherwise."""
+    `benchmarks/auto_rule.py`), except on a recording of one cycle, whose locked share
+    cannot be measured (people-like or not, the network's answer is kept there:
+    `benchmarks/auto_rule.py --cycles 1`), on every sample otherwise."""
     if not verdict.doubtful:
         return Refinement.KEEP
     share = verdict.locked_share
     if share is not None and share < PEOPLE_LIKE_SHARE:
         return Refinement.KEEP
     if verdict.noise is not None and verdict.noise.unchecked:
-        return Refinement.LOCKED
+        # one cycle: no locked share to tell people-like sway from part-locked, and least
+        # squares, raw or locked, ended further from the truth than the network on such
+        # recordings at every share (benchmarks/results/auto_rule_one_cycle.md)
+        return Refinement.KEEP if share is None else Refinement.LOCKED
     return Refinement.RAW
 
 

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posture_id.frf.cycles import cycle_average
-from posture_id.frf.locked import LockedOptions, LockedProjection
+from posture_id.frf.locked import LockedOptions, LockedProjection, noise_levels
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.noise import sensor_noise_deg
 
@@ -74,8 +74,9 @@ class NoiseCheck:
             harmonics, or the raw sway about its mean), of the whole-body COM sway when
             it was given (else of the segments); inf for a model that falls.
         noise_relative: the ``relative`` the recording's noise alone leaves (the noise in
-            the cycle average against the locked sway; NaN when it cannot be estimated:
-            one cycle, or a stimulus that is not periodic).
+            the cycle average against the locked sway: from how the cycles differ, or
+            with one cycle from the harmonics the stimulus leaves empty; NaN for a
+            stimulus that is not periodic).
     """
 
     ratio: float
@@ -171,10 +172,14 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
         locked_power = np.sum(np.abs(projection.spectrum(theirs)) ** 2)
         relative = (float(np.sqrt(np.sum(np.abs(projection.spectrum(ours)) ** 2)
                                   / locked_power)) if finite else math.inf)
-        noise_relative = math.nan
         if projection.cycles >= 2:
-            noise_relative = float(np.sqrt(np.sum(_between_cycles(projection, theirs))
-                                           / locked_power))
+            noise_power = np.sum(_between_cycles(projection, theirs))
+        else:  # one cycle: the noise at the empty harmonics beside each compared one
+            sd = noise_levels(np.abs(projection.all_harmonics(theirs)) ** 2,
+                              projection.excited, projection.harmonics - 1,
+                              LockedOptions().neighbours)
+            noise_power = np.sum(2 * sd**2)  # E|X|² = 2σ² (σ of each part)
+        noise_relative = float(np.sqrt(noise_power / locked_power))
         return NoiseCheck(ratio, "locked", noise, limit, relative, noise_relative)
     noise = max(float(sensor_noise_deg(recorded)), _NOISE_FLOOR_DEG)
     if not np.all(np.isfinite(residual)):

@@ -141,7 +141,9 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
       recording (nothing fitted to it can be checked);
     - the CNN alone: ``--method hybrid`` (least squares from its answer), with
       ``--locked`` when its answer explains such a noisy recording as well as its noise
-      allows (``auto``'s rule);
+      allows (``auto``'s rule); on a recording of one cycle, whose locked share cannot be
+      measured, such an answer gets the longer recording (least squares did no better
+      than the network there: ``auto`` keeps it);
     - least squares on a bound: for a locked fit without a prior, ``--prior-sd 0.5`` (a
       noisy recording leaves some parameters free to run to a bound; the prior holds
       them); otherwise a wider ``--gain-range`` / ``--delay-range`` (and the locked fit
@@ -165,8 +167,10 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
     if people_like and not locked and not (method is Method.CNN and network_reads_people_like):
         return LOCKED_FLAGS
-    if (noise is not None and not noise.acceptable
-            and noise.noise_relative > CLOSE_ENOUGH and method is not Method.CNN):
+    # one cycle (no locked share): least squares does no better than the network there
+    one_cycle = locked_share is None and noise is not None and noise.basis == "locked"
+    if (noise is not None and not noise.acceptable and noise.noise_relative > CLOSE_ENOUGH
+            and (method is not Method.CNN or (one_cycle and noise.unchecked))):
         return ("a longer recording (more stimulus cycles to average): its noise alone "
                 f"leaves {100 * noise.noise_relative:.0f} % of the locked sway, so no answer "
                 f"can be checked to {100 * CLOSE_ENOUGH:g} %")

@@ -350,14 +350,18 @@ def recognise_lab_prts(times_s: np.ndarray, tilt_rad: np.ndarray) -> TiltProfile
 
     def profile(p: np.ndarray, snap: bool = False) -> TiltProfile:
         onset_s, first_state, duration, peak = p
-        first_state = first_state % states
+        first_state, negated = first_state % states, sign
+        # half a cycle on, a PRTS is the same sequence negated: name the start in the
+        # first half ("from state 121, negated" is the 242-state PRTS from its start)
+        if first_state >= states / 2 - 1e-6:
+            first_state, negated = max(first_state - states / 2, 0.0), -sign
         if snap:  # what least squares left a rounding error away from a round value
             onset_s = 0.0 if onset_s < 1e-6 else onset_s
             nearest = round(first_state)
             first_state = float(nearest % states) if abs(first_state - nearest) < 1e-6 \
                 else first_state
         return prts(abs(peak), cycles, states, duration, onset_s=max(onset_s, 0.0),
-                    start_state=first_state, sign=sign)
+                    start_state=first_state, sign=negated)
 
     def misfit(p: np.ndarray) -> np.ndarray:
         return (profile(p).angle(t) - a) / span

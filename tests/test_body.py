@@ -124,7 +124,21 @@ BAD_URDFS = {
     "branching": (
         _link("shank") + _link("left") + _link("right") + _joint("ankle", "foot", "shank")
         + _joint("hip_l", "shank", "left", z=0.5) + _joint("hip_r", "shank", "right", z=0.5),
-        ["joint 'hip_r'", "serial chain", "posture-id body --lump"],
+        ["joints 'hip_l', 'hip_r' branch off link 'shank'", "serial chain",
+         "posture-id body --lump"],
+    ),
+    # a whole humanoid's file: the tree named before its frames' zero masses
+    "branching_behind_a_fixed_frame": (
+        _link("pelvis") + _link("left") + _link("right") + '<link name="camera">'
+        '<inertial><mass value="0"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" '
+        'izz="1"/></inertial></link>\n' + _joint("base", "foot", "pelvis", kind="fixed")
+        + _joint("cam", "pelvis", "camera", kind="fixed")
+        + _joint("hip_l", "pelvis", "left") + _joint("hip_r", "pelvis", "right"),
+        ["branch off link 'foot'", "posture-id body --lump"],
+    ),
+    "floating": (
+        _link("shank") + _joint("free", "foot", "shank", kind="floating"),
+        ["joint 'free' is floating", "posture-id body --lump"],
     ),
     "missing_inertia": (
         _link("shank") + _link("thigh", inertial=False) + _joint("ankle", "foot", "shank")
@@ -147,6 +161,20 @@ def test_bad_urdf_gets_a_clear_error(tmp_path, case):
     assert str(path) in message
     for fragment in expected:
         assert fragment in message
+
+
+def test_a_massless_frame_fixed_to_a_segment_adds_nothing(tmp_path):
+    """A sensor's frame (mass 0, no inertia; an exporter's ±1e-20 kg·m² inertia too) fixed
+    to the shank loads, and the body is the one without it."""
+    frame = ('<link name="imu"><inertial><mass value="0"/><inertia ixx="1e-20" ixy="0" '
+             'ixz="0" iyy="-1e-20" iyz="0" izz="0"/></inertial></link>\n')
+    plain = URDF_HEAD + _link("shank") + _joint("ankle", "foot", "shank") + "</robot>\n"
+    with_frame = (URDF_HEAD + _link("shank") + frame + _joint("ankle", "foot", "shank")
+                  + _joint("imu_mount", "shank", "imu", kind="fixed", z=0.3) + "</robot>\n")
+    (tmp_path / "plain.urdf").write_text(plain)
+    (tmp_path / "frame.urdf").write_text(with_frame)
+    a, b = load_body(tmp_path / "plain.urdf"), load_body(tmp_path / "frame.urdf")
+    assert b.n_segments == 1 and np.allclose(a.mgh, b.mgh) and np.allclose(a.inertias, b.inertias)
 
 
 def test_missing_and_malformed_files(tmp_path):

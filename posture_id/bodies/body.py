@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.bodies.urdf_checks import check_urdf_text
+from posture_id.bodies.urdf_checks import check_urdf_text, lump_hint
 from posture_id.errors import BodyError
 from posture_id.fileio import file_sha256
 
@@ -338,9 +338,7 @@ def load_body(path: str | Path = DEFAULT_URDF) -> Body:
             raise BodyError(
                 f"{path}: joint '{model.names[j]}' branches off {parent} instead of following "
                 f"'{model.names[j - 1]}': the body must be a single serial chain, not a tree "
-                f"(a whole humanoid: lump its legs and trunk into one first, `posture-id body "
-                f"--lump {path} --segments 3 --ankle-joints L R --knee-joints L R "
-                f"--hip-joints L R --out body.urdf`)"
+                f"({lump_hint(path)})"
             )
 
     data = model.createData()

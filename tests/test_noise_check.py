@@ -106,3 +106,26 @@ def test_one_cycle_tells_how_much_of_the_locked_sway_its_noise_leaves(tip):
                      / np.sum(np.abs(projection.spectrum(recorded)) ** 2))
     assert 0.8 < check.noise_relative / actual < 1.2
     assert check.noise_relative > 0.1 and check.unchecked
+
+
+def test_one_cycle_s_noise_is_not_the_body_s_transient(tip):
+    """One clean cycle at 0.01° of noise: the recording's empty harmonics also hold the
+    body's transient from its start (more than 1.5× the noise's share here), the truth's
+    residual only the noise; the smaller is used, so the truth is judged by the noise."""
+    from posture_id.frf.locked import LockedOptions, LockedProjection
+    from posture_id.identify.noise_check import _empty_harmonics
+
+    truth = default_parameters(tip)
+    clean = simulate(tip, truth, prts(1.0, 1))
+    noisy = clean.to_recording().with_sensor_noise(0.01, 3)
+    trial = prepare_trial(noisy)
+    check = noise_check(trial, clean.theta)
+    projection = LockedProjection.for_trial(trial, LockedOptions(weighted=False))
+    recorded = np.degrees(noisy.theta)
+    added = recorded - np.degrees(clean.theta[: len(noisy.time)])
+    locked = np.sum(np.abs(projection.spectrum(recorded)) ** 2)
+    actual = np.sqrt(np.sum(np.abs(projection.spectrum(added)) ** 2) / locked)
+    recording_alone = np.sqrt(np.sum(_empty_harmonics(projection, recorded)) / locked)
+    assert recording_alone > 1.5 * actual
+    assert 0.8 < check.noise_relative / actual < 1.2
+    assert 0.8 < check.ratio < 1.2 and not check.unchecked

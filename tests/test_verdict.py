@@ -126,7 +126,8 @@ def test_a_parameter_on_a_search_bound_is_named(tip):
     (0.9, 1.0, 0.05, ("the body is outside",), "raw", "--method hybrid"),
     # one cycle (no locked share): as good as the noise, kept; a longer recording named
     (None, 1.0, 0.3, (), "keep", "a longer recording (more stimulus cycles to average): "
-     "its noise alone leaves 30 % of the locked sway, so no answer can be checked to 10 %"),
+     "its noise alone leaves 30 % of the locked sway, so no answer can be checked to 10 %; "
+     "for sway without motor noise (a robot's), --method hybrid"),
     (None, 3.0, 0.3, (), "raw", "--method hybrid"),  # more than the noise leaves
 ])
 def test_auto_refines_a_doubtful_answer_on_the_sway_that_suits_it(share, ratio, noise_relative,

@@ -12,7 +12,8 @@ estimated from the recording itself, in the way that suits its stimulus:
   differs between cycles is not locked to the stimulus, while a deterministic response,
   the dead-band's even harmonics included, repeats in every cycle and never counts as
   noise. With one cycle it is the power at the neighbouring harmonics the stimulus leaves
-  empty (:class:`~posture_id.frf.locked.LockedProjection`). Sway of the subject's own,
+  empty, in the recording or in the residual, whichever is smaller (the recording's also
+  holds the body's transient from its start, which a right model shares). Sway of the subject's own,
   drift and sensor noise are all "noise" here, so a people-like recording whose sway is
   mostly not locked to the stimulus is judged as fairly as a clean one. A right model
   leaves an RMS of about 1.
@@ -145,24 +146,21 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
     residual = np.degrees(recorded - model_theta)
     if projection is None:
         projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
-    if projection is not None and projection.cycles < 2:  # the noise from empty harmonics
-        projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=True))
     if projection is not None:
         finite = bool(np.all(np.isfinite(residual)))
-        if projection.cycles >= 2:
-            # what differs between cycles: in the recording, a transient of the body's
-            # own repeats in the model and is no noise; in the residual, a model whose
-            # sway is not periodic adds its own. Each only ever adds: the smaller holds
-            variance = _between_cycles(projection, np.degrees(recorded))
-            if finite:
-                variance = np.minimum(variance, _between_cycles(projection, residual))
-            ratio = (float(np.sqrt(np.mean(np.abs(projection.spectrum(residual)) ** 2
-                                           / variance))) if finite else math.inf)
-            noise = float(np.median(np.sqrt(variance / 2)))
-        else:
-            ratio = (float(np.sqrt(np.mean(projection.apply(residual) ** 2))) if finite
-                     else math.inf)
-            noise = float(np.median(projection.noise))
+        # the noise: with C ≥ 2 cycles what differs between them (in the recording, a
+        # transient of the body's own repeats in the model and is no noise; in the
+        # residual, a model whose sway is not periodic adds its own); with one cycle the
+        # power at the harmonics the stimulus leaves empty (in the recording, the body's
+        # transient from its start is there too, and a right model shares it; in the
+        # residual, a wrong model adds its own). Each only ever adds: the smaller holds
+        spread = _between_cycles if projection.cycles >= 2 else _empty_harmonics
+        variance = spread(projection, np.degrees(recorded))
+        if finite:
+            variance = np.minimum(variance, spread(projection, residual))
+        ratio = (float(np.sqrt(np.mean(np.abs(projection.spectrum(residual)) ** 2
+                                       / variance))) if finite else math.inf)
+        noise = float(np.median(np.sqrt(variance / 2)))
         theirs = np.degrees(recorded)
         ours = residual
         if body_sway is not None:
@@ -172,14 +170,10 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
         locked_power = np.sum(np.abs(projection.spectrum(theirs)) ** 2)
         relative = (float(np.sqrt(np.sum(np.abs(projection.spectrum(ours)) ** 2)
                                   / locked_power)) if finite else math.inf)
-        if projection.cycles >= 2:
-            noise_power = np.sum(_between_cycles(projection, theirs))
-        else:  # one cycle: the noise at the empty harmonics beside each compared one
-            sd = noise_levels(np.abs(projection.all_harmonics(theirs)) ** 2,
-                              projection.excited, projection.harmonics - 1,
-                              LockedOptions().neighbours)
-            noise_power = np.sum(2 * sd**2)  # E|X|² = 2σ² (σ of each part)
-        noise_relative = float(np.sqrt(noise_power / locked_power))
+        noise_power = spread(projection, theirs)
+        if projection.cycles < 2 and finite:  # the start's transient: as above
+            noise_power = np.minimum(noise_power, spread(projection, ours))
+        noise_relative = float(np.sqrt(np.sum(noise_power) / locked_power))
         return NoiseCheck(ratio, "locked", noise, limit, relative, noise_relative)
     noise = max(float(sensor_noise_deg(recorded)), _NOISE_FLOOR_DEG)
     if not np.all(np.isfinite(residual)):
@@ -188,6 +182,16 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
     relative = float(np.sqrt(np.sum(residual**2) / np.sum(spread**2)))
     return NoiseCheck(float(np.sqrt(np.mean(residual**2))) / noise, "raw", noise, limit,
                       relative)
+
+
+def _empty_harmonics(projection: LockedProjection, recorded: np.ndarray) -> np.ndarray:
+    """(K, N) the noise power E|X|² (DFT ÷ P, degrees²) at the compared harmonics of one
+    cycle, from the mean power at the nearest harmonics the stimulus leaves empty,
+    floored at :data:`_NOISE_FLOOR_DEG`. ``recorded``: (S, N) degrees."""
+    power = np.abs(projection.all_harmonics(recorded)) ** 2
+    sd = noise_levels(power, projection.excited, projection.harmonics - 1,
+                      LockedOptions().neighbours)
+    return np.maximum(2 * sd**2, _NOISE_FLOOR_DEG**2 / projection.period)  # σ of each part
 
 
 def _between_cycles(projection: LockedProjection, recorded: np.ndarray) -> np.ndarray:

@@ -142,8 +142,9 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     - the CNN alone: ``--method hybrid`` (least squares from its answer), with
       ``--locked`` when its answer explains such a noisy recording as well as its noise
       allows (``auto``'s rule); on a recording of one cycle, whose locked share cannot be
-      measured, such an answer gets the longer recording (least squares did no better
-      than the network there: ``auto`` keeps it);
+      measured, such an answer gets the longer recording (least squares did worse than
+      the network there on motor-noisy sway: ``auto`` keeps it), and ``--method hybrid``
+      for sway without motor noise;
     - least squares on a bound: for a locked fit without a prior, ``--prior-sd 0.5`` (a
       noisy recording leaves some parameters free to run to a bound; the prior holds
       them); otherwise a wider ``--gain-range`` / ``--delay-range`` (and the locked fit
@@ -173,7 +174,9 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
             and (method is not Method.CNN or (one_cycle and noise.unchecked))):
         return ("a longer recording (more stimulus cycles to average): its noise alone "
                 f"leaves {100 * noise.noise_relative:.0f} % of the locked sway, so no answer "
-                f"can be checked to {100 * CLOSE_ENOUGH:g} %")
+                f"can be checked to {100 * CLOSE_ENOUGH:g} %"
+                + ("; for sway without motor noise (a robot's), --method hybrid"
+                   if method is Method.CNN else ""))
     if method is Method.CNN:
         unchecked = noise is not None and noise.unchecked
         return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like

@@ -253,8 +253,10 @@ class Recording:
                 "was made with (the PRTS flags, or --tilt FILE) to take the tilt from it")
         if header[:2] != ["time_s", "tilt_deg"]:
             raise RecordingError(
-                f"{path}: header must start with 'time_s,tilt_deg', got '{','.join(header[:2])}'"
-            )
+                f"{path}: header must start with 'time_s,tilt_deg', got "
+                f"'{','.join(header[:2])}'; name a lab's own columns: --time-column NAME "
+                "--tilt-column NAME --angle-columns NAME... (Python: RecordingColumns; "
+                "docs/lab_recordings.md)")
         names = []
         for col in header[2:]:
             if not col.endswith("_deg") or len(col) <= 4:

@@ -13,10 +13,10 @@ estimated from the recording itself, in the way that suits its stimulus:
   the dead-band's even harmonics included, repeats in every cycle and never counts as
   noise. With one cycle it is the power at the neighbouring harmonics the stimulus leaves
   empty, in the recording or in the residual, whichever is smaller (the recording's also
-  holds the body's transient from its start, which a right model shares). Sway of the subject's own,
-  drift and sensor noise are all "noise" here, so a people-like recording whose sway is
-  mostly not locked to the stimulus is judged as fairly as a clean one. A right model
-  leaves an RMS of about 1.
+  holds the body's transient from its start, which a right model shares). Sway of the
+  subject's own, drift and sensor noise are all "noise" here, so a people-like recording
+  whose sway is mostly not locked to the stimulus is judged as fairly as a clean one. A
+  right model leaves an RMS of about 1.
 - **raw** (any other stimulus): the residual's SD against the white sensor noise
   estimated from the recording's third differences
   (:func:`~posture_id.uncertainty.noise.sensor_noise_deg`). Sway of the subject's own is
@@ -146,6 +146,8 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
     residual = np.degrees(recorded - model_theta)
     if projection is None:
         projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+    if projection is not None and projection.cycles < 2 and projection.excited.all():
+        projection = None  # one cycle of a tilt that leaves no harmonic empty: no noise there
     if projection is not None:
         finite = bool(np.all(np.isfinite(residual)))
         # the noise: with C ≥ 2 cycles what differs between them (in the recording, a

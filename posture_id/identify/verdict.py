@@ -168,10 +168,10 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
     if people_like and not locked and not (method is Method.CNN and network_reads_people_like):
         return LOCKED_FLAGS
-    # one cycle (no locked share): least squares does no better than the network there
-    one_cycle = locked_share is None and noise is not None and noise.basis == "locked"
+    # the network's answer on one cycle (no locked share: the network reads whole cycles
+    # of a periodic tilt): least squares did worse there on motor-noisy sway
     if (noise is not None and not noise.acceptable and noise.noise_relative > CLOSE_ENOUGH
-            and (method is not Method.CNN or (one_cycle and noise.unchecked))):
+            and (method is not Method.CNN or (locked_share is None and noise.unchecked))):
         return ("a longer recording (more stimulus cycles to average): its noise alone "
                 f"leaves {100 * noise.noise_relative:.0f} % of the locked sway, so no answer "
                 f"can be checked to {100 * CLOSE_ENOUGH:g} %"

@@ -46,8 +46,8 @@ def add_parser(sub) -> None:
                         "from the defaults; hybrid: least squares from the CNN's answer; "
                         "auto: the network, then the hybrid where its answer is doubtful "
                         "and the sway is not people-like (on the stimulus-locked sway when "
-                        "the recording is too noisy to check an answer) (default "
-                        "%(default)s)")
+                        "the recording is too noisy to check an answer; on one cycle, such "
+                        "an answer is kept) (default %(default)s)")
     p.add_argument("--out", type=Path,
                    help="result JSON (its \"parameters\" object is a parameter file); for a "
                         "cohort, a folder: one JSON per recording and summary.csv (needed "

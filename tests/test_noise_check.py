@@ -85,25 +85,33 @@ def test_a_model_that_falls_is_never_consistent(tip):
     assert data["ratio"] is None and data["consistent"] is False
 
 
+def _added_noise_share(trial, noisy, clean):
+    """(the trial's unweighted locked projection, the recorded sway (S, N) degrees, the
+    share of the recorded locked sway that the added noise makes up: the answer the
+    noise check estimates)."""
+    from posture_id.frf.locked import LockedOptions, LockedProjection
+
+    projection = LockedProjection.for_trial(trial, LockedOptions(weighted=False))
+    recorded = np.degrees(noisy.theta)
+    added = recorded - np.degrees(clean.theta[: len(noisy.time)])
+    share = np.sqrt(np.sum(np.abs(projection.spectrum(added)) ** 2)
+                    / np.sum(np.abs(projection.spectrum(recorded)) ** 2))
+    return projection, recorded, share
+
+
 def test_one_cycle_tells_how_much_of_the_locked_sway_its_noise_leaves(tip):
     """One cycle has no cycles to compare: the noise is read at the harmonics the PRTS
     leaves empty. Against the noise that was added (its own compared harmonics), the
     estimate is within a fifth; the truth is consistent and, at 0.1° of noise on a 0.5°
     tilt, too noisy to check an answer to 10 %."""
-    from posture_id.frf.locked import LockedOptions, LockedProjection
-
     truth = default_parameters(tip)
     clean = simulate(tip, truth, prts(0.5, 1))
     noisy = clean.to_recording().with_sensor_noise(0.1, 7)
     trial = prepare_trial(noisy)
     check = noise_check(trial, clean.theta)
     assert check.basis == "locked" and check.consistent
-    projection = LockedProjection.for_trial(trial, LockedOptions(weighted=False))
+    projection, recorded, actual = _added_noise_share(trial, noisy, clean)
     assert projection.cycles == 1
-    added = np.degrees(noisy.theta - clean.theta[: len(noisy.time)])
-    recorded = np.degrees(noisy.theta)
-    actual = np.sqrt(np.sum(np.abs(projection.spectrum(added)) ** 2)
-                     / np.sum(np.abs(projection.spectrum(recorded)) ** 2))
     assert 0.8 < check.noise_relative / actual < 1.2
     assert check.noise_relative > 0.1 and check.unchecked
 
@@ -112,7 +120,6 @@ def test_one_cycle_s_noise_is_not_the_body_s_transient(tip):
     """One clean cycle at 0.01° of noise: the recording's empty harmonics also hold the
     body's transient from its start (more than 1.5× the noise's share here), the truth's
     residual only the noise; the smaller is used, so the truth is judged by the noise."""
-    from posture_id.frf.locked import LockedOptions, LockedProjection
     from posture_id.identify.noise_check import _empty_harmonics
 
     truth = default_parameters(tip)
@@ -120,11 +127,8 @@ def test_one_cycle_s_noise_is_not_the_body_s_transient(tip):
     noisy = clean.to_recording().with_sensor_noise(0.01, 3)
     trial = prepare_trial(noisy)
     check = noise_check(trial, clean.theta)
-    projection = LockedProjection.for_trial(trial, LockedOptions(weighted=False))
-    recorded = np.degrees(noisy.theta)
-    added = recorded - np.degrees(clean.theta[: len(noisy.time)])
+    projection, recorded, actual = _added_noise_share(trial, noisy, clean)
     locked = np.sum(np.abs(projection.spectrum(recorded)) ** 2)
-    actual = np.sqrt(np.sum(np.abs(projection.spectrum(added)) ** 2) / locked)
     recording_alone = np.sqrt(np.sum(_empty_harmonics(projection, recorded)) / locked)
     assert recording_alone > 1.5 * actual
     assert 0.8 < check.noise_relative / actual < 1.2

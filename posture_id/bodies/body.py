@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.bodies.urdf_checks import check_urdf_text, lump_hint
+from posture_id.bodies.urdf_checks import check_urdf_text
 from posture_id.errors import BodyError
 from posture_id.fileio import file_sha256
 
@@ -331,14 +331,6 @@ def load_body(path: str | Path = DEFAULT_URDF) -> Body:
             raise BodyError(
                 f"{path}: joint '{model.names[j]}' is {kind}; every joint of the chain "
                 "must be revolute (fixed joints are merged)"
-            )
-        if model.parents[j] != j - 1:
-            up_joint = model.parents[j]
-            parent = "the support" if up_joint == 0 else f"'{model.names[up_joint]}'"
-            raise BodyError(
-                f"{path}: joint '{model.names[j]}' branches off {parent} instead of following "
-                f"'{model.names[j - 1]}': the body must be a single serial chain, not a tree "
-                f"({lump_hint(path)})"
             )
 
     data = model.createData()

@@ -17,14 +17,14 @@ import numpy as np
 
 from posture_id.errors import BodyError
 
-__all__ = ["check_urdf_text", "lump_hint"]
+__all__ = ["check_urdf_text"]
 
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 #: Principal moments below this (kg·m²) count as zero.
 _ZERO_INERTIA = 1e-12
 
 
-def lump_hint(path: Path) -> str:
+def _lump_hint(path: Path) -> str:
     """What to do with a whole humanoid's URDF (a tree): the command that lumps it."""
     return (f"a whole humanoid: lump its legs and trunk into one first, `posture-id body "
             f"--lump {path} --segments 3 --ankle-joints L R --knee-joints L R "
@@ -32,8 +32,9 @@ def lump_hint(path: Path) -> str:
 
 
 def _check_chain(path: Path, root) -> None:
-    """A tree (links fixed to one another count as one) is refused before its links are
-    checked: it is read only through ``posture-id body --lump``."""
+    """A tree (links fixed to one another count as one, as the parser merges them) is
+    refused before its links are checked: it is read only through ``posture-id body
+    --lump``. The one check that the moving joints form a single chain."""
     group = {link.get("name"): link.get("name") for link in root.findall("link")}
 
     def top(name: str) -> str:
@@ -50,14 +51,14 @@ def _check_chain(path: Path, root) -> None:
     for name, kind, parent, _child in joints:
         if kind == "floating":
             raise BodyError(f"{path}: joint '{name}' is floating: the body must be a single "
-                            f"serial chain standing on the support ({lump_hint(path)})")
+                            f"serial chain standing on the support ({_lump_hint(path)})")
         if kind != "fixed":
             moving.setdefault(top(parent), []).append(name)
     for link, names in moving.items():
         if len(names) > 1:
             raise BodyError(f"{path}: joints {', '.join(repr(n) for n in names[:3])}"
                             f"{' …' if len(names) > 3 else ''} branch off link '{link}': the "
-                            f"body must be a single serial chain, not a tree ({lump_hint(path)})")
+                            f"body must be a single serial chain, not a tree ({_lump_hint(path)})")
 
 
 def check_urdf_text(path: Path) -> None:

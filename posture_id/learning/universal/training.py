@@ -25,7 +25,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 import torch
@@ -43,7 +43,8 @@ __all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED", "POI
 #: Seed of the validation split's noise (fixed, so epochs are compared alike).
 VALIDATION_SEED = 0x56414C
 #: The point losses :class:`UniversalTrainingConfig` knows.
-POINT_LOSSES = ("squared", "absolute")
+PointLoss = Literal["squared", "absolute"]
+POINT_LOSSES: tuple[str, ...] = get_args(PointLoss)
 
 
 @dataclass(frozen=True)
@@ -61,7 +62,7 @@ class UniversalTrainingConfig:
     patience: int = 12
     seed: int = 0
     threads: int | None = None
-    point_loss: Literal["squared", "absolute"] = "squared"
+    point_loss: PointLoss = "squared"
 
     def __post_init__(self) -> None:
         if self.point_loss not in POINT_LOSSES:
@@ -73,7 +74,7 @@ def _device() -> torch.device:
     return torch.device("cuda" if torch.cuda.is_available() else "cpu")
 
 
-def _loss(out: torch.Tensor, target: torch.Tensor, point_loss: str = "squared"
+def _loss(out: torch.Tensor, target: torch.Tensor, point_loss: PointLoss = "squared"
           ) -> tuple[torch.Tensor, torch.Tensor]:
     """(training loss, validation loss) of a batch: ``out`` (K, B, 9) of K members,
     ``target`` (B, 5) standardised continuous targets then the class (±1). The training

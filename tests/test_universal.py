@@ -469,16 +469,59 @@ def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_
 @pytest.mark.slow
 def test_a_table_cell_draws_until_enough_trials_stay_up():
     """TALOS falls under many prior draws: its cells draw more batches until they hold
-    the trials asked for; every per-trial array is cut alike."""
+    the trials asked for; every per-trial array is cut alike. It is one body."""
     from posture_id.learning.universal.table import _cell, _cells
 
     cells = list(_cells())
     index = next(i for i, (family, stim, sway) in enumerate(cells)
                  if family.startswith("TALOS") and stim == (80, 6, 1.0) and sway == "clean")
-    arrays = _cell(index, 4, UniversalScope().to_dict())
+    (arrays,) = _cell(index, 4, UniversalScope().to_dict())
     assert int(arrays["kept"]) == 4 == len(arrays["y"]) == len(arrays["targets"])
     assert len(arrays["kp"]) == len(arrays["locked_share"]) == 4
     assert int(arrays["simulated"]) >= 4 and np.all(arrays["motor_noise_deg"] == 0)
+
+
+def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
+    """A Winter cell scores the family: its trials are split evenly over bodies drawn
+    from the scope's heights and masses, not spent on one body."""
+    import json
+
+    from posture_id.learning.universal.table import BODIES_PER_CELL, _cell, _cells
+
+    cells = list(_cells())
+    index = next(i for i, (family, stim, sway) in enumerate(cells)
+                 if family == "Winter 1-seg" and stim == (80, 6, 3.0) and sway == "clean")
+    scope = UniversalScope()
+    groups = _cell(index, BODIES_PER_CELL + 3, scope.to_dict())
+    assert len(groups) == BODIES_PER_CELL
+    assert sorted(len(g["targets"]) for g in groups) == [1] * (BODIES_PER_CELL - 3) + [2] * 3
+    bodies = [json.loads(str(g["draw"]))["body"] for g in groups]
+    heights = [b["height_m"] for b in bodies]
+    assert len(set(heights)) == BODIES_PER_CELL
+    assert all(scope.heights_m[0] <= h <= scope.heights_m[1] for h in heights)
+    assert all(scope.masses_kg[0] <= b["mass_kg"] <= scope.masses_kg[1] for b in bodies)
+
+
+def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
+    from posture_id.learning.universal.table import _cache_key, _load_cell, _save_cell
+
+    scope = UniversalScope()
+    groups = [{"y": np.arange(6, dtype=np.complex64).reshape(2, 3, 1),
+               "draw": np.array('{"body": {}}'), "kept": np.array(2)},
+              {"y": np.ones((1, 3, 1), np.complex64), "draw": np.array("{}"),
+               "kept": np.array(1)}]
+    path = tmp_path / "cell-00.npz"
+    _save_cell(path, groups, _cache_key(3, scope))
+    back = _load_cell(path, _cache_key(3, scope))
+    assert len(back) == 2
+    for got, made in zip(back, groups, strict=True):
+        assert got.keys() == made.keys()
+        for key in made:
+            np.testing.assert_array_equal(got[key], made[key])
+    assert _load_cell(path, _cache_key(4, scope)) is None  # other trials: made again
+    assert _load_cell(tmp_path / "cell-01.npz", _cache_key(3, scope)) is None
+    path.write_bytes(path.read_bytes()[:40])  # truncated: made again, no traceback
+    assert _load_cell(path, _cache_key(3, scope)) is None
 
 
 def test_ece_of_calibrated_and_overconfident_probabilities():

@@ -91,6 +91,10 @@ def add_parser(sub) -> None:
     b.add_argument("--trials", type=positive_int, default=64,
                    help="trials per cell (default %(default)d)")
     b.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
+    b.add_argument("--cache", type=Path, help="folder that keeps the simulated cells: a run "
+                   "again with the same trials reads them (resumes; scores another model on "
+                   "the same trials)")
+    b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run_table)
 
 
@@ -154,7 +158,12 @@ def run_table(args: argparse.Namespace) -> int:
     from posture_id.learning.universal.identifier import BUNDLED_DIR
     from posture_id.learning.universal.table import family_table
 
-    table = family_table(args.model or BUNDLED_DIR, args.out, args.trials, args.workers)
+    if args.cache is not None:
+        check_output_folder(args.cache, "--cache")
+    with TerminalProgress("cell", prefix="posture-id universal table",
+                          quiet=args.quiet) as progress:
+        table = family_table(args.model or BUNDLED_DIR, args.out, args.trials, args.workers,
+                             args.cache, progress)
     print(table.markdown())
     say(f"wrote {args.out / 'table.md'}, table.json and table.png")
     return 0

@@ -1,22 +1,31 @@
 """The universal network over body families × stimuli × clean and people-like sway, on
 trials simulated for the table alone (their own seeds: no training trial is among them).
 
-Families: Winter 1-, 2- and 3-segment bodies (height and mass drawn per cell from the
-scope's ranges, Winter's proportions), the default TIP and lumped TALOS (3 segments).
+Families: Winter 1-, 2- and 3-segment bodies (:data:`BODIES_PER_CELL` bodies per cell,
+height and mass drawn from the scope's ranges, Winter's proportions, each with an equal
+share of the cell's trials: a cell scores the family, not one body of it), the default TIP
+and lumped TALOS (3 segments).
 Stimuli: the 242-state PRTS ×2 (121 s) and the 80-state PRTS ×6 (120 s), 0.25 s states,
 at 0.5, 1 and 3° peak to peak. Sway: clean (sensor noise uniform in 0–0.1°, no motor
 noise) and people-like (motor noise leaving 15–40 % of the body COM sway locked, sensor
 noise 0.02–0.1°, drift up to 0.5° per minute).
+
+With ``cache`` the simulated cells are kept (one file per cell, with what made it) and a
+run again with the same trials and scope reads them: an interrupted table resumes, and
+another model is scored on the very same trials.
 """
 
 from __future__ import annotations
 
 import itertools
+import json
+import zipfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from posture_id.datasets.store import save_npz
 from posture_id.executors import executor_for
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.universal.calibration import UniversalCalibration
@@ -26,10 +35,14 @@ from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.samples import LoadedShard, make_samples
 from posture_id.learning.universal.scope import BodyDraw, StimulusDraw, UniversalScope
 from posture_id.plotting import plot_score_grid
+from posture_id.progress import Progress, report
 
-__all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "TABLE_SEED"]
+__all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "TABLE_SEED",
+           "BODIES_PER_CELL"]
 
 TABLE_SEED = 0x544142
+#: Winter bodies drawn per cell (the TIP and TALOS are one body each).
+BODIES_PER_CELL = 8
 FAMILIES = ("Winter 1-seg", "Winter 2-seg", "Winter 3-seg", "TIP", "TALOS 3-seg")
 STIMULI = tuple((states, cycles, amp) for states, cycles in ((242, 2), (80, 6))
                 for amp in (0.5, 1.0, 3.0))
@@ -57,14 +70,10 @@ _PER_TRIAL = ("y", "y_locked", "targets", "locked_share", "motor_noise_deg", "kp
 _MAX_BATCHES = 8
 
 
-def _cell(index: int, trials: int, scope_dict: dict) -> dict:
-    """One cell's trials: batches drawn until ``trials`` stay up (a lumped robot falls
+def _group(body: BodyDraw, stimulus: StimulusDraw, trials: int, scope: UniversalScope,
+           rng: np.random.Generator) -> dict:
+    """``trials`` of one body: batches drawn until ``trials`` stay up (a lumped robot falls
     under many prior draws), cut to ``trials``."""
-    family, (states, cycles, amp), sway = list(_cells())[index]
-    scope = replace(UniversalScope.from_dict(scope_dict), **SWAY[sway])
-    rng = np.random.default_rng(np.random.SeedSequence([TABLE_SEED, index]))
-    body = _body(family, rng, scope)
-    stimulus = StimulusDraw(states, 0.25, amp, cycles)
     batches = []
     while sum(int(b["kept"]) for b in batches) < trials and len(batches) < _MAX_BATCHES:
         batches.append(simulate_trials(body, stimulus, trials, scope, rng))
@@ -74,6 +83,50 @@ def _cell(index: int, trials: int, scope_dict: dict) -> dict:
     out["simulated"] = np.array(trials * len(batches))
     out["kept"] = np.array(len(out["targets"]))
     return out
+
+
+def _cell(index: int, trials: int, scope_dict: dict) -> list[dict]:
+    """One cell's trials, one dict per body (:data:`BODIES_PER_CELL` for a Winter
+    family, their trials split evenly; one for the TIP and TALOS)."""
+    family, (states, cycles, amp), sway = list(_cells())[index]
+    scope = replace(UniversalScope.from_dict(scope_dict), **SWAY[sway])
+    rng = np.random.default_rng(np.random.SeedSequence([TABLE_SEED, index]))
+    stimulus = StimulusDraw(states, 0.25, amp, cycles)
+    bodies = min(BODIES_PER_CELL, trials) if family.startswith("Winter") else 1
+    sizes = np.diff(np.linspace(0, trials, bodies + 1).round().astype(int))
+    return [_group(_body(family, rng, scope), stimulus, int(size), scope, rng)
+            for size in sizes]
+
+
+def _cache_key(trials: int, scope: UniversalScope) -> str:
+    """What a cached cell was made with: a cell made otherwise is made again."""
+    return json_text({"seed": TABLE_SEED, "trials": trials, "bodies": BODIES_PER_CELL,
+                      "scope": scope.to_dict()})
+
+
+def _save_cell(path: Path, groups: list[dict], key: str) -> None:
+    arrays = {f"{j}/{name}": value for j, group in enumerate(groups)
+              for name, value in group.items()}
+    save_npz(path, {**arrays, "made_with": np.array(key)})
+
+
+def _load_cell(path: Path, key: str) -> list[dict] | None:
+    """The cached cell at ``path``, or None if there is none made with ``key``."""
+    if not path.exists():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if str(z["made_with"]) != key:
+                return None
+            groups: dict[int, dict] = {}
+            for name in z.files:
+                if name != "made_with":
+                    j, field = name.split("/", 1)
+                    groups.setdefault(int(j), {})[field] = z[name]
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        # a truncated or foreign file: the cell is made again
+        return None
+    return [groups[j] for j in sorted(groups)]
 
 
 def _cells():
@@ -135,37 +188,52 @@ class FamilyTable:
 
 
 def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
-                 workers: int | None = None) -> FamilyTable:
-    """Simulate every cell, score the model there, write table.{md,json,png} to ``out``."""
+                 workers: int | None = None, cache: str | Path | None = None,
+                 progress: Progress | None = None) -> FamilyTable:
+    """Simulate every cell (or read it from ``cache``), score the model there, write
+    table.{md,json,png} to ``out``."""
     model = UniversalModel.load(model_dir)
     calibration = UniversalCalibration.load(model_dir)
     scope = model.scope
     cells = list(_cells())
-    executor = executor_for(None, workers, processes=True)
-    results = {}
-    try:
-        for index, arrays in executor.unordered(_cell, range(len(cells)), trials,
-                                                scope.to_dict()):
-            results[index] = arrays
-    finally:
-        executor.close()
+    key = _cache_key(trials, scope)
+    files = [Path(cache) / f"cell-{i:02d}.npz" if cache else None for i in range(len(cells))]
+    if cache:
+        Path(cache).mkdir(parents=True, exist_ok=True)
+    results = {i: groups for i, f in enumerate(files)
+               if f is not None and (groups := _load_cell(f, key)) is not None}
+    todo = [i for i in range(len(cells)) if i not in results]
+    report(progress, len(results), len(cells), "cell")
+    if todo:
+        executor = executor_for(None, workers, processes=True)
+        try:
+            for index, groups in executor.unordered(_cell, todo, trials, scope.to_dict()):
+                if files[index] is not None:
+                    _save_cell(files[index], groups, key)
+                results[index] = groups
+                report(progress, len(results), len(cells), "cell")
+        finally:
+            executor.close()
     scores: dict[tuple[str, str, str], GroupScore] = {}
     for index, (family, stim, sway) in enumerate(cells):
-        arrays = results[index]
-        arrays["index"] = index
+        shards = []
+        for j, arrays in enumerate(results[index]):
+            arrays["index"] = index * BODIES_PER_CELL + j
+            shards.append(LoadedShard.of(arrays))
         sway_scope = replace(scope, **SWAY[sway])
-        samples = make_samples([LoadedShard.of(arrays)], sway_scope,
-                               np.random.default_rng([TABLE_SEED, index]))
-        key = (family, _stimulus_label(*stim), sway)
-        scores[key] = score_samples(model, samples, calibration)["all"]
+        samples = make_samples(shards, sway_scope, np.random.default_rng([TABLE_SEED, index]))
+        scores[(family, _stimulus_label(*stim), sway)] = score_samples(
+            model, samples, calibration)["all"]
     table = FamilyTable(scores)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    bodies = {f"{family} | {_stimulus_label(*stim)} | {sway}":
+              [json.loads(str(g["draw"]))["body"] for g in results[i]]
+              for i, (family, stim, sway) in enumerate(cells)}
     atomic_write_text(out / "table.json", json_text({
         "model": str(model_dir), "weights_sha256": model.sidecar.get("weights_sha256"),
-        "trials_per_cell": trials, "cells": table.to_dict()}))
+        "trials_per_cell": trials, "bodies_per_winter_cell": BODIES_PER_CELL,
+        "cells": table.to_dict(), "bodies": bodies}))
     atomic_write_text(out / "table.md", table.markdown() + "\n")
     table.plot(out / "table.png")
     return table
-
-

@@ -103,7 +103,8 @@ universal-model: $(STAMP)
 	  data/models/universal/calibration.json $(UNIVERSAL_DIR)/
 	cp data/models/universal/model.json data/models/universal/check.md \
 	  data/models/universal/check.json docs/models/universal/
-	$(BIN)/posture-id universal table --trials 512 --out docs/results/universal > /dev/null
+	$(BIN)/posture-id universal table --trials 2048 --cache data/table_cells --quiet \
+	  --out docs/results/universal > /dev/null
 
 model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(MODEL_TRIALS) --body $(URDF) \

@@ -137,11 +137,13 @@ def _markdown(summary: dict, rows: list[dict], cycles: int = 2,
               share_range: tuple[float, float] = (0.6, 0.95)) -> str:
     counts = {k: sum(r["refinement"] == k for r in rows) for k in ("keep", "raw", "locked")}
     doubtful = sum(r["verdict_doubtful"] for r in rows)
-    lines = ["# `auto`'s rule on part-locked subjects", "",
+    lo, hi = (100 * v for v in share_range)
+    who = "subjects without motor noise" if lo >= 100 else "part-locked subjects"
+    locked = f"{lo:.0f} %" if lo == hi else f"{lo:.0f}–{hi:.0f} %"
+    lines = [f"# `auto`'s rule on {who}", "",
              "Made by `.venv/bin/python benchmarks/auto_rule.py` (its docstring says what). "
              f"{len(rows)} subjects, the 242-state PRTS ×{cycles}, "
-             f"{100 * share_range[0]:.0f}–{100 * share_range[1]:.0f} % of the body COM sway "
-             "locked; the network's "
+             f"{locked} of the body COM sway locked; the network's "
              f"verdict was doubtful for {doubtful}; this rule kept {counts['keep']} answers, "
              f"refined {counts['locked']} on the locked sway and {counts['raw']} on the raw "
              "sway.",
@@ -163,8 +165,18 @@ def main() -> None:
     parser.add_argument("--share", type=float, nargs=2, default=(0.6, 0.95),
                         metavar=("LO", "HI"), help="locked share of the body COM sway")
     parser.add_argument("--name", default="auto_rule", help="result files' name")
+    parser.add_argument("--rewrite", action="store_true",
+                        help="rewrite NAME.md from the earlier NAME.json (run with the same "
+                        "--cycles and --share), simulating nothing")
     args = parser.parse_args()
     share_range = tuple(args.share)
+    if args.rewrite:
+        earlier = json.loads((args.out / f"{args.name}.json").read_text())
+        rows = earlier["rows"]
+        text = _markdown(_summary(rows), rows, args.cycles, share_range)
+        atomic_write_text(args.out / f"{args.name}.md", text)
+        print(text)
+        return
     executor = executor_for(None, args.workers, processes=True)
     rows = []
     try:

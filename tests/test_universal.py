@@ -524,6 +524,43 @@ def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
     assert _load_cell(path, _cache_key(3, scope)) is None
 
 
+@pytest.mark.slow
+def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_path, capsys):
+    """`posture-id universal table --cache`: cells already kept are read, the one missing
+    is simulated (by the process pool) and kept; a second run reads every cell and
+    writes the same table."""
+    from posture_id.cli import main
+    from posture_id.learning.universal.identifier import BUNDLED_DIR
+    from posture_id.learning.universal.model import UniversalModel
+    from posture_id.learning.universal.table import _cache_key, _cell, _cells, _load_cell, _save_cell
+
+    cells = list(_cells())
+    missing = next(i for i, (family, stim, sway) in enumerate(cells)
+                   if family == "Winter 1-seg" and stim == (242, 2, 3.0) and sway == "clean")
+    key = _cache_key(2, UniversalModel.load(BUNDLED_DIR).scope)
+    stand_in = _cell(0, 2, UniversalModel.load(BUNDLED_DIR).scope.to_dict())
+    cache = tmp_path / "cells"
+    cache.mkdir()
+    for i in range(len(cells)):  # every other cell stands in with cell 0's trials
+        if i != missing:
+            _save_cell(cache / f"cell-{i:02d}.npz", stand_in, key)
+    argv = ["universal", "table", "--trials", "2", "--workers", "1", "--cache", str(cache),
+            "--quiet"]
+    assert main([*argv, "--out", str(tmp_path / "a")]) == 0
+    made = _load_cell(cache / f"cell-{missing:02d}.npz", key)
+    assert made is not None and len(made) == 2  # two trials: two bodies of the family
+    table = json.loads((tmp_path / "a" / "table.json").read_text())
+    label = "Winter 1-seg | 242×2, 3° | clean"
+    assert [b["height_m"] for b in table["bodies"][label]] == [
+        json.loads(str(g["draw"]))["body"]["height_m"] for g in made]
+    assert len(table["cells"]) == len(cells) and table["trials_per_cell"] == 2
+    assert table["bodies"]["TALOS 3-seg | 80×6, 3° | people-like"] == [  # read, not made
+        json.loads(str(g["draw"]))["body"] for g in stand_in]
+    assert main([*argv, "--out", str(tmp_path / "b")]) == 0
+    assert (tmp_path / "a" / "table.md").read_text() == (tmp_path / "b" / "table.md").read_text()
+    capsys.readouterr()
+
+
 def test_ece_of_calibrated_and_overconfident_probabilities():
     from posture_id.learning.universal.evaluation import _ece
 

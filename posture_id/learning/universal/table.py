@@ -149,7 +149,9 @@ class FamilyTable:
     def markdown(self) -> str:
         lines = ["# The universal model over body families, stimuli and sway", "",
                  "Made by `posture-id universal table` (posture_id.learning.universal.table: "
-                 "trials simulated for the table alone, their own seeds). Clean: sensor "
+                 "trials simulated for the table alone, their own seeds). A Winter cell's "
+                 f"trials are spread over {BODIES_PER_CELL} bodies of the family drawn from "
+                 "the scope's heights and masses (table.json names them). Clean: sensor "
                  "noise 0–0.1°, no motor noise. People-like: motor noise leaving 15–40 % of "
                  "the body COM sway locked, sensor noise 0.02–0.1°, drift up to 0.5° per "
                  "minute. Errors: median |identified / true − 1| per module, from the ankle "

@@ -532,7 +532,13 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
     from posture_id.cli import main
     from posture_id.learning.universal.identifier import BUNDLED_DIR
     from posture_id.learning.universal.model import UniversalModel
-    from posture_id.learning.universal.table import _cache_key, _cell, _cells, _load_cell, _save_cell
+    from posture_id.learning.universal.table import (
+        _cache_key,
+        _cell,
+        _cells,
+        _load_cell,
+        _save_cell,
+    )
 
     cells = list(_cells())
     missing = next(i for i, (family, stim, sway) in enumerate(cells)

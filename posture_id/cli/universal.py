@@ -93,7 +93,7 @@ def add_parser(sub) -> None:
     b.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     b.add_argument("--cache", type=Path, help="folder that keeps the simulated cells: a run "
                    "again with the same trials reads them (resumes; scores another model on "
-                   "the same trials)")
+                   "the same trials); delete it after changing the simulator")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run_table)
 

@@ -12,7 +12,8 @@ noise 0.02–0.1°, drift up to 0.5° per minute).
 
 With ``cache`` the simulated cells are kept (one file per cell, with what made it) and a
 run again with the same trials and scope reads them: an interrupted table resumes, and
-another model is scored on the very same trials.
+another model is scored on the very same trials. Like a set's shards, a kept cell does not
+notice a change of the simulator's code: delete the folder after one.
 """
 
 from __future__ import annotations

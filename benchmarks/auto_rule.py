@@ -166,14 +166,18 @@ def main() -> None:
                         metavar=("LO", "HI"), help="locked share of the body COM sway")
     parser.add_argument("--name", default="auto_rule", help="result files' name")
     parser.add_argument("--rewrite", action="store_true",
-                        help="rewrite NAME.md from the earlier NAME.json (run with the same "
-                        "--cycles and --share), simulating nothing")
+                        help="rewrite NAME.md from the earlier NAME.json, simulating nothing "
+                        "(its --cycles and --share as the JSON records them; an older JSON "
+                        "that does not: give the same flags)")
     args = parser.parse_args()
     share_range = tuple(args.share)
     if args.rewrite:
         earlier = json.loads((args.out / f"{args.name}.json").read_text())
         rows = earlier["rows"]
-        text = _markdown(_summary(rows), rows, args.cycles, share_range)
+        # what made the rows, where the JSON says it (older ones do not: the flags then)
+        cycles = earlier.get("cycles", args.cycles)
+        share_range = tuple(earlier.get("share", share_range))
+        text = _markdown(_summary(rows), rows, cycles, share_range)
         atomic_write_text(args.out / f"{args.name}.md", text)
         print(text)
         return
@@ -190,8 +194,8 @@ def main() -> None:
     summary = _summary(rows)
     args.out.mkdir(parents=True, exist_ok=True)
     text = _markdown(summary, rows, args.cycles, share_range)
-    atomic_write_text(args.out / f"{args.name}.json", json_text({"summary": summary,
-                                                                 "rows": rows}))
+    atomic_write_text(args.out / f"{args.name}.json", json_text({
+        "summary": summary, "rows": rows, "cycles": args.cycles, "share": list(share_range)}))
     atomic_write_text(args.out / f"{args.name}.md", text)
     print(text)
     print(json.dumps({m: s["kp_error_median_pct"] for m, s in summary.items()}))

@@ -535,6 +535,7 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
     from posture_id.learning.universal.table import (
         _cache_key,
         _cell,
+        _cell_file,
         _cells,
         _load_cell,
         _save_cell,
@@ -543,17 +544,18 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
     cells = list(_cells())
     missing = next(i for i, (family, stim, sway) in enumerate(cells)
                    if family == "Winter 1-seg" and stim == (242, 2, 3.0) and sway == "clean")
-    key = _cache_key(2, UniversalModel.load(BUNDLED_DIR).scope)
-    stand_in = _cell(0, 2, UniversalModel.load(BUNDLED_DIR).scope.to_dict())
+    scope = UniversalModel.load(BUNDLED_DIR).scope
+    key = _cache_key(2, scope)
+    stand_in = _cell(0, 2, scope.to_dict())
     cache = tmp_path / "cells"
     cache.mkdir()
     for i in range(len(cells)):  # every other cell stands in with cell 0's trials
         if i != missing:
-            _save_cell(cache / f"cell-{i:02d}.npz", stand_in, key)
+            _save_cell(_cell_file(cache, i), stand_in, key)
     argv = ["universal", "table", "--trials", "2", "--workers", "1", "--cache", str(cache),
             "--quiet"]
     assert main([*argv, "--out", str(tmp_path / "a")]) == 0
-    made = _load_cell(cache / f"cell-{missing:02d}.npz", key)
+    made = _load_cell(_cell_file(cache, missing), key)
     assert made is not None and len(made) == 2  # two trials: two bodies of the family
     table = json.loads((tmp_path / "a" / "table.json").read_text())
     label = "Winter 1-seg | 242×2, 3° | clean"

@@ -105,6 +105,11 @@ def _cache_key(trials: int, scope: UniversalScope) -> str:
                       "scope": scope.to_dict()})
 
 
+def _cell_file(cache: str | Path, index: int) -> Path:
+    """Where cell ``index`` is kept in the folder ``cache``."""
+    return Path(cache) / f"cell-{index:02d}.npz"
+
+
 def _save_cell(path: Path, groups: list[dict], key: str) -> None:
     arrays = {f"{j}/{name}": value for j, group in enumerate(groups)
               for name, value in group.items()}
@@ -199,12 +204,12 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
     calibration = UniversalCalibration.load(model_dir)
     scope = model.scope
     cells = list(_cells())
-    key = _cache_key(trials, scope)
-    files = [Path(cache) / f"cell-{i:02d}.npz" if cache else None for i in range(len(cells))]
+    made_with = _cache_key(trials, scope)
+    files = [_cell_file(cache, i) if cache else None for i in range(len(cells))]
     if cache:
         Path(cache).mkdir(parents=True, exist_ok=True)
     results = {i: groups for i, f in enumerate(files)
-               if f is not None and (groups := _load_cell(f, key)) is not None}
+               if f is not None and (groups := _load_cell(f, made_with)) is not None}
     todo = [i for i in range(len(cells)) if i not in results]
     report(progress, len(results), len(cells), "cell")
     if todo:
@@ -212,12 +217,13 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
         try:
             for index, groups in executor.unordered(_cell, todo, trials, scope.to_dict()):
                 if files[index] is not None:
-                    _save_cell(files[index], groups, key)
+                    _save_cell(files[index], groups, made_with)
                 results[index] = groups
                 report(progress, len(results), len(cells), "cell")
         finally:
             executor.close()
     scores: dict[tuple[str, str, str], GroupScore] = {}
+    bodies: dict[str, list[dict]] = {}
     for index, (family, stim, sway) in enumerate(cells):
         shards = []
         for j, arrays in enumerate(results[index]):
@@ -225,14 +231,12 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
             shards.append(LoadedShard.of(arrays))
         sway_scope = replace(scope, **SWAY[sway])
         samples = make_samples(shards, sway_scope, np.random.default_rng([TABLE_SEED, index]))
-        scores[(family, _stimulus_label(*stim), sway)] = score_samples(
-            model, samples, calibration)["all"]
+        key = (family, _stimulus_label(*stim), sway)
+        scores[key] = score_samples(model, samples, calibration)["all"]
+        bodies[" | ".join(key)] = [json.loads(str(g["draw"]))["body"] for g in results[index]]
     table = FamilyTable(scores)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    bodies = {f"{family} | {_stimulus_label(*stim)} | {sway}":
-              [json.loads(str(g["draw"]))["body"] for g in results[i]]
-              for i, (family, stim, sway) in enumerate(cells)}
     atomic_write_text(out / "table.json", json_text({
         "model": str(model_dir), "weights_sha256": model.sidecar.get("weights_sha256"),
         "trials_per_cell": trials, "bodies_per_winter_cell": BODIES_PER_CELL,

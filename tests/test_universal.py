@@ -441,12 +441,103 @@ def test_a_calibration_made_before_the_noise_colour_is_refused_with_the_fix(tmp_
     cal = UniversalCalibration({POOLED: [[1.0] * 4] * 99}, {POOLED: 1.0}, {POOLED: 500}, "x")
     cal.save(tmp_path)
     assert UniversalCalibration.load(tmp_path).counts == {POOLED: 500}
-    data = json.loads((tmp_path / "calibration.json").read_text())
-    del data["colour_edge"]
-    (tmp_path / "calibration.json").write_text(json.dumps(data))
-    with pytest.raises(ModelError, match="calibration.json: made for other levels or regimes.*"
-                                         "posture-id universal check"):
-        UniversalCalibration.load(tmp_path)
+    saved = json.loads((tmp_path / "calibration.json").read_text())
+    for before in ("colour_edge", "trend_terms"):  # before the colour; before the trend
+        data = dict(saved)
+        del data[before]
+        (tmp_path / "calibration.json").write_text(json.dumps(data))
+        with pytest.raises(ModelError, match="calibration.json: made for other levels or "
+                                             "regimes.*posture-id universal check"):
+            UniversalCalibration.load(tmp_path)
+
+
+class _ScaledErrorsModel:
+    """A stand-in network, SD 1, whose errors are z · 10**(slope · log10 p-p) with z kept
+    in the first four inputs: too confident on large tilts, too cautious on small ones."""
+
+    sidecar = {"weights_sha256": "stand-in"}
+
+    def __init__(self, slope: float):
+        self.slope = slope
+
+    def predict(self, inputs):
+        from posture_id.learning.universal.model import UniversalPrediction
+        from posture_id.learning.universal.samples import STIMULUS_COLUMNS
+
+        log_pp = inputs[:, STIMULUS_COLUMNS][:, 0].astype(float)
+        errors = inputs[:, :4].astype(float) * 10 ** (self.slope * log_pp)[:, None]
+        return UniversalPrediction(errors, np.ones_like(errors), np.full(len(inputs), 3.0))
+
+
+def _stimulus_samples(rng, m: int):
+    """M clean module samples of every segment count over 0.5–4° tilts (equal p-p and
+    velocity descriptors), true values 0, z ~ N(0, 1) in the first four inputs."""
+    from posture_id.learning.universal.features import N_INPUTS
+    from posture_id.learning.universal.samples import STIMULUS_COLUMNS, Samples
+
+    log_pp = rng.uniform(np.log10(0.5), np.log10(4.0), m)
+    inputs = np.zeros((m, N_INPUTS), dtype=np.float32)
+    inputs[:, :4] = rng.standard_normal((m, 4))
+    inputs[:, STIMULUS_COLUMNS] = np.column_stack([log_pp, log_pp, np.full(m, 1.5),
+                                                    np.full(m, np.log10(2))])
+    targets = np.zeros((m, 5))
+    targets[:, 4] = 1.0
+    zeros = np.zeros(m)
+    return Samples(inputs, targets, np.arange(m), np.zeros(m, int), rng.integers(1, 4, m),
+                   np.full(m, 0.005), zeros, np.ones(m), zeros, zeros, zeros.astype(int))
+
+
+def test_the_difficulty_trend_evens_the_coverage_over_stimuli():
+    """A network too confident on large tilts: one conformal quantile covers the small
+    tilts more than 90 % and the large ones less; the difficulty trend, fitted on other
+    samples, finds the slope, and the calibration covers every third of the tilts 90 %
+    on a third set."""
+    from posture_id.learning.universal.calibration import (
+        POOLED,
+        TREND_TERMS,
+        UniversalCalibration,
+        _conformal,
+        calibrate,
+    )
+    from posture_id.learning.universal.evaluation import score_samples
+
+    rng = np.random.default_rng(11)
+    model = _ScaledErrorsModel(slope=0.5)
+    trend_set, cal_set, test_set = (_stimulus_samples(rng, m) for m in (20000, 20000, 30000))
+    cal = calibrate(model, cal_set, trend_set)
+    beta = np.asarray(cal.trend)
+    assert beta.shape == (len(TREND_TERMS), 4)
+    # d = 10**(0.5 · log10 p-p) = exp(0.5 · ln 10 · log10 p-p); p-p and velocity are one
+    # column here, so their coefficients share the slope
+    pp = TREND_TERMS.index("log10 p-p deg")
+    assert np.allclose(beta[pp] + beta[pp + 1], 0.5 * np.log(10), rtol=0.05)
+    log_pp = test_set.inputs[:, -4]
+    groups = np.array(["small", "middle", "large"])[
+        np.digitize(log_pp, np.quantile(log_pp, [1 / 3, 2 / 3]))]
+    scores = np.abs(model.predict(cal_set.inputs).mean)
+    flat = UniversalCalibration({POOLED: _conformal(scores)}, {POOLED: 1.0},
+                                {POOLED: len(scores)}, "stand-in")
+    assert flat.difficulty(np.zeros((2, len(TREND_TERMS)))).tolist() == [[1.0] * 4] * 2
+    untrended = score_samples(model, test_set, flat, 0.9, groups)
+    assert untrended["small"].coverage_pct["kp"] > 95
+    assert untrended["large"].coverage_pct["kp"] < 85
+    trended = score_samples(model, test_set, cal, 0.9, groups)
+    for group in ("small", "middle", "large"):
+        for name, value in trended[group].coverage_pct.items():
+            assert 88.5 <= value <= 91.5, (group, name, value)
+
+
+def test_the_trend_terms_of_one_recording_are_its_modules_rows():
+    from posture_id.learning.universal.calibration import TREND_TERMS, trend_terms
+    from posture_id.learning.universal.features import N_INPUTS
+
+    inputs = np.random.default_rng(2).normal(size=(3, N_INPUTS))
+    one = trend_terms(3, 0.01, 1.0, inputs)
+    rows = trend_terms(np.full(3, 3), np.full(3, 0.01), np.full(3, 1.0), inputs)
+    assert one.shape == (3, len(TREND_TERMS))
+    assert np.array_equal(one, rows)
+    assert one[0, :7].tolist() == [0, 0, 1, 0, 0, -2, 1]  # 3 segments, log10 0.01, coloured
+    assert np.array_equal(one[:, 7:], inputs[:, -4:])
 
 
 def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_path):

@@ -15,6 +15,7 @@ from posture_id.learning.universal.data import open_sets
 from posture_id.learning.universal.evaluation import GroupScore, score_samples
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.samples import Samples, load_split, make_samples
+from posture_id.learning.universal.training import VALIDATION_SEED
 
 __all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes"]
 
@@ -78,7 +79,9 @@ def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str 
     scope = model.scope
     cal = make_samples(load_split(data, "calibration"), scope,
                        np.random.default_rng(CALIBRATION_SEED))
-    calibration: UniversalCalibration = calibrate(model, cal)
+    validation = make_samples(load_split(data, "validation"), scope,
+                              np.random.default_rng(VALIDATION_SEED))
+    calibration: UniversalCalibration = calibrate(model, cal, validation)
     calibration.save(model_dir)
     test = make_samples(load_split(data, "test"), scope, np.random.default_rng(TEST_SEED))
     overall = score_samples(model, test, calibration, level)["all"]

@@ -7,7 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posture_id.learning.universal.calibration import UniversalCalibration, regime_of
+from posture_id.learning.universal.calibration import (
+    UniversalCalibration,
+    regime_of,
+    trend_terms,
+)
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.samples import Samples
 
@@ -79,11 +83,13 @@ def score_samples(model: UniversalModel, samples: Samples,
     probability = 1.0 / (1.0 + np.exp(-pred.logit))
     if calibration is not None:
         regimes = regime_of(samples.segments, samples.noise_ratio, samples.noise_colour)
+        terms = trend_terms(samples.segments, samples.noise_ratio, samples.noise_colour,
+                            samples.inputs)
         half = np.empty_like(pred.sd)
         for regime in np.unique(regimes):
             sel = regimes == regime
             probability[sel] = calibration.probability(str(regime), pred.logit[sel])
-            half[sel] = pred.sd[sel] * calibration.scale(str(regime), level)
+            half[sel] = calibration.half_width(str(regime), level, pred.sd[sel], terms[sel])
         low = np.maximum(pred.mean - half, -1.0)
         inside = ((samples.targets[:, :4] >= low)
                   & (samples.targets[:, :4] <= pred.mean + half)).astype(float)

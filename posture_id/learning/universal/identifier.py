@@ -30,6 +30,7 @@ from posture_id.learning.universal.calibration import (
     UniversalCalibration,
     regime_of,
     regime_text,
+    trend_terms,
 )
 from posture_id.learning.universal.features import (
     DESCRIPTORS,
@@ -196,7 +197,8 @@ class UniversalIdentifier:
             if not 0.5 <= level <= LEVEL_MAX:
                 raise PostureIdError(f"interval level {level:g} is outside the calibrated "
                                      f"0.5–{LEVEL_MAX:g}")
-            half = prediction.sd * self.calibration.scale(regime, level)
+            half = self.calibration.half_width(regime, level, prediction.sd,
+                                               trend_terms(n, ratio, colour, inputs))
             defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
             intervals = ParameterIntervals.around(
                 normalised[:, :4], half, defaults, level,

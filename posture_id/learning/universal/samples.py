@@ -10,14 +10,15 @@ import numpy as np
 
 from posture_id.learning.universal.data import UniversalSet, shard_com_weights, shard_layout
 from posture_id.learning.universal.features import (
+    N_INPUTS,
     features_and_noise,
     stimulus_descriptors,
 )
 from posture_id.learning.universal.harmonics import drift_parts, sensor_noise_parts
 from posture_id.learning.universal.scope import UniversalScope
 
-__all__ = ["LoadedShard", "Samples", "SET_STRIDE", "load_split", "make_samples", "module_inputs",
-           "inputs_and_noise"]
+__all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
+           "make_samples", "module_inputs", "inputs_and_noise"]
 
 
 @dataclass(frozen=True)
@@ -79,6 +80,11 @@ def load_split(data: UniversalSet | Sequence[UniversalSet], split: str) -> list[
                 arrays["index"] = i * SET_STRIDE + entry["index"]
                 out.append(LoadedShard.of(arrays))
     return out
+
+
+#: The columns of :func:`module_inputs` holding :func:`~.features.stimulus_descriptors`
+#: (the last four).
+STIMULUS_COLUMNS = slice(N_INPUTS - 4, N_INPUTS)
 
 
 def module_inputs(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarray

@@ -442,7 +442,8 @@ def test_a_calibration_made_before_the_noise_colour_is_refused_with_the_fix(tmp_
     cal.save(tmp_path)
     assert UniversalCalibration.load(tmp_path).counts == {POOLED: 500}
     saved = json.loads((tmp_path / "calibration.json").read_text())
-    for before in ("colour_edge", "trend_terms"):  # before the colour; before the trend
+    # before the colour; before the trend; before its noise-ratio floor
+    for before in ("colour_edge", "trend_terms", "trend_ratio_floor"):
         data = dict(saved)
         del data[before]
         (tmp_path / "calibration.json").write_text(json.dumps(data))

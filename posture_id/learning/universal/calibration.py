@@ -19,10 +19,10 @@ period and cycles), β the least-squares fit of log score on x on the validation
 one regime the network's σ̂ runs wide on some stimuli and narrow on others (a 1-segment
 body's clean sway under long, large tilts was covered 94–95 % at 90 % without it); d
 evens that out, the regimes' quantiles make the level. Class probabilities get a
-temperature per regime (minimum negative log-likelihood). A regime with fewer than :data:`MIN_CELL` samples
-uses its noise-ratio bin's values over both colours, then its segment count's, and a
-segment count with fewer (a set of 2- and 3-segment bodies only) the values pooled over
-every sample (:data:`POOLED`).
+temperature per regime (minimum negative log-likelihood). A regime with fewer than
+:data:`MIN_CELL` samples uses its noise-ratio bin's values over both colours, then its
+segment count's, and a segment count with fewer (a set of 2- and 3-segment bodies only)
+the values pooled over every sample (:data:`POOLED`).
 """
 
 from __future__ import annotations

@@ -79,8 +79,9 @@ def add_parser(sub) -> None:
     t.add_argument("--quiet", action="store_true", help="no progress bar")
     t.set_defaults(func=run_train)
 
-    c = u.add_parser("check", help="calibrate a model on its set's calibration split and "
-                     "check it on the test split")
+    c = u.add_parser("check", help="calibrate a model on its set's calibration split (the "
+                     "recording-difficulty trend on its validation split) and check it on "
+                     "the test split")
     c.add_argument("model", type=Path, help="model directory")
     c.add_argument("data", type=Path, nargs="+", help="the sets it was trained on")
     c.set_defaults(func=run_check)

@@ -39,9 +39,8 @@ from posture_id.learning.universal.model import ModelError, UniversalModel, Univ
 from posture_id.learning.universal.samples import STIMULUS_COLUMNS, Samples
 
 __all__ = ["RATIO_EDGES", "COLOUR_EDGE", "LEVELS", "MIN_CELL", "POOLED", "TREND_TERMS",
-           "TREND_RATIO_FLOOR",
-           "UniversalCalibration", "calibrate", "regime_of", "regime_text", "trend_terms",
-           "CALIBRATION_FILE"]
+           "TREND_RATIO_FLOOR", "UniversalCalibration", "calibrate", "regime_of",
+           "regime_text", "trend_terms", "CALIBRATION_FILE"]
 
 #: Bin edges of the noise ratio: clean below 0.02, in four bins there (the network's own
 #: SD shrinks less than its error does on the cleanest sway, a large tilt's, so one clean
@@ -68,8 +67,7 @@ TREND_TERMS = ("1-seg", "2-seg", "3-seg", "1-seg x log10 ratio", "2-seg x log10 
 #: Noise ratios below this count as this in the trend: below it the "noise" is mostly
 #: the sway's own nonlinearity (the dead band), the network's errors stop shrinking with
 #: the ratio, and a trend carried further made the intervals of noise-free recordings too
-#: narrow (held-out test samples below 3e-5 covered 83 % for Kp with the floor at 1e-5,
-#: 88 % with it here).
+#: narrow (docs/universal.md, "The recording's difficulty d").
 TREND_RATIO_FLOOR = 1e-4
 #: Scores below this are held there before their log is taken (a perfect estimate).
 _SCORE_FLOOR = 1e-3
@@ -224,12 +222,13 @@ def _scores(model: UniversalModel, samples: Samples) -> tuple[UniversalPredictio
 
 
 def _terms(samples: Samples) -> np.ndarray:
+    """(M, len(TREND_TERMS)) :func:`trend_terms` of module samples."""
     return trend_terms(samples.segments, samples.noise_ratio, samples.noise_colour,
                        samples.inputs)
 
 
 def _fit_trend(model: UniversalModel, samples: Samples) -> tuple:
-    """β (len(TREND_TERMS), 4): least squares of log max(score, 1e-3) on
+    """β (len(TREND_TERMS), 4): least squares of log max(score, _SCORE_FLOOR) on
     :func:`trend_terms` over ``samples`` (the validation split)."""
     _, scores = _scores(model, samples)
     beta = np.linalg.lstsq(_terms(samples), np.log(np.maximum(scores, _SCORE_FLOOR)),

@@ -72,8 +72,9 @@ class CheckReport:
 def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str | Path],
                     level: float = 0.9) -> CheckReport:
     """Calibrate the model at ``model_dir`` (written there as calibration.json) on the
-    calibration split of the set (or sets) it was trained on, and check it on the test
-    split; the report is written there as check.json and check.md."""
+    calibration split of the set (or sets) it was trained on (its difficulty trend on the
+    validation split, noise drawn as in training), and check it on the test split; the
+    report is written there as check.json and check.md."""
     model = UniversalModel.load(model_dir)
     data = open_sets(data_path)
     scope = model.scope

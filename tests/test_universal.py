@@ -578,7 +578,7 @@ def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
     from the scope's heights and masses, not spent on one body."""
     import json
 
-    from posture_id.learning.universal.table import BODIES_PER_CELL, _cell, _cells
+    from posture_id.learning.universal.table import BODIES_PER_CELL, TABLE_SEED, _cell, _cells
 
     cells = list(_cells())
     index = next(i for i, (family, stim, sway) in enumerate(cells)
@@ -592,6 +592,12 @@ def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
     assert len(set(heights)) == BODIES_PER_CELL
     assert all(scope.heights_m[0] <= h <= scope.heights_m[1] for h in heights)
     assert all(scope.masses_kg[0] <= b["mass_kg"] <= scope.masses_kg[1] for b in bodies)
+    # another seed: the same cell on other bodies (the documented table's are the default)
+    again = _cell(index, BODIES_PER_CELL + 3, scope.to_dict(), TABLE_SEED)
+    assert [json.loads(str(g["draw"]))["body"] for g in again] == bodies
+    other = _cell(index, BODIES_PER_CELL + 3, scope.to_dict(), TABLE_SEED + 1)
+    assert not {b["height_m"] for b in (json.loads(str(g["draw"]))["body"]
+                                        for g in other)} & set(heights)
 
 
 def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
@@ -611,6 +617,7 @@ def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
         for key in made:
             np.testing.assert_array_equal(got[key], made[key])
     assert _load_cell(path, _cache_key(4, scope)) is None  # other trials: made again
+    assert _load_cell(path, _cache_key(3, scope, seed=1)) is None  # another seed: again
     assert _load_cell(tmp_path / "cell-01.npz", _cache_key(3, scope)) is None
     path.write_bytes(path.read_bytes()[:40])  # truncated: made again, no traceback
     assert _load_cell(path, _cache_key(3, scope)) is None

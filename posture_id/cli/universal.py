@@ -95,6 +95,8 @@ def add_parser(sub) -> None:
     b.add_argument("--cache", type=Path, help="folder that keeps the simulated cells: a run "
                    "again with the same trials reads them (resumes; scores another model on "
                    "the same trials); delete it after changing the simulator")
+    b.add_argument("--seed", type=non_negative_int, help="draw the trials from this seed "
+                   "(default: the documented table's): the same table on other trials")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run_table)
 
@@ -157,14 +159,15 @@ def run_check(args: argparse.Namespace) -> int:
 def run_table(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     from posture_id.learning.universal.identifier import BUNDLED_DIR
-    from posture_id.learning.universal.table import family_table
+    from posture_id.learning.universal.table import TABLE_SEED, family_table
 
     if args.cache is not None:
         check_output_folder(args.cache, "--cache")
     with TerminalProgress("cell", prefix="posture-id universal table",
                           quiet=args.quiet) as progress:
         table = family_table(args.model or BUNDLED_DIR, args.out, args.trials, args.workers,
-                             args.cache, progress)
+                             args.cache, progress,
+                             TABLE_SEED if args.seed is None else args.seed)
     print(table.markdown())
     say(f"wrote {args.out / 'table.md'}, table.json and table.png")
     return 0

@@ -86,12 +86,12 @@ def _group(body: BodyDraw, stimulus: StimulusDraw, trials: int, scope: Universal
     return out
 
 
-def _cell(index: int, trials: int, scope_dict: dict) -> list[dict]:
+def _cell(index: int, trials: int, scope_dict: dict, seed: int = TABLE_SEED) -> list[dict]:
     """One cell's trials, one dict per body (:data:`BODIES_PER_CELL` for a Winter
-    family, their trials split evenly; one for the TIP and TALOS)."""
+    family, their trials split evenly; one for the TIP and TALOS), drawn from ``seed``."""
     family, (states, cycles, amp), sway = list(_cells())[index]
     scope = replace(UniversalScope.from_dict(scope_dict), **SWAY[sway])
-    rng = np.random.default_rng(np.random.SeedSequence([TABLE_SEED, index]))
+    rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
     stimulus = StimulusDraw(states, 0.25, amp, cycles)
     bodies = min(BODIES_PER_CELL, trials) if family.startswith("Winter") else 1
     sizes = np.diff(np.linspace(0, trials, bodies + 1).round().astype(int))
@@ -99,9 +99,9 @@ def _cell(index: int, trials: int, scope_dict: dict) -> list[dict]:
             for size in sizes]
 
 
-def _cache_key(trials: int, scope: UniversalScope) -> str:
+def _cache_key(trials: int, scope: UniversalScope, seed: int = TABLE_SEED) -> str:
     """What a cached cell was made with: a cell made otherwise is made again."""
-    return json_text({"seed": TABLE_SEED, "trials": trials, "bodies": BODIES_PER_CELL,
+    return json_text({"seed": seed, "trials": trials, "bodies": BODIES_PER_CELL,
                       "scope": scope.to_dict()})
 
 
@@ -197,14 +197,16 @@ class FamilyTable:
 
 def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
                  workers: int | None = None, cache: str | Path | None = None,
-                 progress: Progress | None = None) -> FamilyTable:
+                 progress: Progress | None = None, seed: int = TABLE_SEED) -> FamilyTable:
     """Simulate every cell (or read it from ``cache``), score the model there, write
-    table.{md,json,png} to ``out``."""
+    table.{md,json,png} to ``out``. ``seed`` draws the cells' bodies, parameters and
+    noise: the default is the documented table's; another gives the same table on
+    other trials."""
     model = UniversalModel.load(model_dir)
     calibration = UniversalCalibration.load(model_dir)
     scope = model.scope
     cells = list(_cells())
-    made_with = _cache_key(trials, scope)
+    made_with = _cache_key(trials, scope, seed)
     files = [_cell_file(cache, i) if cache else None for i in range(len(cells))]
     if cache:
         Path(cache).mkdir(parents=True, exist_ok=True)
@@ -215,7 +217,7 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
     if todo:
         executor = executor_for(None, workers, processes=True)
         try:
-            for index, groups in executor.unordered(_cell, todo, trials, scope.to_dict()):
+            for index, groups in executor.unordered(_cell, todo, trials, scope.to_dict(), seed):
                 if files[index] is not None:
                     _save_cell(files[index], groups, made_with)
                 results[index] = groups
@@ -230,7 +232,7 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
             arrays["index"] = index * BODIES_PER_CELL + j
             shards.append(LoadedShard.of(arrays))
         sway_scope = replace(scope, **SWAY[sway])
-        samples = make_samples(shards, sway_scope, np.random.default_rng([TABLE_SEED, index]))
+        samples = make_samples(shards, sway_scope, np.random.default_rng([seed, index]))
         key = (family, _stimulus_label(*stim), sway)
         scores[key] = score_samples(model, samples, calibration)["all"]
         bodies[" | ".join(key)] = [json.loads(str(g["draw"]))["body"] for g in results[index]]
@@ -240,6 +242,7 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
     atomic_write_text(out / "table.json", json_text({
         "model": str(model_dir), "weights_sha256": model.sidecar.get("weights_sha256"),
         "trials_per_cell": trials, "bodies_per_winter_cell": BODIES_PER_CELL,
+        **({"seed": seed} if seed != TABLE_SEED else {}),
         "cells": table.to_dict(), "bodies": bodies}))
     atomic_write_text(out / "table.md", table.markdown() + "\n")
     table.plot(out / "table.png")

@@ -598,6 +598,9 @@ def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
     other = _cell(index, BODIES_PER_CELL + 3, scope.to_dict(), TABLE_SEED + 1)
     assert not {b["height_m"] for b in (json.loads(str(g["draw"]))["body"]
                                         for g in other)} & set(heights)
+    # more bodies per cell (--bodies-per-cell): the trials spread over that many
+    wide = _cell(index, 5, scope.to_dict(), TABLE_SEED, 5)
+    assert len(wide) == 5 and [len(g["targets"]) for g in wide] == [1] * 5
 
 
 def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):

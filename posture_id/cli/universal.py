@@ -97,6 +97,9 @@ def add_parser(sub) -> None:
                    "the same trials); delete it after changing the simulator")
     b.add_argument("--seed", type=non_negative_int, help="draw the trials from this seed "
                    "(default: the documented table's): the same table on other trials")
+    b.add_argument("--bodies-per-cell", type=positive_int,
+                   help="Winter bodies a cell's trials are spread over (default: the "
+                   "documented table's, 8)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run_table)
 
@@ -159,7 +162,7 @@ def run_check(args: argparse.Namespace) -> int:
 def run_table(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     from posture_id.learning.universal.identifier import BUNDLED_DIR
-    from posture_id.learning.universal.table import TABLE_SEED, family_table
+    from posture_id.learning.universal.table import BODIES_PER_CELL, TABLE_SEED, family_table
 
     if args.cache is not None:
         check_output_folder(args.cache, "--cache")
@@ -167,7 +170,8 @@ def run_table(args: argparse.Namespace) -> int:
                           quiet=args.quiet) as progress:
         table = family_table(args.model or BUNDLED_DIR, args.out, args.trials, args.workers,
                              args.cache, progress,
-                             TABLE_SEED if args.seed is None else args.seed)
+                             TABLE_SEED if args.seed is None else args.seed,
+                             args.bodies_per_cell or BODIES_PER_CELL)
     print(table.markdown())
     say(f"wrote {args.out / 'table.md'}, table.json and table.png")
     return 0

@@ -86,22 +86,24 @@ def _group(body: BodyDraw, stimulus: StimulusDraw, trials: int, scope: Universal
     return out
 
 
-def _cell(index: int, trials: int, scope_dict: dict, seed: int = TABLE_SEED) -> list[dict]:
-    """One cell's trials, one dict per body (:data:`BODIES_PER_CELL` for a Winter
-    family, their trials split evenly; one for the TIP and TALOS), drawn from ``seed``."""
+def _cell(index: int, trials: int, scope_dict: dict, seed: int = TABLE_SEED,
+          bodies_per_cell: int = BODIES_PER_CELL) -> list[dict]:
+    """One cell's trials, one dict per body (``bodies_per_cell`` for a Winter family,
+    their trials split evenly; one for the TIP and TALOS), drawn from ``seed``."""
     family, (states, cycles, amp), sway = list(_cells())[index]
     scope = replace(UniversalScope.from_dict(scope_dict), **SWAY[sway])
     rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
     stimulus = StimulusDraw(states, 0.25, amp, cycles)
-    bodies = min(BODIES_PER_CELL, trials) if family.startswith("Winter") else 1
+    bodies = min(bodies_per_cell, trials) if family.startswith("Winter") else 1
     sizes = np.diff(np.linspace(0, trials, bodies + 1).round().astype(int))
     return [_group(_body(family, rng, scope), stimulus, int(size), scope, rng)
             for size in sizes]
 
 
-def _cache_key(trials: int, scope: UniversalScope, seed: int = TABLE_SEED) -> str:
+def _cache_key(trials: int, scope: UniversalScope, seed: int = TABLE_SEED,
+               bodies_per_cell: int = BODIES_PER_CELL) -> str:
     """What a cached cell was made with: a cell made otherwise is made again."""
-    return json_text({"seed": seed, "trials": trials, "bodies": BODIES_PER_CELL,
+    return json_text({"seed": seed, "trials": trials, "bodies": bodies_per_cell,
                       "scope": scope.to_dict()})
 
 
@@ -148,6 +150,7 @@ class FamilyTable:
     """Scores per (family, stimulus, sway) cell."""
 
     cells: dict
+    bodies_per_cell: int = BODIES_PER_CELL
 
     def to_dict(self) -> dict:
         return {" | ".join(k): v.to_dict() for k, v in self.cells.items()}
@@ -156,7 +159,7 @@ class FamilyTable:
         lines = ["# The universal model over body families, stimuli and sway", "",
                  "Made by `posture-id universal table` (posture_id.learning.universal.table: "
                  "trials simulated for the table alone, their own seeds). A Winter cell's "
-                 f"trials are spread over {BODIES_PER_CELL} bodies of the family drawn from "
+                 f"trials are spread over {self.bodies_per_cell} bodies of the family drawn from "
                  "the scope's heights and masses (table.json names them). Clean: sensor "
                  "noise 0–0.1°, no motor noise. People-like: motor noise leaving 15–40 % of "
                  "the body COM sway locked, sensor noise 0.02–0.1°, drift up to 0.5° per "
@@ -197,16 +200,17 @@ class FamilyTable:
 
 def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
                  workers: int | None = None, cache: str | Path | None = None,
-                 progress: Progress | None = None, seed: int = TABLE_SEED) -> FamilyTable:
+                 progress: Progress | None = None, seed: int = TABLE_SEED,
+                 bodies_per_cell: int = BODIES_PER_CELL) -> FamilyTable:
     """Simulate every cell (or read it from ``cache``), score the model there, write
     table.{md,json,png} to ``out``. ``seed`` draws the cells' bodies, parameters and
     noise: the default is the documented table's; another gives the same table on
-    other trials."""
+    other trials. ``bodies_per_cell``: the Winter bodies a cell's trials are spread over."""
     model = UniversalModel.load(model_dir)
     calibration = UniversalCalibration.load(model_dir)
     scope = model.scope
     cells = list(_cells())
-    made_with = _cache_key(trials, scope, seed)
+    made_with = _cache_key(trials, scope, seed, bodies_per_cell)
     files = [_cell_file(cache, i) if cache else None for i in range(len(cells))]
     if cache:
         Path(cache).mkdir(parents=True, exist_ok=True)
@@ -217,7 +221,8 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
     if todo:
         executor = executor_for(None, workers, processes=True)
         try:
-            for index, groups in executor.unordered(_cell, todo, trials, scope.to_dict(), seed):
+            for index, groups in executor.unordered(_cell, todo, trials, scope.to_dict(), seed,
+                                                        bodies_per_cell):
                 if files[index] is not None:
                     _save_cell(files[index], groups, made_with)
                 results[index] = groups
@@ -229,19 +234,19 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
     for index, (family, stim, sway) in enumerate(cells):
         shards = []
         for j, arrays in enumerate(results[index]):
-            arrays["index"] = index * BODIES_PER_CELL + j
+            arrays["index"] = index * bodies_per_cell + j
             shards.append(LoadedShard.of(arrays))
         sway_scope = replace(scope, **SWAY[sway])
         samples = make_samples(shards, sway_scope, np.random.default_rng([seed, index]))
         key = (family, _stimulus_label(*stim), sway)
         scores[key] = score_samples(model, samples, calibration)["all"]
         bodies[" | ".join(key)] = [json.loads(str(g["draw"]))["body"] for g in results[index]]
-    table = FamilyTable(scores)
+    table = FamilyTable(scores, bodies_per_cell)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "table.json", json_text({
         "model": str(model_dir), "weights_sha256": model.sidecar.get("weights_sha256"),
-        "trials_per_cell": trials, "bodies_per_winter_cell": BODIES_PER_CELL,
+        "trials_per_cell": trials, "bodies_per_winter_cell": bodies_per_cell,
         **({"seed": seed} if seed != TABLE_SEED else {}),
         "cells": table.to_dict(), "bodies": bodies}))
     atomic_write_text(out / "table.md", table.markdown() + "\n")

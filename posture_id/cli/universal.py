@@ -162,16 +162,18 @@ def run_check(args: argparse.Namespace) -> int:
 def run_table(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     from posture_id.learning.universal.identifier import BUNDLED_DIR
-    from posture_id.learning.universal.table import BODIES_PER_CELL, TABLE_SEED, family_table
+    from posture_id.learning.universal.table import family_table
 
     if args.cache is not None:
         check_output_folder(args.cache, "--cache")
     with TerminalProgress("cell", prefix="posture-id universal table",
                           quiet=args.quiet) as progress:
+        # the seed and bodies per cell where given; family_table's defaults otherwise
+        given = {name: value for name, value in (("seed", args.seed),
+                                                 ("bodies_per_cell", args.bodies_per_cell))
+                 if value is not None}
         table = family_table(args.model or BUNDLED_DIR, args.out, args.trials, args.workers,
-                             args.cache, progress,
-                             TABLE_SEED if args.seed is None else args.seed,
-                             args.bodies_per_cell or BODIES_PER_CELL)
+                             args.cache, progress, **given)
     print(table.markdown())
     say(f"wrote {args.out / 'table.md'}, table.json and table.png")
     return 0

@@ -99,7 +99,7 @@ def add_parser(sub) -> None:
                    "(default: the documented table's): the same table on other trials")
     b.add_argument("--bodies-per-cell", type=positive_int,
                    help="Winter bodies a cell's trials are spread over (default: the "
-                   "documented table's, 8)")
+                   "documented table's, 64)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=run_table)
 

@@ -43,7 +43,7 @@ __all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "TABLE_
 
 TABLE_SEED = 0x544142
 #: Winter bodies drawn per cell (the TIP and TALOS are one body each).
-BODIES_PER_CELL = 8
+BODIES_PER_CELL = 64
 FAMILIES = ("Winter 1-seg", "Winter 2-seg", "Winter 3-seg", "TIP", "TALOS 3-seg")
 STIMULI = tuple((states, cycles, amp) for states, cycles in ((242, 2), (80, 6))
                 for amp in (0.5, 1.0, 3.0))

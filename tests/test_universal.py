@@ -585,7 +585,7 @@ def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
                  if family == "Winter 1-seg" and stim == (80, 6, 3.0) and sway == "clean")
     scope = UniversalScope()
     bodies_per_cell = 8  # the default (64) is the documented table's; fewer here, as fast
-    groups = _cell(index, bodies_per_cell + 3, scope.to_dict(), TABLE_SEED, bodies_per_cell)
+    groups = _cell(index, bodies_per_cell + 3, scope.to_dict(), bodies_per_cell=bodies_per_cell)
     assert len(groups) == bodies_per_cell
     assert sorted(len(g["targets"]) for g in groups) == [1] * (bodies_per_cell - 3) + [2] * 3
     bodies = [json.loads(str(g["draw"]))["body"] for g in groups]
@@ -600,9 +600,9 @@ def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
                   bodies_per_cell)
     assert not {b["height_m"] for b in (json.loads(str(g["draw"]))["body"]
                                         for g in other)} & set(heights)
-    # more bodies per cell (--bodies-per-cell): the trials spread over that many
-    wide = _cell(index, 5, scope.to_dict(), TABLE_SEED, 5)
-    assert len(wide) == 5 and [len(g["targets"]) for g in wide] == [1] * 5
+    # fewer bodies than trials (--bodies-per-cell): the trials spread over that many
+    few = _cell(index, 5, scope.to_dict(), TABLE_SEED, 3)
+    assert sorted(len(g["targets"]) for g in few) == [1, 2, 2]
 
 
 def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):

@@ -833,3 +833,81 @@ def test_the_training_configuration_names_its_point_loss():
     args = build_parser().parse_args(["universal", "train", "set", "--out", "m",
                                       "--point-loss", "absolute"])
     assert args.point_loss == "absolute"
+
+
+def _motor_noise_harmonics(draws: int):
+    """(E, draws, N) harmonics of what motor noise adds to the sway of one 2-segment
+    Winter body, one parameter set, under an 80-state PRTS ×4 at 0.5° (the dead-band
+    weighs most at small tilts), one noise draw per trial; and (E, N) the locked sway's."""
+    from posture_id.dec.parameters import ParameterArrays
+    from posture_id.dec.prior import sample_parameters
+    from posture_id.learning.universal.bodies import build_body
+    from posture_id.simulation.batch import simulate_batch
+    from posture_id.simulation.noise import MotorNoise
+    from posture_id.simulation.stimulus import prts
+
+    body = build_body(BodyDraw("winter", 2, 1.75, 70.0, ((1.0, 1.0),) * 2))
+    profile = prts(0.5, 4, 80, 0.25)
+    one = sample_parameters(body, 1, np.random.default_rng(2))
+    params = ParameterArrays(**{f: np.repeat(getattr(one, f), draws, axis=0)
+                                for f in ParameterArrays.FIELDS})
+    clean = simulate_batch(body, params, profile, workers=1)
+    noisy = simulate_batch(body, params, profile, workers=1, motor_noise=MotorNoise(0.3, 0.2, 7))
+    layout = harmonic_layout(clean.tilt, 50.0, profile.period_s, profile.periodic_from_s)
+    locked = sway_harmonics(layout, np.moveaxis(clean.theta, 0, 1))
+    noise = sway_harmonics(layout, np.moveaxis(noisy.theta, 0, 1)) - locked
+    excited = layout.excited & (layout.frequencies_hz < 2.5)
+    return noise[excited], locked[excited, 0]
+
+
+def _locked_bias(noise: np.ndarray) -> float:
+    """Mean over harmonics and channels of |mean over draws|² / (variance / draws): about
+    1 for noise centred on zero, growing with the draws for a part locked to the stimulus."""
+    draws = noise.shape[1]
+    var = np.mean(np.abs(noise - noise.mean(1, keepdims=True)) ** 2, axis=1)
+    return float(np.mean(np.abs(noise.mean(1)) ** 2 / (var / draws)))
+
+
+def test_motor_noise_harmonics_are_centred_with_uniform_phases_so_turning_them_is_a_new_draw():
+    """The premise of ``fresh_motor_noise`` (:func:`.samples.rotate_motor_noise`): over
+    200 draws of the torque noise on one body and parameter set, what the noise adds at
+    each excited harmonic has no part locked to the stimulus (the dead-band does not turn
+    it into one) and a uniform phase (Rayleigh: draws × R² about 1). A locked part of a
+    third of the noise's SD would show (the statistic is not blind)."""
+    noise, locked = _motor_noise_harmonics(200)
+    sd = np.sqrt(np.mean(np.abs(noise) ** 2, axis=1, keepdims=True))
+    assert 0.2 < np.mean(np.abs(noise) ** 2) / np.mean(np.abs(locked) ** 2) < 5  # people-like
+    assert _locked_bias(noise) < 2.0
+    assert _locked_bias(noise + sd / 3) > 5.0
+    phases = noise / np.abs(noise)
+    assert np.mean(200 * np.abs(phases.mean(1)) ** 2) < 2.0
+
+
+def test_turning_motor_noise_keeps_its_power_cross_spectra_and_the_locked_sway():
+    from posture_id.learning.universal.samples import rotate_motor_noise
+
+    rng = np.random.default_rng(4)
+    locked = rng.standard_normal((30, 5, 3)) + 1j * rng.standard_normal((30, 5, 3))
+    noise = rng.standard_normal((30, 5, 3)) + 1j * rng.standard_normal((30, 5, 3))
+    noise[:, 2] = 0  # a clean trial
+    y = locked + noise
+    turned = rotate_motor_noise(y, locked, np.random.default_rng(0))
+    new = turned - locked
+    assert np.allclose(np.abs(new), np.abs(noise))  # the same power at every harmonic
+    assert np.allclose(new[..., 0] * np.conj(new[..., 1]),  # the same cross-spectra
+                       noise[..., 0] * np.conj(noise[..., 1]))
+    assert np.allclose(turned[:, 2], y[:, 2])  # a clean trial as it was
+    assert not np.allclose(new[:, 0], noise[:, 0])  # a new draw
+    again = rotate_motor_noise(y, locked, np.random.default_rng(0))
+    assert np.array_equal(turned, again)  # reproducible from the generator
+
+
+def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it():
+    from posture_id.cli import build_parser
+    from posture_id.learning.universal.training import UniversalTrainingConfig
+
+    assert UniversalTrainingConfig().fresh_motor_noise is False
+    parse = build_parser().parse_args
+    assert parse(["universal", "train", "set", "--out", "m"]).fresh_motor_noise is False
+    assert parse(["universal", "train", "set", "--out", "m",
+                  "--fresh-motor-noise"]).fresh_motor_noise is True

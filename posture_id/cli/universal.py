@@ -74,6 +74,9 @@ def add_parser(sub) -> None:
     t.add_argument("--point-loss", choices=("squared", "absolute"),
                    help="the estimates' loss: squared error (the posterior mean; default) or "
                         "absolute error (the posterior median)")
+    t.add_argument("--fresh-motor-noise", action="store_true",
+                   help="turn each training trial's motor noise to a new draw every epoch "
+                        "(each harmonic's noise by a random phase)")
     t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     t.add_argument("--threads", type=positive_int, help="torch threads (default: all cores)")
     t.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -138,6 +141,8 @@ def run_train(args: argparse.Namespace) -> int:
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
                                ("weight_decay", args.weight_decay),
                                ("point_loss", args.point_loss)) if v is not None}
+    if args.fresh_motor_noise:
+        given["fresh_motor_noise"] = True
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads, **given)
     shape = {k: v for k, v in (("dropout", args.dropout),
                                ("hidden", tuple(args.hidden) if args.hidden else None))

@@ -18,7 +18,7 @@ from posture_id.learning.universal.harmonics import drift_parts, sensor_noise_pa
 from posture_id.learning.universal.scope import UniversalScope
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
-           "make_samples", "module_inputs", "inputs_and_noise"]
+           "make_samples", "module_inputs", "inputs_and_noise", "rotate_motor_noise"]
 
 
 @dataclass(frozen=True)
@@ -107,17 +107,40 @@ def inputs_and_noise(layout, harmonics: np.ndarray, body: np.ndarray, com: np.nd
         b * n, -1).astype(np.float32), ratio, colour
 
 
+def rotate_motor_noise(y: np.ndarray, y_locked: np.ndarray, rng: np.random.Generator
+                       ) -> np.ndarray:
+    """Harmonics (K, T, N) of the same trials with another draw of their motor noise.
+
+    ``y`` holds each trial's harmonics with motor noise, ``y_locked`` those of the same
+    trial without it (the shard's two simulations); their difference is what the noise
+    did. For stationary noise through the (nearly linear) closed loop, the harmonics of
+    a cycle average are complex Gaussian with a phase uniform and independent from one
+    harmonic to the next: turning each harmonic's noise by its own uniform phase, the
+    same for every channel of a trial (so the segments' cross-spectra stay as
+    simulated), gives a realisation as likely as the simulated one, with the same power
+    at every harmonic and so the same locked share. A trial without motor noise has no
+    difference and is left as it is. ``tests/test_universal.py`` checks the premise
+    (the noise's harmonics over many draws centred on zero, their phases uniform)
+    against simulations."""
+    noise = y - y_locked
+    turn = np.exp(2j * np.pi * rng.random(noise.shape[:2]))[:, :, None]
+    return y_locked + noise * turn
+
+
 def make_samples(shards: list[LoadedShard], scope: UniversalScope,
-                 rng: np.random.Generator) -> Samples:
+                 rng: np.random.Generator, fresh_motor_noise: bool = False) -> Samples:
     """The module samples of ``shards`` with sensor noise (SD uniform in the scope's range,
     per trial) and drift (level uniform in the scope's range, for trials with motor
-    noise) drawn from ``rng``."""
+    noise) drawn from ``rng``; with ``fresh_motor_noise``, each trial's motor noise
+    as well (:func:`rotate_motor_noise`)."""
     parts: dict[str, list] = {k: [] for k in Samples.__dataclass_fields__}
     first = 0
     for shard in shards:
         a, layout = shard.arrays, shard.layout
         y = np.moveaxis(a["y"], 0, 1).astype(np.complex128)  # (K, T, N)
         k, t, n = y.shape
+        if fresh_motor_noise:
+            y = rotate_motor_noise(y, np.moveaxis(a["y_locked"], 0, 1), rng)
         sensor = rng.uniform(*scope.sensor_noise_deg, t)
         drift = np.where(a["motor_noise_deg"] > 0, rng.uniform(*scope.drift_deg, t), 0.0)
         sd = np.sqrt(sensor_noise_parts(layout.period_samples, layout.cycles,

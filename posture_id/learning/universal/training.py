@@ -53,7 +53,10 @@ class UniversalTrainingConfig:
     decay, early-stopping patience, seed, torch threads (default: all cores), and the
     point loss of the four parameters' estimates: 'squared' (their mean squared error:
     the estimate learns the posterior mean) or 'absolute' (their mean absolute error: the
-    posterior median), in training and in the validation loss that picks the epoch."""
+    posterior median), in training and in the validation loss that picks the epoch.
+    ``fresh_motor_noise``: every epoch turns each training trial's motor noise to a new
+    draw (:func:`.samples.rotate_motor_noise`), as it draws its sensor noise and drift
+    afresh; the validation split keeps the simulated noise."""
 
     epochs: int = 60
     batch_size: int = 512
@@ -63,6 +66,7 @@ class UniversalTrainingConfig:
     seed: int = 0
     threads: int | None = None
     point_loss: PointLoss = "squared"
+    fresh_motor_noise: bool = False
 
     def __post_init__(self) -> None:
         if self.point_loss not in POINT_LOSSES:
@@ -116,7 +120,8 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     train_shards = load_split(data, "train")
     validation = make_samples(load_split(data, "validation"), scope,
                               np.random.default_rng(VALIDATION_SEED))
-    first = make_samples(train_shards, scope, np.random.default_rng([config.seed, 0]))
+    first = make_samples(train_shards, scope, np.random.default_rng([config.seed, 0]),
+                         config.fresh_motor_noise)
     input_mean = first.inputs.mean(axis=0, dtype=np.float64)
     input_std = np.maximum(first.inputs.std(axis=0, dtype=np.float64), 1e-6)
     target_mean = first.targets[:, :4].mean(axis=0)
@@ -141,7 +146,8 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     for epoch in range(len(history), config.epochs):
         started = time.perf_counter()
         samples = first if epoch == 0 else make_samples(
-            train_shards, scope, np.random.default_rng([config.seed, epoch]))
+            train_shards, scope, np.random.default_rng([config.seed, epoch]),
+            config.fresh_motor_noise)
         x = model.standardise(samples.inputs)
         t = _targets(samples, target_mean, target_std)
         order = torch.from_numpy(np.random.default_rng([config.seed, 1, epoch]).permutation(len(x)))

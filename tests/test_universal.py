@@ -606,7 +606,12 @@ def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
 
 
 def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
-    from posture_id.learning.universal.table import _cache_key, _load_cell, _save_cell
+    from posture_id.learning.universal.table import (
+        TableCacheError,
+        _cache_key,
+        _load_cell,
+        _save_cell,
+    )
 
     scope = UniversalScope()
     groups = [{"y": np.arange(6, dtype=np.complex64).reshape(2, 3, 1),
@@ -621,8 +626,15 @@ def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
         assert got.keys() == made.keys()
         for key in made:
             np.testing.assert_array_equal(got[key], made[key])
-    assert _load_cell(path, _cache_key(4, scope)) is None  # other trials: made again
-    assert _load_cell(path, _cache_key(3, scope, seed=1)) is None  # another seed: again
+    # made otherwise: refused, naming the file, what made it and what is asked
+    with pytest.raises(TableCacheError, match=r"cell-00.npz: a table cell made with 3 trials "
+                       r"per cell, the default seed, 64 bodies per Winter cell; this table "
+                       r"asks for 4 trials per cell, the default seed, 64 bodies"):
+        _load_cell(path, _cache_key(4, scope))
+    with pytest.raises(TableCacheError, match="asks for 3 trials per cell, seed 1, 8 bodies"):
+        _load_cell(path, _cache_key(3, scope, seed=1, bodies_per_cell=8))
+    with pytest.raises(TableCacheError, match="and another scope"):
+        _load_cell(path, _cache_key(3, UniversalScope(tip_share=0.2)))
     assert _load_cell(tmp_path / "cell-01.npz", _cache_key(3, scope)) is None
     path.write_bytes(path.read_bytes()[:40])  # truncated: made again, no traceback
     assert _load_cell(path, _cache_key(3, scope)) is None
@@ -632,7 +644,8 @@ def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
 def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_path, capsys):
     """`posture-id universal table --cache`: cells already kept are read, the one missing
     is simulated (by the process pool) and kept; a second run reads every cell and
-    writes the same table."""
+    writes the same table; a run asking for other trials is refused and leaves the
+    folder as it was."""
     from posture_id.cli import main
     from posture_id.learning.universal.identifier import BUNDLED_DIR
     from posture_id.learning.universal.model import UniversalModel
@@ -671,6 +684,14 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
     assert main([*argv, "--out", str(tmp_path / "b")]) == 0
     assert (tmp_path / "a" / "table.md").read_text() == (tmp_path / "b" / "table.md").read_text()
     capsys.readouterr()
+    # other trials on the same folder: refused in one line, nothing simulated or overwritten
+    kept = {f.name: f.read_bytes() for f in cache.iterdir()}
+    argv[3] = "3"  # --trials 3
+    assert main([*argv, "--out", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "made with 2 trials per cell" in err
+    assert "Give another --cache folder" in err and not (tmp_path / "c").exists()
+    assert {f.name: f.read_bytes() for f in cache.iterdir()} == kept
 
 
 def test_ece_of_calibrated_and_overconfident_probabilities():

@@ -97,7 +97,9 @@ def add_parser(sub) -> None:
     b.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     b.add_argument("--cache", type=Path, help="folder that keeps the simulated cells: a run "
                    "again with the same trials reads them (resumes; scores another model on "
-                   "the same trials); delete it after changing the simulator")
+                   "the same trials; a folder of cells made with other trials, seed or bodies "
+                   "per cell is refused, not overwritten); delete it after changing the "
+                   "simulator")
     b.add_argument("--seed", type=non_negative_int, help="draw the trials from this seed "
                    "(default: the documented table's): the same table on other trials")
     b.add_argument("--bodies-per-cell", type=positive_int,

@@ -12,8 +12,11 @@ noise 0.02–0.1°, drift up to 0.5° per minute).
 
 With ``cache`` the simulated cells are kept (one file per cell, with what made it) and a
 run again with the same trials and scope reads them: an interrupted table resumes, and
-another model is scored on the very same trials. Like a set's shards, a kept cell does not
-notice a change of the simulator's code: delete the folder after one.
+another model is scored on the very same trials. A folder holding cells made otherwise
+(other trials, seed, bodies per cell or scope) is refused before anything is simulated,
+as a set's folder is: its cells took half an hour and are not overwritten. Like a set's
+shards, a kept cell does not notice a change of the simulator's code: delete the folder
+after one.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from posture_id.datasets.config import DatasetError
 from posture_id.datasets.store import save_npz
 from posture_id.executors import executor_for
 from posture_id.fileio import atomic_write_text, json_text
@@ -102,9 +106,27 @@ def _cell(index: int, trials: int, scope_dict: dict, seed: int = TABLE_SEED,
 
 def _cache_key(trials: int, scope: UniversalScope, seed: int = TABLE_SEED,
                bodies_per_cell: int = BODIES_PER_CELL) -> str:
-    """What a cached cell was made with: a cell made otherwise is made again."""
+    """What a cached cell was made with: a folder of cells made otherwise is refused."""
     return json_text({"seed": seed, "trials": trials, "bodies": bodies_per_cell,
                       "scope": scope.to_dict()})
+
+
+class TableCacheError(DatasetError):
+    """A table's cache folder holds cells made with other arguments."""
+
+
+def _describe(key: str) -> str:
+    made = json.loads(key)
+    seed = "the default seed" if made["seed"] == TABLE_SEED else f"seed {made['seed']}"
+    return f"{made['trials']} trials per cell, {seed}, {made['bodies']} bodies per Winter cell"
+
+
+def _mismatch(path: Path, made: str, key: str) -> TableCacheError:
+    scope = " and another scope" if json.loads(made)["scope"] != json.loads(key)["scope"] else ""
+    return TableCacheError(
+        f"{path}: a table cell made with {_describe(made)}{scope}; this table asks for "
+        f"{_describe(key)}. Give another --cache folder, or delete {path.parent} to make "
+        "its cells again (it is not overwritten)")
 
 
 def _cell_file(cache: str | Path, index: int) -> Path:
@@ -119,13 +141,15 @@ def _save_cell(path: Path, groups: list[dict], key: str) -> None:
 
 
 def _load_cell(path: Path, key: str) -> list[dict] | None:
-    """The cached cell at ``path``, or None if there is none made with ``key``."""
+    """The cached cell at ``path``, or None if there is none (or only a truncated or
+    foreign file). Raises :class:`TableCacheError` for a cell made otherwise than
+    ``key`` says."""
     if not path.exists():
         return None
     try:
         with np.load(path, allow_pickle=False) as z:
             if str(z["made_with"]) != key:
-                return None
+                raise _mismatch(path, str(z["made_with"]), key)
             groups: dict[int, dict] = {}
             for name in z.files:
                 if name != "made_with":

@@ -94,7 +94,7 @@ universal-model: $(STAMP)
 	  --preset-jitter 0.15 --quiet
 	$(BIN)/posture-id universal train data/universal data/universal_people \
 	  data/universal_presets data/universal_small data/universal_robots \
-	  --out data/models/universal --epochs $(UNIVERSAL_EPOCHS) --quiet
+	  --out data/models/universal --epochs $(UNIVERSAL_EPOCHS) --fresh-motor-noise --quiet
 	$(BIN)/posture-id universal check data/models/universal data/universal \
 	  data/universal_people data/universal_presets data/universal_small \
 	  data/universal_robots > /dev/null

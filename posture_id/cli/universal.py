@@ -76,7 +76,8 @@ def add_parser(sub) -> None:
                         "absolute error (the posterior median)")
     t.add_argument("--fresh-motor-noise", action="store_true",
                    help="turn each training trial's motor noise to a new draw every epoch "
-                        "(each harmonic's noise by a random phase)")
+                        "(each harmonic's noise by a random phase), as the bundled model "
+                        "was trained (`make universal-model`); off by default")
     t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     t.add_argument("--threads", type=positive_int, help="torch threads (default: all cores)")
     t.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -923,12 +923,20 @@ def test_turning_motor_noise_keeps_its_power_cross_spectra_and_the_locked_sway()
     assert np.array_equal(turned, again)  # reproducible from the generator
 
 
-def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it():
-    from posture_id.cli import build_parser
+def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it(
+        tmp_path, monkeypatch):
+    """`universal train` hands the flag to the training configuration (what it would
+    train with is caught, not run)."""
+    from posture_id.cli import main
+    from posture_id.learning.universal import training
     from posture_id.learning.universal.training import UniversalTrainingConfig
 
     assert UniversalTrainingConfig().fresh_motor_noise is False
-    parse = build_parser().parse_args
-    assert parse(["universal", "train", "set", "--out", "m"]).fresh_motor_noise is False
-    assert parse(["universal", "train", "set", "--out", "m",
-                  "--fresh-motor-noise"]).fresh_motor_noise is True
+    seen = []
+    monkeypatch.setattr(training, "train_universal",
+                        lambda data, out, config, *a, **k: seen.append(config))
+    (tmp_path / "set").mkdir()
+    argv = ["universal", "train", str(tmp_path / "set"), "--quiet", "--out"]
+    assert main([*argv, str(tmp_path / "m1")]) == 0
+    assert main([*argv, str(tmp_path / "m2"), "--fresh-motor-noise"]) == 0
+    assert [c.fresh_motor_noise for c in seen] == [False, True]

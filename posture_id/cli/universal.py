@@ -144,9 +144,8 @@ def run_train(args: argparse.Namespace) -> int:
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
                                ("weight_decay", args.weight_decay),
                                ("point_loss", args.point_loss)) if v is not None}
-    if args.fresh_motor_noise:
-        given["fresh_motor_noise"] = True
-    config = UniversalTrainingConfig(seed=args.seed, threads=args.threads, **given)
+    config = UniversalTrainingConfig(seed=args.seed, threads=args.threads,
+                                     fresh_motor_noise=args.fresh_motor_noise, **given)
     shape = {k: v for k, v in (("dropout", args.dropout),
                                ("hidden", tuple(args.hidden) if args.hidden else None))
              if v is not None}

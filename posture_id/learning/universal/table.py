@@ -115,17 +115,17 @@ class TableCacheError(DatasetError):
     """A table's cache folder holds cells made with other arguments."""
 
 
-def _describe(key: str) -> str:
-    made = json.loads(key)
+def _describe(made: dict) -> str:
     seed = "the default seed" if made["seed"] == TABLE_SEED else f"seed {made['seed']}"
     return f"{made['trials']} trials per cell, {seed}, {made['bodies']} bodies per Winter cell"
 
 
-def _mismatch(path: Path, made: str, key: str) -> TableCacheError:
-    scope = " and another scope" if json.loads(made)["scope"] != json.loads(key)["scope"] else ""
+def _mismatch(path: Path, made_key: str, key: str) -> TableCacheError:
+    made, asked = json.loads(made_key), json.loads(key)
+    scope = " and another scope" if made["scope"] != asked["scope"] else ""
     return TableCacheError(
         f"{path}: a table cell made with {_describe(made)}{scope}; this table asks for "
-        f"{_describe(key)}. Give another --cache folder, or delete {path.parent} to make "
+        f"{_describe(asked)}. Give another --cache folder, or delete {path.parent} to make "
         "its cells again (it is not overwritten)")
 
 

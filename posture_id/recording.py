@@ -77,6 +77,9 @@ class Recording:
         theta: (S, N) rad, segment angles in space (NaN after a simulated fall).
         segments: (N,) link names.
         name: what messages call it (the file it was read from, "trial 3", ...).
+        tilt_recorded: the tilt comes from the file (or the simulation); False when the
+            file had no tilt column and the named stimulus filled it in (its onset then
+            rests on the lab's word alone).
 
     Raises:
         RecordingError: shapes that disagree, fewer than 2 samples, a time column that
@@ -88,6 +91,7 @@ class Recording:
     theta: np.ndarray
     segments: tuple[str, ...]
     name: str = "recording"
+    tilt_recorded: bool = True
 
     def __post_init__(self) -> None:
         time = np.asarray(self.time, dtype=float)
@@ -226,7 +230,8 @@ class Recording:
             raise RecordingError(
                 f"{path}: every angle is below {RADIANS_SUSPECT_DEG}° (largest |value| "
                 f"{largest:.3g}); the columns look like radians: give their unit (--units rad)")
-        return cls(time, tilt, theta, tuple(segments), str(path))
+        return cls(time, tilt, theta, tuple(segments), str(path),
+                   tilt_recorded=columns.tilt is not None)
 
     @classmethod
     def from_csv(cls, path: str | Path, segments: tuple[str, ...] | None = None,
@@ -243,10 +248,12 @@ class Recording:
         """
         path = Path(path)
         header, values = read_numeric_csv(path, RecordingError, "recording")
+        recorded = True
         if header[:1] == ["time_s"] and header[1:2] != ["tilt_deg"] and tilt_of is not None:
             values = np.insert(values, 1, np.degrees(tilt_of(values[:, 0] - values[0, 0])),
                                axis=1)
             header = ["time_s", "tilt_deg", *header[1:]]
+            recorded = False
         elif header[:1] == ["time_s"] and header[1:2] != ["tilt_deg"]:
             raise RecordingError(
                 f"{path}: no 'tilt_deg' column after time_s; name the stimulus the recording "
@@ -278,6 +285,7 @@ class Recording:
             theta=np.radians(values[:, 2:]),
             segments=tuple(names),
             name=str(path),
+            tilt_recorded=recorded,
         )
 
 

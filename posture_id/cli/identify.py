@@ -33,7 +33,12 @@ DEFAULT_METHOD_NAME = "auto"
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("identify", help="identify DEC parameters of a recording")
+    p = sub.add_parser(
+        "identify", help="identify DEC parameters of a recording",
+        epilog="exit status: 0 an answer (its trust: good, imprecise or doubtful, in the "
+               "summary and the JSON); 3 an answer, written, whose model falls in "
+               "re-simulation (nothing tried balances the body: doubtful); 2 input refused "
+               "(one line says why); a cohort: 1 when a recording failed")
     p.add_argument("recording",
                    help="recording CSV (time_s,tilt_deg,<seg>_deg...); a folder or a glob "
                         "pattern identifies a cohort into the --out folder")
@@ -47,7 +52,10 @@ def add_parser(sub) -> None:
                         "auto: the network, then the hybrid where its answer is doubtful "
                         "and the sway is not people-like (on the stimulus-locked sway when "
                         "the recording is too noisy to check an answer; on one cycle, such "
-                        "an answer is kept) (default %(default)s)")
+                        "an answer is kept); on people-like sway where it falls or leaves "
+                        "more than the noise, the locked fit with the network's spread as "
+                        "the prior; a stimulus named but not recorded is moved to where "
+                        "the sway says it ran (default %(default)s)")
     p.add_argument("--out", type=Path,
                    help="result JSON (its \"parameters\" object is a parameter file); for a "
                         "cohort, a folder: one JSON per recording and summary.csv (needed "
@@ -85,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     # torch and CasADi load here, not when the parser is built: other commands start fast
     from posture_id.identify import Identifier, Method
-    from posture_id.identify.result import FELL
+    from posture_id.identify.result import FELL, FELL_EXIT
 
     body = load_body(args.body or DEFAULT_URDF)
     identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
@@ -95,10 +103,10 @@ def run(args: argparse.Namespace) -> int:
     if args.out is None:
         say("no --out: the result is printed, not written (--out FILE.json keeps it)")
     write_result(result, args.out, args.plot)
-    if result.fell:  # exit status 1: identified, but the model does not balance the body
+    if result.fell:  # exit status 3: an answer, written, but it does not balance the body
         say(FELL.format(at="" if result.fell_at_s is None else f" at t = "
                                                                  f"{result.fell_at_s:.2f} s"))
-        return 1
+        return FELL_EXIT
     return 0
 
 

@@ -181,13 +181,15 @@ class SimulatorEvaluator(Evaluator):
 def run_stage(name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
               lower: np.ndarray, upper: np.ndarray, tolerance: float, max_iterations: int,
               progress: Progress | None = None,
-              prior_sd: np.ndarray | None = None) -> StageResult:
+              prior_sd: np.ndarray | None = None,
+              prior_centre: np.ndarray | None = None) -> StageResult:
     """One bounded trust-region least-squares stage over the ``free`` entries of q (7N,).
 
     ``lower``/``upper`` are (7N,) bounds; entries not free keep their q0 values.
-    ``prior_sd``: (7N,) standard deviations of a Gaussian prior on q centred on 0 (the
-    defaults; inf: none): each free entry adds the residual q_k / sd_k, so the stage finds
-    the maximum a posteriori estimate when the residuals are in units of their noise.
+    ``prior_sd``: (7N,) standard deviations of a Gaussian prior on q centred on
+    ``prior_centre`` (7N,; default 0, the defaults; inf: none): each free entry adds the
+    residual (q_k − centre_k) / sd_k, so the stage finds the maximum a posteriori estimate
+    when the residuals are in units of their noise.
     """
     free = list(free)
     cache: dict = {}
@@ -195,6 +197,8 @@ def run_stage(name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
     weights = (np.zeros(len(free)) if prior_sd is None
                else 1.0 / np.asarray(prior_sd, dtype=float)[free])
     priored = np.flatnonzero(weights > 0)
+    centre = (np.zeros(len(free)) if prior_centre is None
+              else np.asarray(prior_centre, dtype=float)[free])
 
     def full(x):
         q = q0.copy()
@@ -202,7 +206,8 @@ def run_stage(name: str, evaluator: Evaluator, q0: np.ndarray, free: list[int],
         return q
 
     def residual(x):
-        r = np.concatenate([evaluator.residual(full(x)), x[priored] * weights[priored]])
+        r = np.concatenate([evaluator.residual(full(x)),
+                            (x[priored] - centre[priored]) * weights[priored]])
         cache["x"], cache["r"] = x.copy(), r
         return r
 

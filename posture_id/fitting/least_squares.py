@@ -120,8 +120,7 @@ class FitRun:
         self.u = step_inputs(tilt, tilt_vel, problem.n_steps_u)
         self.measured = trial.recording.theta
         self.target = _target(trial, options)
-        self.prior_sd = None if options.prior_sd is None else self.layout.per_unknown(
-            options.prior_sd, np.inf, options.prior_sd)
+        self.prior_sd, self.prior_centre = _prior(options, self.layout)
         self.exact = ExactEvaluator(problem, self.u, self.measured, self.target)
         self.warm = SimulatorEvaluator(body, problem.defaults, trial.stimulus, sim,
                                        self.measured, self.target)
@@ -182,7 +181,7 @@ class FitRun:
               tolerance: float, limit: int) -> StageResult:
         """Run one bounded stage and keep it."""
         result = run_stage(name, evaluator, q0, free, self.lower, self.upper, tolerance,
-                           limit, self.progress, self.prior_sd)
+                           limit, self.progress, self.prior_sd, self.prior_centre)
         self.stages.append(result)
         return result
 
@@ -340,3 +339,29 @@ def search_bounds(options: FitOptions, layout: UnknownLayout) -> tuple[np.ndarra
         b[3 * layout.n : 4 * layout.n] = options.delay_bounds[side]  # Δ̃ after the gains
         bounds.append(b)
     return bounds[0], bounds[1]
+
+
+def _prior(options: FitOptions, layout: UnknownLayout
+           ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(7N,) the prior's SD of every unknown (inf: none) and its centre, from
+    ``options.prior_sd`` and ``prior_centre`` (None, None without a prior)."""
+    if options.prior_sd is None:
+        return None, None
+    n = layout.size
+    four = 4 * layout.n
+    sd = layout.per_unknown(np.inf, np.inf, np.inf)
+    centre = np.zeros(n)
+    if isinstance(options.prior_sd, tuple):
+        if len(options.prior_sd) != four:
+            raise FitError(f"prior_sd holds {len(options.prior_sd)} values; this body needs "
+                           f"{four} (Kp, Ki, Kd and delay of each of its {layout.n} modules)")
+        sd[layout.gains_delays] = options.prior_sd
+        sd[layout.passive] = float(np.median(options.prior_sd))
+    else:
+        sd = layout.per_unknown(options.prior_sd, np.inf, options.prior_sd)
+    if options.prior_centre is not None:
+        if len(options.prior_centre) != four:
+            raise FitError(f"prior_centre holds {len(options.prior_centre)} values; this "
+                           f"body needs {four}")
+        centre[layout.gains_delays] = options.prior_centre
+    return sd, centre

@@ -161,7 +161,13 @@ class FitOptions:
             a Gaussian prior of SD σ_p on every normalised gain and delay, centred on the
             body's defaults (MODEL §5 draws with σ = 0.5): parameters the sway does not
             determine stay near the defaults instead of wandering. Needs the locked fit
-            (whose residuals are in units of the recording's noise).
+            (whose residuals are in units of the recording's noise). A tuple gives each
+            normalised gain and delay its own SD (4N values, in the order of
+            ``prior_centre``).
+        prior_centre: None (default): the prior is centred on the defaults (0). 4N
+            normalised values [K̃p of every module, then K̃i, K̃d, Δ̃]: centred there
+            instead (``auto`` centres it on the network's answer, with the network's
+            calibrated spread as ``prior_sd``). Needs ``prior_sd``.
         fit_passive: also fit every module's passive stiffness Kpas and damping Bpas
             (normalised like the gains, within ``gain_bounds``); otherwise they stay at the
             initial guess's values (the defaults).
@@ -183,7 +189,8 @@ class FitOptions:
     warm_start: bool = True
     warm_tolerance: float = 1e-7
     locked: LockedOptions | None = None
-    prior_sd: float | None = None
+    prior_sd: float | tuple[float, ...] | None = None
+    prior_centre: tuple[float, ...] | None = None
     fit_passive: bool = False
 
     def __post_init__(self) -> None:
@@ -210,10 +217,18 @@ class FitOptions:
         if self.locked is not None and not isinstance(self.locked, LockedOptions):
             raise FitError(f"locked must be None or LockedOptions(), got {self.locked!r}")
         if self.prior_sd is not None:
-            if not (math.isfinite(self.prior_sd) and self.prior_sd > 0):
-                raise FitError(f"prior_sd must be a finite number > 0, got {self.prior_sd!r}")
+            sds = self.prior_sd if isinstance(self.prior_sd, tuple) else (self.prior_sd,)
+            if not sds or not all(isinstance(v, int | float) and math.isfinite(v) and v > 0
+                                  for v in sds):
+                raise FitError(f"prior_sd must be a finite number > 0 (or a tuple of them), "
+                               f"got {self.prior_sd!r}")
             if self.locked is None or not self.locked.weighted:
                 raise FitError("prior_sd needs the locked, weighted fit (residuals in units "
                                "of the noise): set locked=LockedOptions()")
+        if self.prior_centre is not None:
+            if self.prior_sd is None:
+                raise FitError("prior_centre needs prior_sd (the prior's spread)")
+            if not all(math.isfinite(v) for v in self.prior_centre):
+                raise FitError(f"prior_centre must be finite, got {self.prior_centre!r}")
         if not (math.isfinite(self.smooth_deadband_rad_s) and self.smooth_deadband_rad_s >= 0):
             raise FitError(f"smooth_deadband_rad_s must be ≥ 0, got {self.smooth_deadband_rad_s}")

@@ -132,6 +132,7 @@ class CohortResult(Result):
     def summary(self) -> str:
         counts = {s: sum(v == s for v in self.status.values()) for s in _FINISHED}
         doubtful = [r["recording"] for r in self.rows if r.get("trust") == "doubtful"]
+        imprecise = sum(r.get("trust") == "imprecise" for r in self.rows)
         return (f"{self.out}: {len(self.status)} recordings, {counts['done']} identified, "
                 f"{counts['skipped']} already done, {counts['redone']} identified again "
                 f"(done before with other options), {len(self.failed)} failed"
@@ -139,7 +140,9 @@ class CohortResult(Result):
                           for k, v in self.changed.items())
                 + "".join(f"\n  {k}: {v}" for k, v in self.failed.items())
                 + (f"\n  trust doubtful: {', '.join(doubtful)} (the JSON says why and what "
-                   "to try)" if doubtful else ""))
+                   "to try)" if doubtful else "")
+                + (f"\n  trust imprecise: {imprecise} (right as far as their noise shows; "
+                   "their intervals give the precision)" if imprecise else ""))
 
 
 def _identify_text(recording: tuple[str, str, str, str], method: str,
@@ -303,6 +306,14 @@ def _sig(x) -> float | None:
     return None if x is None else float(f"{float(x):.5g}")
 
 
+def _trust_level(trust: dict) -> str:
+    """A result JSON's trust level (good, imprecise or doubtful; JSONs written before the
+    three levels: doubtful or good), "" without a verdict."""
+    if not trust:
+        return ""
+    return trust.get("level") or ("doubtful" if trust.get("doubtful") else "good")
+
+
 def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) -> list[dict]:
     """summary.csv: SI units throughout (N·m/rad, N·m·s/rad, N·m/(rad·s), s), E_rel in
     percent, 5 significant digits; per module its class probability (P(COM), the CNN's
@@ -320,8 +331,7 @@ def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) ->
                        method=data["method"],
                        e_rel_pct=None if data["e_rel"] is None else _sig(100 * data["e_rel"]),
                        classes="/".join(m["controls"] for m in data["parameters"].values()),
-                       trust=("doubtful" if trust.get("doubtful") else "good") if trust
-                       else "", suggestion=trust.get("suggestion") or "")
+                       trust=_trust_level(trust), suggestion=trust.get("suggestion") or "")
             probability = data.get("class_probability_com") or {}
             intervals = (data.get("intervals") or {}).get("modules", {})
             for joint, module in data["parameters"].items():

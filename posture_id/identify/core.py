@@ -28,17 +28,25 @@ import math
 import time
 from dataclasses import replace
 from pathlib import Path
+from statistics import NormalDist
 
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
+from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.method import DEFAULT_METHOD, Method
+from posture_id.identify.mistakes import find_mistakes
 from posture_id.identify.networks import Network, network_for
 from posture_id.identify.noise_check import noise_check
 from posture_id.identify.result import IdentificationResult, SegmentFit
-from posture_id.identify.verdict import PEOPLE_LIKE_SHARE, TrustVerdict, suggestion
+from posture_id.identify.verdict import (
+    PEOPLE_LIKE_SHARE,
+    TrustVerdict,
+    suggestion,
+    unpinned_parameters,
+)
 from posture_id.learning.config import LearningError
 from posture_id.learning.identifier import DEFAULT_LEVEL
 from posture_id.progress import Progress
@@ -50,7 +58,8 @@ from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG, SimulationOptions
 from posture_id.simulation.stimulus import TiltProfile
 from posture_id.trials import PreparedTrial, prepare_trial
 
-__all__ = ["Method", "identify", "Identifier", "DEFAULT_METHOD", "Refinement", "auto_refinement"]
+__all__ = ["Method", "identify", "Identifier", "DEFAULT_METHOD", "Refinement", "auto_refinement",
+           "network_prior"]
 
 #: The CNN is said to be unsure of a class when P(C = +1) is inside this band.
 UNSURE_CLASS = (0.05, 0.95)
@@ -175,7 +184,8 @@ class Identifier:
         checked = _resimulate(body, trial, parameters, options.simulation, locked)
         body_share = checked.pop("locked_share")  # the verdict's, not a result field
         verdict = _verdict(method, options, trial, checked, body_share, cnn, fit, locked,
-                           self.cnn is not None and self.cnn.reads_people_like)
+                           self.cnn is not None and self.cnn.reads_people_like,
+                           body, intervals, parameters)
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -199,33 +209,103 @@ class Identifier:
 
     def _auto(self, trial: PreparedTrial, progress: Progress | None,
               start: float) -> IdentificationResult:
-        """:attr:`Method.AUTO`: the network's answer, refined by least squares (the hybrid)
-        when its verdict is doubtful (:func:`auto_refinement`: on the locked sway when the
-        recording is too noisy to check it); least squares from the body's defaults when the
-        network cannot read the recording (a tilt that is not periodic, or less than one
-        whole cycle of it) or identify the body (more than 3 segments)."""
+        """:attr:`Method.AUTO`: the network's answer, refined by least squares when
+        :func:`auto_refinement` says so (the hybrid on the raw or the locked sway; on
+        people-like sway whose answer falls or leaves more than the noise, the locked fit
+        from the network's answer with its calibrated spread as the prior); least squares
+        from the body's defaults when the network cannot read the recording (a tilt that is
+        not periodic, or less than one whole cycle of it) or identify the body (more than 3
+        segments). A stimulus that was named or rebuilt rather than recorded is first
+        moved in time to where the sway says it was (:meth:`_onset`). Every recording gets
+        an answer: when a refinement falls and the network's answer did not, the network's
+        is kept, and when both fall, the one that stays up longest is returned, doubtful
+        (``posture-id identify`` exits 3 then)."""
         unread = self.network_refusal or _unreadable_by_network(trial)
         if unread is not None:
             fitted = self._as(Method.FIT).identify_trial(trial, progress, start)
             return replace(fitted, notices=(
                 f"{trial.name}: {unread}: identified by least squares from the body's "
                 "defaults (--method auto)", *fitted.notices))
-        answer = self._as(Method.CNN).identify_trial(trial, progress, start)
+        network = self._as(Method.CNN)
+        answer = network.identify_trial(trial, progress, start)
+        answer, trial, moved = self._onset(answer, trial, network, progress, start)
+        result = self._refined(answer, trial, progress, start)
+        return result if moved is None else replace(result, notices=(moved, *result.notices))
+
+    def _refined(self, answer: IdentificationResult, trial: PreparedTrial,
+                 progress: Progress | None, start: float) -> IdentificationResult:
+        """``auto``'s refinement of the network's ``answer`` (:meth:`_auto`)."""
         verdict = answer.verdict
         how = auto_refinement(verdict)
         if how is Refinement.KEEP:
             return answer
         hybrid = self._as(Method.HYBRID)
         on = "the sway"
-        if how is Refinement.LOCKED:
+        if how is Refinement.LOCKED_PRIOR:
+            on = "the stimulus-locked sway, with the network's spread as the prior"
+            hybrid.fit_options = replace(self.fit_options, locked=LockedOptions(),
+                                         **network_prior(answer, self.level))
+        elif how is Refinement.LOCKED:
             on = "the stimulus-locked sway"
             if self.fit_options.locked is None:
                 hybrid.fit_options = replace(self.fit_options, locked=LockedOptions())
         refined = hybrid.identify_trial(trial, progress, start)
-        why = "; ".join(verdict.reasons)
-        return replace(refined, notices=(
-            f"{trial.name}: the network's answer was doubtful ({why}): refined by least "
-            f"squares on {on} (--method auto)", *refined.notices))
+        why = "; ".join(verdict.reasons) or "; ".join(verdict.imprecision)
+        said = (f"{trial.name}: the network's answer was {verdict.level} ({why}): refined by "
+                f"least squares on {on} (--method auto)")
+        if refined.fell and not answer.fell:
+            return replace(answer, notices=(
+                said + "; the refined model falls in re-simulation, so the network's answer "
+                "is kept", *answer.notices))
+        if refined.fell:
+            later = max((answer, refined), key=lambda r: r.fell_at_s or 0.0)
+            return replace(later, notices=(
+                said + "; neither the network's nor the refined model balances this body on "
+                "this stimulus: the one that stays up longest is given, doubtful",
+                *later.notices))
+        return replace(refined, notices=(said, *refined.notices))
+
+    def _onset(self, answer: IdentificationResult, trial: PreparedTrial,
+               network: Identifier, progress: Progress | None, start: float
+               ) -> tuple[IdentificationResult, PreparedTrial, str | None]:
+        """A stimulus that was named or rebuilt rather than recorded (:attr:`PreparedTrial.
+        tilt_recorded` False) and leaves more than the noise: the offset (within half a
+        cycle) that best aligns the answer's locked sway with the recorded one, and the
+        network again on the trial shifted by it; kept when its residual is smaller. The
+        answer, the trial it is for, and the notice of a move (None without one)."""
+        if trial.tilt_recorded or not answer.verdict.beyond_noise or answer.fell:
+            return answer, trial, None
+        period = trial.stimulus.period_s
+        projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+        if projection is None or period is None:
+            return answer, trial, None
+        rec = np.degrees(trial.recording.theta)
+        offsets = projection.best_offsets(np.degrees(answer.resimulated), rec, period / 2,
+                                          count=3, step_s=0.01)
+        best = answer, trial
+        for offset in offsets:
+            if abs(offset) < 0.02:
+                continue
+            shifted = _shifted_whole(trial, offset)
+            if shifted is None:
+                continue
+            moved = network.identify_trial(shifted, progress, start)
+            if moved.fell:
+                continue
+            if moved.verdict.noise is not None and (
+                    moved.verdict.noise.ratio < best[0].verdict.noise.ratio):
+                best = moved, shifted
+        if best[1] is trial:
+            return replace(answer, notices=(*answer.notices, (
+                f"{trial.name}: the stimulus was named, not recorded, and the answer leaves "
+                "more than the noise; no shift of it within half a cycle did better: check "
+                "its onset (--onset-s) and --max-offset-s"))), trial, None
+        moved, shifted = best
+        return moved, shifted, (
+            f"{trial.name}: the stimulus was named, not recorded, and the answer on it left "
+            f"more than the noise: the sway says it ran {shifted.time_offset_s:+.2f} s from "
+            "where it was named; identified there (--method auto; name the onset with "
+            "--onset-s, or search it with --max-offset-s)")
 
 
 class Refinement(enum.Enum):
@@ -237,31 +317,71 @@ class Refinement(enum.Enum):
     RAW = "raw"
     #: least squares from it on the stimulus-locked sway (the hybrid with ``--locked``)
     LOCKED = "locked"
+    #: the same with the network's calibrated spread as a prior centred on its answer
+    LOCKED_PRIOR = "locked_prior"
 
 
 def auto_refinement(verdict: TrustVerdict) -> Refinement:
     """``auto``'s rule for the network's answer (measured in docs/universal.md, "The
-    default method"): keep an answer that is not doubtful, and one on people-like sway
-    (least squares fits the subject's own sway too; the network was trained on such
-    sway). Refine a doubtful answer from its own values: on the stimulus-locked sway when
-    the recording cannot check it (:attr:`~posture_id.identify.noise_check.NoiseCheck.
-    unchecked`: the answer explains the recording as well as its noise allows, and that
-    noise alone leaves more than 10 % of the locked sway; on motor-noisy sway, least
-    squares on every sample fits the subject's own sway and ends further from the truth,
-    `benchmarks/auto_rule.py`), except on a recording of one cycle, whose locked share
-    cannot be measured (people-like or not, the network's answer is kept there:
-    `benchmarks/auto_rule.py --cycles 1`), on every sample otherwise."""
-    if not verdict.doubtful:
+    default method"): keep an answer that is close to the recording (within
+    :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of it), on no bound and inside
+    the network's scope. On people-like sway keep it too unless it falls or leaves more
+    than the recording's noise: least squares fits the subject's own sway too, and the
+    network was trained on such sway; then refine it on the stimulus-locked sway with the
+    network's calibrated spread as the prior (:attr:`Refinement.LOCKED_PRIOR`). Otherwise
+    refine it from its own values: on the stimulus-locked sway when the recording cannot
+    check it (:attr:`~posture_id.identify.noise_check.NoiseCheck.unchecked`: the answer
+    explains the recording as well as its noise allows, and that noise alone leaves more
+    than 10 % of the locked sway; on motor-noisy sway, least squares on every sample fits
+    the subject's own sway and ends further from the truth, `benchmarks/auto_rule.py`),
+    except on a recording of one cycle, whose locked share cannot be measured (people-like
+    or not, the network's answer is kept there: `benchmarks/auto_rule.py --cycles 1`), on
+    every sample otherwise. A mistake found in the recording is no reason to refine: no
+    fit can be right about it."""
+    if verdict.mistakes or not (verdict.not_close or verdict.bounds_that_matter
+                                or verdict.outside):
         return Refinement.KEEP
     share = verdict.locked_share
     if share is not None and share < PEOPLE_LIKE_SHARE:
-        return Refinement.KEEP
+        return Refinement.LOCKED_PRIOR if verdict.beyond_noise else Refinement.KEEP
     if verdict.noise is not None and verdict.noise.unchecked:
         # one cycle: no locked share to tell people-like sway from part-locked, and least
         # squares, raw or locked, ended further from the truth than the network on such
         # motor-noisy recordings (benchmarks/results/auto_rule_one_cycle.md)
         return Refinement.KEEP if share is None else Refinement.LOCKED
     return Refinement.RAW
+
+
+def network_prior(answer: IdentificationResult, level: float) -> dict:
+    """The prior a refinement of the network's ``answer`` takes: ``prior_centre`` its
+    normalised gains and delays, ``prior_sd`` its calibrated spread (the half-width of
+    its intervals at ``level`` over the normal quantile, at least :data:`MIN_PRIOR_SD`);
+    MODEL §5's 0.5 about the defaults when it has no intervals. FitOptions keywords."""
+    intervals = answer.intervals
+    if intervals is None:
+        return {"prior_sd": 0.5}
+    z = NormalDist().inv_cdf((1 + intervals.level) / 2)
+    sd = np.maximum((intervals.upper - intervals.lower) / 2 / z, MIN_PRIOR_SD)  # (N, 4)
+    centre = np.asarray(answer.normalised, dtype=float)[:, :4]
+    return {"prior_sd": tuple(float(v) for v in sd.T.ravel()),
+            "prior_centre": tuple(float(v) for v in centre.T.ravel())}
+
+
+#: The least SD of the network's prior on a normalised parameter (its intervals can be
+#: narrow where the network has seen much of the same).
+MIN_PRIOR_SD = 0.05
+
+
+def _shifted_whole(trial: PreparedTrial, offset_s: float) -> PreparedTrial | None:
+    """``trial`` with its stimulus ``offset_s`` later, its periodic part counted from where
+    it now starts when that is later (so that the cycles analysed hold the stimulus's
+    cycles only); None when less than one whole cycle is left."""
+    shifted = trial.shifted(offset_s)
+    stimulus = shifted.stimulus
+    if offset_s > 0:
+        stimulus = replace(stimulus, periodic_from_s=stimulus.periodic_from_s + offset_s)
+        shifted = replace(shifted, stimulus=stimulus)
+    return None if shifted.whole_cycle_shortfall() is not None else shifted
 
 
 def _unreadable_by_network(trial: PreparedTrial) -> str | None:
@@ -361,10 +481,11 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
 
 def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked: dict,
              share: float | None, cnn, fit, locked: LockedProjection | None,
-             reads_people_like: bool = False) -> TrustVerdict:
+             reads_people_like: bool, body: Body, intervals, parameters) -> TrustVerdict:
     """The trust verdict (:mod:`posture_id.identify.verdict`) of one identification;
     ``share``: the recorded body sway's locked share; ``reads_people_like``: the network
-    was trained on people-like sway (the universal model)."""
+    was trained on people-like sway (the universal model); ``intervals`` (or None) and
+    ``parameters``: the answer's."""
     noise = noise_check(trial, checked["resimulated"],
                         body_sway=(checked["sway_recorded"], checked["sway_resimulated"]),
                         projection=locked)
@@ -379,8 +500,13 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
         outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked: "
                        "least squares on the raw sway fits the subject's own sway too")
     on_bounds = () if fit is None else fit.on_bounds
-    verdict = TrustVerdict(noise, on_bounds, tuple(outside), share)
-    if not verdict.doubtful:
+    mistakes = find_mistakes(trial, body, checked["resimulated"], locked)
+    estimate = np.array([[getattr(parameters[j], f) for f in TARGET_FIELDS]
+                         for j in body.joint_names])
+    verdict = TrustVerdict(noise, on_bounds, tuple(outside), share,
+                           mistakes=tuple(m.sentence for m in mistakes),
+                           unpinned=unpinned_parameters(intervals, estimate))
+    if not verdict.doubtful or verdict.mistakes:  # a mistake: the recording to mend first
         return verdict
     return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,
                                                   options.prior_sd is not None,

@@ -46,7 +46,8 @@ from posture_id.frf.locked import LockedOptions, LockedProjection, noise_levels
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.noise import sensor_noise_deg
 
-__all__ = ["NoiseCheck", "noise_check", "NOISE_RATIO_LIMIT", "CLOSE_ENOUGH"]
+__all__ = ["NoiseCheck", "noise_check", "harmonic_noise", "NOISE_RATIO_LIMIT",
+           "CLOSE_ENOUGH"]
 
 #: The residual's RMS in units of the recording's noise up to which a model is said to
 #: explain the recording as well as its noise allows.
@@ -184,6 +185,14 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
     relative = float(np.sqrt(np.sum(residual**2) / np.sum(spread**2)))
     return NoiseCheck(float(np.sqrt(np.mean(residual**2))) / noise, "raw", noise, limit,
                       relative)
+
+
+def harmonic_noise(projection: LockedProjection, signal_deg: np.ndarray) -> np.ndarray:
+    """(K, N) E|X|² of the noise in each compared harmonic of the cycle average of
+    ``signal_deg`` (S, N) degrees (DFT ÷ P): from how its cycles differ (C ≥ 2), else from
+    the harmonics the stimulus leaves empty (module docstring)."""
+    spread = _between_cycles if projection.cycles >= 2 else _empty_harmonics
+    return spread(projection, np.asarray(signal_deg, dtype=float))
 
 
 def _empty_harmonics(projection: LockedProjection, recorded: np.ndarray) -> np.ndarray:

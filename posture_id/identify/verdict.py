@@ -18,20 +18,44 @@ Three questions, each answered from the recording and the result alone (no truth
    on the raw sway: the same share (below it the raw fit is fitting the subject's own
    sway).
 
-The answer is "doubtful" when any of them fails, and the verdict then names the method or
-flags that suit the recording (:func:`suggestion`; the rule and its measurement:
-docs/identify.md, "Trust").
+and a fourth, from the recording alone:
+
+4. **Could this body, under one controller, have made this recording at all?**
+   (:mod:`posture_id.identify.mistakes`: a tilt of the wrong sign, a step in the angles,
+   control that changes within the recording, a body whose time scale is not the
+   subject's, inputs unlike anything the network was trained on.)
+
+Three levels (:class:`TrustLevel`), because "wrong" and "imprecise" are different news:
+
+- ``doubtful``: evidence that the answer is wrong: a residual beyond the recording's noise
+  (and more than :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of its locked
+  sway), Kp or Kd on a search bound, a recording outside what the method was trained on,
+  or a mistake found in the recording. The verdict names the method or flags that suit
+  the recording (:func:`suggestion`).
+- ``imprecise``: nothing says the answer is wrong, but the recording cannot pin it: its
+  noise alone leaves more than ``CLOSE_ENOUGH`` of the locked sway (no answer can be
+  checked to 10 %), or a module's Kp, Kd or delay has an interval wider than ±10 % of its
+  value (:data:`PINNED_FIELDS`, :data:`PINNED_TO`). The calibrated intervals give the
+  precision; the verdict names what is not pinned.
+- ``good``: the model explains the recording as well as its noise allows and the
+  recording pins those parameters.
+
+The rule and its measurement: docs/identify.md, "Trust".
 """
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from posture_id.identify.method import Method
 from posture_id.identify.noise_check import CLOSE_ENOUGH, NoiseCheck
 
-__all__ = ["TrustVerdict", "PEOPLE_LIKE_SHARE", "suggestion"]
+__all__ = ["TrustVerdict", "TrustLevel", "PEOPLE_LIKE_SHARE", "PINNED_FIELDS", "PINNED_TO",
+           "suggestion", "unpinned_parameters"]
 
 #: Body sway whose noise-corrected stimulus-locked share is below this is people-like:
 #: the subject's own sway dominates (docs/real_recordings.md: 10–40 % in people).
@@ -42,6 +66,25 @@ PEOPLE_LIKE_SHARE = 0.6
 #: the parameters a recording determines least (docs/uncertainty.md); on a bound they are
 #: named, as what the recording leaves open, without doubting the rest.
 DOUBTFUL_ON_BOUND = ("kp", "kd", "kpas", "bpas")
+
+#: The parameters a ``good`` answer pins: the gains and the delay the sway determines
+#: (Ki, the parameter posture sway determines least, is named by the intervals' own words
+#: and does not lower the level: docs/uncertainty.md).
+PINNED_FIELDS = ("kp", "kd", "delay_s")
+#: Pinned: the interval's half-width is at most this share of the value.
+PINNED_TO = 0.10
+
+
+class TrustLevel(str, enum.Enum):
+    """How far an answer can be trusted (module docstring)."""
+
+    GOOD = "good"
+    IMPRECISE = "imprecise"
+    DOUBTFUL = "doubtful"
+
+    def __str__(self) -> str:
+        return self.value
+
 
 #: What suits people-like sway (docs/real_recordings.md, docs/results/real_like.md).
 LOCKED_FLAGS = "--method fit --locked --prior-sd 0.5"
@@ -58,6 +101,10 @@ class TrustVerdict:
             calibrated on (sentences).
         locked_share: the body sway's stimulus-locked share (noise-corrected), or None.
         suggestion: what to run instead when doubtful ("" otherwise).
+        mistakes: what in the recording this body under one controller cannot have made
+            (sentences, :mod:`posture_id.identify.mistakes`).
+        unpinned: parameters whose interval is wider than ±:data:`PINNED_TO` of their
+            value ("the hip's Kd"), of :data:`PINNED_FIELDS`.
     """
 
     noise: NoiseCheck | None
@@ -65,16 +112,56 @@ class TrustVerdict:
     outside: tuple[str, ...] = ()
     locked_share: float | None = None
     suggestion: str = ""
+    mistakes: tuple[str, ...] = ()
+    unpinned: tuple[str, ...] = ()
+
+    @property
+    def beyond_noise(self) -> bool:
+        """The residual is larger than the recording's noise allows and more than
+        :data:`CLOSE_ENOUGH` of the recorded sway (a model that falls included)."""
+        noise = self.noise
+        return noise is not None and not noise.consistent and not noise.acceptable
+
+    @property
+    def not_close(self) -> bool:
+        """The residual is more than :data:`CLOSE_ENOUGH` of the recorded sway, whether or
+        not the recording's noise explains it (``auto``'s trigger for a refinement)."""
+        return self.noise is not None and not self.noise.acceptable
 
     @property
     def reasons(self) -> tuple[str, ...]:
         """Why the answer is doubtful (empty when it is not)."""
         out = []
-        if self.noise is not None and not self.noise.acceptable:
+        if self.beyond_noise:
             out.append(f"the model leaves a {self.noise.sentence()}")
         if self.bounds_that_matter:
             out.append("on a search bound: " + ", ".join(self.bounds_that_matter))
-        return (*out, *self.outside)
+        return (*out, *self.outside, *self.mistakes)
+
+    @property
+    def imprecision(self) -> tuple[str, ...]:
+        """Why the answer is imprecise (empty when it is not, or when it is doubtful)."""
+        if self.reasons:
+            return ()
+        out = []
+        noise = self.noise
+        if noise is not None and not noise.acceptable:
+            out.append(
+                f"its noise alone leaves about {100 * noise.noise_relative:.0f} % of the "
+                f"recorded {noise.basis} sway, too much to check an answer to "
+                f"{100 * CLOSE_ENOUGH:g} % (the model's residual: {100 * noise.relative:.1f} %, "
+                f"{noise.ratio:.2f}× the noise)" if math.isfinite(noise.noise_relative) else
+                f"the model leaves a {noise.sentence()}")
+        if self.unpinned:
+            out.append(f"the recording does not pin {_listed(self.unpinned)} to "
+                       f"±{100 * PINNED_TO:g} %")
+        return tuple(out)
+
+    @property
+    def level(self) -> TrustLevel:
+        if self.reasons:
+            return TrustLevel.DOUBTFUL
+        return TrustLevel.IMPRECISE if self.imprecision else TrustLevel.GOOD
 
     @property
     def bounds_that_matter(self) -> tuple[str, ...]:
@@ -83,10 +170,14 @@ class TrustVerdict:
 
     @property
     def doubtful(self) -> bool:
+        """True only for :attr:`TrustLevel.DOUBTFUL`."""
         return bool(self.reasons)
 
     def line(self) -> str:
         """The one line a user reads."""
+        if self.level is TrustLevel.IMPRECISE:
+            return ("trust: imprecise: " + "; ".join(self.imprecision)
+                    + ": nothing says the answer is wrong; its intervals give the precision")
         if not self.doubtful:
             noise = self.noise
             if noise is None:
@@ -114,14 +205,17 @@ class TrustVerdict:
         def number(x: float | None) -> float | None:
             return None if x is None or not math.isfinite(x) else float(x)
 
-        return {"doubtful": self.doubtful, "trust_reasons": list(self.reasons),
+        return {"doubtful": self.doubtful, "trust_level": self.level.value,
+                "trust_reasons": list(self.reasons),
                 "noise_ratio": None if noise is None else number(noise.ratio),
                 "relative_residual": None if noise is None else number(noise.relative),
                 "noise_relative": None if noise is None else number(noise.noise_relative)}
 
     def to_dict(self) -> dict:
-        return {"doubtful": self.doubtful, "reasons": list(self.reasons),
-                "suggestion": self.suggestion or None,
+        return {"level": self.level.value, "doubtful": self.doubtful,
+                "reasons": list(self.reasons), "imprecise": list(self.imprecision),
+                "suggestion": self.suggestion or None, "mistakes": list(self.mistakes),
+                "unpinned": list(self.unpinned),
                 "noise_check": None if self.noise is None else self.noise.to_dict(),
                 "on_bounds": list(self.on_bounds), "outside": list(self.outside),
                 "locked_share": self.locked_share}
@@ -191,3 +285,31 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
             return "--method hybrid"
         return "--locked --max-offset-s 1" + ("" if prior else " --prior-sd 0.5")
     return ""
+
+
+def _listed(names: tuple[str, ...]) -> str:
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def unpinned_parameters(intervals, estimate_si: np.ndarray | None = None) -> tuple[str, ...]:
+    """The :data:`PINNED_FIELDS` whose interval's half-width is more than
+    :data:`PINNED_TO` of the value ("the hip's Kd"), from a
+    :class:`~posture_id.uncertainty.intervals.ParameterIntervals` (None: none).
+    ``estimate_si``: (N, 4) the values in SI units (default: the intervals' centres)."""
+    if intervals is None:
+        return ()
+    from posture_id.dec.parameters import TARGET_FIELDS
+    from posture_id.uncertainty.intervals import LABELS
+
+    half = (intervals.upper_si - intervals.lower_si) / 2
+    value = (intervals.upper_si + intervals.lower_si) / 2 if estimate_si is None \
+        else np.asarray(estimate_si, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        wide = ~(half <= PINNED_TO * np.abs(value))
+    out = []
+    for i, joint in enumerate(intervals.joints):
+        names = [LABELS[f] for k, f in enumerate(TARGET_FIELDS)
+                 if f in PINNED_FIELDS and wide[i, k]]
+        if names:
+            out.append(f"the {joint}'s {' and '.join(names)}")
+    return tuple(out)

@@ -24,7 +24,8 @@ from posture_id.dec.parameters import DecParameters, ParameterArrays
 from posture_id.errors import SimulationError
 from posture_id.recording import Recording
 from posture_id.simulation.batch import simulate, simulate_batch
-from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorNoise
+from posture_id.simulation.measurement import MeasurementNoise
+from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, DEFAULT_SHAPE, MotorNoise, MotorShape
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.results import BatchResult, SimulationResult
 from posture_id.simulation.stimulus import TiltProfile
@@ -56,8 +57,15 @@ class PeopleLike:
 def people_like(body: Body, params: DecParameters, stimulus: TiltProfile,
                 locked_share: float, seed: int, sensor_noise_deg: float = 0.05,
                 cutoff_hz: float = DEFAULT_CUTOFF_HZ,
-                options: SimulationOptions | None = None) -> PeopleLike:
+                options: SimulationOptions | None = None,
+                shape: MotorShape = DEFAULT_SHAPE,
+                measurement: MeasurementNoise | None = None) -> PeopleLike:
     """Simulate a subject whose body COM sway is ``locked_share`` stimulus-locked.
+
+    ``shape``: the motor noise's spectrum, joint correlation and time course
+    (:class:`~posture_id.simulation.noise.MotorShape`; default the first-order low-pass of
+    corner ``cutoff_hz``). ``measurement``: coloured sensor noise and drift added after the
+    white ``sensor_noise_deg`` (:class:`~posture_id.simulation.measurement.MeasurementNoise`).
 
     Raises:
         SimulationError: the subject falls (without noise or with it), or the share is not
@@ -66,10 +74,11 @@ def people_like(body: Body, params: DecParameters, stimulus: TiltProfile,
     if not 0 < locked_share < 1:
         raise SimulationError(f"locked_share must be in (0, 1), got {locked_share}")
     locked = simulate(body, params, stimulus, options)
-    unit = simulate(body, params, stimulus, options, MotorNoise(1.0, cutoff_hz, seed))
+    unit = simulate(body, params, stimulus, options, MotorNoise(1.0, cutoff_hz, seed, shape))
     if not (locked.stable and unit.stable):
         # a unit level may tip the body over: calibrate at a tenth of it
-        unit = simulate(body, params, stimulus, options, MotorNoise(0.1, cutoff_hz, seed))
+        unit = simulate(body, params, stimulus, options,
+                        MotorNoise(0.1, cutoff_hz, seed, shape))
         scale = 0.1
     else:
         scale = 1.0
@@ -78,7 +87,7 @@ def people_like(body: Body, params: DecParameters, stimulus: TiltProfile,
     response = np.var(locked.alpha[:, 0])
     per_level = np.var(unit.alpha[:, 0] - locked.alpha[:, 0]) / scale**2
     level = math.sqrt(response * (1 - locked_share) / locked_share / per_level)
-    motor = MotorNoise(float(level), cutoff_hz, seed)
+    motor = MotorNoise(float(level), cutoff_hz, seed, shape)
     noisy = simulate(body, params, stimulus, options, motor)
     if not noisy.stable:
         raise SimulationError("the subject falls with its motor noise")
@@ -86,6 +95,8 @@ def people_like(body: Body, params: DecParameters, stimulus: TiltProfile,
     recording = noisy.to_recording()
     if sensor_noise_deg > 0:
         recording = recording.with_sensor_noise(sensor_noise_deg, seed)
+    if measurement is not None:
+        recording = measurement.apply(recording, seed)
     return PeopleLike(recording, locked, motor, realised)
 
 

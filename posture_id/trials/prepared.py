@@ -63,6 +63,11 @@ class PreparedTrial:
         return self.recording.name
 
     @property
+    def tilt_recorded(self) -> bool:
+        """The tilt column was recorded (False: filled in from the named stimulus)."""
+        return self.recording.tilt_recorded
+
+    @property
     def rate_hz(self) -> float:
         return self.recording.sample_rate_hz
 

@@ -17,7 +17,9 @@ bundled universal network), in three groups:
   control changed halfway (the ankle's and the hip's Kp ×1.35 and Kd ×0.7 from the middle
   on, the two simulations cross-faded over 2 s).
 
-Bodies: the TIP and Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg), in turn;
+Bodies: the TIP and Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg), in turn (a
+3-segment Winter body in the TIP's turn for another person's body, a 2-segment one in the
+1-segment's turn for exchanged columns);
 stimuli: the 242-state PRTS ×2 and the 80-state PRTS ×6, 0.5–2° peak to peak; parameters
 from MODEL §5's prior (a seed no data set uses). A recording is **right** when every
 class is right and every truth lies inside its 90 % interval, **wrong** when a class is
@@ -83,8 +85,10 @@ def _recording(group: str, kind: str, index: int):
     the subject falls (drawn again by the caller)."""
     rng = np.random.default_rng([SEED, zlib.crc32(f'{group}/{kind}'.encode()), index])
     name = BODIES[index % len(BODIES)]
-    if group == "mistakes" and kind == "columns exchanged" and name in BODIES[:2]:
-        name = "Winter 2-seg" if name == "Winter 1-seg" else name
+    if group == "mistakes" and kind == "columns exchanged" and name == "Winter 1-seg":
+        name = "Winter 2-seg"  # two columns to exchange
+    if group == "mistakes" and kind == "other body" and name == "TIP":
+        name = "Winter 3-seg"  # a body drawn for a height
     for _attempt in range(30):
         body = _body(name)
         stimulus = _stimulus(rng)

@@ -74,3 +74,31 @@ inside = low <= truth[joint].kp <= high
 print(f"its 90 % interval [{low:.0f}, {high:.0f}] holds the truth: {inside}")
 assert abs(error) < 0.1 and answer.segments[0].locked_variance_explained > 0.9
 answer.plot("lab_subject.png")
+
+# %% [markdown]
+# ## When the platform's angle was not recorded, and the onset is only roughly known
+#
+# Some labs keep only the sway; the stimulus is then named by its flags, and its onset
+# rests on the lab's clock. Here the same file without its `platform` column, with the
+# onset given 2 s late (3.97 s for 1.97 s). The default method notices that its answer
+# leaves more than the recording's noise on a stimulus that was named, not recorded,
+# finds in the sway where the stimulus really ran (within half a cycle), and identifies
+# the recording there; it says so in a notice.
+
+# %%
+sway_only = Path("lab_subject.sway_only.csv")
+lines = recording_file.read_text().splitlines()
+sway_only.write_text("\n".join(",".join(line.split(",")[::2]) for line in lines) + "\n")
+print(sway_only.read_text().splitlines()[:2])  # time,COM_x
+named = ["--states", "80", "--cycles", "3", "--amplitude-deg", "1", "--start-state", "36.48",
+         "--lag-s", "0.04", "--onset-s", "3.97"]  # the lab's onset: 1.97 s
+command = [posture_id_command, "identify", str(sway_only), "--body", str(body.urdf_path),
+           "--time-column", "time", "--tilt-column", "none", "--angle-columns", "COM_x",
+           *named, "--out", "lab_subject.onset.json"]
+shown = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+print(shown)
+result = json.loads(Path("lab_subject.onset.json").read_text())
+check = result["trust"]["noise_check"]
+print(f"trust: {result['trust']['level']}; locked residual {check['ratio']:.2f}× the noise")
+assert check["consistent"] or "--max-offset-s" in shown
+assert any("the sway says it ran -2.0" in notice for notice in result["notices"])

@@ -36,10 +36,11 @@ from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
+from posture_id.identify.alternatives import better_explanations
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.mistakes import find_mistakes
 from posture_id.identify.networks import Network, network_for
-from posture_id.identify.noise_check import noise_check
+from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, noise_check
 from posture_id.identify.result import IdentificationResult, SegmentFit
 from posture_id.identify.verdict import (
     PEOPLE_LIKE_SHARE,
@@ -49,6 +50,7 @@ from posture_id.identify.verdict import (
 )
 from posture_id.learning.config import LearningError
 from posture_id.learning.identifier import DEFAULT_LEVEL
+from posture_id.learning.universal.identifier import UniversalIdentifier
 from posture_id.progress import Progress
 from posture_id.provenance import provenance
 from posture_id.recording import Recording
@@ -186,6 +188,7 @@ class Identifier:
         verdict = _verdict(method, options, trial, checked, body_share, cnn, fit, locked,
                            self.cnn is not None and self.cnn.reads_people_like,
                            body, intervals, parameters)
+        verdict = self._alternatives(trial, verdict, cnn)
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -197,6 +200,34 @@ class Identifier:
             verdict=verdict, relaxed_refit=relaxed_refit, **checked,
         )
 
+
+    def _alternatives(self, trial: PreparedTrial, verdict: TrustVerdict, cnn
+                      ) -> TrustVerdict:
+        """The verdict with the mistakes an alternative reading reveals
+        (:mod:`~posture_id.identify.alternatives`: columns exchanged, another body's
+        size), looked for when the answer leaves more than the noise and a network can
+        read the alternatives."""
+        noise = verdict.noise
+        if (self.cnn is None or cnn is None or noise is None or noise.basis != "locked"
+                or not noise.ratio > NOISE_RATIO_LIMIT):
+            return verdict
+        base = noise.ratio if self.method is Method.CNN else self._network_ratio(trial, self.body)
+        found = better_explanations(trial, self.body, base, self._network_ratio,
+                                    sizes=isinstance(self.cnn, UniversalIdentifier))
+        if not found:
+            return verdict
+        return replace(verdict, mistakes=verdict.mistakes + tuple(m.sentence for m in found),
+                       suggestion="")
+
+    def _network_ratio(self, trial: PreparedTrial, body: Body) -> float:
+        """The network's answer on ``trial`` read with ``body``, re-simulated: its
+        stimulus-locked residual in units of the recording's noise (inf: it falls)."""
+        network = self.cnn if body is self.body else self.cnn.for_body(body)
+        answer = network.identify(trial, self.level)
+        locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+        checked = _resimulate(body, trial, answer.parameters, self.fit_options.simulation,
+                              locked)
+        return noise_check(trial, checked["resimulated"], projection=locked).ratio
 
     def _as(self, method: Method) -> Identifier:
         """This identifier with another method, sharing its network (none for least
@@ -218,8 +249,9 @@ class Identifier:
         segments). A stimulus that was named or rebuilt rather than recorded is first
         moved in time to where the sway says it was (:meth:`_onset`). Every recording gets
         an answer: when a refinement falls and the network's answer did not, the network's
-        is kept, and when both fall, the one that stays up longest is returned, doubtful
-        (``posture-id identify`` exits 3 then)."""
+        is kept; when both fall, least squares from the body's defaults on the locked sway
+        with MODEL §5's prior; when that falls too, the one that stays up longest is
+        returned, doubtful (``posture-id identify`` exits 4 then)."""
         unread = self.network_refusal or _unreadable_by_network(trial)
         if unread is not None:
             fitted = self._as(Method.FIT).identify_trial(trial, progress, start)
@@ -258,11 +290,22 @@ class Identifier:
                 said + "; the refined model falls in re-simulation, so the network's answer "
                 "is kept", *answer.notices))
         if refined.fell:
-            later = max((answer, refined), key=lambda r: r.fell_at_s or 0.0)
+            # both fall: least squares from the body's defaults on the locked sway, MODEL
+            # §5's prior holding what the sway leaves open (where the network's answer is
+            # no start at all)
+            fit = self._as(Method.FIT)
+            fit.fit_options = replace(self.fit_options, locked=LockedOptions(), prior_sd=0.5,
+                                      prior_centre=None)
+            fitted = fit.identify_trial(trial, progress, start)
+            said += ("; the refined model falls in re-simulation too: fitted again from the "
+                     "body's defaults on the stimulus-locked sway with MODEL §5's prior "
+                     "(--method fit --locked --prior-sd 0.5)")
+            if not fitted.fell:
+                return replace(fitted, notices=(said, *fitted.notices))
+            later = max((answer, refined, fitted), key=lambda r: r.fell_at_s or 0.0)
             return replace(later, notices=(
-                said + "; neither the network's nor the refined model balances this body on "
-                "this stimulus: the one that stays up longest is given, doubtful",
-                *later.notices))
+                said + "; no model tried balances this body on this stimulus: the one that "
+                "stays up longest is given, doubtful", *later.notices))
         return replace(refined, notices=(said, *refined.notices))
 
     def _onset(self, answer: IdentificationResult, trial: PreparedTrial,

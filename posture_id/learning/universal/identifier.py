@@ -16,6 +16,7 @@ notice saying so.
 
 from __future__ import annotations
 
+import copy
 import math
 from pathlib import Path
 
@@ -107,6 +108,21 @@ class UniversalIdentifier:
     @classmethod
     def load(cls, folder: str | Path, body: Body) -> UniversalIdentifier:
         return cls(UniversalModel.load(folder), body)
+
+    def for_body(self, body: Body) -> UniversalIdentifier:
+        """The same model and calibration for another body (nothing read again)."""
+        if not 1 <= body.n_segments <= 3:
+            raise LearningError(f"the universal model identifies bodies of 1 to 3 segments; "
+                                f"'{body.name}' has {body.n_segments}")
+        other = copy.copy(self)
+        other.body = body
+        other.descriptors = body_descriptors(body)
+        other.com = com_weights(body)
+        other._layouts = {}
+        other.defaults = default_parameters(body)
+        other.body_outside = other._outside(other.descriptors, range(0, DESCRIPTORS - 4),
+                                            f"body '{body.name}'")
+        return other
 
     @classmethod
     def bundled(cls, body: Body) -> UniversalIdentifier:

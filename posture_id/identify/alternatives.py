@@ -1,0 +1,89 @@
+"""Would the recording be explained far better if it were not what the user says it is?
+
+Two mistakes leave a recording that some model explains, only not the one asked for:
+
+- **segment columns exchanged** (the lab's export mixed up two segments): the same
+  network, on the same body, reads the recording with two neighbouring columns put back
+  the other way round;
+- **another person's body** (the URDF of someone else, or a template of the wrong size):
+  the network reads it with the body made larger or smaller (every length ×b, masses kept:
+  :func:`~posture_id.bodies.scaling.scaled_body`, factors :data:`SIZES`). A body's mass
+  cannot be seen in sway at all (the gains scale with it); its size can, through its time
+  scale √(J/m·g·h) ∝ √b, wherever inertia shapes the response.
+
+Each alternative is judged as the answer is: the identified model re-simulated, its
+stimulus-locked residual in units of the recording's own noise
+(:func:`~posture_id.identify.noise_check.noise_check`). An alternative counts as evidence
+only when the answer leaves more than the noise allows (and stays up: against a model that
+falls, any reading that does not would win) and the alternative leaves at most
+1/:data:`SWAP_GAIN` (columns) or 1/:data:`SIZE_GAIN` (size) of it: on a right recording
+every alternative is worse (docs/identify.md, "Mistakes"), and on people-like sway, whose
+noise hides both, none is called.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import replace
+
+from posture_id.bodies.body import Body
+from posture_id.bodies.scaling import scaled_body
+from posture_id.identify.mistakes import Mistake
+from posture_id.identify.noise_check import NOISE_RATIO_LIMIT
+from posture_id.trials import PreparedTrial
+
+__all__ = ["better_explanations", "SIZES", "SWAP_GAIN", "SIZE_GAIN"]
+
+#: Body sizes tried, as factors on every length.
+SIZES = (0.8, 0.9, 1.1, 1.25)
+#: Exchanged columns are named when putting them back divides the residual by this.
+SWAP_GAIN = 3.0
+#: Another body size is named when it divides the residual by this.
+SIZE_GAIN = 1.3
+
+#: (trial, body) → the network's answer's residual in units of the noise (inf: it falls).
+RatioOf = Callable[[PreparedTrial, Body], float]
+
+
+def better_explanations(trial: PreparedTrial, body: Body, ratio: float, ratio_of: RatioOf,
+                        sizes: bool = True) -> tuple[Mistake, ...]:
+    """The mistakes an alternative reading reveals (module docstring).
+
+    Args:
+        trial, body: as identified. ratio: the answer's residual in units of the noise,
+            by the same reading as ``ratio_of`` gives the alternatives'.
+        ratio_of: the network's reading of a trial on a body, judged.
+        sizes: try other body sizes (a network trained on one body cannot).
+    """
+    if not (NOISE_RATIO_LIMIT < ratio < math.inf):  # a model that falls is no yardstick
+        return ()
+    found = []
+    names = trial.recording.segments
+    best = None
+    for k in range(len(names) - 1):
+        theta = trial.recording.theta.copy()
+        theta[:, [k, k + 1]] = theta[:, [k + 1, k]]
+        swapped = replace(trial, recording=replace(trial.recording, theta=theta))
+        other = ratio_of(swapped, body)
+        if other * SWAP_GAIN <= ratio and (best is None or other < best[1]):
+            best = (k, other)
+    if best is not None:
+        k, other = best
+        found.append(Mistake("columns exchanged", ratio / other, SWAP_GAIN, (
+            f"the {names[k]} and {names[k + 1]} columns read the other way round leave "
+            f"{other:.2f}× the noise against {_times(ratio)} as given: are they exchanged?")))
+    if sizes:
+        tried = [(factor, ratio_of(trial, scaled_body(body, factor))) for factor in SIZES]
+        factor, other = min(tried, key=lambda t: t[1])
+        if other * SIZE_GAIN <= ratio:
+            found.append(Mistake("another body", ratio / other, SIZE_GAIN, (
+                f"a body {abs(100 * (factor - 1)):.0f} % {'taller' if factor > 1 else 'shorter'}"
+                f" than {body.name}'s explains the sway better ({other:.2f}× the noise against "
+                f"{_times(ratio)}): is the URDF this subject's? (the sway shows a body's "
+                "size, not its mass)")))
+    return tuple(found)
+
+
+def _times(ratio: float) -> str:
+    return "a fall" if not math.isfinite(ratio) else f"{ratio:.2f}×"

@@ -16,6 +16,8 @@ from posture_id.cli.arguments import (
     say,
 )
 from posture_id.cli.progress import TerminalProgress
+from posture_id.errors import PostureIdError
+from posture_id.simulation.noise_families import NoiseFamily
 
 __all__ = ["add_parser"]
 
@@ -50,6 +52,11 @@ def add_parser(sub) -> None:
                    help="range of the PRTS's peak-to-peak tilt, degrees, drawn log-uniform "
                         "(default: the scope's, 0.5 4); a set trained beside the default "
                         "one may draw over any range that overlaps it")
+    d.add_argument("--noise-families", nargs="+", metavar="FAMILY",
+                   choices=[f.value for f in NoiseFamily],
+                   help="each trial with motor noise draws its torque noise's shape from "
+                        "one of these families (posture_id.simulation.noise_families; "
+                        "default: the low-pass of 0.2 Hz for all)")
     d.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=run_data)
@@ -78,6 +85,13 @@ def add_parser(sub) -> None:
                    help="turn each training trial's motor noise to a new draw every epoch "
                         "(each harmonic's noise by a random phase), as the bundled model "
                         "was trained (`make universal-model`); off by default")
+    t.add_argument("--init", type=Path, metavar="MODEL_DIR",
+                   help="start from this universal model (its weights and standardisation: "
+                        "fine-tuning; its network settings are kept)")
+    t.add_argument("--exclude-families", nargs="+", metavar="FAMILY", default=(),
+                   choices=[f.value for f in NoiseFamily],
+                   help="leave the trials of these noise families out (to report on them "
+                        "as noise the network never saw)")
     t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     t.add_argument("--threads", type=positive_int, help="torch threads (default: all cores)")
     t.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -122,7 +136,8 @@ def run_data(args: argparse.Namespace) -> int:
                                ("tip_share", args.tip_share),
                                ("preset_share", args.preset_share),
                                ("preset_jitter", args.preset_jitter),
-                               ("amplitude_deg", args.amplitude_deg)) if v is not None}
+                               ("amplitude_deg", args.amplitude_deg),
+                               ("noise_families", args.noise_families)) if v is not None}
     # a scope out of range is a ScopeError: one line, exit status 2 (cli.main)
     given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
                                        for k, v in scope.items()})
@@ -141,11 +156,17 @@ def run_train(args: argparse.Namespace) -> int:
     from posture_id.learning.universal.network import UniversalNetworkConfig
     from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
 
+    if args.init is not None and (args.hidden or args.dropout is not None or args.members != 1):
+        raise PostureIdError("--init keeps its model's network: --hidden, --dropout and "
+                             "--members go with a network trained from the start")
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
                                ("weight_decay", args.weight_decay),
-                               ("point_loss", args.point_loss)) if v is not None}
+                               ("point_loss", args.point_loss),
+                               ("init", None if args.init is None else str(args.init)))
+             if v is not None}
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads,
-                                     fresh_motor_noise=args.fresh_motor_noise, **given)
+                                     fresh_motor_noise=args.fresh_motor_noise,
+                                     exclude_families=tuple(args.exclude_families), **given)
     shape = {k: v for k, v in (("dropout", args.dropout),
                                ("hidden", tuple(args.hidden) if args.hidden else None))
              if v is not None}

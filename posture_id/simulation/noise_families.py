@@ -33,7 +33,10 @@ import numpy as np
 from posture_id.simulation.measurement import MeasurementNoise
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorShape
 
-__all__ = ["NoiseFamily", "NoiseDraw", "draw_noise"]
+__all__ = ["NoiseFamily", "NoiseDraw", "draw_noise", "DRIFTING_COLOUR_SLOPE"]
+
+#: The range of the ``drifting`` family's sensor-noise colour (PSD slope, uniform).
+DRIFTING_COLOUR_SLOPE = (1.0, 2.0)
 
 
 class NoiseFamily(str, enum.Enum):
@@ -96,7 +99,7 @@ def draw_noise(family: NoiseFamily, rng: np.random.Generator) -> NoiseDraw:
         return NoiseDraw(family, corner, shape, sensor, None)
     if family is NoiseFamily.DRIFTING:
         measurement = MeasurementNoise(
-            sd_deg=sensor, colour_slope=float(rng.uniform(1, 2)),
+            sd_deg=sensor, colour_slope=float(rng.uniform(*DRIFTING_COLOUR_SLOPE)),
             offset_deg=float(rng.uniform(0, 1)), trend_deg=float(rng.uniform(0, 0.3)),
             random_walk_deg=float(rng.uniform(0, 0.5)), steps=int(rng.integers(0, 3)),
             step_deg=float(rng.uniform(0, 0.1)))

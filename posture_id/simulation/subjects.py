@@ -15,6 +15,7 @@ level, and the realised share is reported), then white sensor noise is added.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,7 +32,7 @@ from posture_id.simulation.results import BatchResult, SimulationResult
 from posture_id.simulation.stimulus import TiltProfile
 
 __all__ = ["PeopleLike", "people_like", "MotorLevels", "motor_levels_for_share",
-           "UNIT_LEVEL_PER_DEG"]
+           "UNIT_LEVEL_PER_DEG", "per_trial_values"]
 
 #: The motor-noise level of a batched calibration run, per degree of peak-to-peak tilt.
 UNIT_LEVEL_PER_DEG = 0.05
@@ -118,18 +119,33 @@ class MotorLevels:
 
 def motor_levels_for_share(body: Body, params: ParameterArrays, stimulus: TiltProfile,
                            share: np.ndarray, seeds: np.ndarray, unit_level: float,
-                           cutoff_hz: float = DEFAULT_CUTOFF_HZ,
-                           options: SimulationOptions | None = None) -> MotorLevels:
+                           cutoff_hz: float | Sequence[float] = DEFAULT_CUTOFF_HZ,
+                           options: SimulationOptions | None = None,
+                           shapes: Sequence[MotorShape] | None = None) -> MotorLevels:
     """The batched form of :func:`people_like`'s calibration: B trials simulated without
     motor noise and with ``unit_level`` (trial b seeded by ``seeds[b]``), and the level
     that leaves ``share[b]`` of trial b's body COM sway locked (the body is nearly linear:
-    the noise's variance scales with the level squared)."""
+    the noise's variance scales with the level squared). ``cutoff_hz`` and ``shapes``:
+    the noise's corner and :class:`~posture_id.simulation.noise.MotorShape`, one for all
+    trials or one per trial (default: the first-order low-pass)."""
     clean = simulate_batch(body, params, stimulus, options, workers=1)
     unit = simulate_batch(body, params, stimulus, options, workers=1, motor_noise=[
-        MotorNoise(unit_level, cutoff_hz, int(s)) for s in seeds])
+        MotorNoise(unit_level, c, int(s), m)
+        for s, c, m in zip(seeds, per_trial_values(cutoff_hz, len(seeds)),
+                           per_trial_values(shapes or DEFAULT_SHAPE, len(seeds)),
+                           strict=True)])
     with np.errstate(invalid="ignore", divide="ignore"):
         response = np.var(clean.alpha[:, :, 0], axis=1)
         per_level = np.var(unit.alpha[:, :, 0] - clean.alpha[:, :, 0], axis=1) / unit_level**2
         level = np.sqrt(response * (1 - share) / share / per_level)
     usable = clean.stable & unit.stable & np.isfinite(level) & (level <= 10)
     return MotorLevels(np.where(usable, level, np.nan), usable, clean, response)
+
+
+def per_trial_values(value, n: int) -> list:
+    """``value`` for each of ``n`` trials: a sequence of n as it is, anything else n times."""
+    if isinstance(value, list | tuple | np.ndarray):
+        if len(value) != n:
+            raise SimulationError(f"{len(value)} values given for {n} trials")
+        return [v.item() if isinstance(v, np.generic) else v for v in value]
+    return [value] * n

@@ -51,7 +51,8 @@ from posture_id.learning.universal.scope import (
 )
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate_batch
-from posture_id.simulation.noise import MotorNoise
+from posture_id.simulation.noise import DEFAULT_SHAPE, MotorNoise, MotorShape
+from posture_id.simulation.noise_families import NoiseFamily, draw_noise
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.subjects import UNIT_LEVEL_PER_DEG, motor_levels_for_share
 
@@ -120,13 +121,15 @@ def simulate_trials(body_draw: BodyDraw, stim: StimulusDraw, trials: int,
     noisy_trial = rng.random(trials) >= scope.clean_share
     share = np.where(noisy_trial, rng.uniform(*scope.locked_share, trials), 1.0)
     seeds = rng.integers(0, 2**62, trials)
+    family, cutoff, shapes = _noise_draws(scope, trials, rng)
     levels = motor_levels_for_share(body, params, profile, share, seeds,
-                                    UNIT_LEVEL_PER_DEG * stim.amplitude_deg, scope.cutoff_hz,
-                                    options)
+                                    UNIT_LEVEL_PER_DEG * stim.amplitude_deg, cutoff,
+                                    options, shapes)
     clean, usable, response = levels.clean, levels.usable, levels.response
     level = np.where(usable & noisy_trial, levels.level, 0.0)
     final = simulate_batch(body, params, profile, options, workers=1, motor_noise=[
-        MotorNoise(float(v), scope.cutoff_hz, int(s)) for v, s in zip(level, seeds, strict=True)])
+        MotorNoise(float(v), c, int(s), m)
+        for v, s, c, m in zip(level, seeds, cutoff, shapes, strict=True)])
     kept = usable & final.stable
     with np.errstate(invalid="ignore", divide="ignore"):
         realised = response / _var(final.alpha[:, :, 0])
@@ -151,7 +154,21 @@ def simulate_trials(body_draw: BodyDraw, stim: StimulusDraw, trials: int,
         draw=np.array(json.dumps(draw, default=float)),
         simulated=np.array(trials), kept=np.array(int(kept.sum())),
     )
+    if scope.noise_families:  # which family each kept trial's motor noise is of
+        out["noise_family"] = family[kept]
     return out
+
+
+def _noise_draws(scope: UniversalScope, trials: int, rng: np.random.Generator
+                 ) -> tuple[np.ndarray, list[float], list[MotorShape]]:
+    """Each trial's noise family (index into ``scope.noise_families``; −1 without them),
+    its motor noise's corner (Hz) and shape. Without families the scope's low-pass for
+    all, drawing nothing from ``rng`` (a set made before families draws as it did)."""
+    if not scope.noise_families:
+        return (np.full(trials, -1), [scope.cutoff_hz] * trials, [DEFAULT_SHAPE] * trials)
+    family = rng.integers(0, len(scope.noise_families), trials)
+    draws = [draw_noise(NoiseFamily(scope.noise_families[f]), rng) for f in family]
+    return family, [d.cutoff_hz for d in draws], [d.shape for d in draws]
 
 
 def _make(k: int, config: UniversalDataConfig) -> dict[str, np.ndarray]:
@@ -297,8 +314,10 @@ def open_sets(paths: str | Path | Sequence[str | Path]) -> list[UniversalSet]:
 
 
 #: Scope fields that may differ between sets trained on together: what share of the
-#: trials has motor noise and how much.
-_SWAY_FIELDS = ("clean_share", "locked_share")
+#: trials has motor noise, how much, and of which families (a set drawing families
+#: beside sets of the low-pass only; sets that draw families must draw the same: a shard
+#: names its trials' family by its index in its set's list).
+_SWAY_FIELDS = ("clean_share", "locked_share", "noise_families")
 #: Scope fields of the mix of bodies drawn, which may differ too.
 _MIX_FIELDS = ("proportion_jitter", "tip_share", "preset_share", "preset_jitter")
 #: Scope ranges a later set may draw differently, overlapping the first set's: to draw
@@ -318,6 +337,11 @@ def merged_scope(sets: Sequence[UniversalSet]) -> UniversalScope:
     training margin)."""
     scopes = [UniversalScope.from_dict(d.manifest["config"]["scope"]) for d in sets]
     first = scopes[0]
+    families = {s.noise_families for s in scopes if s.noise_families}
+    if len(families) > 1:
+        raise DatasetError(f"{', '.join(str(d.path) for d in sets)}: sets that draw noise "
+                           "families must draw the same ones, in the same order; these draw "
+                           + "; ".join(", ".join(f) for f in sorted(families)))
     for data, scope in zip(sets[1:], scopes[1:], strict=True):
         for name in _FOCUS_FIELDS:
             (lo, hi), (first_lo, first_hi) = getattr(scope, name), getattr(first, name)
@@ -332,11 +356,13 @@ def merged_scope(sets: Sequence[UniversalSet]) -> UniversalScope:
                 raise DatasetError(
                     f"{data.path}: scope field {name} is {getattr(scope, name)}, but "
                     f"{sets[0].path} has {getattr(first, name)}; sets trained on together "
-                    "may differ only in their motor noise (clean_share, locked_share), "
+                    "may differ only in their motor noise (clean_share, locked_share, "
+                    "noise_families), "
                     "their mix of bodies (proportion_jitter, tip_share, preset_share, "
                     "preset_jitter) and "
                     "an overlapping amplitude_deg")
     return replace(first,
+                   noise_families=next(iter(families), ()),
                    proportion_jitter=max(s.proportion_jitter for s in scopes),
                    preset_jitter=max(s.preset_jitter for s in scopes),
                    clean_share=max(s.clean_share for s in scopes),

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -100,3 +101,57 @@ def drift_parts(frequencies_hz: np.ndarray, record_s: float, drift_deg: np.ndarr
     (...,) in 60 s over a record of ``record_s``."""
     q = np.radians(np.asarray(drift_deg, dtype=float))[..., None] ** 2 / 60.0
     return np.sqrt(q / (8.0 * math.pi**2 * np.asarray(frequencies_hz) ** 2 * record_s))
+
+
+def coloured_noise_parts(period_samples: int, cycles: int, sd_rad: np.ndarray,
+                         frequencies_hz: np.ndarray, sample_rate_hz: float,
+                         slope: np.ndarray) -> np.ndarray:
+    """(..., K) SD of each part of each harmonic for coloured sensor noise of SD ``sd_rad``
+    (...,) and one-sided PSD ∝ (1 + (f/f_0)²)^(−slope/2) (:class:`~posture_id.simulation.
+    measurement.MeasurementNoise`; slope (...,), 0 for white).
+
+    A harmonic of the cycle average of C cycles of P samples is the DFT (÷N, N = C·P) of
+    the whole span at that frequency, so red noise leaks into it from below through the
+    Fejér kernel: E|X_k|² = (1/N²)·[N·r(0) + 2·Σ_{m≥1} (N − m)·r(m)·cos(2π f_k m/f_s)],
+    r the noise's autocovariance (the inverse DFT of its PSD, scaled to r(0) = sd²). It is
+    computed on a grid of slopes (:data:`_SLOPE_GRID`, kept per layout) and interpolated
+    in log variance; white noise gives sd²/N (within the 1e-4 of the offset the draw leaves
+    out)."""
+    slope = np.asarray(slope, dtype=float)
+    sd = np.asarray(sd_rad, dtype=float)
+    n = cycles * period_samples
+    grid = _coloured_unit_variance(n, float(sample_rate_hz),
+                                   tuple(np.asarray(frequencies_hz, dtype=float)))  # (G, K)
+    if np.any(slope < _SLOPE_GRID[0]) or np.any(slope > _SLOPE_GRID[-1]):
+        raise ValueError(f"coloured noise slopes must lie within {_SLOPE_GRID[0]:g} to "
+                         f"{_SLOPE_GRID[-1]:g}")
+    logs = np.log(grid)
+    at = np.stack([np.interp(slope, _SLOPE_GRID, logs[:, k]) for k in range(grid.shape[1])],
+                  axis=-1)  # (..., K)
+    return sd[..., None] * np.sqrt(np.exp(at) / 2)
+
+
+#: The slopes :func:`coloured_noise_parts` computes exactly (it interpolates between them).
+_SLOPE_GRID = np.linspace(0.0, 3.0, 25)
+
+
+@lru_cache(maxsize=256)
+def _coloured_unit_variance(n: int, sample_rate_hz: float, frequencies_hz: tuple[float, ...]
+                            ) -> np.ndarray:
+    """(G, K) E|X_k|² of unit-variance coloured noise of each slope of :data:`_SLOPE_GRID`
+    over a span of n samples (:func:`coloured_noise_parts`)."""
+    from posture_id.simulation.measurement import COLOUR_CORNER_HZ
+
+    m = 2 * n  # the PSD on the grid MeasurementNoise draws it on (twice the span)
+    f = np.fft.rfftfreq(m, 1.0 / sample_rate_hz)
+    lags = np.arange(n)
+    weights = np.where(lags == 0, n, 2.0 * (n - lags))  # (N,)
+    cosines = np.cos(2 * np.pi * np.outer(lags, frequencies_hz) / sample_rate_hz)  # (N, K)
+    out = np.empty((len(_SLOPE_GRID), len(frequencies_hz)))
+    for g, slope in enumerate(_SLOPE_GRID):
+        psd = (1 + (f / COLOUR_CORNER_HZ) ** 2) ** (-slope / 2)
+        psd[0] = 0.0  # the noise has no offset
+        r = np.fft.irfft(psd, n=m)[:n]
+        r = r / r[0]
+        out[g] = (weights * r) @ cosines / n**2
+    return out

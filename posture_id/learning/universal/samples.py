@@ -14,8 +14,13 @@ from posture_id.learning.universal.features import (
     features_and_noise,
     stimulus_descriptors,
 )
-from posture_id.learning.universal.harmonics import drift_parts, sensor_noise_parts
+from posture_id.learning.universal.harmonics import (
+    coloured_noise_parts,
+    drift_parts,
+    sensor_noise_parts,
+)
 from posture_id.learning.universal.scope import UniversalScope
+from posture_id.simulation.noise_families import DRIFTING_COLOUR_SLOPE, NoiseFamily
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
            "make_samples", "module_inputs", "inputs_and_noise", "rotate_motor_noise"]
@@ -127,6 +132,27 @@ def rotate_motor_noise(y: np.ndarray, y_locked: np.ndarray, rng: np.random.Gener
     return y_locked + noise * turn
 
 
+def _sensor_parts(arrays: dict, layout, scope: UniversalScope, sd_rad: np.ndarray,
+                  rng: np.random.Generator) -> np.ndarray:
+    """(K, T) SD of each part of each harmonic for the sensor noise of a shard's trials:
+    white, but coloured (slope uniform in the family's
+    :data:`~posture_id.simulation.noise_families.DRIFTING_COLOUR_SLOPE`, drawn here, afresh
+    every epoch) for the trials whose noise family is ``drifting`` (:mod:`posture_id.
+    simulation.noise_families`)."""
+    white = sensor_noise_parts(layout.period_samples, layout.cycles, sd_rad)  # (T,)
+    parts = np.broadcast_to(white[None, :], (len(layout.frequencies_hz), len(white))).copy()
+    family = arrays.get("noise_family")
+    if family is None or NoiseFamily.DRIFTING.value not in scope.noise_families:
+        return parts
+    coloured = np.asarray(family) == scope.noise_families.index(NoiseFamily.DRIFTING.value)
+    if coloured.any():
+        slope = rng.uniform(*DRIFTING_COLOUR_SLOPE, int(coloured.sum()))
+        parts[:, coloured] = coloured_noise_parts(
+            layout.period_samples, layout.cycles, sd_rad[coloured], layout.frequencies_hz,
+            layout.sample_rate_hz, slope).T
+    return parts
+
+
 def make_samples(shards: list[LoadedShard], scope: UniversalScope,
                  rng: np.random.Generator, fresh_motor_noise: bool = False) -> Samples:
     """The module samples of ``shards`` with sensor noise (SD uniform in the scope's range,
@@ -143,8 +169,7 @@ def make_samples(shards: list[LoadedShard], scope: UniversalScope,
             y = rotate_motor_noise(y, np.moveaxis(a["y_locked"], 0, 1), rng)
         sensor = rng.uniform(*scope.sensor_noise_deg, t)
         drift = np.where(a["motor_noise_deg"] > 0, rng.uniform(*scope.drift_deg, t), 0.0)
-        sd = np.sqrt(sensor_noise_parts(layout.period_samples, layout.cycles,
-                                        np.radians(sensor))[None, :] ** 2
+        sd = np.sqrt(_sensor_parts(a, layout, scope, np.radians(sensor), rng) ** 2
                      + drift_parts(layout.frequencies_hz, layout.cycles * layout.period_samples
                                    / layout.sample_rate_hz, drift).T ** 2)  # (K, T)
         y = y + sd[:, :, None] * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))

@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from posture_id.errors import PostureIdError
+from posture_id.simulation.noise_families import NoiseFamily
 from posture_id.simulation.stimulus import LAB_STATE_RANGE_S, TiltProfile, prts
 
 __all__ = ["UniversalScope", "BodyDraw", "StimulusDraw", "draw_body", "draw_stimulus",
@@ -49,6 +50,13 @@ class UniversalScope:
             other trials (uniform).
         drift_deg: range of slow drift, degrees: the SD a random walk of the lean reaches
             in 60 s (uniform, per trial and epoch).
+        cutoff_hz: the motor noise's corner, Hz (without ``noise_families``).
+        noise_families: () (default): every trial's motor noise is the first-order
+            low-pass of ``cutoff_hz``. Names of
+            :class:`~posture_id.simulation.noise_families.NoiseFamily`: each trial with
+            motor noise draws one of them (equally likely) and from it its torque noise's
+            corner and shape (its measurement noise is not stored: the sensor noise and
+            the drift are drawn at training time).
     """
 
     heights_m: tuple[float, float] = (1.45, 2.05)
@@ -68,6 +76,7 @@ class UniversalScope:
     locked_share: tuple[float, float] = (0.1, 1.0)
     drift_deg: tuple[float, float] = (0.0, 0.5)
     cutoff_hz: float = 0.2
+    noise_families: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         for name in ("heights_m", "masses_kg", "state_s", "amplitude_deg", "duration_s",
@@ -93,6 +102,12 @@ class UniversalScope:
                              f"{self.locked_share}")
         if not 0 <= self.clean_share <= 1:
             raise ScopeError(f"scope clean_share must be within [0, 1], got {self.clean_share}")
+        known = [f.value for f in NoiseFamily]
+        unknown = [f for f in self.noise_families if f not in known]
+        if unknown or len(set(self.noise_families)) != len(self.noise_families):
+            raise ScopeError(f"scope noise_families must be distinct names among "
+                             f"{', '.join(known)}; got {', '.join(self.noise_families)}")
+        object.__setattr__(self, "noise_families", tuple(self.noise_families))
 
     def to_dict(self) -> dict:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}

@@ -23,7 +23,7 @@ import math
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Literal, get_args
 
@@ -31,11 +31,19 @@ import numpy as np
 import torch
 from safetensors.torch import load_file, save_file
 
+from posture_id.dec.parameters import ParameterArrays
 from posture_id.fileio import atomic_write, atomic_write_text, json_text
+from posture_id.learning.config import LearningError
 from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
-from posture_id.learning.universal.samples import Samples, load_split, make_samples
+from posture_id.learning.universal.samples import (
+    LoadedShard,
+    Samples,
+    load_split,
+    make_samples,
+)
+from posture_id.learning.universal.scope import UniversalScope
 from posture_id.progress import Progress, report
 
 __all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED", "POINT_LOSSES"]
@@ -56,7 +64,11 @@ class UniversalTrainingConfig:
     posterior median), in training and in the validation loss that picks the epoch.
     ``fresh_motor_noise``: every epoch turns each training trial's motor noise to a new
     draw (:func:`.samples.rotate_motor_noise`), as it draws its sensor noise and drift
-    afresh; the validation split keeps the simulated noise."""
+    afresh; the validation split keeps the simulated noise. ``init``: a universal model's
+    folder to start from (its weights and its standardisation: fine-tuning; the network
+    settings are then its own). ``exclude_families``: noise families
+    (:mod:`posture_id.simulation.noise_families`) whose trials are left out of the
+    training and validation splits (to report on them as noise never seen)."""
 
     epochs: int = 60
     batch_size: int = 512
@@ -67,6 +79,8 @@ class UniversalTrainingConfig:
     threads: int | None = None
     point_loss: PointLoss = "squared"
     fresh_motor_noise: bool = False
+    init: str | None = None
+    exclude_families: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.point_loss not in POINT_LOSSES:
@@ -117,19 +131,29 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     data = open_sets(data_path)
     scope = merged_scope(data)
     t0 = time.perf_counter()
-    train_shards = load_split(data, "train")
-    validation = make_samples(load_split(data, "validation"), scope,
+    train_shards = without_families(load_split(data, "train"), scope,
+                                    config.exclude_families)
+    validation = make_samples(without_families(load_split(data, "validation"), scope,
+                                               config.exclude_families), scope,
                               np.random.default_rng(VALIDATION_SEED))
     first = make_samples(train_shards, scope, np.random.default_rng([config.seed, 0]),
                          config.fresh_motor_noise)
-    input_mean = first.inputs.mean(axis=0, dtype=np.float64)
-    input_std = np.maximum(first.inputs.std(axis=0, dtype=np.float64), 1e-6)
-    target_mean = first.targets[:, :4].mean(axis=0)
-    target_std = first.targets[:, :4].std(axis=0)
     log(f"loaded {len(train_shards)} training shards ({len(first)} module samples), "
         f"{len(validation)} validation samples in {time.perf_counter() - t0:.0f} s")
     torch.manual_seed(config.seed)
-    net = UniversalNetwork(network_config).to(device)
+    if config.init is not None:  # fine-tuning: its network and standardisation
+        base = UniversalModel.load(config.init)
+        net = base.network.to(device)
+        net.train()
+        network_config = net.config
+        input_mean, input_std = base.input_mean, base.input_std
+        target_mean, target_std = base.target_mean, base.target_std
+    else:
+        input_mean = first.inputs.mean(axis=0, dtype=np.float64)
+        input_std = np.maximum(first.inputs.std(axis=0, dtype=np.float64), 1e-6)
+        target_mean = first.targets[:, :4].mean(axis=0)
+        target_std = first.targets[:, :4].std(axis=0)
+        net = UniversalNetwork(network_config).to(device)
     model = UniversalModel(net, input_mean, input_std, target_mean, target_std)
     steps = math.ceil(len(first) / config.batch_size)
     optimiser = torch.optim.AdamW(net.parameters(), lr=config.max_learning_rate,
@@ -194,23 +218,64 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
         "training": {**asdict(config), "history": history,
                      "best_epoch": int(np.argmin([h["validation_loss"] for h in history])) + 1,
                      "device": str(device), "train_samples": len(first)},
-        "ranges": _ranges(first),
+        "ranges": _ranges(first, None if config.init is None else base.sidecar["ranges"]),
     }
+    if config.init is not None:
+        model.sidecar["fine_tuned_from"] = {"path": str(Path(config.init).resolve()),
+                                            "weights_sha256": base.sidecar["weights_sha256"],
+                                            "training": base.sidecar.get("training")}
     model.save(out)
     for name in ("train-state.safetensors", "train-state.json"):
         (out / name).unlink(missing_ok=True)
     return model
 
 
-def _ranges(samples: Samples) -> dict:
+def _ranges(samples: Samples, before: dict | None = None) -> dict:
     """Per input column, the 0.5 % and 99.5 % points of the training inputs' descriptors
-    (what a recording is checked against)."""
+    (what a recording is checked against); with ``before`` (a fine-tuned model's start's),
+    the span of both."""
     from posture_id.learning.universal.features import DESCRIPTORS
 
     desc = samples.inputs[:, -DESCRIPTORS:]
-    return {"descriptors_low": np.percentile(desc, 0.5, axis=0).tolist(),
-            "descriptors_high": np.percentile(desc, 99.5, axis=0).tolist(),
-            "noise_ratio_high": float(np.percentile(samples.noise_ratio, 99.5))}
+    out = {"descriptors_low": np.percentile(desc, 0.5, axis=0).tolist(),
+           "descriptors_high": np.percentile(desc, 99.5, axis=0).tolist(),
+           "noise_ratio_high": float(np.percentile(samples.noise_ratio, 99.5))}
+    if before is None:
+        return out
+    return {"descriptors_low": np.minimum(out["descriptors_low"],
+                                          before["descriptors_low"]).tolist(),
+            "descriptors_high": np.maximum(out["descriptors_high"],
+                                           before["descriptors_high"]).tolist(),
+            "noise_ratio_high": max(out["noise_ratio_high"], before["noise_ratio_high"])}
+
+
+def without_families(shards: list[LoadedShard], scope: UniversalScope,
+                     families: tuple[str, ...]) -> list[LoadedShard]:
+    """``shards`` without the trials whose motor noise is of one of ``families`` (a set
+    made without noise families has none of them: every trial is kept)."""
+    if not families:
+        return shards
+    unknown = [f for f in families if f not in scope.noise_families]
+    if unknown:
+        drawn = ", ".join(scope.noise_families) or "the low-pass only"
+        raise LearningError(f"no trial of these sets is of the noise families "
+                            f"{', '.join(unknown)}; they draw {drawn}")
+    drop = [scope.noise_families.index(f) for f in families]
+    out = []
+    for shard in shards:
+        family = shard.arrays.get("noise_family")
+        if family is None:
+            out.append(shard)
+            continue
+        keep = ~np.isin(family, drop)
+        if keep.all():
+            out.append(shard)
+        elif keep.any():
+            per_trial = {"y", "y_locked", "targets", "locked_share", "motor_noise_deg",
+                         "noise_family", *ParameterArrays.FIELDS}
+            arrays = {k: v[keep] if k in per_trial else v for k, v in shard.arrays.items()}
+            out.append(replace(shard, arrays=arrays))
+    return out
 
 
 def _run_identity(data, network: UniversalNetworkConfig) -> list[dict]:

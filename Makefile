@@ -6,6 +6,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
 .PHONY: design-results universal-model demo test test-fast lint bench bodies models model calibration examples real-like \
+        honest-verdict noise-lofo \
         real-like-models real-like-model clean
 
 $(STAMP): pyproject.toml
@@ -155,6 +156,19 @@ real-like-model: $(STAMP)
 real-like: real-like-models
 	$(BIN)/python benchmarks/why_raw_sway_fails.py
 	$(BIN)/python benchmarks/real_like.py --subjects 30
+
+# Real sway answered honestly (docs/identify.md, "Trust"; docs/real_recordings.md, "Noise
+# of other shapes"): the verdict's benchmark (clean, six noise families, five mistakes),
+# then a set over the noise families and the leave-one-family-out fine-tunes (resumable).
+NOISE_SHARDS ?= 900
+honest-verdict: $(STAMP)
+	$(BIN)/python benchmarks/honest_verdict.py --subjects 24 --out docs/results/honest_verdict
+
+noise-lofo: $(STAMP)
+	$(BIN)/posture-id universal data --out data/universal_families --shards $(NOISE_SHARDS) \
+	  --seed 11 --clean-share 0.1 --locked-share 0.1 0.6 --noise-families low_pass \
+	  two_corners shallow correlated drifting changing --quiet
+	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families --out docs/results/noise_lofo
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/simulation.py

@@ -62,8 +62,7 @@ def test_shards_say_each_trials_family_and_draw_them_all(family_set):
 
 def test_training_can_leave_a_family_out(family_set):
     from posture_id.learning.config import LearningError
-    from posture_id.learning.universal.samples import load_split
-    from posture_id.learning.universal.training import without_families
+    from posture_id.learning.universal.samples import load_split, without_families
 
     scope = family_set.manifest["config"]["scope"]
     scope = UniversalScope.from_dict(scope)
@@ -126,3 +125,21 @@ def test_a_model_fine_tuned_from_the_bundled_one_keeps_its_standardisation(famil
     assert again.sidecar["training"]["exclude_families"] == ["shallow"]
     assert tuned.path == tmp_path / "tuned"
     assert NoiseFamily.SHALLOW.value in FAMILIES
+
+
+def test_the_command_line_refuses_network_flags_with_init_and_families_a_set_lacks(
+        family_set, tmp_path, capsys):
+    from posture_id.cli import main
+    from posture_id.learning.universal.identifier import BUNDLED_DIR
+
+    status = main(["universal", "train", str(family_set.path), "--out", str(tmp_path / "m"),
+                   "--init", str(BUNDLED_DIR), "--hidden", "64", "64"])
+    assert status == 2
+    assert "--init keeps its model's network" in capsys.readouterr().err
+    status = main(["universal", "train", str(family_set.path), "--out", str(tmp_path / "n"),
+                   "--exclude-families", "correlated", "--epochs", "1"])
+    assert status == 2
+    err = capsys.readouterr().err
+    assert "no trial of these sets is of the noise families correlated" in err
+    assert "low_pass, shallow, drifting" in err
+    assert not (tmp_path / "n").exists()  # nothing left behind

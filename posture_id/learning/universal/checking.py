@@ -14,7 +14,12 @@ from posture_id.learning.universal.calibration import UniversalCalibration, cali
 from posture_id.learning.universal.data import open_sets
 from posture_id.learning.universal.evaluation import GroupScore, score_samples
 from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import Samples, load_split, make_samples
+from posture_id.learning.universal.samples import (
+    Samples,
+    load_split,
+    make_samples,
+    without_families,
+)
 from posture_id.learning.universal.training import VALIDATION_SEED
 
 __all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes"]
@@ -74,17 +79,23 @@ def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str 
     """Calibrate the model at ``model_dir`` (written there as calibration.json) on the
     calibration split of the set (or sets) it was trained on (its difficulty trend on the
     validation split, noise drawn as in training), and check it on the test split; the
-    report is written there as check.json and check.md."""
+    report is written there as check.json and check.md. The noise families the model was
+    trained without are left out of all three (they are what it is to be judged on)."""
     model = UniversalModel.load(model_dir)
     data = open_sets(data_path)
     scope = model.scope
-    cal = make_samples(load_split(data, "calibration"), scope,
-                       np.random.default_rng(CALIBRATION_SEED))
-    validation = make_samples(load_split(data, "validation"), scope,
+    # a model trained without some noise families is calibrated and checked without them
+    left_out = tuple(model.sidecar.get("training", {}).get("exclude_families", ()))
+
+    def split(name: str):
+        return without_families(load_split(data, name), scope, left_out)
+
+    cal = make_samples(split("calibration"), scope, np.random.default_rng(CALIBRATION_SEED))
+    validation = make_samples(split("validation"), scope,
                               np.random.default_rng(VALIDATION_SEED))
     calibration: UniversalCalibration = calibrate(model, cal, validation)
     calibration.save(model_dir)
-    test = make_samples(load_split(data, "test"), scope, np.random.default_rng(TEST_SEED))
+    test = make_samples(split("test"), scope, np.random.default_rng(TEST_SEED))
     overall = score_samples(model, test, calibration, level)["all"]
     by_segments = score_samples(model, test, calibration, level,
                                 np.char.add(test.segments.astype(str), "-seg"))

@@ -4,10 +4,12 @@ shard's stored harmonics with fresh sensor noise and drift (:mod:`.harmonics`)."
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from posture_id.dec.parameters import ParameterArrays
+from posture_id.learning.config import LearningError
 from posture_id.learning.universal.data import UniversalSet, shard_com_weights, shard_layout
 from posture_id.learning.universal.features import (
     N_INPUTS,
@@ -23,7 +25,8 @@ from posture_id.learning.universal.scope import UniversalScope
 from posture_id.simulation.noise_families import DRIFTING_COLOUR_SLOPE, NoiseFamily
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
-           "make_samples", "module_inputs", "inputs_and_noise", "rotate_motor_noise"]
+           "make_samples", "module_inputs", "inputs_and_noise", "rotate_motor_noise",
+           "without_families"]
 
 
 @dataclass(frozen=True)
@@ -186,3 +189,32 @@ def make_samples(shards: list[LoadedShard], scope: UniversalScope,
         parts["shard"].append(np.full(t * n, a["index"]))
         first += t
     return Samples(**{k: np.concatenate(v) for k, v in parts.items()})
+
+
+def without_families(shards: list[LoadedShard], scope: UniversalScope,
+                     families: tuple[str, ...]) -> list[LoadedShard]:
+    """``shards`` without the trials whose motor noise is of one of ``families`` (a set
+    made without noise families has none of them: every trial is kept)."""
+    if not families:
+        return shards
+    unknown = [f for f in families if f not in scope.noise_families]
+    if unknown:
+        drawn = ", ".join(scope.noise_families) or "the low-pass only"
+        raise LearningError(f"no trial of these sets is of the noise families "
+                            f"{', '.join(unknown)}; they draw {drawn}")
+    drop = [scope.noise_families.index(f) for f in families]
+    out = []
+    for shard in shards:
+        family = shard.arrays.get("noise_family")
+        if family is None:
+            out.append(shard)
+            continue
+        keep = ~np.isin(family, drop)
+        if keep.all():
+            out.append(shard)
+        elif keep.any():
+            per_trial = {"y", "y_locked", "targets", "locked_share", "motor_noise_deg",
+                         "noise_family", *ParameterArrays.FIELDS}
+            arrays = {k: v[keep] if k in per_trial else v for k, v in shard.arrays.items()}
+            out.append(replace(shard, arrays=arrays))
+    return out

@@ -23,7 +23,7 @@ import math
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Literal, get_args
 
@@ -31,19 +31,16 @@ import numpy as np
 import torch
 from safetensors.torch import load_file, save_file
 
-from posture_id.dec.parameters import ParameterArrays
 from posture_id.fileio import atomic_write, atomic_write_text, json_text
-from posture_id.learning.config import LearningError
 from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
 from posture_id.learning.universal.samples import (
-    LoadedShard,
     Samples,
     load_split,
     make_samples,
+    without_families,
 )
-from posture_id.learning.universal.scope import UniversalScope
 from posture_id.progress import Progress, report
 
 __all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED", "POINT_LOSSES"]
@@ -125,7 +122,6 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     config = config or UniversalTrainingConfig()
     network_config = network or UniversalNetworkConfig()
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(config.threads or os.cpu_count() or 1)
     device = _device()
     data = open_sets(data_path)
@@ -161,6 +157,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     schedule = torch.optim.lr_scheduler.OneCycleLR(
         optimiser, max_lr=config.max_learning_rate, total_steps=config.epochs * steps + 1)
     sets = _run_identity(data, network_config)
+    out.mkdir(parents=True, exist_ok=True)  # only once the sets are read and fit to train
     state = _resume(out, net, optimiser, schedule, config, sets)
     best_state = state.pop("best_weights", None)
     history = state.get("history", [])
@@ -247,35 +244,6 @@ def _ranges(samples: Samples, before: dict | None = None) -> dict:
             "descriptors_high": np.maximum(out["descriptors_high"],
                                            before["descriptors_high"]).tolist(),
             "noise_ratio_high": max(out["noise_ratio_high"], before["noise_ratio_high"])}
-
-
-def without_families(shards: list[LoadedShard], scope: UniversalScope,
-                     families: tuple[str, ...]) -> list[LoadedShard]:
-    """``shards`` without the trials whose motor noise is of one of ``families`` (a set
-    made without noise families has none of them: every trial is kept)."""
-    if not families:
-        return shards
-    unknown = [f for f in families if f not in scope.noise_families]
-    if unknown:
-        drawn = ", ".join(scope.noise_families) or "the low-pass only"
-        raise LearningError(f"no trial of these sets is of the noise families "
-                            f"{', '.join(unknown)}; they draw {drawn}")
-    drop = [scope.noise_families.index(f) for f in families]
-    out = []
-    for shard in shards:
-        family = shard.arrays.get("noise_family")
-        if family is None:
-            out.append(shard)
-            continue
-        keep = ~np.isin(family, drop)
-        if keep.all():
-            out.append(shard)
-        elif keep.any():
-            per_trial = {"y", "y_locked", "targets", "locked_share", "motor_noise_deg",
-                         "noise_family", *ParameterArrays.FIELDS}
-            arrays = {k: v[keep] if k in per_trial else v for k, v in shard.arrays.items()}
-            out.append(replace(shard, arrays=arrays))
-    return out
 
 
 def _run_identity(data, network: UniversalNetworkConfig) -> list[dict]:

@@ -153,3 +153,21 @@ def test_auto_refines_an_answer_on_the_sway_that_suits_it(share, ratio, noise_re
     # a mistake in the recording: no fit can be right about it, so none is tried
     assert auto_refinement(replace(verdict, mistakes=("a step",))).value == "keep"
     assert auto_refinement(TrustVerdict(None, (), (), share)).value == "keep"
+
+
+def test_an_answer_the_recording_does_not_pin_is_imprecise_and_says_what():
+    from posture_id.identify.noise_check import NoiseCheck
+    from posture_id.identify.verdict import TrustLevel, TrustVerdict
+
+    close = NoiseCheck(1.1, "locked", 0.001, relative=0.03, noise_relative=0.02)
+    assert TrustVerdict(close).level is TrustLevel.GOOD
+    verdict = TrustVerdict(close, unpinned=("the hip's Kd", "the hip's class (P(com) 0.62)"))
+    assert verdict.level is TrustLevel.IMPRECISE and not verdict.doubtful
+    assert verdict.line() == (
+        "trust: imprecise: the recording does not pin the hip's Kd and the hip's class "
+        "(P(com) 0.62) (to ±10 %): nothing says the answer is wrong; its intervals give "
+        "the precision")
+    beyond = NoiseCheck(4.0, "locked", 0.001, relative=0.3, noise_relative=0.02)
+    doubtful = replace(verdict, noise=beyond)
+    assert doubtful.level is TrustLevel.DOUBTFUL and doubtful.imprecision == ()
+    assert doubtful.to_dict()["level"] == "doubtful" and doubtful.to_dict()["doubtful"]

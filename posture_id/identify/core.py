@@ -546,9 +546,14 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
     mistakes = find_mistakes(trial, body, checked["resimulated"], locked)
     estimate = np.array([[getattr(parameters[j], f) for f in TARGET_FIELDS]
                          for j in body.joint_names])
+    unpinned = unpinned_parameters(intervals, estimate)
+    if method is Method.CNN and cnn is not None:  # a class the network is unsure of
+        low, high = UNSURE_CLASS
+        unpinned += tuple(f"the {j}'s class (P(com) {p:.2f})"
+                          for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
+                          if low < p < high)
     verdict = TrustVerdict(noise, on_bounds, tuple(outside), share,
-                           mistakes=tuple(m.sentence for m in mistakes),
-                           unpinned=unpinned_parameters(intervals, estimate))
+                           mistakes=tuple(m.sentence for m in mistakes), unpinned=unpinned)
     if not verdict.doubtful or verdict.mistakes:  # a mistake: the recording to mend first
         return verdict
     return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,

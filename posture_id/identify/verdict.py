@@ -104,7 +104,8 @@ class TrustVerdict:
         mistakes: what in the recording this body under one controller cannot have made
             (sentences, :mod:`posture_id.identify.mistakes`).
         unpinned: parameters whose interval is wider than ±:data:`PINNED_TO` of their
-            value ("the hip's Kd"), of :data:`PINNED_FIELDS`.
+            value ("the hip's Kd"), of :data:`PINNED_FIELDS`, and classes the network is
+            unsure of ("the hip's class (P(com) 0.62)").
     """
 
     noise: NoiseCheck | None
@@ -153,8 +154,8 @@ class TrustVerdict:
                 f"{noise.ratio:.2f}× the noise)" if math.isfinite(noise.noise_relative) else
                 f"the model leaves a {noise.sentence()}")
         if self.unpinned:
-            out.append(f"the recording does not pin {_listed(self.unpinned)} to "
-                       f"±{100 * PINNED_TO:g} %")
+            out.append(f"the recording does not pin {_listed(self.unpinned)} (to "
+                       f"±{100 * PINNED_TO:g} %)")
         return tuple(out)
 
     @property

@@ -43,6 +43,7 @@ def test_cohort_writes_one_json_each_and_a_summary(cohort, tmp_path, capsys):
     low, high = float(done["ankle_kp_low"]), float(done["ankle_kp_high"])
     assert low <= float(done["ankle_kp"]) <= high
     assert 0 <= float(done["ankle_p_com"]) <= 1
+    assert done["trust"] == data["trust"]["level"] in ("good", "imprecise", "doubtful")
     # started again, nothing finished is redone
     stamps = {p.name: p.stat().st_mtime_ns for p in out.glob("subject*.json")}
     assert main(["identify", str(cohort / "subject*.csv"), "--out", str(out)]) == 0

@@ -24,7 +24,8 @@ stimuli: the 242-state PRTS ×2 and the 80-state PRTS ×6, 0.5–2° peak to pea
 from MODEL §5's prior (a seed no data set uses). A recording is **right** when every
 class is right and every truth lies inside its 90 % interval, **wrong** when a class is
 wrong or a Kp lies farther from the truth than twice its interval's half-width. Writes
-``report.md`` and ``rows.json``; a journal makes an interrupted run resumable.
+``report.md`` and ``rows.json``; a journal makes an interrupted run resumable (removed
+once ``rows.json`` is written).
 """
 
 from __future__ import annotations
@@ -283,6 +284,7 @@ def main() -> None:
                                                          "rows": rows}))
     text = report(rows, args.subjects, model)
     atomic_write_text(args.out / "report.md", text)
+    (args.out / "journal.jsonl").unlink(missing_ok=True)  # rows.json holds every row
     print(text)
 
 

@@ -53,7 +53,7 @@ def _fine_tune(data: Path, out: Path, exclude: tuple[str, ...], epochs: int,
 
 def _judge(model: Path | None, families: list[str], groups: list[str], subjects: int,
            out: Path) -> list[dict]:
-    if not (out / "rows.json").exists():
+    if not (out / "report.md").exists():
         command = [sys.executable, str(HERE / "honest_verdict.py"), "--subjects", str(subjects),
                    "--groups", *groups, "--families", *families, "--out", str(out)]
         if model is not None:

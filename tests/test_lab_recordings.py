@@ -123,7 +123,7 @@ def test_a_lab_file_is_read_as_it_is(tmp_path, tip):
 
 def test_a_model_that_falls_is_said_in_one_line(tmp_path, tip, monkeypatch, capsys):
     """The network's answer makes the body fall when re-simulated: one line says so and what
-    to try, the JSON is written and stays strict, the exit status is 4 (FELL_EXIT)."""
+    to try, the JSON is written and stays strict, the exit status is 1 (FELL_EXIT)."""
     from posture_id.identify.result import FELL_EXIT
     from posture_id.learning.universal.identifier import UniversalIdentifier
 

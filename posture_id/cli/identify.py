@@ -36,7 +36,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "identify", help="identify DEC parameters of a recording",
         epilog="exit status: 0 an answer (its trust: good, imprecise or doubtful, in the "
-               "summary and the JSON); 4 an answer, written, whose model falls in "
+               "summary and the JSON); 1 an answer, written, whose model falls in "
                "re-simulation (nothing tried balances the body: doubtful); 2 input refused "
                "(one line says why); 3 a bug; a cohort: 1 when a recording failed")
     p.add_argument("recording",
@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out is None:
         say("no --out: the result is printed, not written (--out FILE.json keeps it)")
     write_result(result, args.out, args.plot)
-    if result.fell:  # exit status 4: an answer, written, but it does not balance the body
+    if result.fell:  # exit status 1: an answer, written, but it does not balance the body
         say(FELL.format(at="" if result.fell_at_s is None else f" at t = "
                                                                  f"{result.fell_at_s:.2f} s"))
         return FELL_EXIT

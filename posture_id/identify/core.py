@@ -251,7 +251,7 @@ class Identifier:
         an answer: when a refinement falls and the network's answer did not, the network's
         is kept; when both fall, least squares from the body's defaults on the locked sway
         with MODEL §5's prior; when that falls too, the one that stays up longest is
-        returned, doubtful (``posture-id identify`` exits 4 then)."""
+        returned, doubtful (``posture-id identify`` exits 1 then, its answer written)."""
         unread = self.network_refusal or _unreadable_by_network(trial)
         if unread is not None:
             fitted = self._as(Method.FIT).identify_trial(trial, progress, start)

@@ -22,8 +22,9 @@ __all__ = ["SegmentFit", "IdentificationResult", "FELL", "FELL_EXIT"]
 
 #: ``posture-id identify``'s exit status when its answer (written as any other, its verdict
 #: doubtful) falls in re-simulation: nothing tried balances the body on the stimulus.
-#: 0: an answer that balances it; 2: input refused; 3: a bug (posture_id.cli).
-FELL_EXIT = 4
+#: 0: an answer that balances it; 2: input refused; 3: a bug (posture_id.cli). Never 1
+#: without an answer: the answer is written first.
+FELL_EXIT = 1
 
 #: The one line of a result whose identified model falls in re-simulation.
 FELL = ("the identified model falls in re-simulation{at}: these parameters do not balance "

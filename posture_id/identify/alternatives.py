@@ -29,6 +29,7 @@ from dataclasses import replace
 
 from posture_id.bodies.body import Body
 from posture_id.bodies.scaling import scaled_body
+from posture_id.errors import PostureIdError
 from posture_id.identify.mistakes import Mistake
 from posture_id.identify.noise_check import NOISE_RATIO_LIMIT
 from posture_id.trials import PreparedTrial
@@ -74,7 +75,11 @@ def better_explanations(trial: PreparedTrial, body: Body, ratio: float, ratio_of
             f"the {names[k]} and {names[k + 1]} columns read the other way round leave "
             f"{other:.2f}× the noise against {_times(ratio)} as given: are they exchanged?")))
     if sizes:
-        tried = [(factor, ratio_of(trial, scaled_body(body, factor))) for factor in SIZES]
+        try:
+            bodies = [(factor, scaled_body(body, factor)) for factor in SIZES]
+        except PostureIdError:  # a body this check cannot copy: no evidence either way
+            return tuple(found)
+        tried = [(factor, ratio_of(trial, scaled)) for factor, scaled in bodies]
         factor, other = min(tried, key=lambda t: t[1])
         if other * SIZE_GAIN <= ratio:
             found.append(Mistake("another body", ratio / other, SIZE_GAIN, (

@@ -95,3 +95,16 @@ def test_another_persons_body_is_named(tmp_path, monkeypatch):
     monkeypatch.setattr(alternatives, "SIZE_GAIN", np.inf)  # the check switched off
     again = identify(recording, short, Method.CNN, stimulus=prts(1.5))
     assert not any("URDF" in m for m in again.verdict.mistakes)
+
+
+def test_a_recording_cleaner_than_the_networks_own_error_reads_no_alternative(tip):
+    """No sensor noise at all: the network's ~1 % error is tens of noise units, and a
+    smaller body read 50× against 87× (a chance of the network, not evidence)."""
+    from posture_id.identify.alternatives import MIN_NOISE_SHARE
+
+    stimulus = prts(2.0, 3, 80)
+    recording = simulate(tip, stimulus=stimulus).to_recording()
+    result = identify(recording, tip, Method.CNN, stimulus=stimulus)
+    noise = result.verdict.noise
+    assert noise.ratio > 10 and noise.relative / noise.ratio < MIN_NOISE_SHARE
+    assert not result.verdict.mistakes

@@ -36,7 +36,7 @@ from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
-from posture_id.identify.alternatives import better_explanations
+from posture_id.identify.alternatives import MIN_NOISE_SHARE, better_explanations
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.mistakes import find_mistakes
 from posture_id.identify.networks import Network, network_for
@@ -209,7 +209,8 @@ class Identifier:
         read the alternatives."""
         noise = verdict.noise
         if (self.cnn is None or cnn is None or noise is None or noise.basis != "locked"
-                or not noise.ratio > NOISE_RATIO_LIMIT):
+                or not NOISE_RATIO_LIMIT < noise.ratio < math.inf
+                or noise.relative / noise.ratio < MIN_NOISE_SHARE):
             return verdict
         base = noise.ratio if self.method is Method.CNN else self._network_ratio(trial, self.body)
         found = better_explanations(trial, self.body, base, self._network_ratio,

@@ -163,6 +163,8 @@ def _one(task: tuple) -> dict:
                 "seconds": time.perf_counter() - began, "level": result.verdict.level.value,
                 "reasons": list(result.verdict.reasons), "fell": bool(result.fell),
                 "method_used": result.method.value,
+                "p_com": None if result.class_probability is None
+                else [float(x) for x in result.class_probability],
                 "notices": [n for n in result.notices if "refined" in n or "stimulus" in n]})
     if truth is not None:
         iv = result.intervals

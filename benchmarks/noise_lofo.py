@@ -86,8 +86,10 @@ def main() -> None:
     bundled = _judge(None, [f.value for f in NoiseFamily], ["people-like"], args.subjects,
                      args.out / "bundled")
     lines = ["# Noise the network never saw: leave one family out", "",
-             f"Made by `.venv/bin/python benchmarks/noise_lofo.py --epochs {args.epochs} "
-             f"--subjects {args.subjects}` (the set and the stages: its docstring). Each row: "
+             f"Made by `.venv/bin/python benchmarks/noise_lofo.py --set {args.set} --epochs "
+             f"{args.epochs} --learning-rate {args.learning_rate:g} --subjects {args.subjects} "
+             f"--models {args.models} --out {args.out}` (the set and the stages: its "
+             "docstring). Each row: "
              f"{args.subjects} people-like subjects (15–40 % locked) of one noise family, "
              "identified by the default method with the bundled network, and with the "
              "network fine-tuned on the set's other families (the family never seen).", "",

@@ -168,7 +168,9 @@ noise-lofo: $(STAMP)
 	$(BIN)/posture-id universal data --out data/universal_families --shards $(NOISE_SHARDS) \
 	  --seed 11 --clean-share 0.1 --locked-share 0.1 0.6 --noise-families low_pass \
 	  two_corners shallow correlated drifting changing --quiet
-	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families --out docs/results/noise_lofo
+	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families --epochs 20 \
+	  --learning-rate 5e-4 --subjects 24 --models data/models/noise_lofo_long \
+	  --out docs/results/noise_lofo
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/simulation.py

@@ -75,6 +75,10 @@ def test_when_nothing_balances_the_body_the_longest_standing_answer_is_given(
     assert result.fell and result.verdict.doubtful and result.method is Method.HYBRID
     assert any("the one that stays up longest is given, doubtful" in n
                for n in result.notices)
+    # the line it ends with does not suggest what auto has tried already
+    assert result.fell_line().startswith("the identified model falls in re-simulation at t")
+    assert "no model tried balances" in result.fell_line()
+    assert "try --method hybrid" not in result.summary()
 
 
 def test_the_command_writes_a_fallen_answer_and_exits_1(tip, subject, network_that_falls,

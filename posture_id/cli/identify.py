@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     # torch and CasADi load here, not when the parser is built: other commands start fast
     from posture_id.identify import Identifier, Method
-    from posture_id.identify.result import FELL, FELL_EXIT
+    from posture_id.identify.result import FELL_EXIT
 
     body = load_body(args.body or DEFAULT_URDF)
     identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
@@ -104,8 +104,7 @@ def run(args: argparse.Namespace) -> int:
         say("no --out: the result is printed, not written (--out FILE.json keeps it)")
     write_result(result, args.out, args.plot)
     if result.fell:  # exit status 1: an answer, written, but it does not balance the body
-        say(FELL.format(at="" if result.fell_at_s is None else f" at t = "
-                                                                 f"{result.fell_at_s:.2f} s"))
+        say(result.fell_line())
         return FELL_EXIT
     return 0
 

@@ -41,7 +41,7 @@ from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.mistakes import find_mistakes
 from posture_id.identify.networks import Network, network_for
 from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, noise_check
-from posture_id.identify.result import IdentificationResult, SegmentFit
+from posture_id.identify.result import NOTHING_BALANCES, IdentificationResult, SegmentFit
 from posture_id.identify.verdict import (
     PEOPLE_LIKE_SHARE,
     TrustVerdict,
@@ -305,8 +305,8 @@ class Identifier:
                 return replace(fitted, notices=(said, *fitted.notices))
             later = max((answer, refined, fitted), key=lambda r: r.fell_at_s or 0.0)
             return replace(later, notices=(
-                said + "; no model tried balances this body on this stimulus: the one that "
-                "stays up longest is given, doubtful", *later.notices))
+                said + f"; {NOTHING_BALANCES}: the one that stays up longest is given, "
+                "doubtful", *later.notices))
         return replace(refined, notices=(said, *refined.notices))
 
     def _onset(self, answer: IdentificationResult, trial: PreparedTrial,

@@ -18,7 +18,7 @@ if TYPE_CHECKING:  # CasADi and torch load only with the methods that need them
     from posture_id.fitting.result import FitResult
     from posture_id.learning.identifier import CnnIdentification
 
-__all__ = ["SegmentFit", "IdentificationResult", "FELL", "FELL_EXIT"]
+__all__ = ["SegmentFit", "IdentificationResult", "FELL", "FELL_EXIT", "NOTHING_BALANCES"]
 
 #: ``posture-id identify``'s exit status when its answer (written as any other, its verdict
 #: doubtful) falls in re-simulation: nothing tried balances the body on the stimulus.
@@ -30,6 +30,12 @@ FELL_EXIT = 1
 FELL = ("the identified model falls in re-simulation{at}: these parameters do not balance "
         "this body on this stimulus; try --method hybrid, or for noisy sway --method fit "
         "--locked --prior-sd 0.5")
+#: ``auto``'s notice when everything it tries falls (and the line such a result ends with).
+NOTHING_BALANCES = "no model tried balances this body on this stimulus"
+FELL_AFTER_ALL = ("the identified model falls in re-simulation{at}: " + NOTHING_BALANCES
+                  + " (the network's answer, least squares from it and from the body's "
+                  "defaults): check that the body (--body) and the stimulus are the "
+                  "recording's")
 
 
 @dataclass(frozen=True)
@@ -137,11 +143,17 @@ class IdentificationResult(Result):
         }
         return out
 
+    def fell_line(self) -> str:
+        """The one line that says the identified model falls (and what to try, unless
+        ``auto`` tried it all already)."""
+        at = "" if self.fell_at_s is None else f" at t = {self.fell_at_s:.2f} s"
+        tried = any(NOTHING_BALANCES in notice for notice in self.notices)
+        return (FELL_AFTER_ALL if tried else FELL).format(at=at)
+
     def summary(self) -> str:
         lines = self.parameters.identified_table(self.class_probability)
         if self.fell:
-            lines.append(FELL.format(at="" if self.fell_at_s is None
-                                     else f" at t = {self.fell_at_s:.2f} s"))
+            lines.append(self.fell_line())
         else:
             lines.append("re-simulated: " + ", ".join(
                 f"{s.segment} RMS {s.rms_deg:.4f}° (raw sway: {100 * s.variance_explained:.1f} "

@@ -304,6 +304,7 @@ class Identifier:
             if not fitted.fell:
                 return replace(fitted, notices=(said, *fitted.notices))
             later = max((answer, refined, fitted), key=lambda r: r.fell_at_s or 0.0)
+            later = replace(later, verdict=replace(later.verdict, suggestion=""))  # all tried
             return replace(later, notices=(
                 said + f"; {NOTHING_BALANCES}: the one that stays up longest is given, "
                 "doubtful", *later.notices))

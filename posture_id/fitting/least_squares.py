@@ -95,6 +95,7 @@ def fit_recording(
     """
     options = options or FitOptions()
     start = time.perf_counter()
+    _check_offset_range(trial, options)  # before any work
     run = FitRun.start(trial, body, options, progress, problem)
     result = run.fit(init or run.problem.defaults)
     if options.locked is not None and options.locked.max_offset_s > 0:
@@ -258,11 +259,7 @@ def _search_offset(run: FitRun, result: FitResult) -> FitResult:
         FitError: ``max_offset_s`` is more than half a stimulus cycle.
     """
     limit = run.options.locked.max_offset_s
-    period = run.trial.stimulus.period_s
-    if limit > period / 2 + 1e-9:
-        raise FitError(f"{run.trial.name}: max_offset_s {limit:g} s is more than half a "
-                       f"stimulus cycle ({period / 2:g} s): an offset of a whole cycle "
-                       "cannot be told from none")
+    _check_offset_range(run.trial, run.options)
     fixed = replace(run.options, classes=FixedClasses(),
                     locked=replace(run.options.locked, max_offset_s=0.0))
     projection = run.target.projection
@@ -339,6 +336,18 @@ def search_bounds(options: FitOptions, layout: UnknownLayout) -> tuple[np.ndarra
         b[3 * layout.n : 4 * layout.n] = options.delay_bounds[side]  # Δ̃ after the gains
         bounds.append(b)
     return bounds[0], bounds[1]
+
+
+def _check_offset_range(trial: PreparedTrial, options: FitOptions) -> None:
+    """Refuse a stimulus offset search wider than half a stimulus cycle (an offset of a
+    whole cycle cannot be told from none)."""
+    if options.locked is None or options.locked.max_offset_s <= 0:
+        return
+    limit, period = options.locked.max_offset_s, trial.stimulus.period_s
+    if period is not None and limit > period / 2 + 1e-9:
+        raise FitError(f"{trial.name}: max_offset_s {limit:g} s is more than half a "
+                       f"stimulus cycle ({period / 2:g} s): an offset of a whole cycle "
+                       "cannot be told from none")
 
 
 def _prior(options: FitOptions, layout: UnknownLayout

@@ -136,6 +136,13 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
             a tilt column that is not the named stimulus.
     """
     name = recording.name
+    if stimulus is not None:
+        moves = stimulus.times[np.flatnonzero(np.diff(stimulus.angles) != 0)]
+        if len(moves) and moves[0] >= recording.duration_s:
+            raise StimulusError(
+                f"{name}: the stimulus named starts moving at {moves[0]:g} s (its onset, "
+                f"lead-in and lag), after the recording ends ({recording.duration_s:g} s); "
+                "check --onset-s and --lag-s")
     if np.ptp(recording.tilt) == 0:
         raise RecordingError(f"{name}: the tilt is constant: there is no stimulus, so the "
                              "controller's parameters cannot be identified from it")

@@ -1,0 +1,45 @@
+"""Checks made at the entrance, before any work, that name the real problem: a stimulus
+named to start after the recording ends, an offset search wider than half a cycle."""
+
+from __future__ import annotations
+
+import pytest
+
+from posture_id.dec.parameters import default_parameters
+from posture_id.errors import StimulusError
+from posture_id.fitting.options import FitError, FitOptions
+from posture_id.frf.locked import LockedOptions
+from posture_id.simulation import prts, simulate
+from posture_id.trials import prepare_trial
+
+
+def test_a_stimulus_named_to_start_after_the_recording_is_named_so(tip, tmp_path, capsys):
+    from posture_id.cli import main
+
+    recording = simulate(tip, default_parameters(tip)).to_recording()
+    late = prts(1.0, 2, 242, onset_s=500.0)
+    with pytest.raises(StimulusError, match="starts moving at 500 s .* after the recording "
+                                            "ends \\(121 s\\)"):
+        prepare_trial(recording, late)
+    path = tmp_path / "sway_only.csv"
+    lines = recording.to_csv(tmp_path / "full.csv").read_text().splitlines()
+    path.write_text("\n".join(",".join(c for k, c in enumerate(line.split(",")) if k != 1)
+                              for line in lines) + "\n")
+    assert main(["identify", str(path), "--onset-s", "500"]) == 2
+    err = capsys.readouterr().err
+    assert "starts moving at 500 s" in err and "tilt is constant" not in err
+
+
+def test_an_offset_search_beyond_half_a_cycle_is_refused_before_any_fit(tip, monkeypatch):
+    from posture_id.fitting import least_squares
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the fit started before the options were checked")
+
+    monkeypatch.setattr(least_squares.FitRun, "start", no_work)
+    recording = simulate(tip, default_parameters(tip)).to_recording()
+    trial = prepare_trial(recording, prts())
+    options = FitOptions(locked=LockedOptions(max_offset_s=100.0))
+    with pytest.raises(FitError, match="max_offset_s 100 s is more than half a stimulus "
+                                       "cycle \\(30.25 s\\)"):
+        least_squares.fit_recording(trial, tip, None, options)

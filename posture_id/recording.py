@@ -59,6 +59,12 @@ class RecordingColumns:
     def __post_init__(self) -> None:
         if not self.angles:
             raise RecordingError("name the angle columns (one per body segment)")
+        named = [c for c in (self.time, self.tilt, *self.angles) if c is not None]
+        twice = sorted({c for c in named if named.count(c) > 1})
+        if twice:
+            raise RecordingError(f"column {', '.join(repr(c) for c in twice)} is named more "
+                                 "than once (time, tilt and angle columns must each be their "
+                                 "own): one segment's sway would be read as another's")
         if not isinstance(self.unit, AngleUnit):
             raise RecordingError(f"unit must be an AngleUnit, got {self.unit!r}")
         rate = self.sample_rate_hz

@@ -5,6 +5,7 @@ masses and scales its lengths, its m·g·h by b and its inertias by b²."""
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,9 @@ from posture_id.dec.parameters import default_parameters
 from posture_id.identify import Method, identify
 from posture_id.simulation import prts, simulate
 
+#: The project's shipped URDFs (``make bodies``).
+URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
+
 
 def _winter(tmp_path, height, mass, segments):
     path = tmp_path / f"winter_{height}_{mass}_{segments}.urdf"
@@ -28,7 +32,6 @@ def _winter(tmp_path, height, mass, segments):
 
 @pytest.mark.parametrize("name", ["tip_default", "talos_tip", "winter_1.75m_70kg_2seg"])
 def test_a_scaled_body_keeps_its_build(name):
-    from tests.conftest import URDF_DIR
 
     body = load_body(URDF_DIR / f"{name}.urdf")
     same = scaled_body(body, 1.0)

@@ -3,14 +3,20 @@ named to start after the recording ends, an offset search wider than half a cycl
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
+from posture_id.bodies.body import load_body
 from posture_id.dec.parameters import default_parameters
 from posture_id.errors import StimulusError
 from posture_id.fitting.options import FitError, FitOptions
 from posture_id.frf.locked import LockedOptions
 from posture_id.simulation import prts, simulate
 from posture_id.trials import prepare_trial
+
+#: The project's shipped URDFs (``make bodies``).
+URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
 
 
 def test_a_stimulus_named_to_start_after_the_recording_is_named_so(tip, tmp_path, capsys):
@@ -43,3 +49,29 @@ def test_an_offset_search_beyond_half_a_cycle_is_refused_before_any_fit(tip, mon
     with pytest.raises(FitError, match="max_offset_s 100 s is more than half a stimulus "
                                        "cycle \\(30.25 s\\)"):
         least_squares.fit_recording(trial, tip, None, options)
+
+
+@pytest.mark.parametrize("flags", [["--fit-passive"], ["--locked", "--prior-sd", "0.5"],
+                                   ["--gain-range", "0.5", "2"]])
+def test_least_squares_flags_with_the_network_alone_are_refused(flags, tmp_path, capsys):
+    from posture_id.cli import main
+
+    path = tmp_path / "rec.csv"
+    simulate(load_body()).to_recording().to_csv(path)
+    assert main(["identify", str(path), "--method", "cnn", *flags]) == 2
+    err = capsys.readouterr().err
+    assert f"{flags[0]}" in err and "--method cnn runs none" in err
+
+
+@pytest.mark.parametrize("flags, named", [
+    (["--angle-columns", "a", "a"], "'a' is named more than once"),
+    (["--time-column", "t"], "--time-column and --tilt-column go with --angle-columns"),
+])
+def test_a_labs_columns_are_each_their_own_and_go_together(flags, named, tmp_path, capsys):
+    from posture_id.cli import main
+
+    path = tmp_path / "rec.csv"
+    path.write_text("t,tilt,a\n0,0,0\n0.02,0.1,0.1\n")
+    assert main(["identify", str(path), "--body", str(URDF_DIR / "winter_1.75m_70kg_2seg.urdf"),
+                 *flags]) == 2
+    assert named in capsys.readouterr().err

@@ -92,6 +92,20 @@ def add_search_arguments(parser: argparse.ArgumentParser) -> None:
                              f"(default {low:g} {high:g})")
 
 
+def search_flags_given(args: argparse.Namespace) -> list[str]:
+    """The flags of :func:`add_search_arguments` given a value other than their default."""
+    low, high = (1 + b for b in default_of(FitOptions, "gain_bounds"))
+    delay_low, delay_high = (1 + b for b in default_of(FitOptions, "delay_bounds"))
+    defaults = {"--locked": (args.locked, False),
+                "--max-frequency-hz": (args.max_frequency_hz,
+                                       default_of(LockedOptions, "max_frequency_hz")),
+                "--max-offset-s": (args.max_offset_s, 0.0),
+                "--prior-sd": (args.prior_sd, None), "--fit-passive": (args.fit_passive, False),
+                "--gain-range": (list(args.gain_range), [low, high]),
+                "--delay-range": (list(args.delay_range), [delay_low, delay_high])}
+    return [flag for flag, (value, default) in defaults.items() if value != default]
+
+
 def search_keywords(args: argparse.Namespace) -> dict:
     """FitOptions keywords of --locked, --prior-sd, --fit-passive, --gain-range and
     --delay-range (bounds normalised: factor − 1)."""

@@ -13,7 +13,7 @@ from posture_id.cli.arguments import (
     say,
     write_result,
 )
-from posture_id.cli.fit import add_search_arguments, search_keywords
+from posture_id.cli.fit import add_search_arguments, search_flags_given, search_keywords
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_column_arguments,
@@ -80,7 +80,16 @@ def _is_cohort(recording: str) -> bool:
     return Path(recording).is_dir() or any(c in recording for c in "*?[")
 
 
+def _no_search_for_the_network_alone(args: argparse.Namespace) -> None:
+    """Refuse least-squares flags with ``--method cnn``, which runs no least squares."""
+    given = search_flags_given(args) if args.method == "cnn" else []
+    if given:
+        raise PostureIdError(f"{', '.join(given)} set the least-squares search, and --method "
+                             "cnn runs none: use --method hybrid, fit or auto (the default)")
+
+
 def run(args: argparse.Namespace) -> int:
+    _no_search_for_the_network_alone(args)
     if _is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)

@@ -140,6 +140,10 @@ def columns_from_args(args: argparse.Namespace) -> RecordingColumns | None:
                 getattr(args, "units", "deg") != "deg":
             raise PostureIdError("--sample-rate-hz and --units go with --angle-columns "
                                  "(name the file's columns)")
+        if getattr(args, "time_column", "time_s") != "time_s" or \
+                getattr(args, "tilt_column", "tilt_deg") != "tilt_deg":
+            raise PostureIdError("--time-column and --tilt-column go with --angle-columns "
+                                 "(name the file's columns)")
         return None
     tilt = None if args.tilt_column.lower() == "none" else args.tilt_column
     return RecordingColumns(time=args.time_column, tilt=tilt, angles=tuple(args.angle_columns),

@@ -75,3 +75,22 @@ def test_a_labs_columns_are_each_their_own_and_go_together(flags, named, tmp_pat
     assert main(["identify", str(path), "--body", str(URDF_DIR / "winter_1.75m_70kg_2seg.urdf"),
                  *flags]) == 2
     assert named in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("flags, named", [
+    (["--default-tip", "--segments", "2", "--out", "x.urdf"], "--default-tip writes the 3"),
+    (["urdf/tip_default.urdf", "--out", "copy.urdf"], "--out writes a body"),
+    (["--segments", "2"], "--segments goes with a body to write"),
+    (["--height", "1.8", "--mass", "80", "--hip-joints", "a", "b", "--out", "x.urdf"],
+     "--hip-joints go with --lump"),
+])
+def test_body_flags_that_would_do_nothing_are_refused(flags, named, tmp_path, capsys,
+                                                      monkeypatch):
+    from posture_id.cli import main
+
+    monkeypatch.chdir(URDF_DIR.parent)
+    flags = [str(tmp_path / f) if f.endswith(".urdf") and not f.startswith("urdf/") else f
+             for f in flags]
+    assert main(["body", *flags]) == 2
+    assert named in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())  # nothing written

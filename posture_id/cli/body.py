@@ -54,7 +54,22 @@ def _write(args: argparse.Namespace) -> Path | None:
     if args.mass is not None and args.height is None:
         raise PostureIdError("--mass goes with --height (a Winter body)")
     writing = args.height is not None or args.default_tip or args.from_robot or args.lump
+    lump_only = [f"--{f.replace('_', '-')}" for f in ("ankle_joints", "knee_joints",
+                                                      "hip_joints", "srdf", "posture")
+                 if getattr(args, f) is not None]
+    if lump_only and not args.lump:
+        raise PostureIdError(f"{', '.join(lump_only)} go with --lump (a whole-body URDF)")
+    if args.default_tip and args.segments != 3:
+        raise PostureIdError("--default-tip writes the 3-segment TIP of MODEL §1; --segments "
+                             "goes with --height, --from-robot or --lump")
     if not writing:
+        if args.out is not None:
+            raise PostureIdError("--out writes a body: give --height and --mass, "
+                                 "--default-tip, --from-robot or --lump (describing a URDF "
+                                 "writes nothing)")
+        if args.segments != 3:
+            raise PostureIdError("--segments goes with a body to write (--height, "
+                                 "--from-robot or --lump); a URDF has its own")
         return None
     if args.out is None:
         raise PostureIdError("--out is required to write a body URDF")

@@ -143,3 +143,17 @@ def test_the_command_line_refuses_network_flags_with_init_and_families_a_set_lac
     assert "no trial of these sets is of the noise families correlated" in err
     assert "low_pass, shallow, drifting" in err
     assert not (tmp_path / "n").exists()  # nothing left behind
+
+
+def test_a_set_too_small_for_a_split_is_refused_in_one_line(tmp_path, capsys):
+    from posture_id.cli import main
+    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
+
+    small = generate_universal(UniversalDataConfig(shards=2, trials=3, seed=1),
+                               tmp_path / "small", workers=1)
+    out = tmp_path / "model"
+    assert main(["universal", "train", str(small.path), "--out", str(out), "--epochs", "1",
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "no train trial: the train split takes the shards whose index is ≥ 3" in err
+    assert "holds 2" in err and not out.exists()

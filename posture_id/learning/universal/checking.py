@@ -18,6 +18,7 @@ from posture_id.learning.universal.samples import (
     Samples,
     load_split,
     make_samples,
+    require_trials,
     without_families,
 )
 from posture_id.learning.universal.training import VALIDATION_SEED
@@ -88,7 +89,8 @@ def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str 
     left_out = tuple(model.sidecar.get("training", {}).get("exclude_families", ()))
 
     def split(name: str):
-        return without_families(load_split(data, name), scope, left_out)
+        return require_trials(without_families(load_split(data, name), scope, left_out),
+                              data, name, left_out)
 
     cal = make_samples(split("calibration"), scope, np.random.default_rng(CALIBRATION_SEED))
     validation = make_samples(split("validation"), scope,

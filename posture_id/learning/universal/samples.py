@@ -26,7 +26,7 @@ from posture_id.simulation.noise_families import DRIFTING_COLOUR_SLOPE, NoiseFam
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
            "make_samples", "module_inputs", "inputs_and_noise", "rotate_motor_noise",
-           "without_families"]
+           "without_families", "require_trials"]
 
 
 @dataclass(frozen=True)
@@ -218,3 +218,22 @@ def without_families(shards: list[LoadedShard], scope: UniversalScope,
             arrays = {k: v[keep] if k in per_trial else v for k, v in shard.arrays.items()}
             out.append(replace(shard, arrays=arrays))
     return out
+
+
+#: Which shard index (mod 10) each split takes (:func:`~.data.split_of`).
+_SPLIT_INDEX = {"test": "≡ 0", "calibration": "≡ 1", "validation": "≡ 2", "train": "≥ 3"}
+
+
+def require_trials(shards: list[LoadedShard], data: Sequence[UniversalSet], split: str,
+                   families: tuple[str, ...] = ()) -> list[LoadedShard]:
+    """``shards`` of ``split``, refused in one line when they hold no trial (a set too small
+    to have that split, or every trial of it in a family left out)."""
+    if shards:
+        return shards
+    names = ", ".join(str(d.path) for d in data)
+    made = sum(len(d.manifest["shards"]) for d in data)
+    left = f" outside the families left out ({', '.join(families)})" if families else ""
+    raise LearningError(f"{names}: no {split} trial{left}: the {split} split takes the shards "
+                        f"whose index is {_SPLIT_INDEX[split]} (mod 10) and this holds "
+                        f"{made}; make at least 10 shards (posture-id universal data "
+                        "--shards N, resumable)")

@@ -39,6 +39,7 @@ from posture_id.learning.universal.samples import (
     Samples,
     load_split,
     make_samples,
+    require_trials,
     without_families,
 )
 from posture_id.progress import Progress, report
@@ -127,11 +128,13 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     data = open_sets(data_path)
     scope = merged_scope(data)
     t0 = time.perf_counter()
-    train_shards = without_families(load_split(data, "train"), scope,
-                                    config.exclude_families)
-    validation = make_samples(without_families(load_split(data, "validation"), scope,
-                                               config.exclude_families), scope,
-                              np.random.default_rng(VALIDATION_SEED))
+    left_out = config.exclude_families
+    train_shards = require_trials(without_families(load_split(data, "train"), scope,
+                                                   left_out), data, "train", left_out)
+    validation = make_samples(
+        require_trials(without_families(load_split(data, "validation"), scope, left_out),
+                       data, "validation", left_out),
+        scope, np.random.default_rng(VALIDATION_SEED))
     first = make_samples(train_shards, scope, np.random.default_rng([config.seed, 0]),
                          config.fresh_motor_noise)
     log(f"loaded {len(train_shards)} training shards ({len(first)} module samples), "

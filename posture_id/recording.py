@@ -25,6 +25,14 @@ __all__ = ["Recording", "RecordingColumns", "AngleUnit", "RADIANS_SUSPECT_DEG"]
 #: A recording whose every angle (tilt and segments, "degrees") stays below this is taken
 #: to be in radians by mistake: 0.1° of sway and tilt at most is below any stimulus used.
 RADIANS_SUSPECT_DEG = 0.1
+#: A recording read as radians whose segment angles reach this (degrees) is taken to be in
+#: degrees by mistake: a segment 30° from the vertical is a fall, not sway (the
+#: simulator's widest sway limit is far below).
+DEGREES_SUSPECT_DEG = 30.0
+#: A tilt column read as radians that spans more than this (degrees) is taken to be in
+#: degrees by mistake (posture platforms tilt a few degrees; the universal network's
+#: scope is 0.5–4° peak to peak).
+TILT_SUSPECT_DEG = 20.0
 
 
 class AngleUnit(enum.Enum):
@@ -236,6 +244,22 @@ class Recording:
             raise RecordingError(
                 f"{path}: every angle is below {RADIANS_SUSPECT_DEG}° (largest |value| "
                 f"{largest:.3g}); the columns look like radians: give their unit (--units rad)")
+        if columns.unit is AngleUnit.RADIANS:
+            tilt_range = (float(np.degrees(np.ptp(tilt))) if columns.tilt is not None
+                          else 0.0)
+            if tilt_range > TILT_SUSPECT_DEG:
+                raise RecordingError(
+                    f"{path}: column {columns.tilt!r} spans {np.ptp(column[columns.tilt]):.3g}, "
+                    f"which in radians is {tilt_range:.0f}° of platform tilt, more than any "
+                    "posture platform runs; the columns look like degrees: give their unit "
+                    "(--units deg, the default)")
+            if largest > DEGREES_SUSPECT_DEG:
+                worst = max(columns.angles, key=lambda c: float(np.abs(column[c]).max()))
+                raise RecordingError(
+                    f"{path}: column {worst!r} reaches {np.abs(column[worst]).max():.3g}, "
+                    f"which in radians is {largest:.0f}°: no standing body sways so far; "
+                    "the columns look like degrees: give their unit (--units deg, the "
+                    "default)")
         return cls(time, tilt, theta, tuple(segments), str(path),
                    tilt_recorded=columns.tilt is not None)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from posture_id.bodies.body import load_body
@@ -94,3 +95,30 @@ def test_body_flags_that_would_do_nothing_are_refused(flags, named, tmp_path, ca
     assert main(["body", *flags]) == 2
     assert named in capsys.readouterr().err
     assert not any(tmp_path.iterdir())  # nothing written
+
+
+def test_degrees_read_as_radians_are_refused_naming_the_column(tmp_path, capsys):
+    """A lab's degrees with --units rad: a 2° tilt would be 115°, and so would the sway
+    that follows it: one line naming the column; without the tilt column, the sway's."""
+    from posture_id.cli import main
+
+    recording = simulate(load_body(URDF_DIR / "winter_1.75m_70kg_1seg.urdf"), stimulus=prts(
+        2.0)).to_recording()
+    path = tmp_path / "lab.csv"
+    rows = "".join(f"{t:.2f},{a:.5f},{b:.5f}\n" for t, a, b in zip(
+        recording.time, np.degrees(recording.tilt), np.degrees(recording.theta[:, 0]),
+        strict=True))
+    path.write_text("time,platform,COM\n" + rows)
+    common = ["identify", str(path), "--body", str(URDF_DIR / "winter_1.75m_70kg_1seg.urdf"),
+              "--time-column", "time", "--tilt-column", "platform", "--angle-columns", "COM"]
+    assert main([*common, "--units", "rad", "--method", "cnn"]) == 2
+    err = capsys.readouterr().err
+    assert "column 'platform' spans" in err and "look like degrees" in err
+    assert main([*common, "--method", "cnn"]) == 0  # the same file in degrees is read
+    tall = path.with_name("tall.csv")  # sway only (the stimulus named), up to 40 "radians"
+    tall.write_text("time,COM\n" + "".join(f"{t:.2f},{40 * np.sin(t):.5f}\n"
+                                           for t in recording.time))
+    assert main(["identify", str(tall), "--body", str(URDF_DIR / "winter_1.75m_70kg_1seg.urdf"),
+                 "--time-column", "time", "--tilt-column", "none", "--angle-columns", "COM",
+                 "--units", "rad", "--method", "cnn", "--amplitude-deg", "2"]) == 2
+    assert "column 'COM' reaches 40" in capsys.readouterr().err

@@ -122,3 +122,17 @@ def test_degrees_read_as_radians_are_refused_naming_the_column(tmp_path, capsys)
                  "--time-column", "time", "--tilt-column", "none", "--angle-columns", "COM",
                  "--units", "rad", "--method", "cnn", "--amplitude-deg", "2"]) == 2
     assert "column 'COM' reaches 40" in capsys.readouterr().err
+
+
+def test_a_period_the_tilt_does_not_repeat_with_is_refused(tip, tmp_path, capsys):
+    """The 242-state PRTS (60.5 s) analysed with --period-s 20: one line, not an FRF of
+    cycles that are not the stimulus's; its own period is read."""
+    from posture_id.cli import main
+
+    path = tmp_path / "rec.csv"
+    simulate(tip).to_recording().to_csv(path)
+    out = tmp_path / "frf.json"
+    assert main(["frf", str(path), "--period-s", "20", "--out", str(out)]) == 2
+    assert "the tilt does not repeat every 20 s" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(["frf", str(path), "--period-s", "60.5", "--out", str(out)]) == 0

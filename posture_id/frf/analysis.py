@@ -34,6 +34,7 @@ def frequency_response(trial: PreparedTrial, body: Body | None = None,
                              + ("" if hint is None
                                 else f"; and {hint.removeprefix(trial.name + ': ')}"))
     start = int(np.searchsorted(recording.time, stimulus.periodic_from_s - 1e-9))
+    _check_period(trial, start, period_s)
     channels = tuple(recording.segments)
     outputs = recording.theta[start:]
     if body is not None:
@@ -42,3 +43,27 @@ def frequency_response(trial: PreparedTrial, body: Body | None = None,
         channels += ("body COM",)
     return frequency_response_arrays(recording.tilt[start:], outputs, recording.sample_rate_hz,
                                      period_s, channels, options, trial.name)
+
+
+#: The tilt's change from one cycle to the next, against its own RMS, above which a
+#: period is not the tilt's.
+PERIOD_MISMATCH = 0.1
+
+
+def _check_period(trial: PreparedTrial, start: int, period_s: float) -> None:
+    """Refuse a period the tilt does not repeat with (with two whole cycles or more to
+    compare): an FRF over cycles that are not the stimulus's is meaningless."""
+    rec = trial.recording
+    p = int(round(period_s * rec.sample_rate_hz))
+    tilt = rec.tilt[start:]
+    cycles = len(tilt) // p if p > 0 else 0
+    if cycles < 2:
+        return
+    whole = tilt[: cycles * p].reshape(cycles, p)
+    change = float(np.sqrt(np.mean((whole[1:] - whole[:-1]) ** 2)))
+    size = float(np.sqrt(np.mean((whole - whole.mean()) ** 2)))
+    if size > 0 and change > PERIOD_MISMATCH * size:
+        raise RecordingError(
+            f"{trial.name}: the tilt does not repeat every {period_s:g} s (from one cycle to "
+            f"the next it changes by {100 * change / size:.0f} % of its RMS): give the "
+            "stimulus's own period (--period-s), or name the PRTS")

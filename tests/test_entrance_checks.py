@@ -136,3 +136,24 @@ def test_a_period_the_tilt_does_not_repeat_with_is_refused(tip, tmp_path, capsys
     assert "the tilt does not repeat every 20 s" in capsys.readouterr().err
     assert not out.exists()
     assert main(["frf", str(path), "--period-s", "60.5", "--out", str(out)]) == 0
+
+
+@pytest.mark.parametrize("protocol, named", [
+    ({"kind": "multisine", "period_s": 20.0, "harmonics": [1, "two", 3]},
+     "protocol harmonics must be a whole number ≥ 1, got 'two'"),
+    ({"kind": "multisine", "period_s": 20.0, "harmonics": [1, 2], "weights": [1, "x"]},
+     "protocol weights must be 2 finite numbers"),
+    ({"kind": "prts", "amplitude_deg": 1e9}, "more than the 20° a posture platform tilts"),
+])
+def test_a_protocol_holding_a_word_or_an_impossible_tilt_is_refused(protocol, named,
+                                                                    tmp_path, capsys):
+    import json
+
+    from posture_id.cli import main
+
+    path = tmp_path / "protocol.json"
+    path.write_text(json.dumps(protocol))
+    out = tmp_path / "command.csv"
+    assert main(["stimulus", str(path), "--out", str(out)]) == 2
+    assert named in capsys.readouterr().err
+    assert not out.exists()

@@ -50,9 +50,22 @@ def _positive(name: str, value: float) -> float:
 
 
 def _count(name: str, value) -> int:
-    if isinstance(value, bool) or int(value) != value or value < 1:
+    if (isinstance(value, bool) or not isinstance(value, int | float)
+            or not math.isfinite(value) or int(value) != value or value < 1):
         raise StimulusError(f"protocol {name} must be a whole number ≥ 1, got {value!r}")
     return int(value)
+
+
+#: The largest peak-to-peak tilt a protocol may ask of a posture platform, degrees.
+MAX_PLATFORM_DEG = 20.0
+
+
+def _amplitude(name: str, value: float, limit: float = MAX_PLATFORM_DEG) -> float:
+    value = _positive(name, value)
+    if value > limit:
+        raise StimulusError(f"protocol {name} is {value:g}°: more than the {limit:g}° a "
+                            "posture platform tilts (and far beyond upright stance)")
+    return value
 
 
 def _period(name: str, value: float) -> float:
@@ -128,7 +141,7 @@ class PrtsProtocol(_Single):
         if self.states not in PRTS_REGISTERS:
             raise StimulusError(f"protocol states must be one of {sorted(PRTS_REGISTERS)}, "
                                 f"got {self.states!r}")
-        _positive("amplitude_deg", self.amplitude_deg)
+        _amplitude("amplitude_deg", self.amplitude_deg)
         _count("cycles", self.cycles)
         _count("repetitions", self.repetitions)
         _period("state_s × states", self.state_s * self.states)
@@ -182,7 +195,7 @@ class MultisineProtocol(_Single):
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "period_s", _period("period_s", self.period_s))
-        _positive("amplitude_deg", self.amplitude_deg)
+        _amplitude("amplitude_deg", self.amplitude_deg)
         _count("cycles", self.cycles)
         _count("repetitions", self.repetitions)
         h = tuple(_count("harmonics", k) for k in self.harmonics)
@@ -194,6 +207,9 @@ class MultisineProtocol(_Single):
             value = getattr(self, name)
             if value is None:
                 continue
+            if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+                raise StimulusError(f"protocol {name} must be {len(h)} finite numbers (one "
+                                    f"per harmonic), got {getattr(self, name)!r}")
             value = tuple(float(v) for v in value)
             if len(value) != len(h) or not all(math.isfinite(v) for v in value):
                 raise StimulusError(f"protocol {name} must be {len(h)} finite numbers (one "
@@ -244,12 +260,16 @@ class SumOfSinesProtocol(_Single):
 
     def __post_init__(self) -> None:
         f = tuple(_positive("frequencies_hz", v) for v in self.frequencies_hz)
-        a = tuple(_positive("amplitudes_deg", v) for v in self.amplitudes_deg)
+        a = tuple(_amplitude("amplitudes_deg", v, MAX_PLATFORM_DEG / 2)
+                  for v in self.amplitudes_deg)
         if not f or len(a) != len(f) or len(set(f)) != len(f):
             raise StimulusError("protocol frequencies_hz must be distinct, one amplitude each")
         object.__setattr__(self, "frequencies_hz", f)
         object.__setattr__(self, "amplitudes_deg", a)
         if self.phases_rad is not None:
+            if not all(isinstance(v, int | float) and not isinstance(v, bool)
+                       for v in self.phases_rad):
+                raise StimulusError(f"protocol phases_rad must be {len(f)} finite numbers")
             p = tuple(float(v) for v in self.phases_rad)
             if len(p) != len(f) or not all(math.isfinite(v) for v in p):
                 raise StimulusError(f"protocol phases_rad must be {len(f)} finite numbers")
@@ -312,7 +332,8 @@ class TwoAmplitudeProtocol:
     def __post_init__(self) -> None:
         if not isinstance(self.base, (PrtsProtocol, MultisineProtocol, SumOfSinesProtocol)):
             raise StimulusError("protocol base of two amplitudes must be a single protocol")
-        a = tuple(_positive("amplitudes_deg", v) for v in self.amplitudes_deg)
+        a = tuple(_amplitude("amplitudes_deg", v, MAX_PLATFORM_DEG / 2)
+                  for v in self.amplitudes_deg)
         if len(a) != 2 or a[0] == a[1]:
             raise StimulusError(f"protocol amplitudes_deg must be two different amplitudes, "
                                 f"got {self.amplitudes_deg!r}")

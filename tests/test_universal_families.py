@@ -32,6 +32,12 @@ def family_set(tmp_path_factory):
                               out, workers=2)
 
 
+def test_a_scope_draws_tilts_a_platform_can_run():
+    with pytest.raises(ScopeError, match="within \\(0, 20\\]° peak to peak"):
+        UniversalScope(amplitude_deg=(30.0, 40.0))
+    assert UniversalScope(amplitude_deg=(8.0, 12.0)).amplitude_deg == (8.0, 12.0)
+
+
 def test_a_scope_names_known_families_once():
     with pytest.raises(ScopeError, match="noise_families"):
         UniversalScope(noise_families=("pink",))

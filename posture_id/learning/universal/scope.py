@@ -15,6 +15,7 @@ import numpy as np
 
 from posture_id.errors import PostureIdError
 from posture_id.simulation.noise_families import NoiseFamily
+from posture_id.simulation.protocols import MAX_PLATFORM_DEG
 from posture_id.simulation.stimulus import LAB_STATE_RANGE_S, TiltProfile, prts
 
 __all__ = ["UniversalScope", "BodyDraw", "StimulusDraw", "draw_body", "draw_stimulus",
@@ -85,6 +86,10 @@ class UniversalScope:
             if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo <= hi):
                 raise ScopeError(f"scope {name} must be a range 0 ≤ low ≤ high, got {(lo, hi)}")
             object.__setattr__(self, name, (float(lo), float(hi)))
+        if self.amplitude_deg[1] > MAX_PLATFORM_DEG or self.amplitude_deg[0] <= 0:
+            raise ScopeError(f"scope amplitude_deg must lie within (0, {MAX_PLATFORM_DEG:g}]° "
+                             f"peak to peak (what a posture platform tilts), got "
+                             f"{self.amplitude_deg}")
         if not set(self.segments) <= {1, 2, 3} or not self.segments:
             raise ScopeError(f"scope segments must be among 1, 2, 3, got {self.segments}")
         if not set(self.states) <= {80, 242} or not self.states:

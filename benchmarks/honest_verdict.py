@@ -183,6 +183,21 @@ def _one(task: tuple) -> dict:
     return row
 
 
+def family_cells(rows: list[dict], family: str) -> str:
+    """Table cells of the people-like subjects of one noise family: the share of modules
+    with their class right, the median |Kp error|, the share of true Kps and of all true
+    parameters inside their 90 % intervals ("" cells when there are none)."""
+    group = [r for r in rows if r["group"] == "people-like" and r["kind"] == family
+             and not r.get("skipped")]
+    if not group:
+        return " | | "
+    classes = np.concatenate([r["classes_right"] for r in group])
+    kp = np.abs(np.concatenate([r["kp_error"] for r in group]))
+    inside = np.concatenate([np.array(r["inside"]) for r in group])
+    return (f"{100 * classes.mean():.1f} % | {100 * np.median(kp):.1f} % | "
+            f"{100 * inside[:, 0].mean():.0f} % | {100 * inside.mean():.0f} %")
+
+
 def _judged(row: dict) -> str:
     """right, wrong or neither (module docstring)."""
     if "classes_right" not in row:
@@ -206,15 +221,10 @@ def report(rows: list[dict], subjects: int, model: str | None = None) -> str:
              "|---|---|---|---|---|---|---|"]
     for family in NoiseFamily:
         group = [r for r in rows if r["group"] == "people-like" and r["kind"] == family.value]
-        if not group:
-            continue
-        classes = np.concatenate([r["classes_right"] for r in group])
-        kp = np.abs(np.concatenate([r["kp_error"] for r in group]))
-        inside = np.concatenate([np.array(r["inside"]) for r in group])
-        doubtful = sum(r["level"] == "doubtful" for r in group)
-        lines.append(f"| {family.value} | {len(group)} | {100 * classes.mean():.1f} % | "
-                     f"{100 * np.median(kp):.1f} % | {100 * inside[:, 0].mean():.0f} % | "
-                     f"{100 * inside.mean():.0f} % | {doubtful} |")
+        if group:
+            doubtful = sum(r["level"] == "doubtful" for r in group)
+            lines.append(f"| {family.value} | {len(group)} | {family_cells(rows, family.value)}"
+                         f" | {doubtful} |")
     lines += ["", "## The verdict against the truth", "",
               "| group | level | right | neither | wrong |", "|---|---|---|---|---|"]
     for group in ("clean", "people-like"):
@@ -229,6 +239,16 @@ def report(rows: list[dict], subjects: int, model: str | None = None) -> str:
         lines.append("")
         lines.append(f"Doubtful: {sum(r['level'] == 'doubtful' for r in of)} of {len(of)} "
                      f"{j} answers.")
+    people = [r for r in judged if r["group"] == "people-like" and r.get("p_com") is not None]
+    if people:  # would an unsure class make a good sign of a wrong answer?
+        lines.append("")
+        for low, high in ((0.05, 0.95), (0.2, 0.8)):
+            marked = {j: [any(low < p < high for p in r["p_com"]) for r in people
+                          if _judged(r) == j] for j in ("right", "wrong")}
+            lines.append(f"People-like answers with a class the network is unsure of (P(com) "
+                         f"within {low:g}–{high:g}): {sum(marked['wrong'])} of "
+                         f"{len(marked['wrong'])} wrong, {sum(marked['right'])} of "
+                         f"{len(marked['right'])} right.")
     lines += ["", "## Mistakes", "", "| mistake | recordings | good | imprecise | doubtful |",
               "|---|---|---|---|---|"]
     for kind in MISTAKES:

@@ -26,11 +26,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from posture_id.fileio import atomic_write_text
 from posture_id.learning.universal.identifier import BUNDLED_DIR
 from posture_id.simulation.noise_families import NoiseFamily
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from honest_verdict import family_cells  # noqa: E402  (a sibling script)
 
 HELD_OUT = [f.value for f in NoiseFamily if f is not NoiseFamily.LOW_PASS]
 HERE = Path(__file__).resolve().parent
@@ -62,18 +63,6 @@ def _judge(model: Path | None, families: list[str], groups: list[str], subjects:
     return json.loads((out / "rows.json").read_text(encoding="utf-8"))["rows"]
 
 
-def _cells(rows: list[dict], family: str) -> str:
-    group = [r for r in rows if r["group"] == "people-like" and r["kind"] == family
-             and not r.get("skipped")]
-    if not group:
-        return "| | | |"
-    classes = np.concatenate([r["classes_right"] for r in group])
-    kp = np.abs(np.concatenate([r["kp_error"] for r in group]))
-    inside = np.concatenate([np.array(r["inside"]) for r in group])
-    return (f"{100 * classes.mean():.1f} % | {100 * np.median(kp):.1f} % | "
-            f"{100 * inside[:, 0].mean():.0f} % | {100 * inside.mean():.0f} %")
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", type=Path, default=Path("data/universal_families"))
@@ -101,8 +90,8 @@ def main() -> None:
         print(f"{family}: fine-tuning without it", flush=True)
         _fine_tune(args.set, model, (family,), args.epochs, args.learning_rate)
         rows = _judge(model, [family], ["people-like"], args.subjects, args.out / family)
-        lines.append(f"| {family} | bundled | {_cells(bundled, family)} |")
-        lines.append(f"| {family} | fine-tuned without it | {_cells(rows, family)} |")
+        lines.append(f"| {family} | bundled | {family_cells(bundled, family)} |")
+        lines.append(f"| {family} | fine-tuned without it | {family_cells(rows, family)} |")
     everything = args.models / "all_families"
     print("all families: fine-tuning", flush=True)
     _fine_tune(args.set, everything, (), args.epochs, args.learning_rate)
@@ -111,7 +100,7 @@ def main() -> None:
     lines += ["", "Fine-tuned on every family (each row's family seen):", "",
               "| family | modules: every class right | median \\|Kp error\\| | 90 % intervals "
               "holding the true Kp | all parameters |", "|---|---|---|---|---|"]
-    lines += [f"| {f.value} | {_cells(rows, f.value)} |" for f in NoiseFamily]
+    lines += [f"| {f.value} | {family_cells(rows, f.value)} |" for f in NoiseFamily]
     atomic_write_text(args.out / "report.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -16,7 +16,6 @@ from posture_id.learning.universal.harmonics import (
 )
 from posture_id.learning.universal.scope import ScopeError, UniversalScope
 from posture_id.simulation.measurement import MeasurementNoise
-from posture_id.simulation.noise_families import NoiseFamily
 
 FAMILIES = ("low_pass", "shallow", "drifting")
 
@@ -130,7 +129,6 @@ def test_a_model_fine_tuned_from_the_bundled_one_keeps_its_standardisation(famil
     assert np.all(low <= np.array(base.sidecar["ranges"]["descriptors_low"]))
     assert again.sidecar["training"]["exclude_families"] == ["shallow"]
     assert tuned.path == tmp_path / "tuned"
-    assert NoiseFamily.SHALLOW.value in FAMILIES
 
 
 def test_the_command_line_refuses_network_flags_with_init_and_families_a_set_lacks(

@@ -10,6 +10,7 @@ asks whether a larger or smaller copy explains the sway better.
 from __future__ import annotations
 
 import tempfile
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -20,10 +21,11 @@ from posture_id.bodies.urdf_writer import LinkSpec, chain_urdf
 __all__ = ["scaled_body"]
 
 
+@lru_cache(maxsize=32)
 def scaled_body(body: Body, factor: float) -> Body:
     """``body`` with every length (joint origins, COMs, segment lengths) × ``factor``, its
     masses kept and each inertia about its COM × factor² (written as a planar URDF and
-    loaded)."""
+    loaded; kept, so that a cohort on one body writes and loads each size once)."""
     links = []
     segments = body.segments
     for k, seg in enumerate(segments):

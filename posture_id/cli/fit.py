@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
@@ -157,9 +158,7 @@ def at_the_noise(result):
     was the recording's 0.05° exited 1, "NOT converged")."""
     if result.converged:
         return result
-    from dataclasses import replace
-
-    from posture_id.identify.noise_check import noise_check
+    from posture_id.identify.noise_check import noise_check  # loads torch: only here
 
     check = noise_check(result.trial, result.fitted)
     if not check.consistent:

@@ -254,12 +254,8 @@ def _search_offset(run: FitRun, result: FitResult) -> FitResult:
     again with the stimulus shifted by it (classes kept), the best fit kept; then, from
     it, the best offset again while it still moves (at most :data:`OFFSET_ROUNDS` times).
     The result's trial is the shifted one, so that what re-simulates it uses the offset.
-
-    Raises:
-        FitError: ``max_offset_s`` is more than half a stimulus cycle.
     """
-    limit = run.options.locked.max_offset_s
-    _check_offset_range(run.trial, run.options)
+    limit = run.options.locked.max_offset_s  # within half a cycle (fit_recording checked)
     fixed = replace(run.options, classes=FixedClasses(),
                     locked=replace(run.options.locked, max_offset_s=0.0))
     projection = run.target.projection

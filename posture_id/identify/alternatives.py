@@ -16,9 +16,9 @@ stimulus-locked residual in units of the recording's own noise
 (:func:`~posture_id.identify.noise_check.noise_check`). An alternative counts as evidence
 only when the answer leaves more than the noise allows (and stays up: against a model that
 falls, any reading that does not would win) and the alternative leaves at most
-1/:data:`SWAP_GAIN` (columns) or 1/:data:`SIZE_GAIN` (size) of it: on a right recording
-every alternative is worse (docs/identify.md, "Mistakes"), and on people-like sway, whose
-noise hides both, none is called. On a recording whose noise is below
+1/:data:`SWAP_GAIN` (columns) or 1/:data:`SIZE_GAIN` (size) of it (how often a right
+recording is named: docs/identify.md, "Mistakes"); on people-like sway, whose noise hides
+both, they are rarely called. On a recording whose noise is below
 :data:`MIN_NOISE_SHARE` of its locked sway none is read: the network's own error is larger
 than such noise.
 """
@@ -48,25 +48,29 @@ SIZE_GAIN = 1.3
 #: The least noise, as a share of the recorded locked sway, at which alternatives are
 #: read: the network's own error is about 1 % of the sway on right recordings, so on a
 #: cleaner recording (a robot's sensors, a simulation without noise) it reads as tens of
-#: noise units and two readings differ by chance (a noise-free TIP recording at 2° read
-#: 87× against 50× for a body 20 % shorter; at 0.02° of noise 2.2× against 6.9×).
+#: noise units and two readings differ by chance (tests/test_alternatives.py: a noise-free
+#: TIP recording read with a body 20 % shorter).
 MIN_NOISE_SHARE = 0.003
 
 #: (trial, body) → the network's answer's residual in units of the noise (inf: it falls).
 RatioOf = Callable[[PreparedTrial, Body], float]
 
 
-def better_explanations(trial: PreparedTrial, body: Body, ratio: float, ratio_of: RatioOf,
-                        sizes: bool = True) -> tuple[Mistake, ...]:
+def better_explanations(trial: PreparedTrial, body: Body, ratio: float, relative: float,
+                        ratio_of: RatioOf, sizes: bool = True) -> tuple[Mistake, ...]:
     """The mistakes an alternative reading reveals (module docstring).
 
     Args:
         trial, body: as identified. ratio: the answer's residual in units of the noise,
-            by the same reading as ``ratio_of`` gives the alternatives'.
+            by the same reading as ``ratio_of`` gives the alternatives'. relative: the
+            answer's residual as a share of the recorded locked sway (``relative / ratio``
+            is the noise's share, against :data:`MIN_NOISE_SHARE`).
         ratio_of: the network's reading of a trial on a body, judged.
         sizes: try other body sizes (a network trained on one body cannot).
     """
     if not (NOISE_RATIO_LIMIT < ratio < math.inf):  # a model that falls is no yardstick
+        return ()
+    if relative / ratio < MIN_NOISE_SHARE:  # the network's own error would read as noise
         return ()
     found = []
     names = trial.recording.segments

@@ -36,7 +36,7 @@ from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
-from posture_id.identify.alternatives import MIN_NOISE_SHARE, better_explanations
+from posture_id.identify.alternatives import better_explanations
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.mistakes import find_mistakes
 from posture_id.identify.networks import Network, network_for
@@ -188,7 +188,7 @@ class Identifier:
         verdict = _verdict(method, options, trial, checked, body_share, cnn, fit, locked,
                            self.cnn is not None and self.cnn.reads_people_like,
                            body, intervals, parameters)
-        verdict = self._alternatives(trial, verdict, cnn)
+        verdict = self._alternatives(trial, verdict, cnn, locked)
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -201,34 +201,40 @@ class Identifier:
         )
 
 
-    def _alternatives(self, trial: PreparedTrial, verdict: TrustVerdict, cnn
-                      ) -> TrustVerdict:
+    def _alternatives(self, trial: PreparedTrial, verdict: TrustVerdict, cnn,
+                      locked: LockedProjection | None) -> TrustVerdict:
         """The verdict with the mistakes an alternative reading reveals
         (:mod:`~posture_id.identify.alternatives`: columns exchanged, another body's
         size), looked for when the answer leaves more than the noise and a network can
-        read the alternatives."""
+        read the alternatives. ``locked``: the trial's unweighted locked projection (the
+        same for every alternative: they keep its tilt)."""
         noise = verdict.noise
         if (self.cnn is None or cnn is None or noise is None or noise.basis != "locked"
-                or not NOISE_RATIO_LIMIT < noise.ratio < math.inf
-                or noise.relative / noise.ratio < MIN_NOISE_SHARE):
-            return verdict
-        base = noise.ratio if self.method is Method.CNN else self._network_ratio(trial, self.body)
-        found = better_explanations(trial, self.body, base, self._network_ratio,
+                or not NOISE_RATIO_LIMIT < noise.ratio < math.inf):
+            return verdict  # nothing to read, or an answer within the noise
+        def ratio_of(other: PreparedTrial, body: Body) -> float:
+            return self._network_ratio(other, body, locked)
+
+        base = noise.ratio if self.method is Method.CNN else ratio_of(trial, self.body)
+        found = better_explanations(trial, self.body, base, noise.relative, ratio_of,
                                     sizes=isinstance(self.cnn, UniversalIdentifier))
         if not found:
             return verdict
         return replace(verdict, mistakes=verdict.mistakes + tuple(m.sentence for m in found),
                        suggestion="")
 
-    def _network_ratio(self, trial: PreparedTrial, body: Body) -> float:
+    def _network_ratio(self, trial: PreparedTrial, body: Body,
+                       locked: LockedProjection | None = None) -> float:
         """The network's answer on ``trial`` read with ``body``, re-simulated: its
-        stimulus-locked residual in units of the recording's noise (inf: it falls)."""
+        stimulus-locked residual in units of the recording's noise (inf: it falls).
+        ``locked``: the trial's unweighted locked projection (default: made here)."""
         network = self.cnn if body is self.body else self.cnn.for_body(body)
         answer = network.identify(trial, self.level)
-        locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
-        checked = _resimulate(body, trial, answer.parameters, self.fit_options.simulation,
-                              locked)
-        return noise_check(trial, checked["resimulated"], projection=locked).ratio
+        if locked is None:
+            locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+        sway = simulate(body, answer.parameters, trial.stimulus,
+                        replace(self.fit_options.simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG))
+        return noise_check(trial, sway.theta, projection=locked).ratio
 
     def _as(self, method: Method) -> Identifier:
         """This identifier with another method, sharing its network (none for least
@@ -327,25 +333,18 @@ class Identifier:
         rec = np.degrees(trial.recording.theta)
         offsets = projection.best_offsets(np.degrees(answer.resimulated), rec, period / 2,
                                           count=3, step_s=0.01)
-        best = answer, trial
-        for offset in offsets:
-            if abs(offset) < 0.02:
-                continue
-            shifted = _shifted_whole(trial, offset)
-            if shifted is None:
-                continue
-            moved = network.identify_trial(shifted, progress, start)
-            if moved.fell:
-                continue
-            if moved.verdict.noise is not None and (
-                    moved.verdict.noise.ratio < best[0].verdict.noise.ratio):
-                best = moved, shifted
-        if best[1] is trial:
+        candidates = [shifted for offset in offsets if abs(offset) >= 0.02
+                      and (shifted := _shifted_whole(trial, offset)) is not None]
+        # each candidate judged by the network's residual alone; the best identified once
+        judged = [(self._network_ratio(shifted, self.body), shifted) for shifted in candidates]
+        better = [(r, shifted) for r, shifted in judged if r < answer.verdict.noise.ratio]
+        if not better:
             return replace(answer, notices=(*answer.notices, (
                 f"{trial.name}: the stimulus was named, not recorded, and the answer leaves "
                 "more than the noise; no shift of it within half a cycle did better: check "
                 "its onset (--onset-s) and --max-offset-s"))), trial, None
-        moved, shifted = best
+        shifted = min(better, key=lambda t: t[0])[1]
+        moved = network.identify_trial(shifted, progress, start)
         return moved, shifted, (
             f"{trial.name}: the stimulus was named, not recorded, and the answer on it left "
             f"more than the noise: the sway says it ran {shifted.time_offset_s:+.2f} s from "

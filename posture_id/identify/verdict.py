@@ -51,8 +51,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.identify.method import Method
 from posture_id.identify.noise_check import CLOSE_ENOUGH, NoiseCheck
+from posture_id.uncertainty.intervals import LABELS
 
 __all__ = ["TrustVerdict", "TrustLevel", "PEOPLE_LIKE_SHARE", "PINNED_FIELDS", "PINNED_TO",
            "suggestion", "unpinned_parameters"]
@@ -292,21 +294,16 @@ def _listed(names: tuple[str, ...]) -> str:
     return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
-def unpinned_parameters(intervals, estimate_si: np.ndarray | None = None) -> tuple[str, ...]:
+def unpinned_parameters(intervals, estimate_si: np.ndarray) -> tuple[str, ...]:
     """The :data:`PINNED_FIELDS` whose interval's half-width is more than
     :data:`PINNED_TO` of the value ("the hip's Kd"), from a
-    :class:`~posture_id.uncertainty.intervals.ParameterIntervals` (None: none).
-    ``estimate_si``: (N, 4) the values in SI units (default: the intervals' centres)."""
+    :class:`~posture_id.uncertainty.intervals.ParameterIntervals` (None: none) and the
+    answer's values ``estimate_si`` (N, 4), SI units."""
     if intervals is None:
         return ()
-    from posture_id.dec.parameters import TARGET_FIELDS
-    from posture_id.uncertainty.intervals import LABELS
-
     half = (intervals.upper_si - intervals.lower_si) / 2
-    value = (intervals.upper_si + intervals.lower_si) / 2 if estimate_si is None \
-        else np.asarray(estimate_si, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        wide = ~(half <= PINNED_TO * np.abs(value))
+    with np.errstate(invalid="ignore"):
+        wide = ~(half <= PINNED_TO * np.abs(np.asarray(estimate_si, dtype=float)))
     out = []
     for i, joint in enumerate(intervals.joints):
         names = [LABELS[f] for k, f in enumerate(TARGET_FIELDS)

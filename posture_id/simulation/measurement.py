@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from posture_id.errors import SimulationError
-from posture_id.simulation.noise import shaped_noise
+from posture_id.simulation.noise import corner_psd, shaped_noise
 
 __all__ = ["MeasurementNoise", "COLOUR_CORNER_HZ", "MEASUREMENT_STREAM"]
 
@@ -102,5 +102,4 @@ def _coloured(rng: np.random.Generator, s: int, n: int, dt: float, slope: float
     """(S, N) unit-variance noise of PSD ∝ (1 + (f/f_0)²)^(−slope/2) (white for 0)."""
     if slope == 0:
         return rng.standard_normal((s, n))
-    return shaped_noise(rng, s, n, dt,
-                        lambda f: (1 + (f / COLOUR_CORNER_HZ) ** 2) ** (-slope / 2))
+    return shaped_noise(rng, s, n, dt, lambda f: corner_psd(f, COLOUR_CORNER_HZ, slope))

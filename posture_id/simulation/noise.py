@@ -53,7 +53,7 @@ import numpy as np
 from posture_id.errors import SimulationError
 
 __all__ = ["MotorNoise", "MotorShape", "DEFAULT_SHAPE", "DEFAULT_CUTOFF_HZ", "motor_noise_torques",
-           "per_trial", "shaped_noise"]
+           "per_trial", "shaped_noise", "corner_psd"]
 
 #: Unit-noise draws kept (a batch's trials: 64 per universal shard).
 UNIT_NOISE_KEPT = 128
@@ -109,11 +109,10 @@ class MotorShape:
 
     def psd(self, frequency_hz: np.ndarray, cutoff_hz: float) -> np.ndarray:
         """The unnormalised one-sided PSD S(f) of the module docstring."""
-        f = np.asarray(frequency_hz, dtype=float)
-        out = (1 + (f / cutoff_hz) ** 2) ** (-self.slope / 2)
+        out = corner_psd(frequency_hz, cutoff_hz, self.slope)
         if self.second_cutoff_hz is not None:
-            out = out * (1 + (f / self.second_cutoff_hz) ** 2) ** (
-                -(self.second_slope - self.slope) / 2)
+            out = out * corner_psd(frequency_hz, self.second_cutoff_hz,
+                                   self.second_slope - self.slope)
         return out
 
     def level(self, t_s: np.ndarray, duration_s: float) -> np.ndarray:
@@ -201,6 +200,13 @@ class MotorNoise:
             eta = math.sqrt(rho) * eta[:, -1:] + math.sqrt(1 - rho) * eta[:, :n_joints]
         t = np.arange(n_steps) * dt
         return eta * shape.level(t, n_steps * dt)[:, None]
+
+
+def corner_psd(frequency_hz: np.ndarray, corner_hz: float, slope: float) -> np.ndarray:
+    """(1 + (f/f_c)²)^(−slope/2): flat below the corner, log-log slope −``slope`` above it
+    (the unnormalised PSD of every shaped noise here and of coloured sensor noise)."""
+    f = np.asarray(frequency_hz, dtype=float)
+    return (1 + (f / corner_hz) ** 2) ** (-slope / 2)
 
 
 def shaped_noise(rng: np.random.Generator, n_samples: int, columns: int, dt: float,

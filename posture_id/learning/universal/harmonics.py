@@ -141,6 +141,7 @@ def _coloured_unit_variance(n: int, sample_rate_hz: float, frequencies_hz: tuple
     """(G, K) E|X_k|² of unit-variance coloured noise of each slope of :data:`_SLOPE_GRID`
     over a span of n samples (:func:`coloured_noise_parts`)."""
     from posture_id.simulation.measurement import COLOUR_CORNER_HZ
+    from posture_id.simulation.noise import corner_psd
 
     m = 2 * n  # the PSD on the grid MeasurementNoise draws it on (twice the span)
     f = np.fft.rfftfreq(m, 1.0 / sample_rate_hz)
@@ -149,7 +150,7 @@ def _coloured_unit_variance(n: int, sample_rate_hz: float, frequencies_hz: tuple
     cosines = np.cos(2 * np.pi * np.outer(lags, frequencies_hz) / sample_rate_hz)  # (N, K)
     out = np.empty((len(_SLOPE_GRID), len(frequencies_hz)))
     for g, slope in enumerate(_SLOPE_GRID):
-        psd = (1 + (f / COLOUR_CORNER_HZ) ** 2) ** (-slope / 2)
+        psd = corner_psd(f, COLOUR_CORNER_HZ, slope)
         psd[0] = 0.0  # the noise has no offset
         r = np.fft.irfft(psd, n=m)[:n]
         r = r / r[0]

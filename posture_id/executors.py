@@ -127,6 +127,29 @@ class LocalExecutor(TaskExecutor):
 CONNECT_TIMEOUT_S = 30.0
 
 
+def check_scheduler_address(address: str, timeout_s: float = 5.0) -> None:
+    """Refuse, in seconds rather than Dask's half minute of retries, a scheduler address
+    that is malformed or where nothing accepts a connection (``tcp://host:port``)."""
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if parts.scheme not in ("tcp", "tls") or not host or port is None:
+        raise PostureIdError(f"--scheduler {address}: not a Dask scheduler address "
+                             "(tcp://host:port)")
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        raise PostureIdError(f"--scheduler {address}: nothing accepts a connection there "
+                             f"({exc.strerror or exc}); start the scheduler (dask scheduler) "
+                             "or check the address") from None
+
+
 class DaskExecutor(TaskExecutor):
     """Tasks on a running Dask distributed cluster (``tcp://host:port``); up to two per
     cluster thread in flight, each released once its result is here."""

@@ -28,6 +28,8 @@ __all__ = [
     "non_negative_float",
     "check_output_file",
     "check_output_folder",
+    "command_rate",
+    "share",
     "say",
     "write_result",
 ]
@@ -68,6 +70,11 @@ positive_int = _number(int, lambda x: x >= 1, "an integer ≥ 1")
 non_negative_int = _number(int, lambda x: x >= 0, "an integer ≥ 0")
 positive_float = _number(float, lambda x: x > 0, "a number > 0")
 non_negative_float = _number(float, lambda x: x >= 0, "a number ≥ 0")
+#: A platform's command rate, Hz: a motion controller takes 1 Hz to 10 kHz (a higher
+#: rate writes a file of millions of lines per minute, a lower one no tilt).
+command_rate = _number(float, lambda x: 1 <= x <= 10_000, "a rate from 1 to 10000 Hz")
+#: A share of something: more than none, less than all.
+share = _number(float, lambda x: 0 < x < 1, "a share between 0 and 1")
 #: An interval's nominal coverage: the calibrations hold 0.50 to 0.99.
 interval_level = _number(float, lambda x: 0.5 <= x <= 0.99, "a level from 0.5 to 0.99")
 

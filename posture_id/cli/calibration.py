@@ -6,12 +6,12 @@ import argparse
 from pathlib import Path
 
 from posture_id.cli.arguments import (
-    check_output_folder,
     non_negative_float,
     non_negative_int,
     positive_int,
     say,
 )
+from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
 
 __all__ = ["add_parser"]
@@ -47,8 +47,17 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
+#: What ``calibration`` writes into its --out folder (its journal is its own).
+CALIBRATION_FILES = ("calibration.json", "calibration_report.json", "calibration_report.md",
+                     "coverage.png", "reliability.png", "identifiability.png")
+
+
 def run(args: argparse.Namespace) -> int:
-    check_output_folder(args.out, "--out", inputs=(args.model, args.dataset))
+    with OutputFolder(args.out, "--out", CALIBRATION_FILES, inputs=(args.model, args.dataset)):
+        return _calibration(args)
+
+
+def _calibration(args: argparse.Namespace) -> int:
     from posture_id.studies.calibration import install_calibration, run_calibration
 
     with TerminalProgress(prefix="posture-id calibration") as progress:

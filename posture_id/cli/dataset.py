@@ -61,6 +61,10 @@ def add_parser(sub) -> None:
 
 def run_generate(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=(args.body,))
+    if args.scheduler:
+        from posture_id.executors import check_scheduler_address
+
+        check_scheduler_address(args.scheduler)
     config = DatasetConfig(
         trials=args.trials, body=str(args.body or DEFAULT_URDF), seed=args.seed,
         shard_size=args.shard_size, **prts_arguments(args), simulation=model_options(args),

@@ -7,13 +7,14 @@ import argparse
 from pathlib import Path
 
 from posture_id.cli.arguments import (
-    check_output_folder,
     non_negative_float,
     non_negative_int,
     positive_float,
     positive_int,
     say,
+    share,
 )
+from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
 
 __all__ = ["add_parser"]
@@ -29,7 +30,7 @@ def add_parser(sub) -> None:
     p.add_argument("--sensor-noise-deg", type=non_negative_float, default=0.05,
                    help="white sensor noise SD, degrees (default %(default)g)")
     motor = p.add_mutually_exclusive_group()
-    motor.add_argument("--locked-share", type=positive_float,
+    motor.add_argument("--locked-share", type=share,
                        help="motor noise leaving this share of the body COM sway locked "
                             "(people: 0.15–0.4; default: no motor noise)")
     motor.add_argument("--motor-sd-deg", type=non_negative_float,
@@ -54,8 +55,18 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
+#: What ``design`` writes into its --out folder (DesignResult.write).
+DESIGN_FILES = ("design.md", "design.json", "design.png", "protocols/*.json",
+                "recommended.json")
+
+
 def run(args: argparse.Namespace) -> int:
-    check_output_folder(args.out, "--out", inputs=tuple(args.protocol or ()) + (args.body,))
+    with OutputFolder(args.out, "--out", DESIGN_FILES,
+                      inputs=tuple(args.protocol or ()) + (args.body,)):
+        return _design(args)
+
+
+def _design(args: argparse.Namespace) -> int:
     from posture_id.bodies.body import DEFAULT_URDF, load_body
     from posture_id.design.candidates import default_candidates
     from posture_id.design.goal import PARAMETERS, DesignGoal

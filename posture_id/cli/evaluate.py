@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from posture_id.cli.arguments import check_output_folder, non_negative_int, say
+from posture_id.cli.arguments import non_negative_int, say
+from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
+from posture_id.errors import PostureIdError
 
 __all__ = ["add_parser"]
 
@@ -25,8 +27,22 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
+#: What ``evaluate`` writes into its --out folder.
+EVALUATE_FILES = ("report.json", "report.md", "parameter_errors.png",
+                  "identification_error.png", "universal_comparison.md",
+                  "universal_comparison.json")
+
+
 def run(args: argparse.Namespace) -> int:
-    check_output_folder(args.out, "--out", inputs=(args.model, args.dataset))
+    if args.universal not in (None, "bundled") and not (Path(args.universal)
+                                                        / "model.json").is_file():
+        raise PostureIdError(f"{args.universal}: --universal is not a universal model (no "
+                             "model.json)")
+    with OutputFolder(args.out, "--out", EVALUATE_FILES, inputs=(args.model, args.dataset)):
+        return _evaluate(args)
+
+
+def _evaluate(args: argparse.Namespace) -> int:
     # torch loads here, not when the parser is built: other commands start without it
     from posture_id.learning.evaluation import evaluate
 

@@ -22,7 +22,7 @@ from posture_id.cli.stimulus import (
     add_lab_stimulus_arguments,
     recording_and_stimulus,
 )
-from posture_id.dec.parameters import DecParameters
+from posture_id.dec.parameters import MAX_DELAY_S, PAPER_TABLE, DecParameters
 from posture_id.errors import PostureIdError
 from posture_id.fitting.options import (
     Compilation,
@@ -121,6 +121,11 @@ def search_keywords(args: argparse.Namespace) -> dict:
         if not low < high:
             raise PostureIdError(f"{flag}: MIN must be below MAX, got {low:g} {high:g}")
         out[key] = (low - 1.0, high - 1.0)
+    longest = args.delay_range[1] * max(m["delay_s"] for m in PAPER_TABLE.values())
+    if longest > MAX_DELAY_S:
+        raise PostureIdError(f"--delay-range: MAX {args.delay_range[1]:g}× the default delays "
+                             f"reaches {longest:g} s, beyond the {MAX_DELAY_S:g} s a DEC delay "
+                             "may be (a parameter file refuses it too)")
     return out
 
 

@@ -3,17 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import glob
 from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
     check_output_file,
-    check_output_folder,
     interval_level,
     say,
     write_result,
 )
 from posture_id.cli.fit import add_search_arguments, search_flags_given, search_keywords
+from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_column_arguments,
@@ -118,9 +119,19 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _folders_of(recordings: list[Path]) -> set[Path]:
+    """The recordings' folders: a cohort's results beside its recordings would be read as
+    recordings the next time."""
+    return {p.parent for p in recordings}
+
+
 def run_cohort(args: argparse.Namespace) -> int:
     from posture_id.identify import Identifier, Method
-    from posture_id.identify.cohort import find_recordings, identify_cohort
+    from posture_id.identify.cohort import (
+        find_recordings,
+        identify_cohort,
+        subjects_without_a_body,
+    )
 
     if args.plot:
         raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording")
@@ -129,12 +140,25 @@ def run_cohort(args: argparse.Namespace) -> int:
                              "FOLDER (one JSON per recording and summary.csv)")
     fit_options = FitOptions(**search_keywords(args))
     recordings = find_recordings(args.recording)
-    check_output_folder(args.out, "--out", inputs=(*recordings, args.body, args.tilt))
-    body = load_body(args.body or DEFAULT_URDF)
-    stimulus = stimulus_from_args(args, default=None)
-    identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
-    with TerminalProgress("recordings", prefix="posture-id identify") as progress:
-        result = identify_cohort(recordings, args.out, identifier, args.scheduler, progress,
-                                 stimulus, args.model, columns_from_args(args), args.bodies)
+    writes = (*(f"{glob.escape(p.stem)}.json" for p in recordings), "summary.csv")
+    if args.scheduler:
+        from posture_id.executors import check_scheduler_address
+
+        check_scheduler_address(args.scheduler)
+    if args.bodies is not None:
+        without = subjects_without_a_body(recordings, args.bodies)
+        if without:
+            names = ", ".join(p.name for p in without[:3]) + (" …" if len(without) > 3 else "")
+            say(f"{len(without)} of {len(recordings)} recordings have no body in "
+                f"{args.bodies} ({names}): they get {args.body or 'the default TIP'}")
+    with OutputFolder(args.out, "--out", writes,
+                      inputs=(*recordings, args.body, args.tilt, *_folders_of(recordings))):
+        body = load_body(args.body or DEFAULT_URDF)
+        stimulus = stimulus_from_args(args, default=None)
+        identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
+        with TerminalProgress("recordings", prefix="posture-id identify") as progress:
+            result = identify_cohort(recordings, args.out, identifier, args.scheduler,
+                                     progress, stimulus, args.model, columns_from_args(args),
+                                     args.bodies)
     say(result.summary())
     return 1 if result.failed else 0

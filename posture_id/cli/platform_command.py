@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.cli.arguments import check_output_file, positive_float, positive_int, say
+from posture_id.cli.arguments import check_output_file, command_rate, positive_int, say
 from posture_id.cli.stimulus import protocol_profile
 
 __all__ = ["add_parser"]
@@ -19,8 +19,8 @@ def add_parser(sub) -> None:
                        "the platform's command file: time_s,tilt_deg at a chosen rate")
     p.add_argument("protocol", type=Path, help="protocol file (JSON)")
     p.add_argument("--out", type=Path, required=True, help="command file (CSV)")
-    p.add_argument("--rate-hz", type=positive_float, default=100.0,
-                   help="command rate, Hz (default %(default)g)")
+    p.add_argument("--rate-hz", type=command_rate, default=100.0,
+                   help="command rate, Hz, up to 10 kHz (default %(default)g)")
     p.add_argument("--part", type=positive_int,
                    help="which recording of a two-amplitude protocol (1 or 2)")
     p.set_defaults(func=run)

@@ -5,6 +5,7 @@ stimuli (docs/universal.md)."""
 from __future__ import annotations
 
 import argparse
+import re
 from pathlib import Path
 
 from posture_id.cli.arguments import (
@@ -15,6 +16,7 @@ from posture_id.cli.arguments import (
     positive_int,
     say,
 )
+from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
 from posture_id.errors import PostureIdError
 from posture_id.simulation.noise_families import NoiseFamily
@@ -127,7 +129,7 @@ def add_parser(sub) -> None:
 def run_data(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
-    from posture_id.learning.universal.scope import UniversalScope
+    from posture_id.learning.universal.scope import ScopeError, UniversalScope
 
     given = {"trials": args.trials} if args.trials else {}
     scope = {k: v for k, v in (("clean_share", args.clean_share),
@@ -138,9 +140,12 @@ def run_data(args: argparse.Namespace) -> int:
                                ("preset_jitter", args.preset_jitter),
                                ("amplitude_deg", args.amplitude_deg),
                                ("noise_families", args.noise_families)) if v is not None}
-    # a scope out of range is a ScopeError: one line, exit status 2 (cli.main)
-    given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
-                                       for k, v in scope.items()})
+    try:
+        given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
+                                           for k, v in scope.items()})
+    except ScopeError as exc:  # named by the flag the user gave, not the scope's field
+        raise PostureIdError(re.sub(r"\bscope (\w+)", lambda m: "--" + m.group(1).replace(
+            "_", "-"), str(exc))) from None
     config = UniversalDataConfig(shards=args.shards, seed=args.seed, **given)
     with TerminalProgress("shard", prefix="posture-id universal data",
                           quiet=args.quiet) as progress:
@@ -159,6 +164,8 @@ def run_train(args: argparse.Namespace) -> int:
     if args.init is not None and (args.hidden or args.dropout is not None or args.members != 1):
         raise PostureIdError("--init keeps its model's network: --hidden, --dropout and "
                              "--members go with a network trained from the start")
+    if args.init is not None and not (args.init / "model.json").is_file():
+        raise PostureIdError(f"{args.init}: --init is not a universal model (no model.json)")
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
                                ("weight_decay", args.weight_decay),
                                ("point_loss", args.point_loss),
@@ -187,8 +194,16 @@ def run_check(args: argparse.Namespace) -> int:
     return 0
 
 
+#: What ``universal table`` writes into its --out folder.
+TABLE_FILES = ("table.json", "table.md", "table.png")
+
+
 def run_table(args: argparse.Namespace) -> int:
-    check_output_folder(args.out, "--out")
+    with OutputFolder(args.out, "--out", TABLE_FILES, inputs=(args.model, args.cache)):
+        return _table(args)
+
+
+def _table(args: argparse.Namespace) -> int:
     from posture_id.learning.universal.identifier import BUNDLED_DIR
     from posture_id.learning.universal.table import family_table
 

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from posture_id.design.noise import DesignError
+from posture_id.simulation.protocols import MAX_PLATFORM_DEG
 
 __all__ = ["DesignGoal", "PARAMETERS"]
 
@@ -42,6 +43,10 @@ class DesignGoal:
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise DesignError(f"goal {name} must be > 0, got {value}")
+        if (self.max_peak_to_peak_deg or 0) > MAX_PLATFORM_DEG:
+            raise DesignError(f"goal max_peak_to_peak_deg {self.max_peak_to_peak_deg:g}° is "
+                              f"above the {MAX_PLATFORM_DEG:g}° any protocol may hold: it "
+                              "would limit nothing")
 
     def columns(self) -> list[int]:
         return [PARAMETERS.index(p) for p in self.parameters]

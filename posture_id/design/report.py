@@ -66,8 +66,13 @@ class DesignResult:
         leaves parameters undetermined (median predicted width at least
         :data:`UNDETERMINED` of the prior's). The fit then works beyond its linear range
         for them, and the widths predicted for the others are likely too narrow
-        (docs/design.md: 1.3–1.75× on people-like sway)."""
+        (docs/design.md: 1.3–1.75× on people-like sway); and goal limits that no
+        candidate meets."""
         out = []
+        if self.predictions and self.best is None:
+            out.append("no candidate keeps within the goal's limits (each row says which it "
+                       "breaks): nothing is recommended and recommended.json is not written; "
+                       "relax a limit or give candidates that meet it (--protocol)")
         for p in self.predictions:
             loose = int(np.sum(~(p.widths < UNDETERMINED)))
             if loose:

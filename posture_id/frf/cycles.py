@@ -84,6 +84,10 @@ def cycle_average(signal: np.ndarray, samples_per_cycle: int, skip_cycles: int =
     if drift_order > 0 and cycles < 2:
         raise PostureIdError(f"{name}: a drift can only be told from the response with ≥ 2 "
                              "analysed cycles")
+    if drift_order >= 2 * cycles:
+        raise PostureIdError(f"{name}: a drift of order {drift_order} over {cycles} cycles "
+                             "bends as fast as the stimulus's own lowest frequency and would "
+                             f"take up the response: give a drift order below {2 * cycles}")
     p = samples_per_cycle
     span = x[start : start + cycles * p]
     trailing = span.shape[1:]

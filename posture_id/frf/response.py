@@ -209,6 +209,10 @@ def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate
     """FRFs of ``outputs`` (S, M) relative to ``tilt`` (S,), both rad, sampled evenly at
     ``sample_rate_hz`` from the stimulus's start; ``period_s``: one stimulus cycle."""
     options = options or FrfOptions()
+    if options.max_frequency_hz > sample_rate_hz / 2:
+        raise PostureIdError(f"{name}: max_frequency_hz {options.max_frequency_hz:g} Hz is above "
+                             f"the recording's Nyquist frequency ({sample_rate_hz / 2:g} Hz at "
+                             f"{sample_rate_hz:g} Hz): no frequency there can be analysed")
     p = samples_per_cycle(period_s, sample_rate_hz, name)
     y = np.asarray(outputs, dtype=float)
     u = np.asarray(tilt, dtype=float)

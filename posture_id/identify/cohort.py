@@ -179,6 +179,24 @@ def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | N
     return {**result, "cohort_options": cohort_options(identifier, stimulus, columns)}
 
 
+def subjects_without_a_body(recordings: list[Path], bodies: str | Path) -> list[Path]:
+    """The recordings whose subject has no ``<recording stem>.urdf`` in ``bodies``; a
+    folder of bodies that holds none of the recordings' is refused (the names do not
+    match: every subject would get the default body)."""
+    bodies = Path(bodies)
+    if not bodies.is_dir():
+        raise PostureIdError(f"{bodies}: not a folder of bodies (one URDF per subject, named "
+                             "like their recording)")
+    missing = [p for p in recordings if not (bodies / f"{p.stem}.urdf").is_file()]
+    if recordings and len(missing) == len(recordings):
+        found = sorted(q.name for q in bodies.glob("*.urdf"))[:3]
+        raise PostureIdError(
+            f"{bodies}: holds no body of these recordings (wanted "
+            f"{recordings[0].stem}.urdf and the like; found {', '.join(found) or 'no URDF'}):"
+            " name each subject's URDF like their recording")
+    return missing
+
+
 class SubjectIdentifiers:
     """The identifier of each recording of a cohort: for a subject with a body of their
     own (``bodies/<recording stem>.urdf``) one made like ``identifier`` for that body,

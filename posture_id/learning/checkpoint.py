@@ -125,6 +125,10 @@ def load_model(folder: str | Path) -> LoadedModel:
         sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise LearningError(f"{sidecar_path}: not valid JSON ({exc})") from None
+    if isinstance(sidecar, dict) and sidecar.get("format") == "posture_id-universal-model":
+        raise LearningError(f"{folder}: the universal model, not a per-body model: "
+                            "`posture-id universal table` scores it, `posture-id evaluate "
+                            "SPECIALIST SET --universal` sets it beside a specialist")
     if not isinstance(sidecar, dict) or sidecar.get("format") != FORMAT:
         raise LearningError(f"{sidecar_path}: not a posture_id model (format is not '{FORMAT}')")
     version = sidecar.get("format_version")

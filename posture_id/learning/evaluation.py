@@ -252,6 +252,13 @@ def evaluate(model_dir: str | Path, dataset_dir: str | Path, resimulate: int = 2
         raise LearningError(f"{model_dir}: a {layout.value} model for "
                             f"{model.config.modules} modules cannot read the {n}-segment "
                             f"data set {dataset_dir}")
+    trained_on, scored_on = model.sidecar.get("body", {}), data.manifest["body"]
+    if trained_on.get("sha256") not in (None, scored_on.get("sha256")):
+        raise LearningError(
+            f"{dataset_dir}: a data set of the body {scored_on.get('name')!r}, and the model "
+            f"{model_dir} was trained on {trained_on.get('name')!r}: a per-body model is "
+            "scored on its own body's data (the universal model reads any body: "
+            "`posture-id universal table`)")
     joints = tuple(data.manifest["body"]["joints"])
     splits, test_detail = {}, None
     for name in SPLITS:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import MISSING, asdict, dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
 
@@ -58,6 +58,11 @@ def _count(name: str, value) -> int:
 
 #: The largest peak-to-peak tilt a protocol may ask of a posture platform, degrees.
 MAX_PLATFORM_DEG = 20.0
+#: The highest tilt frequency a protocol may hold, Hz: the Nyquist frequency of the 50 Hz
+#: recordings (and far above what a posture platform follows).
+MAX_FREQUENCY_HZ = KNOT_RATE_HZ / 8
+#: The longest protocol, every recording and repetition, s: a subject's session.
+MAX_SESSION_S = 2 * 3600.0
 
 
 def _amplitude(name: str, value: float, limit: float = MAX_PLATFORM_DEG) -> float:
@@ -99,6 +104,15 @@ class _Single:
     def duration_s(self) -> float:
         """s, one recording."""
         return self.cycles * self.period_s
+
+    def _check_session(self) -> None:
+        """Refuse a protocol longer than a session (:data:`MAX_SESSION_S`)."""
+        total = self.repetitions * self.duration_s
+        if total > MAX_SESSION_S:
+            raise StimulusError(
+                f"protocol of {self.repetitions} × {self.cycles} cycles of {self.period_s:g} s"
+                f" = {total / 3600:.3g} h: longer than the {MAX_SESSION_S / 3600:g} h of a "
+                "session on a platform (fewer cycles or repetitions)")
 
     @property
     def recording_minutes(self) -> float:
@@ -145,6 +159,7 @@ class PrtsProtocol(_Single):
         _count("cycles", self.cycles)
         _count("repetitions", self.repetitions)
         _period("state_s × states", self.state_s * self.states)
+        self._check_session()
 
     @property
     def period_s(self) -> float:
@@ -217,9 +232,10 @@ class MultisineProtocol(_Single):
             if name == "weights" and (min(value) < 0 or max(value) <= 0):
                 raise StimulusError("protocol weights must be ≥ 0, not all 0")
             object.__setattr__(self, name, value)
-        if max(h) / self.period_s > 0.5 * KNOT_RATE_HZ / 4:
+        if max(h) / self.period_s > MAX_FREQUENCY_HZ:
             raise StimulusError(f"protocol harmonics reach {max(h) / self.period_s:g} Hz: "
-                                f"above {KNOT_RATE_HZ / 8:g} Hz")
+                                f"above {MAX_FREQUENCY_HZ:g} Hz")
+        self._check_session()
 
     @property
     def frequencies_hz(self) -> np.ndarray:
@@ -276,7 +292,12 @@ class SumOfSinesProtocol(_Single):
             object.__setattr__(self, "phases_rad", p)
         _count("cycles", self.cycles)
         _count("repetitions", self.repetitions)
+        if max(f) > MAX_FREQUENCY_HZ:
+            raise StimulusError(f"protocol frequencies_hz reach {max(f):g} Hz: above "
+                                f"{MAX_FREQUENCY_HZ:g} Hz, the 50 Hz recordings' Nyquist "
+                                "frequency")
         self.period_s  # noqa: B018 (checks the frequencies are commensurate)
+        self._check_session()
 
     @property
     def period_s(self) -> float:
@@ -398,6 +419,11 @@ def protocol_from_dict(data: dict, where: str = "protocol") -> Protocol:
     fields = {k: v for k, v in data.items() if k != "kind"}
     known = {f for f in cls.__dataclass_fields__ if f != "kind"}
     unknown = sorted(set(fields) - known)
+    missing = sorted(name for name, f in cls.__dataclass_fields__.items()
+                     if f.init and name not in fields and f.default is MISSING
+                     and f.default_factory is MISSING)
+    if missing:
+        raise StimulusError(f"{where}: a {kind} protocol needs the field(s) {missing}")
     if unknown:
         raise StimulusError(f"{where}: unknown field(s) {unknown} for a {kind} protocol "
                             f"(fields: {sorted(known)})")
@@ -415,11 +441,19 @@ def protocol_from_dict(data: dict, where: str = "protocol") -> Protocol:
 def read_protocol(path: str | Path) -> Protocol:
     """A protocol from a JSON file (``write_protocol``)."""
     path = Path(path)
+    if path.is_dir():
+        raise StimulusError(f"{path}: is a folder, not a protocol file (JSON, from "
+                            "posture-id design)")
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise StimulusError(f"{path}: no such protocol file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except PermissionError:
+        raise StimulusError(f"{path}: the protocol file is not readable") from None
+    except UnicodeDecodeError as exc:
+        raise StimulusError(f"{path}: not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
+                            f"{exc.start}); save the protocol as UTF-8 JSON") from None
+    except json.JSONDecodeError as exc:
         raise StimulusError(f"{path}: not valid JSON ({exc})") from None
     return protocol_from_dict(data, str(path))
 

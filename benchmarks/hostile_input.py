@@ -14,7 +14,9 @@ tries them, and each outcome sorted into one of
 Run:  .venv/bin/python benchmarks/hostile_input.py [--out docs/results/hostile_input]
                                                    [--only SUBSTRING]
 
-Writes ``report.md`` (the counts per surface and every case's line) and ``rows.json``.
+Writes ``report.md`` (the counts per surface and every case's line) and ``rows.json``; a
+journal there makes an interrupted run resumable, and records a case that never finished
+(killed while inside code the time limit cannot interrupt) as a hang.
 ``tests/test_hostile_newer.py`` runs every case and requires *clear* or *handled*.
 The cases run in this process, each in a fresh folder (the current directory while it
 runs); the shared material (recordings, a protocol, small data sets) is made once.
@@ -604,6 +606,32 @@ def all_cases() -> list[Case]:
     return cases
 
 
+# ------------------------------------------------------------------------- journal
+#: One JSON line per case started and per case finished: a run again goes on from there,
+#: and a case started but never finished (the process killed while it ran, e.g. inside C
+#: code the time limit cannot interrupt) is recorded as a hang.
+JOURNAL = "hostile_input.journal"
+
+
+def _journal_rows(journal: Path) -> dict[str, Outcome]:
+    if not journal.exists():
+        return {}
+    rows, started = {}, []
+    for line in journal.read_text(encoding="utf-8").splitlines():
+        entry = json.loads(line)
+        if "started" in entry:
+            started.append(entry["started"])
+        else:
+            rows[entry["name"]] = Outcome(entry["name"], entry["surface"], entry["outcome"],
+                                          entry["status"], entry["line"], entry["seconds"])
+    for name in started:
+        if name not in rows:
+            surface = next(c.surface for c in all_cases() if c.name == name)
+            rows[name] = Outcome(name, surface, "hang", None,
+                                 "never finished: the process was stopped while it ran", 0.0)
+    return rows
+
+
 # ------------------------------------------------------------------------- report
 def _report(rows: list[Outcome], seconds: float, command: str) -> str:
     surfaces = sorted({r.surface for r in rows})
@@ -631,19 +659,29 @@ def main(argv: list[str] | None = None) -> int:
     from posture_id.fileio import atomic_write_text, json_text
 
     cases = [c for c in all_cases() if args.only is None or args.only in c.name]
+    args.out.mkdir(parents=True, exist_ok=True)
+    journal = args.out / JOURNAL
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="hostile-") as tmp:
         material = make_material(Path(tmp) / "material")
+        done = _journal_rows(journal)
         rows = []
         for k, case in enumerate(cases, 1):
-            row = run_case(case, material, Path(tmp) / "case")
+            if case.name in done:
+                row = done[case.name]
+            else:
+                with journal.open("a", encoding="utf-8") as out:
+                    out.write(json.dumps({"started": case.name}) + "\n")
+                row = run_case(case, material, Path(tmp) / "case")
+                with journal.open("a", encoding="utf-8") as out:
+                    out.write(json.dumps(row.to_dict()) + "\n")
             rows.append(row)
             print(f"[{k}/{len(cases)}] {row.outcome:9s} {case.name}: {row.line[:150]}",
                   file=sys.stderr, flush=True)
     seconds = time.perf_counter() - start
+    journal.unlink()
     command = ".venv/bin/python benchmarks/hostile_input.py"
     if args.only is None:
-        args.out.mkdir(parents=True, exist_ok=True)
         atomic_write_text(args.out / "report.md", _report(rows, seconds, command))
         atomic_write_text(args.out / "rows.json", json_text([r.to_dict() for r in rows]))
         print(f"wrote {args.out / 'report.md'}", file=sys.stderr)

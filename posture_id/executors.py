@@ -134,11 +134,13 @@ def check_scheduler_address(address: str, timeout_s: float = 5.0) -> None:
     from urllib.parse import urlsplit
 
     parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    if parts.scheme not in ("tcp", "tls"):  # inproc://, ucx://, ws://: Dask's own check
+        return
     try:
         host, port = parts.hostname, parts.port
     except ValueError:
         host = port = None
-    if parts.scheme not in ("tcp", "tls") or not host or port is None:
+    if not host or port is None:
         raise PostureIdError(f"--scheduler {address}: not a Dask scheduler address "
                              "(tcp://host:port)")
     try:

@@ -534,3 +534,36 @@ def plot_score_grid(rows: list[str], columns: list[str], panels: dict, path=None
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_model_frfs(frequencies_hz, recorded, models: dict, coherence, title: str = "",
+                    path=None, ax=None):
+    """The recording's locked FRF (gain, phase; points) with models' FRFs over it (lines),
+    and its coherence: the figure of an FRF fit (IC) or a model comparison.
+
+    Args:
+        frequencies_hz: (K,) Hz. recorded: (K,) complex tilt → COM sway. models: label →
+            (K,) complex. coherence: (K,) 0–1.
+    """
+    fig, axes = _axes(ax, 3, 1, (8, 8), sharex=True)
+    f = np.asarray(frequencies_hz)
+    axes[0, 0].plot(f, np.abs(recorded), "o", ms=3, color="k", label="recording")
+    axes[1, 0].plot(f, np.degrees(np.unwrap(np.angle(recorded))), "o", ms=3, color="k")
+    for k, (label, h) in enumerate(models.items()):
+        axes[0, 0].plot(f, np.abs(h), color=f"C{k}", lw=1.5, label=label)
+        axes[1, 0].plot(f, np.degrees(np.unwrap(np.angle(h))), color=f"C{k}", lw=1.5)
+    axes[2, 0].plot(f, coherence, "o-", ms=3, lw=1, color="k")
+    axes[0, 0].set_yscale("log")
+    axes[0, 0].set_ylabel("gain (deg/deg)")
+    axes[1, 0].set_ylabel("phase (°)")
+    axes[2, 0].set_ylabel("locked share γ²")
+    axes[2, 0].set_ylim(0, 1.05)
+    axes[2, 0].set_xscale("log")
+    axes[2, 0].set_xlabel("frequency (Hz)")
+    for a in axes[:, 0]:
+        a.grid(alpha=0.3, which="both")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

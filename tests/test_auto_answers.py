@@ -84,13 +84,13 @@ def test_when_nothing_balances_the_body_the_longest_standing_answer_is_given(
 def test_the_command_writes_a_fallen_answer_and_exits_1(tip, subject, network_that_falls,
                                                         tmp_path):
     from posture_id.cli import main
-    from posture_id.identify.result import FELL_EXIT
+    from posture_id.cli.exit_status import DOUBTFUL
 
     path = tmp_path / "subject.csv"
     subject.recording.to_csv(path)
     out = tmp_path / "result.json"
     status = main(["identify", str(path), "--method", "cnn", "--out", str(out)])
-    assert status == FELL_EXIT == 1
+    assert status == DOUBTFUL == 1
     data = json.loads(out.read_text())
     assert data["trust"]["level"] == "doubtful" and data["trust"]["doubtful"]
     assert data["parameters"]["ankle"]["kp"] > 0

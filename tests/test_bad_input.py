@@ -394,13 +394,13 @@ def test_a_hopeless_data_set_stops(tmp_path, capsys):
 
 
 @pytest.mark.parametrize(("flags", "problem"), [
-    (["--proportion-jitter", "1"], "scope proportion_jitter must be within [0, 1), got 1.0"),
-    (["--preset-jitter", "1.5"], "scope preset_jitter must be within [0, 1), got 1.5"),
+    (["--proportion-jitter", "1"], "--proportion-jitter must be within [0, 1), got 1.0"),
+    (["--preset-jitter", "1.5"], "--preset-jitter must be within [0, 1), got 1.5"),
     (["--tip-share", "0.6", "--preset-share", "0.5"],
-     "scope tip_share and preset_share must be ≥ 0 with a sum within [0, 1]"),
-    (["--clean-share", "1.5"], "scope clean_share must be within [0, 1], got 1.5"),
+     "--tip-share and --preset-share must be ≥ 0 with a sum within [0, 1]"),
+    (["--clean-share", "1.5"], "--clean-share must be within [0, 1], got 1.5"),
     (["--amplitude-deg", "2", "1"],
-     "scope amplitude_deg must be a range 0 ≤ low ≤ high, got (2.0, 1.0)"),
+     "--amplitude-deg must be a range 0 ≤ low ≤ high, got (2.0, 1.0)"),
 ])
 def test_a_universal_set_s_scope_is_checked_before_anything_runs(tmp_path, capsys, flags,
                                                                   problem):

@@ -123,8 +123,8 @@ def test_a_lab_file_is_read_as_it_is(tmp_path, tip):
 
 def test_a_model_that_falls_is_said_in_one_line(tmp_path, tip, monkeypatch, capsys):
     """The network's answer makes the body fall when re-simulated: one line says so and what
-    to try, the JSON is written and stays strict, the exit status is 1 (FELL_EXIT)."""
-    from posture_id.identify.result import FELL_EXIT
+    to try, the JSON is written and stays strict, the exit status is 1 (DOUBTFUL)."""
+    from posture_id.cli.exit_status import DOUBTFUL
     from posture_id.learning.universal.identifier import UniversalIdentifier
 
     honest = UniversalIdentifier.identify
@@ -141,7 +141,7 @@ def test_a_model_that_falls_is_said_in_one_line(tmp_path, tip, monkeypatch, caps
     simulate(tip).to_recording().with_sensor_noise(0.01, 1).to_csv(path)
     out = tmp_path / "r.json"
     # the network alone: the default (auto) would refine this answer by least squares
-    assert main(["identify", str(path), "--method", "cnn", "--out", str(out)]) == FELL_EXIT
+    assert main(["identify", str(path), "--method", "cnn", "--out", str(out)]) == DOUBTFUL
     captured = capsys.readouterr()
     line = "the identified model falls in re-simulation at t = "
     assert line in captured.err and "try --method hybrid" in captured.err

@@ -66,7 +66,7 @@ def test_fit_and_identify_say_it(tip, tmp_path, capsys):
     assert not (tmp_path / "r.json").exists()
     # the universal model reads the PRTS it finds (0.5 s states) and says what is odd
     assert main(["identify", str(csv), "--method", "cnn", "--out",
-                 str(tmp_path / "u.json")]) == 0
+                 str(tmp_path / "u.json")]) == 1  # written, doubtful
     out = capsys.readouterr().out
     assert "sampled at 50 Hz" in out and "states of 0.5 s outside the 0.2–0.3 s" in out
     assert json.loads((tmp_path / "u.json").read_text())["trust"]["doubtful"]

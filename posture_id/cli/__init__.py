@@ -31,6 +31,7 @@ from posture_id.cli import (
     universal,
 )
 from posture_id.cli.arguments import Parser
+from posture_id.cli.exit_status import BUG, EPILOG, INTERRUPTED, REFUSED
 from posture_id.errors import PostureIdError
 
 __all__ = ["main", "build_parser"]
@@ -45,6 +46,8 @@ def build_parser() -> Parser:
     for command in (body, simulate, fit, frf, dataset, train, evaluate, calibration, identify,
                     demo, benchmark, universal, design, platform_command):
         command.add_parser(sub)
+    for command_parser in sub.choices.values():  # one meaning per exit status, said by all
+        command_parser.epilog = EPILOG
     return parser
 
 
@@ -58,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except PostureIdError as exc:
         print(f"posture-id: error: {exc}", file=sys.stderr)
-        return 2
+        return REFUSED
     except BrokenPipeError:  # `posture-id body | head`: the reader left, nothing to say
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes stdout
@@ -66,11 +69,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("posture-id: interrupted (finished work is kept; run the same command again "
               "to continue where it resumes)", file=sys.stderr)
-        return 130
+        return INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - the one place that turns a bug into one line
         if args.debug:
             raise
         detail = " ".join(str(exc).split())[:300]
         print(f"posture-id: internal error (a bug; please report it): {type(exc).__name__}: "
               f"{detail}. Run again with --debug for the traceback.", file=sys.stderr)
-        return 3
+        return BUG

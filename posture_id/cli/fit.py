@@ -16,6 +16,7 @@ from posture_id.cli.arguments import (
     positive_int,
     write_result,
 )
+from posture_id.cli.exit_status import answered
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_column_arguments,
@@ -38,9 +39,15 @@ __all__ = ["add_parser", "run", "add_search_arguments", "search_keywords"]
 
 
 def add_parser(sub) -> None:
-    fit = sub.add_parser("fit", help="identify DEC parameters from a recording (least squares)")
+    fit = sub.add_parser("fit", help="identify DEC (or IC) parameters from a recording "
+                                     "(least squares)")
     fit.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
     fit.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    fit.add_argument("--model", choices=("dec", "ic"), default="dec",
+                     help="dec (default) or ic: the independent-channel model fitted to the "
+                          "stimulus-locked body COM sway (MODEL §8; seconds, no simulation)")
+    fit.add_argument("--fit-ki", action="store_true",
+                     help="--model ic: also identify Ki (else 0, as the classic fits)")
     fit.add_argument("--init", type=Path, help="initial guess, parameter JSON (e.g. the CNN's)")
     fit.add_argument("--out", type=Path, required=True, help="fit result JSON to write")
     fit.add_argument("--plot", type=Path, help="recorded versus fitted sway (PNG)")
@@ -141,6 +148,10 @@ def run(args: argparse.Namespace) -> int:
     inputs = (args.recording, args.body, args.init, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    if args.model == "ic":
+        return _fit_ic(args)
+    if args.fit_ki:
+        raise PostureIdError("--fit-ki goes with --model ic (DEC's Ki is always identified)")
     options = options_from(args)
     body = load_body(args.body or DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)
@@ -153,7 +164,36 @@ def run(args: argparse.Namespace) -> int:
         result = fit_recording(trial, body, init, options, progress=progress)
     result = at_the_noise(result)
     write_result(result, args.out, args.plot)
-    return 0 if result.converged else 1
+    return answered(not result.converged)
+
+
+#: The DEC fit's flags that mean nothing to the IC fit (it always compares the locked
+#: harmonics and has its own bounds, MODEL §8).
+_DEC_ONLY = ("--init", "--classes", "--no-compile", "--locked", "--max-offset-s",
+             "--prior-sd", "--gain-range", "--delay-range")
+
+
+def _fit_ic(args: argparse.Namespace) -> int:
+    """``fit --model ic``: the IC parameters of the recording's locked COM sway."""
+    given = [f for f in search_flags_given(args) if f in _DEC_ONLY]
+    given += [f for f, on in (("--init", args.init is not None),
+                              ("--classes", args.classes != "relaxed"),
+                              ("--no-compile", args.no_compile)) if on]
+    if given:
+        raise PostureIdError(f"{', '.join(given)}: DEC's fit only; --model ic fits the "
+                             "stimulus-locked COM sway within MODEL §8's bounds")
+    from posture_id.ic import IcFitOptions, fit_ic
+
+    body = load_body(args.body or DEFAULT_URDF)
+    recording, stimulus = recording_and_stimulus(args, body)
+    recording.check_segments(body.segment_names)
+    trial = prepare_trial(recording, stimulus)
+    options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
+                           starts=args.starts, seed=args.seed,
+                           locked=LockedOptions(max_frequency_hz=args.max_frequency_hz))
+    result = fit_ic(trial, body, options)
+    write_result(result, args.out, args.plot)
+    return answered(not result.consistent or bool(result.on_bound))
 
 
 def at_the_noise(result):

@@ -13,6 +13,7 @@ from posture_id.cli.arguments import (
     say,
     write_result,
 )
+from posture_id.cli.exit_status import answered
 from posture_id.cli.fit import add_search_arguments, search_flags_given, search_keywords
 from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
@@ -35,11 +36,7 @@ DEFAULT_METHOD_NAME = "auto"
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
-        "identify", help="identify DEC parameters of a recording",
-        epilog="exit status: 0 an answer (its trust: good, imprecise or doubtful, in the "
-               "summary and the JSON); 1 an answer, written, whose model falls in "
-               "re-simulation (nothing tried balances the body: doubtful); 2 input refused "
-               "(one line says why); 3 a bug; a cohort: 1 when a recording failed")
+        "identify", help="identify DEC parameters of a recording")
     p.add_argument("recording",
                    help="recording CSV (time_s,tilt_deg,<seg>_deg...); a folder or a glob "
                         "pattern identifies a cohort into the --out folder")
@@ -103,8 +100,6 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     # torch and CasADi load here, not when the parser is built: other commands start fast
     from posture_id.identify import Identifier, Method
-    from posture_id.identify.result import FELL_EXIT
-
     body = load_body(args.body or DEFAULT_URDF)
     identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
     recording, stimulus = recording_and_stimulus(args, body)
@@ -113,10 +108,9 @@ def run(args: argparse.Namespace) -> int:
     if args.out is None:
         say("no --out: the result is printed, not written (--out FILE.json keeps it)")
     write_result(result, args.out, args.plot)
-    if result.fell:  # exit status 1: an answer, written, but it does not balance the body
+    if result.fell:  # an answer, written, but it does not balance the body
         say(result.fell_line())
-        return FELL_EXIT
-    return 0
+    return answered(result.fell or (result.verdict is not None and result.verdict.doubtful))
 
 
 def _folders_of(recordings: list[Path]) -> set[Path]:
@@ -161,4 +155,4 @@ def run_cohort(args: argparse.Namespace) -> int:
                                      progress, stimulus, args.model, columns_from_args(args),
                                      args.bodies)
     say(result.summary())
-    return 1 if result.failed else 0
+    return answered(bool(result.failed or result.doubtful))

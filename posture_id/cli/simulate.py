@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
     check_output_file,
@@ -14,8 +16,10 @@ from posture_id.cli.arguments import (
     positive_float,
     say,
 )
+from posture_id.cli.exit_status import answered
 from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
 from posture_id.dec.parameters import DecParameters
+from posture_id.errors import PostureIdError
 from posture_id.simulation.batch import simulate
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorNoise
 from posture_id.simulation.options import SimulationOptions
@@ -54,7 +58,12 @@ def add_motor_noise_arguments(parser: argparse.ArgumentParser, what: str) -> Non
 def add_parser(sub) -> None:
     sim = sub.add_parser("simulate", help="simulate a DEC-controlled body on the tilting platform")
     sim.add_argument("--body", type=Path, help="URDF (default: the TIP)")
-    sim.add_argument("--params", type=Path, help="parameter JSON (default: the body's defaults)")
+    sim.add_argument("--model", choices=("dec", "ic"), default="dec",
+                     help="the controller: dec (default) or ic, the independent-channel model "
+                          "(MODEL §8; every segment at the body COM angle)")
+    sim.add_argument("--params", type=Path,
+                     help="parameter JSON (default: the body's defaults; with --model ic an "
+                          "IC parameter file, \"model\": \"ic\")")
     add_lab_stimulus_arguments(sim, "tilt CSV (time_s,tilt_deg) instead of the PRTS")
     add_model_arguments(sim)
     sim.add_argument("--noise-deg", type=non_negative_float, default=0.0,
@@ -72,9 +81,11 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
-    params = DecParameters.from_json(args.params, body) if args.params else None
     stimulus = stimulus_from_args(args, default=prts())
     options = model_options(args)
+    if args.model == "ic":
+        return _simulate_ic(args, body, stimulus, options)
+    params = DecParameters.from_json(args.params, body) if args.params else None
     motor = (MotorNoise(args.motor_noise, args.motor_cutoff_hz, args.seed)
              if args.motor_noise > 0 else None)
     result = simulate(body, params, stimulus, options, motor_noise=motor)
@@ -89,5 +100,33 @@ def run(args: argparse.Namespace) -> int:
     if not result.stable:
         say(f"posture-id: warning: the body left the ±{options.sway_limit_deg:g}° sway limit "
             f"at t = {result.abort_time:.3f} s; the recording stops there")
-        return 1
-    return 0
+    return answered(not result.stable)
+
+
+def _simulate_ic(args: argparse.Namespace, body, stimulus, options) -> int:
+    """``--model ic``: the IC model's recording (MODEL §8)."""
+    from posture_id.ic import IcParameters, IcPlant, default_ic_parameters, simulate_ic
+
+    if args.deadband_rad_s != default_of(SimulationOptions, "deadband_rad_s"):
+        raise PostureIdError("--deadband-rad-s is DEC's tilt estimator; the IC model has none")
+    params = (IcParameters.from_json(args.params) if args.params
+              else default_ic_parameters(IcPlant.of(body).mgh))
+    recording = simulate_ic(body, params, stimulus, options, args.motor_noise,
+                            args.motor_cutoff_hz, args.seed)
+    if args.noise_deg > 0:
+        recording = recording.with_sensor_noise(args.noise_deg, args.seed)
+    recording.to_csv(args.out)
+    say(f"wrote {args.out} ({len(recording.time)} samples at {options.sample_rate_hz:g} Hz; "
+        f"{params.summary()})")
+    if args.plot:
+        from posture_id.plotting import plot_batch
+
+        alpha = body.com_angles(recording.theta)[:, 0]
+        plot_batch(recording.time, recording.tilt, alpha[None],
+                   np.array([np.all(np.isfinite(alpha))]), "IC model", path=args.plot)
+        say(f"wrote {args.plot}")
+    fell = not np.all(np.isfinite(recording.theta))
+    if fell:
+        say(f"posture-id: warning: the body left the ±{options.sway_limit_deg:g}° sway limit; "
+            "the recording stops there")
+    return answered(fell)

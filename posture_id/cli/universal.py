@@ -143,9 +143,11 @@ def run_data(args: argparse.Namespace) -> int:
     try:
         given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
                                            for k, v in scope.items()})
-    except ScopeError as exc:  # named by the flag the user gave, not the scope's field
-        raise PostureIdError(re.sub(r"\bscope (\w+)", lambda m: "--" + m.group(1).replace(
-            "_", "-"), str(exc))) from None
+    except ScopeError as exc:  # named by the flags the user gave, not the scope's fields
+        text = str(exc).removeprefix("scope ")
+        raise PostureIdError(re.sub(r"\b(" + "|".join(scope) + r")\b",
+                                    lambda m: "--" + m.group(1).replace("_", "-"),
+                                    text)) from None
     config = UniversalDataConfig(shards=args.shards, seed=args.seed, **given)
     with TerminalProgress("shard", prefix="posture-id universal data",
                           quiet=args.quiet) as progress:

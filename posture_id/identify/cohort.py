@@ -129,9 +129,14 @@ class CohortResult(Result):
     def failed(self) -> dict[str, str]:
         return {k: v for k, v in self.status.items() if v not in _FINISHED}
 
+    @property
+    def doubtful(self) -> tuple[str, ...]:
+        """The recordings whose answer is doubtful (``summary.csv``'s trust)."""
+        return tuple(r["recording"] for r in self.rows if r.get("trust") == "doubtful")
+
     def summary(self) -> str:
         counts = {s: sum(v == s for v in self.status.values()) for s in _FINISHED}
-        doubtful = [r["recording"] for r in self.rows if r.get("trust") == "doubtful"]
+        doubtful = self.doubtful
         imprecise = sum(r.get("trust") == "imprecise" for r in self.rows)
         return (f"{self.out}: {len(self.status)} recordings, {counts['done']} identified, "
                 f"{counts['skipped']} already done, {counts['redone']} identified again "

@@ -18,13 +18,7 @@ if TYPE_CHECKING:  # CasADi and torch load only with the methods that need them
     from posture_id.fitting.result import FitResult
     from posture_id.learning.identifier import CnnIdentification
 
-__all__ = ["SegmentFit", "IdentificationResult", "FELL", "FELL_EXIT", "NOTHING_BALANCES"]
-
-#: ``posture-id identify``'s exit status when its answer (written as any other, its verdict
-#: doubtful) falls in re-simulation: nothing tried balances the body on the stimulus.
-#: 0: an answer that balances it; 2: input refused; 3: a bug (posture_id.cli). Never 1
-#: without an answer: the answer is written first.
-FELL_EXIT = 1
+__all__ = ["SegmentFit", "IdentificationResult", "FELL", "NOTHING_BALANCES"]
 
 #: The one line of a result whose identified model falls in re-simulation.
 FELL = ("the identified model falls in re-simulation{at}: these parameters do not balance "

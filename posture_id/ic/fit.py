@@ -1,0 +1,329 @@
+"""Fit the IC model to a recording's stimulus-locked body COM sway (MODEL §8).
+
+What is compared is what the locked DEC fit compares (:mod:`posture_id.frf.locked`): the
+drift-free cycle average of the body COM sway at the harmonics the stimulus excites up to
+2 Hz, each divided by the noise level estimated at the neighbouring harmonics it leaves
+empty. The model's sway on the recording's samples is the IC response to the recorded
+tilt from rest, computed exactly in the frequency domain (the tilt zero-padded far beyond
+the recording's end, times H(jω), transformed back): the transient of the first cycle is
+the model's own, as in a re-simulation, with no time-stepping. Its derivatives are the same
+transform of dH/dp (:func:`~posture_id.ic.response.closed_loop`), so the least squares
+(scipy's trust-region reflective) has the exact Jacobian. Several starts (the first at
+the literature's typical values; the search stops at the first answer whose residual is
+within the noise's 99th percentile); an answer
+whose closed loop is unstable is never returned (:func:`~posture_id.ic.response.is_stable`).
+
+Intervals: Gauss-Newton, the covariance (JᵀJ)⁻¹ of the weighted residual scaled by its
+χ² per degree of freedom where that exceeds 1, at the chosen level.
+"""
+
+from __future__ import annotations
+
+import math
+import time as clock
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from posture_id.errors import PostureIdError
+from posture_id.fileio import Result
+from posture_id.frf.locked import LockedOptions, LockedProjection
+from posture_id.ic.parameters import IcParameters
+from posture_id.ic.response import PARAMETER_ORDER, IcPlant, closed_loop, is_stable
+from posture_id.trials import PreparedTrial
+
+__all__ = ["IcFitOptions", "IcFitResult", "fit_ic", "IcModelResponse", "com_sway_deg",
+           "BOUNDS"]
+
+#: MODEL §8's search bounds: (low, high) per parameter; gains in units of m·g·h (·s for
+#: Kd, /s for Ki), W and G as they are, times in s.
+BOUNDS = {"kp": (0.5, 4.0), "kd": (0.05, 1.0), "ki": (0.0, 0.5), "delay_s": (0.02, 0.35),
+          "w": (0.0, 1.0), "torque_feedback_gain": (0.0, 0.9),
+          "torque_feedback_time_s": (2.0, 100.0), "kpas": (0.0, 1.0), "bpas": (0.0, 0.5)}
+#: The parameters whose unit is m·g·h (times s or per s).
+_PER_MGH = ("kp", "kd", "ki", "kpas", "bpas")
+
+
+@dataclass(frozen=True)
+class IcFitOptions:
+    """What the IC fit identifies and how.
+
+    Attributes:
+        fit_ki: also identify Ki (else 0). fit_passive: also Kpas and Bpas (else 0).
+        starts: least-squares starts (the first at the literature's typical values, the
+            others drawn within the bounds). seed: seeds those draws.
+        locked: the locked harmonics compared (MODEL §8: up to 2 Hz).
+        level: the intervals' nominal coverage.
+    """
+
+    fit_ki: bool = False
+    fit_passive: bool = False
+    starts: int = 6
+    seed: int = 0
+    locked: LockedOptions = field(default_factory=LockedOptions)
+    level: float = 0.9
+
+    def __post_init__(self) -> None:
+        if self.starts < 1:
+            raise PostureIdError(f"IC fit starts must be ≥ 1, got {self.starts}")
+        if not 0.5 <= self.level <= 0.99:
+            raise PostureIdError(f"IC fit level must be within 0.5–0.99, got {self.level}")
+
+    @property
+    def free(self) -> tuple[str, ...]:
+        """The identified parameters, in :data:`PARAMETER_ORDER`."""
+        names = ["kp", "kd", "delay_s", "w", "torque_feedback_gain", "torque_feedback_time_s"]
+        if self.fit_ki:
+            names.append("ki")
+        if self.fit_passive:
+            names += ["kpas", "bpas"]
+        return tuple(n for n in PARAMETER_ORDER if n in names)
+
+
+def com_sway_deg(trial: PreparedTrial, body) -> np.ndarray:
+    """(S,) degrees: the body COM sway α_BS of a trial, from its reference posture."""
+    theta = trial.recording.theta
+    return np.degrees(body.com_angles(theta)[:, 0] - body.reference_com_angles[0])
+
+
+class IcModelResponse:
+    """The IC model's COM sway on a trial's samples (its locked harmonics), with exact
+    derivatives.
+
+    The tilt (S,) is zero-padded to L ≥ 8·S samples (a power of two) so that the circular
+    convolution by H equals the linear one from rest over the recording.
+    """
+
+    def __init__(self, tilt_rad: np.ndarray, sample_rate_hz: float, plant: IcPlant) -> None:
+        self.samples = len(tilt_rad)
+        self.plant = plant
+        length = 1 << int(math.ceil(math.log2(8 * self.samples)))
+        self.tilt_spectrum = np.fft.rfft(np.asarray(tilt_rad, float), n=length)
+        omega = 2 * np.pi * np.fft.rfftfreq(length, 1.0 / sample_rate_hz)
+        omega[0] = 1e-6  # H(0) as its limit: the static response
+        self.s = 1j * omega
+        self.length = length
+
+    def sway(self, params: IcParameters, gradient: bool = False):
+        """(S,) rad of COM sway; with ``gradient``, also (9, S) d sway / dp (SI units)."""
+        if not gradient:
+            h = closed_loop(params, self.plant, self.s)
+            return np.fft.irfft(h * self.tilt_spectrum, n=self.length)[: self.samples]
+        h, dh = closed_loop(params, self.plant, self.s, gradient=True)
+        both = np.vstack([h[None], dh]) * self.tilt_spectrum[None]
+        out = np.fft.irfft(both, n=self.length, axis=1)[:, : self.samples]
+        return out[0], out[1:]
+
+
+@dataclass(frozen=True)
+class IcFitResult(Result):
+    """An IC fit.
+
+    Attributes:
+        parameters: the identified IC parameters (SI units). free: what was identified.
+        intervals: {name: (low, high)} at ``level`` for each identified parameter (SI).
+        chi2: the weighted residual's squared norm (χ², in units of the noise).
+        dof: its degrees of freedom (2·harmonics − identified parameters).
+        harmonics: K, the locked harmonics compared. on_bound: identified parameters on
+        a search bound. stable: the closed loop settles. seconds: the fit's time.
+        explained: share of the recorded locked COM sway the model explains.
+        fitted_deg: (S,) the model's COM sway, degrees. recorded_deg: (S,) the recording's.
+        frequencies_hz, recorded_frf, model_frf: (K,) the locked FRF of the COM sway and
+        the model's at the compared harmonics (tilt → sway, complex).
+    """
+
+    parameters: IcParameters
+    free: tuple[str, ...]
+    intervals: dict
+    level: float
+    chi2: float
+    dof: int
+    harmonics: int
+    on_bound: tuple[str, ...]
+    stable: bool
+    seconds: float
+    explained: float
+    fitted_deg: np.ndarray = field(repr=False)
+    recorded_deg: np.ndarray = field(repr=False)
+    frequencies_hz: np.ndarray = field(repr=False)
+    recorded_frf: np.ndarray = field(repr=False)
+    model_frf: np.ndarray = field(repr=False)
+    coherence: np.ndarray = field(repr=False)
+    name: str = "recording"
+
+    @property
+    def noise_ratio(self) -> float:
+        """√(χ²/dof): 1 when the model explains the recording as well as its noise allows."""
+        return math.sqrt(self.chi2 / max(self.dof, 1))
+
+    @property
+    def consistent(self) -> bool:
+        """χ² within its 99th percentile for ``dof`` degrees of freedom."""
+        from scipy.stats import chi2
+
+        return self.chi2 <= chi2.ppf(0.99, max(self.dof, 1))
+
+    def relative_width(self, name: str) -> float:
+        """Half the interval's width over the value (∞ for a value of 0)."""
+        low, high = self.intervals[name]
+        value = getattr(self.parameters, name)
+        return (high - low) / 2 / abs(value) if value else math.inf
+
+    def to_dict(self) -> dict:
+        from posture_id.provenance import provenance
+
+        return {"model": "ic", "parameters": self.parameters.to_dict(),
+                "identified": list(self.free),
+                "intervals": {k: list(v) for k, v in self.intervals.items()},
+                "level": self.level, "chi2": self.chi2, "dof": self.dof,
+                "noise_ratio": self.noise_ratio, "consistent": self.consistent,
+                "harmonics": self.harmonics, "on_bound": list(self.on_bound),
+                "stable": self.stable, "explained": self.explained,
+                "seconds": self.seconds, "recording": self.name,
+                "provenance": provenance()}
+
+    def summary(self) -> str:
+        p = self.parameters
+        lines = [p.summary(), f"{self.harmonics} locked harmonics up to "
+                 f"{self.frequencies_hz.max():.2f} Hz; residual {self.noise_ratio:.2f}× the "
+                 f"noise ({'consistent with' if self.consistent else 'beyond'} it); explains "
+                 f"{100 * self.explained:.1f} % of the locked COM sway; {self.seconds:.2f} s"]
+        for name in self.free:
+            low, high = self.intervals[name]
+            lines.append(f"  {name:<24} {getattr(p, name):10.4g}   {100 * self.level:.0f} % "
+                         f"interval {low:.4g} – {high:.4g}")
+        if self.on_bound:
+            lines.append(f"on a search bound: {', '.join(self.on_bound)}")
+        return "\n".join(lines)
+
+    def plot(self, path=None, ax=None):
+        """The recording's locked FRF of the COM sway, the fitted model's over it."""
+        from posture_id.plotting import plot_model_frfs
+
+        return plot_model_frfs(self.frequencies_hz, self.recorded_frf,
+                               {"IC model": self.model_frf}, self.coherence,
+                               f"IC fit of {self.name}: residual {self.noise_ratio:.2f}× the "
+                               "noise", path=path, ax=ax)
+
+
+def _scale(name: str, plant: IcPlant) -> float:
+    return plant.mgh if name in _PER_MGH else 1.0
+
+
+def _to_params(x: np.ndarray, free: tuple[str, ...], plant: IcPlant,
+               fixed: IcParameters) -> IcParameters:
+    return fixed.replace(**{n: float(v) * _scale(n, plant) for n, v in zip(free, x,
+                                                                            strict=True)})
+
+
+def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> IcFitResult:
+    """The IC parameters of ``trial``'s body COM sway (the module doc).
+
+    Raises:
+        PostureIdError: a stimulus that is not periodic (no locked harmonics), or no start
+            that gives a stable closed loop.
+    """
+    from scipy.optimize import least_squares
+    from scipy.stats import norm
+
+    options = options or IcFitOptions()
+    started = clock.perf_counter()
+    plant = IcPlant.of(body)
+    rec = trial.recording
+    if trial.stimulus.period_s is None:
+        raise PostureIdError(f"{trial.name}: the IC fit compares stimulus-locked harmonics "
+                             "and needs a periodic stimulus (a PRTS or a protocol)")
+    sway = com_sway_deg(trial, body)
+    projection = LockedProjection.for_recording(
+        rec.tilt, sway[:, None], rec.sample_rate_hz, trial.stimulus.period_s,
+        trial.stimulus.periodic_from_s, options.locked, trial.name)
+    weights = 1.0 / projection.noise[:, 0]
+    recorded = projection.spectrum(sway[:, None])[:, 0]
+    model = IcModelResponse(rec.tilt, rec.sample_rate_hz, plant)
+    free = options.free
+    columns = [PARAMETER_ORDER.index(n) for n in free]
+    scales = np.array([_scale(n, plant) for n in free])
+    fixed = IcParameters(kp=plant.mgh, kd=0.3 * plant.mgh, delay_s=0.15, w=0.5)
+
+    def weighted(y: np.ndarray) -> np.ndarray:
+        """(2K, ...) real: the compared harmonics of y (S, ...) ÷ the noise."""
+        spectrum = projection.spectrum(y) * (weights if y.ndim == 1 else weights[:, None])
+        return np.concatenate([spectrum.real, spectrum.imag])
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        y = np.degrees(model.sway(_to_params(x, free, plant, fixed)))
+        return weighted(y) - target
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        _, dy = model.sway(_to_params(x, free, plant, fixed), gradient=True)
+        dy = np.degrees(dy[columns]).T * scales[None, :]  # (S, P), per normalised unit
+        return weighted(dy)
+
+    target = np.concatenate([(recorded * weights).real, (recorded * weights).imag])
+    low = np.array([BOUNDS[n][0] for n in free])
+    high = np.array([BOUNDS[n][1] for n in free])
+    typical = {"kp": 1.5, "kd": 0.35, "ki": 0.05, "delay_s": 0.15, "w": 0.6,
+               "torque_feedback_gain": 0.3, "torque_feedback_time_s": 20.0, "kpas": 0.1,
+               "bpas": 0.05}
+    rng = np.random.default_rng(options.seed)
+    starts = [np.array([typical[n] for n in free])]
+    for _ in range(options.starts - 1):
+        starts.append(low + (high - low) * rng.uniform(0.1, 0.9, len(free)))
+    from scipy.stats import chi2 as chi2_distribution
+
+    enough = float(chi2_distribution.ppf(0.99, max(len(target) - len(free), 1)))
+    best = None
+    for x0 in starts:
+        try:
+            fit = least_squares(residual, x0, jac=jacobian, bounds=(low, high),
+                                method="trf", x_scale="jac", max_nfev=200)
+        except (ValueError, FloatingPointError):
+            continue
+        params = _to_params(fit.x, free, plant, fixed)
+        if not np.all(np.isfinite(fit.fun)) or not is_stable(params, plant):
+            continue
+        if best is None or fit.cost < best.cost:
+            best = fit
+        if 2 * best.cost <= enough:  # as close as the noise allows: no start does better
+            break
+    if best is None:
+        raise PostureIdError(f"{trial.name}: no IC model with a stable closed loop fits this "
+                             "recording within MODEL §8's bounds")
+    params = _to_params(best.x, free, plant, fixed)
+    chi2 = float(2 * best.cost)
+    n_res = len(target)
+    dof = n_res - len(free)
+    jac = best.jac
+    scale2 = max(1.0, chi2 / max(dof, 1))
+    try:
+        cov = np.linalg.pinv(jac.T @ jac) * scale2
+    except np.linalg.LinAlgError:
+        cov = np.full((len(free), len(free)), np.inf)
+    z = float(norm.ppf(0.5 + options.level / 2))
+    half = z * np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
+    intervals = {n: (max(getattr(params, n) - h, 0.0 if n != "w" else 0.0),
+                     getattr(params, n) + h) for n, h in zip(free, half, strict=True)}
+    span = high - low
+    on_bound = tuple(n for n, x, lo, hi, sp in zip(free, best.x, low, high, span, strict=True)
+                     if n in ("kp", "kd", "delay_s", "w") and lo > 0
+                     and (x - lo < 1e-3 * sp or hi - x < 1e-3 * sp))
+    fitted = np.degrees(model.sway(params))
+    explained = float(projection.explained(sway[:, None], fitted[:, None])[0])
+    tilt_deg = np.degrees(rec.tilt)
+    u = projection.spectrum(tilt_deg[:, None])[:, 0]
+    model_frf = closed_loop(params, plant, 2j * np.pi * projection.frequencies_hz)
+    coherence = _coherence(projection, tilt_deg, sway)
+    return IcFitResult(params, free, intervals, options.level, chi2, dof,
+                       len(projection.harmonics), on_bound, True,
+                       clock.perf_counter() - started, explained, fitted, sway,
+                       projection.frequencies_hz, recorded / u, model_frf, coherence,
+                       trial.name)
+
+
+def _coherence(projection: LockedProjection, tilt_deg: np.ndarray,
+               sway_deg: np.ndarray) -> np.ndarray:
+    """(K,) the share of the sway's power at each compared harmonic that is locked to the
+    stimulus (its locked power over locked plus noise power; 1 without noise)."""
+    locked = np.abs(projection.spectrum(sway_deg[:, None])[:, 0]) ** 2
+    noise = 2 * projection.noise[:, 0] ** 2
+    return locked / (locked + noise)

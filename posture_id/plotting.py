@@ -567,3 +567,42 @@ def plot_model_frfs(frequencies_hz, recorded, models: dict, coherence, title: st
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_model_comparison(frequencies_hz, stimulated, recorded, models: dict, noise,
+                          title: str = "", path=None, ax=None):
+    """Two models against one recording's locked sway at every compared harmonic: the
+    amplitudes (top; stimulated harmonics as dots, the others as crosses, the noise level
+    shaded) and each model's residual in units of the noise there (bottom).
+
+    Args:
+        frequencies_hz: (K,) Hz. stimulated: (K,) bool. recorded: (K,) complex (deg).
+        models: label → (K,) complex (deg). noise: (K,) the noise level σ (deg).
+    """
+    fig, axes = _axes(ax, 2, 1, (9, 7), sharex=True)
+    f = np.asarray(frequencies_hz)
+    on, off = np.asarray(stimulated), ~np.asarray(stimulated)
+    top, bottom = axes[0, 0], axes[1, 0]
+    top.fill_between(f, 1e-9, np.asarray(noise), color="0.85", label="noise level")
+    top.plot(f[on], np.abs(recorded[on]), "o", ms=4, color="k", label="recording, stimulated")
+    top.plot(f[off], np.abs(recorded[off]), "x", ms=4, color="k", label="recording, others")
+    for k, (label, spectrum) in enumerate(models.items()):
+        top.plot(f, np.abs(spectrum), "_", ms=7, mew=1.5, color=f"C{k}", label=label)
+        bottom.plot(f, np.abs(spectrum - recorded) / noise, ".", ms=5, color=f"C{k}",
+                    label=label)
+    top.set_yscale("log")
+    top.set_ylim(bottom=max(1e-6, 0.3 * float(np.min(noise))))
+    top.set_ylabel("locked COM sway (deg)")
+    bottom.axhline(1.0, color="0.4", lw=0.8, ls="--")
+    bottom.set_yscale("log")
+    bottom.set_ylabel("|model − recording| / noise")
+    bottom.set_xscale("log")
+    bottom.set_xlabel("frequency (Hz)")
+    for a in (top, bottom):
+        a.grid(alpha=0.3, which="both")
+    top.legend(fontsize=8)
+    bottom.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

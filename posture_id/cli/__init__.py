@@ -1,5 +1,5 @@
 """Command line: ``posture-id body | simulate | fit | frf | dataset | train | evaluate |
-calibration | identify | demo | benchmark | universal | design | stimulus``,
+calibration | identify | demo | benchmark | universal | design | stimulus | compare``,
 one module per command.
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
@@ -18,6 +18,7 @@ from posture_id.cli import (
     benchmark,
     body,
     calibration,
+    compare,
     dataset,
     demo,
     design,
@@ -44,7 +45,7 @@ def build_parser() -> Parser:
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for command in (body, simulate, fit, frf, dataset, train, evaluate, calibration, identify,
-                    demo, benchmark, universal, design, platform_command):
+                    demo, benchmark, universal, design, platform_command, compare):
         command.add_parser(sub)
     for command_parser in sub.choices.values():  # one meaning per exit status, said by all
         command_parser.epilog = EPILOG

@@ -1,0 +1,185 @@
+"""DEC or IC: does ``posture-id compare`` prefer the model that made the recording?
+
+Run:  .venv/bin/python benchmarks/model_comparison.py [--per-model 30] [--workers 2]
+                                                      [--out docs/results/model_comparison]
+
+``--per-model`` recordings of each model (MODEL §8), made by the project's simulators,
+each compared as ``posture-id compare REC --body URDF`` compares it
+(:func:`~posture_id.ic.compare.compare_models`, the held-out cycle included where there
+are three or more cycles):
+
+- bodies: Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg) and the TIP, in turn;
+- stimuli: the 242-state PRTS ×2 and the 80-state PRTS ×6 in turn, 0.5–2° peak to peak;
+- DEC parameters from MODEL §5's prior; IC parameters drawn around the literature's
+  (Kp 1.3–2.5·m·g·h, Kd 0.25–0.6·m·g·h·s, Δ 0.08–0.22 s, W 0.2–0.9, G 0–0.5, τ_f 5–40 s),
+  redrawn until the closed loop is stable and the body stays up;
+- sway: half clean (0.02° sensor noise), half people-like (motor noise leaving 15–40 % of
+  the body COM sway locked, 0.05° sensor noise).
+
+Writes ``report.md`` (the share preferring the right model, the wrong one and undecided,
+by model and by sway) and ``rows.json``; a journal makes an interrupted run resumable.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+URDFS = [ROOT / "urdf" / f"winter_1.75m_70kg_{n}seg.urdf" for n in (1, 2, 3)] + [
+    ROOT / "urdf" / "tip_default.urdf"]
+JOURNAL = "model_comparison.journal"
+SEED = 8088
+
+
+def _ic_draw(rng: np.random.Generator, plant):
+    from posture_id.ic import IcParameters, is_stable
+
+    while True:
+        p = IcParameters(kp=rng.uniform(1.3, 2.5) * plant.mgh,
+                         kd=rng.uniform(0.25, 0.6) * plant.mgh,
+                         delay_s=rng.uniform(0.08, 0.22), w=rng.uniform(0.2, 0.9),
+                         torque_feedback_gain=rng.uniform(0.0, 0.5),
+                         torque_feedback_time_s=rng.uniform(5.0, 40.0))
+        if is_stable(p, plant):
+            return p
+
+
+def _ic_recording(body, params, stimulus, share, seed):
+    """An IC recording, people-like when ``share`` is given: the motor-noise level that
+    leaves that share of the COM sway locked (the model is linear: exact)."""
+    from posture_id.ic import simulate_ic
+
+    clean = simulate_ic(body, params, stimulus)
+    if share is None:
+        return clean.with_sensor_noise(0.02, seed), None
+    unit = simulate_ic(body, params, stimulus, motor_sd_deg=0.1, seed=seed)
+    com_clean = body.com_angles(clean.theta)[:, 0]
+    noise = body.com_angles(unit.theta)[:, 0] - com_clean
+    level = 0.1 * math.sqrt(np.var(com_clean) * (1 - share) / (share * np.var(noise)))
+    noisy = simulate_ic(body, params, stimulus, motor_sd_deg=level, seed=seed)
+    return noisy.with_sensor_noise(0.05, seed), level
+
+
+def _case(k: int) -> dict:
+    """Recording k: its model, body, stimulus, sway and truth, then the comparison."""
+    from posture_id import load_body
+    from posture_id.dec.prior import sample_parameters
+    from posture_id.ic import IcPlant
+    from posture_id.ic.compare import compare_models
+    from posture_id.simulation.batch import simulate
+    from posture_id.simulation.stimulus import prts
+    from posture_id.simulation.subjects import people_like
+    from posture_id.trials import prepare_trial
+
+    rng = np.random.default_rng([SEED, k])
+    model = "dec" if k % 2 == 0 else "ic"
+    urdf = URDFS[(k // 2) % len(URDFS)]
+    body = load_body(urdf)
+    states, cycles = ((242, 2), (80, 6))[(k // 8) % 2]
+    amplitude = float(rng.uniform(0.5, 2.0))
+    stimulus = prts(amplitude, cycles, states)
+    people = (k // 4) % 2 == 1
+    share = float(rng.uniform(0.15, 0.4)) if people else None
+    if model == "dec":
+        while True:
+            params = sample_parameters(body, 1, rng).trial(0, body.joint_names)
+            if simulate(body, params, stimulus).stable:
+                break
+        if people:
+            recording = people_like(body, params, stimulus, share, SEED + k).recording
+        else:
+            recording = simulate(body, params, stimulus).to_recording().with_sensor_noise(
+                0.02, SEED + k)
+    else:
+        params = _ic_draw(rng, IcPlant.of(body))
+        recording, _ = _ic_recording(body, params, stimulus, share, SEED + k)
+    started = time.perf_counter()
+    result = compare_models(prepare_trial(recording, stimulus), body)
+    return {"k": k, "model": model, "body": urdf.stem, "states": states, "cycles": cycles,
+            "amplitude_deg": amplitude, "sway": "people-like" if people else "clean",
+            "locked_share": share, "preferred": result.preferred,
+            "delta_bic_ic_minus_dec": result.bic["ic"] - result.bic["dec"],
+            "held_out": result.held_out, "within_noise": result.within_noise,
+            "seconds": time.perf_counter() - started}
+
+
+def _report(rows: list[dict], command: str) -> str:
+    lines = ["# DEC or IC: the comparison on recordings of each model", "",
+             f"Made by `{command}` ({len(rows)} recordings; the module doc of "
+             "`benchmarks/model_comparison.py` says how they are made).", "",
+             "| made by | sway | recordings | right | wrong | undecided |",
+             "|---|---|---|---|---|---|"]
+    for model in ("dec", "ic"):
+        for sway in ("clean", "people-like", "all"):
+            mine = [r for r in rows if r["model"] == model and sway in ("all", r["sway"])]
+            if not mine:
+                continue
+            right = sum(r["preferred"] == model for r in mine)
+            undecided = sum(r["preferred"] == "undecided" for r in mine)
+            wrong = len(mine) - right - undecided
+            lines.append(f"| {model.upper()} | {sway} | {len(mine)} | "
+                         f"{right} ({100 * right / len(mine):.0f} %) | "
+                         f"{wrong} ({100 * wrong / len(mine):.0f} %) | "
+                         f"{undecided} ({100 * undecided / len(mine):.0f} %) |")
+    wrong = [r for r in rows if r["preferred"] not in (r["model"], "undecided")]
+    right = sum(r["preferred"] == r["model"] for r in rows)
+    undecided = sum(r["preferred"] == "undecided" for r in rows)
+    lines += ["", f"In all: {right} right, {len(wrong)} wrong "
+              f"({100 * len(wrong) / max(len(rows), 1):.1f} %), {undecided} undecided. "
+              f"Median time per comparison: "
+              f"{np.median([r['seconds'] for r in rows]):.0f} s (both fits, and the two "
+              "held-out fits where there are 6 cycles).", "",
+              "| k | made by | body | stimulus | sway | ΔBIC (IC − DEC) | held-out χ²/dof "
+              "DEC, IC | preferred |", "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        held = ("–" if r["held_out"] is None else
+                f"{r['held_out']['dec']:.2f}, {r['held_out']['ic']:.2f}")
+        lines.append(f"| {r['k']} | {r['model'].upper()} | {r['body']} | PRTS {r['states']}"
+                     f"×{r['cycles']}, {r['amplitude_deg']:.2f}° | {r['sway']} | "
+                     f"{r['delta_bic_ic_minus_dec']:.1f} | {held} | {r['preferred']} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--per-model", type=int, default=30)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--out", type=Path, default=ROOT / "docs/results/model_comparison")
+    args = parser.parse_args(argv)
+    from posture_id.fileio import atomic_write_text, json_text
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    journal = args.out / JOURNAL
+    done = {}
+    if journal.exists():
+        for line in journal.read_text().splitlines():
+            row = json.loads(line)
+            done[row["k"]] = row
+    todo = [k for k in range(2 * args.per_model) if k not in done]
+    with ProcessPoolExecutor(args.workers) as pool:
+        for row in pool.map(_case, todo):
+            done[row["k"]] = row
+            with journal.open("a") as out:
+                out.write(json.dumps(row) + "\n")
+            print(f"[{len(done)}/{2 * args.per_model}] {row['model']} {row['body']} "
+                  f"{row['sway']}: {row['preferred']} ({row['seconds']:.0f} s)",
+                  file=sys.stderr, flush=True)
+    rows = [done[k] for k in sorted(done)]
+    command = ".venv/bin/python benchmarks/model_comparison.py"
+    atomic_write_text(args.out / "report.md", _report(rows, command))
+    atomic_write_text(args.out / "rows.json", json_text(rows))
+    journal.unlink()
+    print(f"wrote {args.out / 'report.md'}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,61 @@
+"""``posture-id compare``: DEC and the independent-channel model fitted to one recording,
+and which of the two its sway supports (MODEL §8; docs/ic.md)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.cli.arguments import check_output_file, non_negative_int, positive_int, write_result
+from posture_id.cli.exit_status import answered
+from posture_id.cli.progress import TerminalProgress
+from posture_id.cli.stimulus import (
+    add_column_arguments,
+    add_lab_stimulus_arguments,
+    recording_and_stimulus,
+)
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("compare", help="fit DEC and the independent-channel (IC) model to a "
+                                       "recording; say which its sway supports")
+    p.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
+    p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    p.add_argument("--out", type=Path, help="comparison JSON (\"preferred\": dec, ic or "
+                                           "undecided, with both models' parameters)")
+    p.add_argument("--plot", type=Path, help="the locked COM sway at every compared harmonic "
+                                            "with both models over it (PNG)")
+    p.add_argument("--fit-ki", action="store_true", help="the IC model's Ki identified too")
+    p.add_argument("--fit-passive", action="store_true",
+                   help="the IC model's passive stiffness and damping identified too")
+    p.add_argument("--starts", type=positive_int, default=6,
+                   help="IC fit starts (default %(default)d)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
+    p.add_argument("--no-held-out", action="store_true",
+                   help="skip the held-out cycle (two fits fewer; the BIC alone decides)")
+    add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with")
+    add_column_arguments(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    inputs = (args.recording, args.body, args.tilt)
+    check_output_file(args.out, "--out", inputs)
+    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    from posture_id.ic import IcFitOptions
+    from posture_id.ic.compare import compare_models
+    from posture_id.trials import prepare_trial
+
+    body = load_body(args.body or DEFAULT_URDF)
+    recording, stimulus = recording_and_stimulus(args, body)
+    recording.check_segments(body.segment_names)
+    trial = prepare_trial(recording, stimulus)
+    options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
+                           starts=args.starts, seed=args.seed)
+    with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
+        result = compare_models(trial, body, options, progress, not args.no_held_out)
+    write_result(result, args.out, args.plot)
+    return answered(result.doubtful)

@@ -1,0 +1,291 @@
+"""Which model does the sway support, DEC or IC? (MODEL §8, comparison.)
+
+Both models are fitted to the same recording: DEC by the locked least-squares fit, IC by
+its FRF fit (:func:`~posture_id.ic.fit.fit_ic`). Then both are judged on the same numbers:
+the drift-free cycle average of the body COM sway at **every** harmonic of the stimulus
+cycle up to 2 Hz, the stimulated ones and the others (where DEC's dead-band can answer and
+a linear model cannot), each divided by its noise level (estimated at the nearest
+harmonics the stimulus leaves empty, the harmonic itself left out; the χ² corrected for
+the estimate's own scatter, ν/(ν − 2) with ν its degrees of freedom). For each model:
+
+- χ², the weighted residual's squared norm, and the Bayesian information criterion
+  BIC = χ² + k·ln n (k the model's identified parameters, n the real numbers compared);
+- with three or more cycles, the prediction of a held-out cycle: both models fitted again
+  on every cycle but the last, their sway on the last cycle against the recorded one
+  (χ² per degree of freedom, the single cycle's noise being √C times the average's).
+
+**[decision]** A model is preferred when its BIC is lower by more than
+:data:`BIC_MARGIN` (10: "very strong" evidence on Kass & Raftery's scale) and the held-out
+cycle, where there is one, does not favour the other (its χ² per degree of freedom lower
+by more than :data:`HELD_OUT_MARGIN`); otherwise "undecided": the difference is within
+what the noise allows.
+"""
+
+from __future__ import annotations
+
+import math
+import time as clock
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from posture_id.errors import PostureIdError
+from posture_id.fileio import Result
+from posture_id.frf.locked import LockedOptions, LockedProjection
+from posture_id.ic.fit import IcFitOptions, IcFitResult, IcModelResponse, com_sway_deg, fit_ic
+from posture_id.ic.response import IcPlant
+from posture_id.trials import PreparedTrial
+
+__all__ = ["ModelComparison", "compare_models", "BIC_MARGIN", "HELD_OUT_MARGIN"]
+
+#: ΔBIC beyond which one model is preferred.
+BIC_MARGIN = 10.0
+#: A held-out cycle's χ²/dof difference beyond which it favours a model.
+HELD_OUT_MARGIN = 0.25
+#: The highest harmonic compared, Hz (MODEL §8).
+MAX_FREQUENCY_HZ = 2.0
+
+
+@dataclass(frozen=True)
+class ModelComparison(Result):
+    """DEC against IC on one recording.
+
+    Attributes:
+        dec: the locked DEC fit. ic: the IC fit.
+        frequencies_hz: (K,) every harmonic compared. stimulated: (K,) bool.
+        chi2: {"dec", "ic"} over every compared harmonic. parameters: {"dec", "ic"} k.
+        bic: {"dec", "ic"}. compared: n, the real numbers compared (2K).
+        held_out: {"dec", "ic"} χ²/dof of the last cycle predicted by fits on the others,
+            or None (fewer than 3 cycles).
+        preferred: "dec", "ic" or "undecided". reason: the sentence that says why.
+        recorded, dec_spectrum, ic_spectrum: (K,) complex cycle-average COM sway (deg).
+    """
+
+    dec: object
+    ic: IcFitResult
+    frequencies_hz: np.ndarray = field(repr=False)
+    stimulated: np.ndarray = field(repr=False)
+    chi2: dict
+    parameters: dict
+    bic: dict
+    compared: int
+    held_out: dict | None
+    preferred: str
+    reason: str
+    recorded: np.ndarray = field(repr=False)
+    dec_spectrum: np.ndarray = field(repr=False)
+    ic_spectrum: np.ndarray = field(repr=False)
+    noise: np.ndarray = field(default=None, repr=False)
+    seconds: float = 0.0
+    name: str = "recording"
+
+    @property
+    def within_noise(self) -> dict:
+        """{"dec", "ic"}: whether the model's χ² is within the 99th percentile of its
+        χ² distribution (n − k degrees of freedom)."""
+        from scipy.stats import chi2
+
+        return {m: bool(self.chi2[m] <= chi2.ppf(0.99, max(self.compared - self.parameters[m],
+                                                             1)))
+                for m in ("dec", "ic")}
+
+    @property
+    def doubtful(self) -> bool:
+        """Neither model explains the locked sway within its noise: the comparison is
+        between two models that both miss something."""
+        return not any(self.within_noise.values())
+
+    def to_dict(self) -> dict:
+        from posture_id.provenance import provenance
+
+        return {"recording": self.name, "preferred": self.preferred, "reason": self.reason,
+                "within_noise": self.within_noise, "doubtful": self.doubtful,
+                "chi2": self.chi2, "parameters": self.parameters, "bic": self.bic,
+                "delta_bic_ic_minus_dec": self.bic["ic"] - self.bic["dec"],
+                "compared_numbers": self.compared,
+                "harmonics": {"stimulated": int(self.stimulated.sum()),
+                              "others": int((~self.stimulated).sum()),
+                              "up_to_hz": MAX_FREQUENCY_HZ},
+                "held_out_cycle": self.held_out,
+                "dec": {"parameters": self.dec.parameters.to_dict(),
+                        "residual_sd": self.dec.residual_sd},
+                "ic": self.ic.to_dict(), "seconds": self.seconds,
+                "provenance": provenance()}
+
+    def summary(self) -> str:
+        held = ("" if self.held_out is None else
+                f"; held-out cycle χ²/dof DEC {self.held_out['dec']:.2f}, IC "
+                f"{self.held_out['ic']:.2f}")
+        fits = self.within_noise
+        lines = [] if not self.doubtful else [
+            "doubtful: neither model explains the locked sway within its noise (both miss "
+            "something: a mistake in the recording, another body, or a third model)"]
+        return "\n".join([
+            f"preferred: {self.preferred.upper()}: {self.reason}", *lines,
+            f"within the noise: DEC {'yes' if fits['dec'] else 'no'}, IC "
+            f"{'yes' if fits['ic'] else 'no'}",
+            f"on {len(self.frequencies_hz)} harmonics up to {MAX_FREQUENCY_HZ:g} Hz "
+            f"({int(self.stimulated.sum())} stimulated): χ² DEC {self.chi2['dec']:.1f} "
+            f"({self.parameters['dec']} parameters), IC {self.chi2['ic']:.1f} "
+            f"({self.parameters['ic']}); BIC DEC {self.bic['dec']:.1f}, IC "
+            f"{self.bic['ic']:.1f}{held}",
+            "DEC: " + ", ".join(f"{j} Kp {m.kp:.1f} Kd {m.kd:.1f} Δ {m.delay_s:.3f} "
+                                f"{m.controls}" for j, m in self.dec.parameters.modules.items()),
+            self.ic.parameters.summary()])
+
+    def plot(self, path=None, ax=None):
+        """The recorded locked COM sway at every compared harmonic, both models over it,
+        and their residuals in units of the noise."""
+        from posture_id.plotting import plot_model_comparison
+
+        return plot_model_comparison(
+            self.frequencies_hz, self.stimulated, self.recorded,
+            {"DEC": self.dec_spectrum, "IC": self.ic_spectrum}, self.noise,
+            f"{self.name}: preferred {self.preferred.upper()}", path=path, ax=ax)
+
+
+def _noise_everywhere(power: np.ndarray, excited: np.ndarray, rows: np.ndarray,
+                      neighbours: int) -> np.ndarray:
+    """(K,) the noise level at every harmonic ``rows``, from the nearest empty harmonics
+    other than the harmonic itself."""
+    empty = np.flatnonzero(~excited)
+    out = np.empty(len(rows))
+    for i, r in enumerate(rows):
+        others = empty[empty != r]
+        nearest = others[np.argsort(np.abs(others - r), kind="stable")[: 2 * neighbours]]
+        out[i] = math.sqrt(power[nearest].mean() / 2)
+    floor = 0.01 * np.median(out)
+    return np.maximum(out, floor if floor > 0 else 1.0)
+
+
+def _judged(projection: LockedProjection, rows: np.ndarray, noise: np.ndarray,
+            recorded: np.ndarray, model_deg: np.ndarray, neighbours: int
+            ) -> tuple[float, np.ndarray]:
+    """(χ², the model's spectrum (K,)) at the harmonic indices ``rows``. Each noise power
+    is estimated from 2·``neighbours`` harmonics (4·neighbours real numbers): its inverse
+    is biased high by ν/(ν − 2), ν = 4·neighbours, which the χ² is corrected for."""
+    spectrum = projection.all_harmonics(model_deg[:, None])[rows, 0]
+    nu = 4 * neighbours
+    chi2 = float(np.sum(np.abs((spectrum - recorded) / noise) ** 2)) * (nu - 2) / nu
+    return chi2, spectrum
+
+
+def _dec_fit(trial: PreparedTrial, body, locked: LockedOptions, progress=None):
+    from posture_id.fitting.least_squares import fit_recording
+    from posture_id.fitting.options import FitOptions
+
+    return fit_recording(trial, body, None, FitOptions(locked=locked), progress=progress)
+
+
+def _dec_com_deg(fit, body) -> np.ndarray:
+    theta = np.asarray(fit.fitted, dtype=float)
+    return np.degrees(body.com_angles(theta)[:, 0] - body.reference_com_angles[0])
+
+
+def _first_cycles(trial: PreparedTrial, cycles: int, projection: LockedProjection
+                  ) -> PreparedTrial:
+    """The trial cut after ``cycles`` analysed cycles."""
+    from posture_id.recording import Recording
+
+    end = projection.start + cycles * projection.period
+    rec = trial.recording
+    cut = Recording(rec.time[:end], rec.tilt[:end], rec.theta[:end], rec.segments,
+                    rec.name, rec.tilt_recorded)
+    stimulus = trial.stimulus
+    return replace(trial, recording=cut, stimulus=stimulus)
+
+
+def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None = None,
+                   progress=None, held_out: bool = True) -> ModelComparison:
+    """Fit DEC and IC to ``trial`` and say which its sway supports (the module doc)."""
+    started = clock.perf_counter()
+    ic_options = ic_options or IcFitOptions()
+    locked = replace(ic_options.locked, max_frequency_hz=MAX_FREQUENCY_HZ)
+    if trial.stimulus.period_s is None:
+        raise PostureIdError(f"{trial.name}: comparing the models needs a periodic stimulus "
+                             "(its locked harmonics)")
+    rec = trial.recording
+    sway = com_sway_deg(trial, body)
+    projection = LockedProjection.for_recording(
+        rec.tilt, sway[:, None], rec.sample_rate_hz, trial.stimulus.period_s,
+        trial.stimulus.periodic_from_s, locked, trial.name)
+    all_spectrum = projection.all_harmonics(sway[:, None])[:, 0]
+    frequencies = np.arange(1, len(all_spectrum) + 1) * rec.sample_rate_hz / projection.period
+    rows = np.flatnonzero(frequencies <= MAX_FREQUENCY_HZ)
+    noise = _noise_everywhere(np.abs(all_spectrum) ** 2, projection.excited, rows,
+                              locked.neighbours)
+    recorded = all_spectrum[rows]
+    dec = _dec_fit(trial, body, locked, progress)
+    ic = fit_ic(trial, body, replace(ic_options, locked=locked))
+    chi2_dec, dec_spectrum = _judged(projection, rows, noise, recorded, _dec_com_deg(dec, body),
+                                     locked.neighbours)
+    chi2_ic, ic_spectrum = _judged(projection, rows, noise, recorded, ic.fitted_deg,
+                                   locked.neighbours)
+    n = 2 * len(rows)
+    k = {"dec": 5 * body.n_segments, "ic": len(ic.free)}
+    chi2 = {"dec": chi2_dec, "ic": chi2_ic}
+    bic = {m: chi2[m] + k[m] * math.log(n) for m in ("dec", "ic")}
+    held = (_held_out(trial, body, projection, locked, ic_options, sway)
+            if held_out and projection.cycles >= 3 else None)
+    preferred, reason = _verdict(bic, held, projection.cycles)
+    return ModelComparison(dec, ic, frequencies[rows], projection.excited[rows], chi2, k, bic,
+                           n, held, preferred, reason, recorded, dec_spectrum, ic_spectrum,
+                           noise, clock.perf_counter() - started, trial.name)
+
+
+def _held_out(trial: PreparedTrial, body, projection: LockedProjection,
+              locked: LockedOptions, ic_options: IcFitOptions, sway: np.ndarray) -> dict:
+    """χ²/dof of each model's prediction of the last cycle, fitted on the others."""
+    from posture_id.simulation.batch import simulate
+    from posture_id.simulation.options import SimulationOptions
+
+    c = projection.cycles
+    train = _first_cycles(trial, c - 1, projection)
+    dec = _dec_fit(train, body, locked)
+    ic = fit_ic(train, body, replace(ic_options, locked=locked))
+    rec = trial.recording
+    options = SimulationOptions(sample_rate_hz=rec.sample_rate_hz)
+    dec_sway = simulate(body, dec.parameters, trial.stimulus, options).theta[: len(rec.time)]
+    dec_com = np.degrees(body.com_angles(dec_sway)[:, 0] - body.reference_com_angles[0])
+    ic_com = np.degrees(IcModelResponse(rec.tilt, rec.sample_rate_hz, IcPlant.of(body))
+                        .sway(ic.parameters))
+    last = slice(projection.start + (c - 1) * projection.period,
+                 projection.start + c * projection.period)
+    p = projection.period
+
+    def spectrum(x: np.ndarray) -> np.ndarray:
+        return np.fft.rfft(x[last] - x[last].mean())[1 : p // 2 + 1] / p
+
+    recorded = spectrum(sway)
+    rows = projection.harmonics - 1
+    noise = projection.noise[:, 0] * math.sqrt(c)  # one cycle's noise, not the average's
+    out = {}
+    for name, model in (("dec", dec_com), ("ic", ic_com)):
+        if not np.all(np.isfinite(model[last])):
+            out[name] = math.inf
+            continue
+        r = (spectrum(model) - recorded)[rows] / noise
+        out[name] = float(np.sum(np.abs(r) ** 2) / (2 * len(rows)))
+    return out
+
+
+def _verdict(bic: dict, held: dict | None, cycles: int) -> tuple[str, str]:
+    delta = bic["ic"] - bic["dec"]
+    if abs(delta) <= BIC_MARGIN:
+        return "undecided", (f"the models' BIC differ by {abs(delta):.1f}, within the "
+                             f"{BIC_MARGIN:g} the noise allows: the recording does not tell "
+                             "them apart")
+    better, worse = ("dec", "ic") if delta > 0 else ("ic", "dec")
+    names = {"dec": "DEC", "ic": "IC"}
+    if held is not None and held[worse] + HELD_OUT_MARGIN < held[better]:
+        return "undecided", (f"{names[better]}'s BIC is lower by {abs(delta):.1f}, but "
+                             f"{names[worse]} predicts the held-out cycle better "
+                             f"(χ²/dof {held[worse]:.2f} against {held[better]:.2f})")
+    tail = ("" if held is None else
+            f"; it predicts the held-out cycle as well or better (χ²/dof {held[better]:.2f} "
+            f"against {held[worse]:.2f})")
+    if held is None:
+        tail = f"; no held-out cycle with {cycles} cycles"
+    return better, (f"{names[better]} explains the locked sway better by a BIC of "
+                    f"{abs(delta):.1f} (beyond the {BIC_MARGIN:g} the noise allows), its "
+                    f"parameters counted{tail}")

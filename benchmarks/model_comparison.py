@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -39,41 +38,13 @@ JOURNAL = "model_comparison.journal"
 SEED = 8088
 
 
-def _ic_draw(rng: np.random.Generator, plant):
-    from posture_id.ic import IcParameters, is_stable
-
-    while True:
-        p = IcParameters(kp=rng.uniform(1.3, 2.5) * plant.mgh,
-                         kd=rng.uniform(0.25, 0.6) * plant.mgh,
-                         delay_s=rng.uniform(0.08, 0.22), w=rng.uniform(0.2, 0.9),
-                         torque_feedback_gain=rng.uniform(0.0, 0.5),
-                         torque_feedback_time_s=rng.uniform(5.0, 40.0))
-        if is_stable(p, plant):
-            return p
-
-
-def _ic_recording(body, params, stimulus, share, seed):
-    """An IC recording, people-like when ``share`` is given: the motor-noise level that
-    leaves that share of the COM sway locked (the model is linear: exact)."""
-    from posture_id.ic import simulate_ic
-
-    clean = simulate_ic(body, params, stimulus)
-    if share is None:
-        return clean.with_sensor_noise(0.02, seed), None
-    unit = simulate_ic(body, params, stimulus, motor_sd_deg=0.1, seed=seed)
-    com_clean = body.com_angles(clean.theta)[:, 0]
-    noise = body.com_angles(unit.theta)[:, 0] - com_clean
-    level = 0.1 * math.sqrt(np.var(com_clean) * (1 - share) / (share * np.var(noise)))
-    noisy = simulate_ic(body, params, stimulus, motor_sd_deg=level, seed=seed)
-    return noisy.with_sensor_noise(0.05, seed), level
-
-
 def _case(k: int) -> dict:
     """Recording k: its model, body, stimulus, sway and truth, then the comparison."""
     from posture_id import load_body
     from posture_id.dec.prior import sample_parameters
     from posture_id.ic import IcPlant
     from posture_id.ic.compare import compare_models
+    from posture_id.ic.subjects import draw_ic_parameters, ic_recording
     from posture_id.simulation.batch import simulate
     from posture_id.simulation.stimulus import prts
     from posture_id.simulation.subjects import people_like
@@ -99,8 +70,9 @@ def _case(k: int) -> dict:
             recording = simulate(body, params, stimulus).to_recording().with_sensor_noise(
                 0.02, SEED + k)
     else:
-        params = _ic_draw(rng, IcPlant.of(body))
-        recording, _ = _ic_recording(body, params, stimulus, share, SEED + k)
+        params = draw_ic_parameters(rng, IcPlant.of(body))
+        recording, _ = ic_recording(body, params, stimulus, share, SEED + k,
+                                    0.05 if people else 0.02)
     started = time.perf_counter()
     result = compare_models(prepare_trial(recording, stimulus), body)
     return {"k": k, "model": model, "body": urdf.stem, "states": states, "cycles": cycles,

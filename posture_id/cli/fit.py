@@ -193,7 +193,7 @@ def _fit_ic(args: argparse.Namespace) -> int:
                            locked=LockedOptions(max_frequency_hz=args.max_frequency_hz))
     result = fit_ic(trial, body, options)
     write_result(result, args.out, args.plot)
-    return answered(not result.consistent or bool(result.on_bound))
+    return answered(result.trust_level == "doubtful")
 
 
 def at_the_noise(result):

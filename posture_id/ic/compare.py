@@ -14,11 +14,13 @@ the estimate's own scatter, ν/(ν − 2) with ν its degrees of freedom). For e
   on every cycle but the last, their sway on the last cycle against the recorded one
   (χ² per degree of freedom, the single cycle's noise being √C times the average's).
 
-**[decision]** A model is preferred when its BIC is lower by more than
+**[decision]** A model is preferred when the other does not explain the locked sway within
+its noise (χ² beyond its 99th percentile), its BIC is lower by more than
 :data:`BIC_MARGIN` (10: "very strong" evidence on Kass & Raftery's scale) and the held-out
 cycle, where there is one, does not favour the other (its χ² per degree of freedom lower
-by more than :data:`HELD_OUT_MARGIN`); otherwise "undecided": the difference is within
-what the noise allows.
+by more than :data:`HELD_OUT_MARGIN`); otherwise "undecided": when both explain the sway
+as well as its noise allows, fewer parameters are no evidence about which controller made
+it.
 """
 
 from __future__ import annotations
@@ -83,10 +85,7 @@ class ModelComparison(Result):
     def within_noise(self) -> dict:
         """{"dec", "ic"}: whether the model's χ² is within the 99th percentile of its
         χ² distribution (n − k degrees of freedom)."""
-        from scipy.stats import chi2
-
-        return {m: bool(self.chi2[m] <= chi2.ppf(0.99, max(self.compared - self.parameters[m],
-                                                             1)))
+        return {m: bool(self.chi2[m] <= _chi2_quantile(self.compared - self.parameters[m]))
                 for m in ("dec", "ic")}
 
     @property
@@ -165,6 +164,8 @@ def _judged(projection: LockedProjection, rows: np.ndarray, noise: np.ndarray,
     is estimated from 2·``neighbours`` harmonics (4·neighbours real numbers): its inverse
     is biased high by ν/(ν − 2), ν = 4·neighbours, which the χ² is corrected for."""
     spectrum = projection.all_harmonics(model_deg[:, None])[rows, 0]
+    if not np.all(np.isfinite(spectrum)):  # the model falls: it explains nothing
+        return math.inf, np.full(len(rows), np.nan, dtype=complex)
     nu = 4 * neighbours
     chi2 = float(np.sum(np.abs((spectrum - recorded) / noise) ** 2)) * (nu - 2) / nu
     return chi2, spectrum
@@ -227,7 +228,8 @@ def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None =
     bic = {m: chi2[m] + k[m] * math.log(n) for m in ("dec", "ic")}
     held = (_held_out(trial, body, projection, locked, ic_options, sway)
             if held_out and projection.cycles >= 3 else None)
-    preferred, reason = _verdict(bic, held, projection.cycles)
+    within = {m: bool(chi2[m] <= _chi2_quantile(n - k[m])) for m in ("dec", "ic")}
+    preferred, reason = _verdict(bic, held, projection.cycles, within)
     return ModelComparison(dec, ic, frequencies[rows], projection.excited[rows], chi2, k, bic,
                            n, held, preferred, reason, recorded, dec_spectrum, ic_spectrum,
                            noise, clock.perf_counter() - started, trial.name)
@@ -269,8 +271,18 @@ def _held_out(trial: PreparedTrial, body, projection: LockedProjection,
     return out
 
 
-def _verdict(bic: dict, held: dict | None, cycles: int) -> tuple[str, str]:
+def _chi2_quantile(dof: int) -> float:
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(0.99, max(dof, 1)))
+
+
+def _verdict(bic: dict, held: dict | None, cycles: int, within: dict) -> tuple[str, str]:
     delta = bic["ic"] - bic["dec"]
+    if all(within.values()):
+        return "undecided", ("both models explain the locked sway within its noise (their "
+                             f"BIC differ by {abs(delta):.1f}): the recording does not tell "
+                             "them apart")
     if abs(delta) <= BIC_MARGIN:
         return "undecided", (f"the models' BIC differ by {abs(delta):.1f}, within the "
                              f"{BIC_MARGIN:g} the noise allows: the recording does not tell "

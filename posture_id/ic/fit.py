@@ -163,6 +163,40 @@ class IcFitResult(Result):
 
         return self.chi2 <= chi2.ppf(0.99, max(self.dof, 1))
 
+    @property
+    def unpinned(self) -> tuple[str, ...]:
+        """Kp, Kd, Δ and W whose interval is wider than ±10 % of the value (W: ±0.1)."""
+        out = []
+        for name in ("kp", "kd", "delay_s", "w"):
+            if name not in self.intervals:
+                continue
+            low, high = self.intervals[name]
+            wide = (high - low) / 2 > (0.1 if name == "w" else 0.1 * abs(getattr(
+                self.parameters, name)))
+            if wide:
+                out.append(name)
+        return tuple(out)
+
+    @property
+    def trust_level(self) -> str:
+        """The trust verdict's level, as for every answer (docs/identify.md, "Trust"):
+        doubtful (a residual beyond the noise, Kp, Kd, Δ or W on a search bound),
+        imprecise (consistent, but Kp, Kd, Δ or W not pinned to 10 %), or good."""
+        if not self.consistent or self.on_bound or not self.stable:
+            return "doubtful"
+        return "imprecise" if self.unpinned else "good"
+
+    def verdict_line(self) -> str:
+        if self.trust_level == "doubtful":
+            why = ([f"residual {self.noise_ratio:.2f}× the noise"] if not self.consistent
+                   else []) + ([f"on a search bound: {', '.join(self.on_bound)}"]
+                               if self.on_bound else [])
+            return f"trust: DOUBTFUL: {'; '.join(why)}"
+        if self.trust_level == "imprecise":
+            return (f"trust: imprecise: {', '.join(self.unpinned)} not pinned to 10 % by this "
+                    "recording; the intervals give the precision")
+        return "trust: good"
+
     def relative_width(self, name: str) -> float:
         """Half the interval's width over the value (∞ for a value of 0)."""
         low, high = self.intervals[name]
@@ -178,6 +212,9 @@ class IcFitResult(Result):
                 "level": self.level, "chi2": self.chi2, "dof": self.dof,
                 "noise_ratio": self.noise_ratio, "consistent": self.consistent,
                 "harmonics": self.harmonics, "on_bound": list(self.on_bound),
+                "trust": {"level": self.trust_level,
+                          "doubtful": self.trust_level == "doubtful",
+                          "unpinned": list(self.unpinned), "line": self.verdict_line()},
                 "stable": self.stable, "explained": self.explained,
                 "seconds": self.seconds, "recording": self.name,
                 "provenance": provenance()}
@@ -192,8 +229,7 @@ class IcFitResult(Result):
             low, high = self.intervals[name]
             lines.append(f"  {name:<24} {getattr(p, name):10.4g}   {100 * self.level:.0f} % "
                          f"interval {low:.4g} – {high:.4g}")
-        if self.on_bound:
-            lines.append(f"on a search bound: {', '.join(self.on_bound)}")
+        lines.append(self.verdict_line())
         return "\n".join(lines)
 
     def plot(self, path=None, ax=None):

@@ -606,3 +606,21 @@ def plot_model_comparison(frequencies_hz, stimulated, recorded, models: dict, no
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_delta_bic(names, delta_bic, preferred, margin: float = 10.0, path=None, ax=None):
+    """ΔBIC (IC − DEC) per recording, the ±``margin`` band of "undecided" shaded."""
+    fig, axes = _axes(ax, 1, 1, (8, 0.35 * len(names) + 1.5))
+    a = axes[0, 0]
+    colours = {"dec": "C0", "ic": "C1", "undecided": "0.5"}
+    y = np.arange(len(names))
+    band = np.log10(1 + margin)
+    a.axvspan(-band, band, color="0.9")
+    a.barh(y, np.sign(delta_bic) * np.log10(1 + np.abs(delta_bic)),
+           color=[colours.get(p, "0.5") for p in preferred])
+    a.set_yticks(y, names)
+    a.set_xlabel("sign(ΔBIC)·log10(1 + |ΔBIC|), ΔBIC = BIC(IC) − BIC(DEC): > 0 favours DEC")
+    a.grid(alpha=0.3, axis="x")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

@@ -15,6 +15,7 @@ from posture_id.cli.stimulus import (
     add_lab_stimulus_arguments,
     recording_and_stimulus,
 )
+from posture_id.errors import PostureIdError
 
 __all__ = ["add_parser"]
 
@@ -22,10 +23,13 @@ __all__ = ["add_parser"]
 def add_parser(sub) -> None:
     p = sub.add_parser("compare", help="fit DEC and the independent-channel (IC) model to a "
                                        "recording; say which its sway supports")
-    p.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
+    p.add_argument("recording", help="recording CSV (time_s,tilt_deg,<seg>_deg...); a folder "
+                                    "or a glob pattern compares a cohort into the --out folder")
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     p.add_argument("--out", type=Path, help="comparison JSON (\"preferred\": dec, ic or "
-                                           "undecided, with both models' parameters)")
+                                           "undecided, with both models' parameters); for a "
+                                           "cohort, a folder: one JSON per recording and "
+                                           "summary.csv")
     p.add_argument("--plot", type=Path, help="the locked COM sway at every compared harmonic "
                                             "with both models over it (PNG)")
     p.add_argument("--fit-ki", action="store_true", help="the IC model's Ki identified too")
@@ -42,6 +46,11 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from posture_id.cli.identify import _is_cohort
+
+    if _is_cohort(args.recording):
+        return run_cohort(args)
+    args.recording = Path(args.recording)
     inputs = (args.recording, args.body, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
@@ -59,3 +68,40 @@ def run(args: argparse.Namespace) -> int:
         result = compare_models(trial, body, options, progress, not args.no_held_out)
     write_result(result, args.out, args.plot)
     return answered(result.doubtful)
+
+
+def run_cohort(args: argparse.Namespace) -> int:
+    """Every recording of a folder or pattern, into the --out folder."""
+    import glob
+
+    from posture_id.cli.output_folder import OutputFolder
+    from posture_id.ic import IcFitOptions
+    from posture_id.ic.cohort import compare_cohort
+    from posture_id.identify.cohort import find_recordings
+    from posture_id.trials import prepare_trial
+
+    if args.plot:
+        raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording "
+                             "and summary.csv")
+    if args.out is None:
+        raise PostureIdError(f"{args.recording}: a cohort's comparisons need a folder: --out "
+                             "FOLDER")
+    recordings = find_recordings(args.recording)
+    writes = (*(f"{glob.escape(p.stem)}.json" for p in recordings), "summary.csv")
+    with OutputFolder(args.out, "--out", writes,
+                      inputs=(*recordings, args.body, args.tilt, *{p.parent for p in recordings})):
+        body = load_body(args.body or DEFAULT_URDF)
+
+        def read(path: Path):
+            args.recording = path
+            recording, stimulus = recording_and_stimulus(args, body)
+            recording.check_segments(body.segment_names)
+            return prepare_trial(recording, stimulus)
+
+        options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
+                               starts=args.starts, seed=args.seed)
+        with TerminalProgress("recordings", prefix="posture-id compare") as progress:
+            result = compare_cohort(recordings, args.out, body, read, options,
+                                    not args.no_held_out, progress)
+    print(result.summary())
+    return answered(bool(result.failed or result.doubtful))

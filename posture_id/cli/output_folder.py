@@ -6,7 +6,7 @@ A command that writes a folder of files (``design --out``, a cohort's ``--out``,
 of those names that posture-id did not write (the user's own ``study/design.md``, a
 ``summary.csv`` of their own) makes the command refuse in one line; a file it wrote before
 is overwritten (a run again). It knows its own files by the folder's ledger,
-``.posture-id.json`` (each file it wrote there with its SHA-256, updated after every
+``.posture-id-files`` (each file it wrote there with its SHA-256, updated after every
 run), or, for JSON results written before the ledger existed, by their
 ``"provenance": {"package": "posture_id"}``. A file the user edited after posture-id wrote
 it is the user's. A run that fails leaves no new empty folder behind.
@@ -25,8 +25,9 @@ from posture_id.errors import PostureIdError
 
 __all__ = ["LEDGER", "OutputFolder", "written_by_posture_id"]
 
-#: The folder's record of the files posture-id wrote into it: {relative path: SHA-256}.
-LEDGER = ".posture-id.json"
+#: The folder's record of the files posture-id wrote into it: {relative path: SHA-256}
+#: (JSON, but not named *.json: a user's loop over the results' JSON does not meet it).
+LEDGER = ".posture-id-files"
 
 
 def _sha256(path: Path) -> str:

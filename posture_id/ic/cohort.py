@@ -1,0 +1,114 @@
+"""``posture-id compare DIR_OR_GLOB --out FOLDER``: DEC against IC on every recording of a
+cohort: ``<recording>.json`` each (the comparison) and ``summary.csv`` (one row per
+recording: the preferred model, ΔBIC, whether each model is within the noise, the IC
+parameters and each DEC module's Kp, Kd and delay). A recording already compared is not
+compared again (a killed run goes on); one that cannot be read gets its reason in the
+summary while the others go on."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from posture_id.errors import PostureIdError
+from posture_id.fileio import Result, atomic_write_text, json_text
+from posture_id.ic.compare import compare_models
+from posture_id.ic.fit import IcFitOptions
+from posture_id.progress import Progress, report
+
+__all__ = ["CompareCohort", "compare_cohort", "SUMMARY_FIELDS"]
+
+SUMMARY_FIELDS = ("recording", "status", "preferred", "delta_bic_ic_minus_dec",
+                  "dec_within_noise", "ic_within_noise", "ic_kp", "ic_kd", "ic_delay_s",
+                  "ic_w", "ic_torque_feedback_gain", "ic_torque_feedback_time_s")
+
+
+@dataclass(frozen=True)
+class CompareCohort(Result):
+    """out: the folder. rows: ``summary.csv``'s rows (dicts)."""
+
+    out: Path
+    rows: tuple[dict, ...]
+
+    @property
+    def failed(self) -> dict[str, str]:
+        return {r["recording"]: r["status"] for r in self.rows
+                if r["status"] not in ("done", "skipped")}
+
+    @property
+    def doubtful(self) -> tuple[str, ...]:
+        """Recordings that neither model explains within the noise."""
+        return tuple(r["recording"] for r in self.rows if r.get("dec_within_noise") is False
+                     and r.get("ic_within_noise") is False)
+
+    def to_dict(self) -> dict:
+        return {"out": str(self.out), "rows": list(self.rows)}
+
+    def summary(self) -> str:
+        counts = {m: sum(r.get("preferred") == m for r in self.rows)
+                  for m in ("dec", "ic", "undecided")}
+        return (f"{self.out}: {len(self.rows)} recordings: DEC preferred {counts['dec']}, IC "
+                f"{counts['ic']}, undecided {counts['undecided']}, failed {len(self.failed)}"
+                + "".join(f"\n  {k}: {v}" for k, v in self.failed.items())
+                + (f"\n  neither model within the noise: {', '.join(self.doubtful)}"
+                   if self.doubtful else ""))
+
+    def plot(self, path=None, ax=None):
+        """ΔBIC (IC − DEC) per recording: below −10 IC, above +10 DEC, between undecided."""
+        from posture_id.plotting import plot_delta_bic
+
+        done = [r for r in self.rows if r.get("delta_bic_ic_minus_dec") is not None]
+        return plot_delta_bic([r["recording"] for r in done],
+                              [r["delta_bic_ic_minus_dec"] for r in done],
+                              [r["preferred"] for r in done], path=path, ax=ax)
+
+
+def _row(name: str, data: dict, status: str) -> dict:
+    ic = data["ic"]["parameters"]
+    row = {"recording": name, "status": status, "preferred": data["preferred"],
+           "delta_bic_ic_minus_dec": data["delta_bic_ic_minus_dec"],
+           "dec_within_noise": data["within_noise"]["dec"],
+           "ic_within_noise": data["within_noise"]["ic"]}
+    row.update({f"ic_{k}": ic[k] for k in ("kp", "kd", "delay_s", "w",
+                                            "torque_feedback_gain", "torque_feedback_time_s")})
+    for joint, m in data["dec"]["parameters"].items():
+        row.update({f"dec_{joint}_kp": m["kp"], f"dec_{joint}_kd": m["kd"],
+                    f"dec_{joint}_delay_s": m["delay_s"], f"dec_{joint}_controls": m["controls"]})
+    return row
+
+
+def compare_cohort(recordings: list[Path], out: Path, body, read, options: IcFitOptions,
+                   held_out: bool = True, progress: Progress | None = None) -> CompareCohort:
+    """Compare every recording into ``out``; ``read(path) -> PreparedTrial``."""
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    report(progress, 0, len(recordings), "recording")
+    for k, path in enumerate(recordings, 1):
+        target = out / f"{path.stem}.json"
+        try:
+            earlier = json.loads(target.read_text(encoding="utf-8")) if target.exists() \
+                else None
+        except ValueError:
+            earlier = None
+        if earlier is not None and "preferred" in earlier:
+            rows.append(_row(path.name, earlier, "skipped"))
+        else:
+            try:
+                result = compare_models(read(path), body, options, held_out=held_out)
+            except PostureIdError as exc:
+                rows.append({"recording": path.name, "status": str(exc)})
+            else:
+                data = result.to_dict()
+                atomic_write_text(target, json_text(data))
+                rows.append(_row(path.name, data, "done"))
+        report(progress, k, len(recordings), "recording")
+    fields = list(SUMMARY_FIELDS) + sorted({k for r in rows for k in r} - set(SUMMARY_FIELDS))
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fields, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    atomic_write_text(out / "summary.csv", text.getvalue())
+    return CompareCohort(out, tuple(rows))

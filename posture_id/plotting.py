@@ -624,3 +624,23 @@ def plot_delta_bic(names, delta_bic, preferred, margin: float = 10.0, path=None,
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_reweighting(names, w_by_part, bic: dict, path=None, ax=None):
+    """The proprioceptive weight W the IC model needed at each amplitude (left) and both
+    models' BIC over every part (right, lower is better)."""
+    fig, axes = _axes(ax, 1, 2, (9, 3.5))
+    left, right = axes[0, 0], axes[0, 1]
+    left.plot(range(1, len(w_by_part) + 1), w_by_part, "o-", color="C1")
+    left.set_xticks(range(1, len(w_by_part) + 1), [f"part {k}" for k in
+                                                    range(1, len(w_by_part) + 1)])
+    left.set_ylim(0, 1)
+    left.set_ylabel("IC proprioceptive weight W")
+    right.bar(["DEC", "IC"], [bic["dec"], bic["ic"]], color=["C0", "C1"])
+    right.set_ylabel("BIC (lower is better)")
+    for a in (left, right):
+        a.grid(alpha=0.3)
+    fig.suptitle(" + ".join(str(n) for n in names))
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

@@ -38,6 +38,11 @@ def add_parser(sub) -> None:
     p.add_argument("--starts", type=positive_int, default=6,
                    help="IC fit starts (default %(default)d)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
+    p.add_argument("--second", type=Path, metavar="RECORDING",
+                   help="the same subject at the second amplitude of a two-amplitude "
+                        "protocol (--protocol FILE gives each part its stimulus; without "
+                        "it each recording's tilt says): DEC with one set of parameters for "
+                        "both, IC with a W per amplitude")
     p.add_argument("--no-held-out", action="store_true",
                    help="skip the held-out cycle (two fits fewer; the BIC alone decides)")
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with")
@@ -51,9 +56,11 @@ def run(args: argparse.Namespace) -> int:
     if _is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)
-    inputs = (args.recording, args.body, args.tilt)
+    inputs = (args.recording, args.body, args.tilt, args.second)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    if args.second is not None:
+        return _run_amplitudes(args)
     from posture_id.ic import IcFitOptions
     from posture_id.ic.compare import compare_models
     from posture_id.trials import prepare_trial
@@ -105,3 +112,27 @@ def run_cohort(args: argparse.Namespace) -> int:
                                     not args.no_held_out, progress)
     print(result.summary())
     return answered(bool(result.failed or result.doubtful))
+
+
+def _run_amplitudes(args: argparse.Namespace) -> int:
+    """``--second``: the two parts of a two-amplitude protocol, compared at once."""
+    from posture_id.ic import IcFitOptions
+    from posture_id.ic.compare import compare_amplitudes
+    from posture_id.trials import prepare_trial
+
+    if args.part is not None:
+        raise PostureIdError("--part: with --second each recording is its own part (the "
+                             "first 1, the second 2)")
+    body = load_body(args.body or DEFAULT_URDF)
+    trials = []
+    for part, path in enumerate((args.recording, args.second), 1):
+        args.recording, args.part = path, (part if args.protocol else None)
+        recording, stimulus = recording_and_stimulus(args, body)
+        recording.check_segments(body.segment_names)
+        trials.append(prepare_trial(recording, stimulus))
+    options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
+                           starts=args.starts, seed=args.seed)
+    with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
+        result = compare_amplitudes(trials, body, options, progress)
+    write_result(result, args.out, args.plot)
+    return answered(result.doubtful)

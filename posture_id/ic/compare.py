@@ -38,7 +38,8 @@ from posture_id.ic.fit import IcFitOptions, IcFitResult, IcModelResponse, com_sw
 from posture_id.ic.response import IcPlant
 from posture_id.trials import PreparedTrial
 
-__all__ = ["ModelComparison", "compare_models", "BIC_MARGIN", "HELD_OUT_MARGIN"]
+__all__ = ["ModelComparison", "compare_models", "AmplitudesComparison", "compare_amplitudes",
+           "BIC_MARGIN", "HELD_OUT_MARGIN"]
 
 #: ΔBIC beyond which one model is preferred.
 BIC_MARGIN = 10.0
@@ -196,43 +197,161 @@ def _first_cycles(trial: PreparedTrial, cycles: int, projection: LockedProjectio
     return replace(trial, recording=cut, stimulus=stimulus)
 
 
+@dataclass(frozen=True)
+class _Judged:
+    """One recording's compared harmonics: every harmonic up to 2 Hz, its noise."""
+
+    projection: LockedProjection
+    rows: np.ndarray
+    frequencies_hz: np.ndarray
+    noise: np.ndarray
+    recorded: np.ndarray
+    sway: np.ndarray
+
+    @classmethod
+    def of(cls, trial: PreparedTrial, body, locked: LockedOptions) -> _Judged:
+        if trial.stimulus.period_s is None:
+            raise PostureIdError(f"{trial.name}: comparing the models needs a periodic "
+                                 "stimulus (its locked harmonics)")
+        rec = trial.recording
+        sway = com_sway_deg(trial, body)
+        projection = LockedProjection.for_recording(
+            rec.tilt, sway[:, None], rec.sample_rate_hz, trial.stimulus.period_s,
+            trial.stimulus.periodic_from_s, locked, trial.name)
+        spectrum = projection.all_harmonics(sway[:, None])[:, 0]
+        frequencies = np.arange(1, len(spectrum) + 1) * rec.sample_rate_hz / projection.period
+        rows = np.flatnonzero(frequencies <= MAX_FREQUENCY_HZ)
+        noise = _noise_everywhere(np.abs(spectrum) ** 2, projection.excited, rows,
+                                  locked.neighbours)
+        return cls(projection, rows, frequencies[rows], noise, spectrum[rows], sway)
+
+    def judge(self, model_deg: np.ndarray, neighbours: int) -> tuple[float, np.ndarray]:
+        return _judged(self.projection, self.rows, self.noise, self.recorded, model_deg,
+                       neighbours)
+
+
 def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None = None,
                    progress=None, held_out: bool = True) -> ModelComparison:
     """Fit DEC and IC to ``trial`` and say which its sway supports (the module doc)."""
     started = clock.perf_counter()
     ic_options = ic_options or IcFitOptions()
     locked = replace(ic_options.locked, max_frequency_hz=MAX_FREQUENCY_HZ)
-    if trial.stimulus.period_s is None:
-        raise PostureIdError(f"{trial.name}: comparing the models needs a periodic stimulus "
-                             "(its locked harmonics)")
-    rec = trial.recording
-    sway = com_sway_deg(trial, body)
-    projection = LockedProjection.for_recording(
-        rec.tilt, sway[:, None], rec.sample_rate_hz, trial.stimulus.period_s,
-        trial.stimulus.periodic_from_s, locked, trial.name)
-    all_spectrum = projection.all_harmonics(sway[:, None])[:, 0]
-    frequencies = np.arange(1, len(all_spectrum) + 1) * rec.sample_rate_hz / projection.period
-    rows = np.flatnonzero(frequencies <= MAX_FREQUENCY_HZ)
-    noise = _noise_everywhere(np.abs(all_spectrum) ** 2, projection.excited, rows,
-                              locked.neighbours)
-    recorded = all_spectrum[rows]
+    judged = _Judged.of(trial, body, locked)
+    projection = judged.projection
     dec = _dec_fit(trial, body, locked, progress)
     ic = fit_ic(trial, body, replace(ic_options, locked=locked))
-    chi2_dec, dec_spectrum = _judged(projection, rows, noise, recorded, _dec_com_deg(dec, body),
-                                     locked.neighbours)
-    chi2_ic, ic_spectrum = _judged(projection, rows, noise, recorded, ic.fitted_deg,
-                                   locked.neighbours)
-    n = 2 * len(rows)
+    chi2_dec, dec_spectrum = judged.judge(_dec_com_deg(dec, body), locked.neighbours)
+    chi2_ic, ic_spectrum = judged.judge(ic.fitted_deg, locked.neighbours)
+    n = 2 * len(judged.rows)
     k = {"dec": 5 * body.n_segments, "ic": len(ic.free)}
     chi2 = {"dec": chi2_dec, "ic": chi2_ic}
     bic = {m: chi2[m] + k[m] * math.log(n) for m in ("dec", "ic")}
-    held = (_held_out(trial, body, projection, locked, ic_options, sway)
+    held = (_held_out(trial, body, projection, locked, ic_options, judged.sway)
             if held_out and projection.cycles >= 3 else None)
     within = {m: bool(chi2[m] <= _chi2_quantile(n - k[m])) for m in ("dec", "ic")}
     preferred, reason = _verdict(bic, held, projection.cycles, within)
-    return ModelComparison(dec, ic, frequencies[rows], projection.excited[rows], chi2, k, bic,
-                           n, held, preferred, reason, recorded, dec_spectrum, ic_spectrum,
-                           noise, clock.perf_counter() - started, trial.name)
+    return ModelComparison(dec, ic, judged.frequencies_hz, projection.excited[judged.rows],
+                           chi2, k, bic, n, held, preferred, reason, judged.recorded,
+                           dec_spectrum, ic_spectrum, judged.noise,
+                           clock.perf_counter() - started, trial.name)
+
+
+@dataclass(frozen=True)
+class AmplitudesComparison(Result):
+    """DEC against IC on the parts of a two-amplitude protocol: DEC with one set of
+    parameters for every part, IC with every parameter shared but W (one per part).
+
+    Attributes:
+        dec: the joint DEC fit (:class:`~posture_id.fitting.joint.JointFit`). ic: the IC
+        fit (:class:`~posture_id.ic.fit.IcPartsFit`). chi2, parameters, bic, compared,
+        preferred, reason: as :class:`ModelComparison`'s, over every part.
+        names: the parts' recordings.
+    """
+
+    dec: object
+    ic: object
+    chi2: dict
+    parameters: dict
+    bic: dict
+    compared: int
+    preferred: str
+    reason: str
+    names: tuple[str, ...]
+    seconds: float = 0.0
+
+    @property
+    def within_noise(self) -> dict:
+        return {m: bool(self.chi2[m] <= _chi2_quantile(self.compared - self.parameters[m]))
+                for m in ("dec", "ic")}
+
+    @property
+    def doubtful(self) -> bool:
+        return not any(self.within_noise.values())
+
+    def to_dict(self) -> dict:
+        from posture_id.provenance import provenance
+
+        return {"recordings": list(self.names), "preferred": self.preferred,
+                "reason": self.reason, "within_noise": self.within_noise,
+                "doubtful": self.doubtful, "chi2": self.chi2, "parameters": self.parameters,
+                "bic": self.bic, "delta_bic_ic_minus_dec": self.bic["ic"] - self.bic["dec"],
+                "compared_numbers": self.compared,
+                "ic": {"parameters": [p.to_dict() for p in self.ic.parameters],
+                       "w_by_part": list(self.ic.w_by_part),
+                       "reweighting": self.ic.reweighting},
+                "dec": {"parameters": self.dec.parameters.to_dict()},
+                "seconds": self.seconds, "provenance": provenance()}
+
+    def summary(self) -> str:
+        w = ", ".join(f"{x:.3f}" for x in self.ic.w_by_part)
+        return "\n".join([
+            f"preferred: {self.preferred.upper()}: {self.reason}",
+            f"IC re-weighting: W {w} by part (it moved by {self.ic.reweighting:+.3f} from the "
+            "first amplitude to the second)",
+            f"χ² DEC {self.chi2['dec']:.1f} ({self.parameters['dec']} parameters), IC "
+            f"{self.chi2['ic']:.1f} ({self.parameters['ic']}); BIC DEC "
+            f"{self.bic['dec']:.1f}, IC {self.bic['ic']:.1f} over {len(self.names)} parts",
+            "DEC: " + ", ".join(f"{j} Kp {m.kp:.1f} Kd {m.kd:.1f} Δ {m.delay_s:.3f} "
+                                f"{m.controls}" for j, m in self.dec.parameters.modules.items()),
+            self.ic.parameters[0].summary() + f" (W of the first part; {w})"])
+
+    def plot(self, path=None, ax=None):
+        """The W each amplitude needed, beside the BIC of both models."""
+        from posture_id.plotting import plot_reweighting
+
+        return plot_reweighting(self.names, self.ic.w_by_part, self.bic, path=path, ax=ax)
+
+
+def compare_amplitudes(trials: list[PreparedTrial], body,
+                       ic_options: IcFitOptions | None = None,
+                       progress=None) -> AmplitudesComparison:
+    """Fit DEC (one set of parameters) and IC (a W per part) to the parts of a
+    two-amplitude protocol, and say which the sway supports (the module doc: the same
+    rule, the held-out cycle left out)."""
+    from posture_id.fitting.joint import fit_recordings_jointly
+    from posture_id.fitting.options import FitOptions
+    from posture_id.ic.fit import fit_ic_parts
+
+    started = clock.perf_counter()
+    ic_options = ic_options or IcFitOptions()
+    locked = replace(ic_options.locked, max_frequency_hz=MAX_FREQUENCY_HZ)
+    judged = [_Judged.of(t, body, locked) for t in trials]
+    dec = fit_recordings_jointly(trials, body, FitOptions(locked=locked), progress)
+    ic = fit_ic_parts(trials, body, replace(ic_options, locked=locked))
+    reference = body.reference_com_angles[0]
+    chi2 = {"dec": 0.0, "ic": 0.0}
+    for part, theta, ic_deg in zip(judged, dec.fitted, ic.fitted_deg, strict=True):
+        dec_deg = np.degrees(body.com_angles(theta)[:, 0] - reference)
+        chi2["dec"] += part.judge(dec_deg, locked.neighbours)[0]
+        chi2["ic"] += part.judge(ic_deg, locked.neighbours)[0]
+    n = sum(2 * len(p.rows) for p in judged)
+    k = {"dec": 5 * body.n_segments, "ic": len(ic_options.free) + len(trials) - 1}
+    bic = {m: chi2[m] + k[m] * math.log(n) for m in ("dec", "ic")}
+    within = {m: bool(chi2[m] <= _chi2_quantile(n - k[m])) for m in ("dec", "ic")}
+    preferred, reason = _verdict(bic, None, None, within)
+    return AmplitudesComparison(dec, ic, chi2, k, bic, n, preferred, reason,
+                                tuple(t.name for t in trials),
+                                clock.perf_counter() - started)
 
 
 def _held_out(trial: PreparedTrial, body, projection: LockedProjection,
@@ -277,7 +396,7 @@ def _chi2_quantile(dof: int) -> float:
     return float(chi2.ppf(0.99, max(dof, 1)))
 
 
-def _verdict(bic: dict, held: dict | None, cycles: int, within: dict) -> tuple[str, str]:
+def _verdict(bic: dict, held: dict | None, cycles: int | None, within: dict) -> tuple[str, str]:
     delta = bic["ic"] - bic["dec"]
     if all(within.values()):
         return "undecided", ("both models explain the locked sway within its noise (their "
@@ -297,7 +416,8 @@ def _verdict(bic: dict, held: dict | None, cycles: int, within: dict) -> tuple[s
             f"; it predicts the held-out cycle as well or better (χ²/dof {held[better]:.2f} "
             f"against {held[worse]:.2f})")
     if held is None:
-        tail = f"; no held-out cycle with {cycles} cycles"
+        tail = ("; every part fitted at once, no held-out cycle" if cycles is None
+                else f"; no held-out cycle with {cycles} cycles")
     return better, (f"{names[better]} explains the locked sway better by a BIC of "
                     f"{abs(delta):.1f} (beyond the {BIC_MARGIN:g} the noise allows), its "
                     f"parameters counted{tail}")

@@ -33,7 +33,7 @@ from posture_id.ic.response import PARAMETER_ORDER, IcPlant, closed_loop, is_sta
 from posture_id.trials import PreparedTrial
 
 __all__ = ["IcFitOptions", "IcFitResult", "fit_ic", "IcModelResponse", "com_sway_deg",
-           "BOUNDS"]
+           "BOUNDS", "IcPartsFit", "fit_ic_parts"]
 
 #: MODEL §8's search bounds: (low, high) per parameter; gains in units of m·g·h (·s for
 #: Kd, /s for Ki), W and G as they are, times in s.
@@ -252,62 +252,92 @@ def _to_params(x: np.ndarray, free: tuple[str, ...], plant: IcPlant,
                                                                             strict=True)})
 
 
-def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> IcFitResult:
-    """The IC parameters of ``trial``'s body COM sway (the module doc).
+class _Part:
+    """One recording's share of an IC fit: its locked COM-sway harmonics, their noise and
+    the model's response on its tilt."""
 
-    Raises:
-        PostureIdError: a stimulus that is not periodic (no locked harmonics), or no start
-            that gives a stable closed loop.
-    """
-    from scipy.optimize import least_squares
-    from scipy.stats import norm
+    def __init__(self, trial: PreparedTrial, body, plant: IcPlant,
+                 locked: LockedOptions) -> None:
+        rec = trial.recording
+        if trial.stimulus.period_s is None:
+            raise PostureIdError(f"{trial.name}: the IC fit compares stimulus-locked "
+                                 "harmonics and needs a periodic stimulus (a PRTS or a "
+                                 "protocol)")
+        self.trial = trial
+        self.sway = com_sway_deg(trial, body)
+        self.projection = LockedProjection.for_recording(
+            rec.tilt, self.sway[:, None], rec.sample_rate_hz, trial.stimulus.period_s,
+            trial.stimulus.periodic_from_s, locked, trial.name)
+        self.weights = 1.0 / self.projection.noise[:, 0]
+        self.recorded = self.projection.spectrum(self.sway[:, None])[:, 0]
+        self.model = IcModelResponse(rec.tilt, rec.sample_rate_hz, plant)
+        weighted = self.recorded * self.weights
+        self.target = np.concatenate([weighted.real, weighted.imag])
 
-    options = options or IcFitOptions()
-    started = clock.perf_counter()
-    plant = IcPlant.of(body)
-    rec = trial.recording
-    if trial.stimulus.period_s is None:
-        raise PostureIdError(f"{trial.name}: the IC fit compares stimulus-locked harmonics "
-                             "and needs a periodic stimulus (a PRTS or a protocol)")
-    sway = com_sway_deg(trial, body)
-    projection = LockedProjection.for_recording(
-        rec.tilt, sway[:, None], rec.sample_rate_hz, trial.stimulus.period_s,
-        trial.stimulus.periodic_from_s, options.locked, trial.name)
-    weights = 1.0 / projection.noise[:, 0]
-    recorded = projection.spectrum(sway[:, None])[:, 0]
-    model = IcModelResponse(rec.tilt, rec.sample_rate_hz, plant)
-    free = options.free
-    columns = [PARAMETER_ORDER.index(n) for n in free]
-    scales = np.array([_scale(n, plant) for n in free])
-    fixed = IcParameters(kp=plant.mgh, kd=0.3 * plant.mgh, delay_s=0.15, w=0.5)
-
-    def weighted(y: np.ndarray) -> np.ndarray:
+    def weighted(self, y: np.ndarray) -> np.ndarray:
         """(2K, ...) real: the compared harmonics of y (S, ...) ÷ the noise."""
-        spectrum = projection.spectrum(y) * (weights if y.ndim == 1 else weights[:, None])
+        w = self.weights if y.ndim == 1 else self.weights[:, None]
+        spectrum = self.projection.spectrum(y) * w
         return np.concatenate([spectrum.real, spectrum.imag])
 
-    def residual(x: np.ndarray) -> np.ndarray:
-        y = np.degrees(model.sway(_to_params(x, free, plant, fixed)))
-        return weighted(y) - target
 
-    def jacobian(x: np.ndarray) -> np.ndarray:
-        _, dy = model.sway(_to_params(x, free, plant, fixed), gradient=True)
-        dy = np.degrees(dy[columns]).T * scales[None, :]  # (S, P), per normalised unit
-        return weighted(dy)
+#: The literature's typical values, the first start of every search (units of BOUNDS).
+_TYPICAL = {"kp": 1.5, "kd": 0.35, "ki": 0.05, "delay_s": 0.15, "w": 0.6,
+            "torque_feedback_gain": 0.3, "torque_feedback_time_s": 20.0, "kpas": 0.1,
+            "bpas": 0.05}
 
-    target = np.concatenate([(recorded * weights).real, (recorded * weights).imag])
-    low = np.array([BOUNDS[n][0] for n in free])
-    high = np.array([BOUNDS[n][1] for n in free])
-    typical = {"kp": 1.5, "kd": 0.35, "ki": 0.05, "delay_s": 0.15, "w": 0.6,
-               "torque_feedback_gain": 0.3, "torque_feedback_time_s": 20.0, "kpas": 0.1,
-               "bpas": 0.05}
-    rng = np.random.default_rng(options.seed)
-    starts = [np.array([typical[n] for n in free])]
-    for _ in range(options.starts - 1):
-        starts.append(low + (high - low) * rng.uniform(0.1, 0.9, len(free)))
+
+@dataclass(frozen=True)
+class _Search:
+    """The best start: x (normalised), its scipy result, each part's parameters."""
+
+    x: np.ndarray
+    fit: object
+    params: tuple[IcParameters, ...]
+    names: tuple[str, ...]
+
+
+def _search(parts: list[_Part], free: tuple[str, ...], plant: IcPlant,
+            options: IcFitOptions, name: str) -> _Search:
+    """Multi-start bounded least squares over ``free`` (shared by every part) and, with
+    several parts, one W per part after the first (``w`` is the first part's)."""
+    from scipy.optimize import least_squares
     from scipy.stats import chi2 as chi2_distribution
 
-    enough = float(chi2_distribution.ppf(0.99, max(len(target) - len(free), 1)))
+    names = tuple(free) + ("w",) * (len(parts) - 1)
+    w_index = [free.index("w")] + list(range(len(free), len(names)))
+    columns = [PARAMETER_ORDER.index(n) for n in free]
+    w_column = PARAMETER_ORDER.index("w")
+    scales = np.array([_scale(n, plant) for n in free])
+    fixed = IcParameters(kp=plant.mgh, kd=0.3 * plant.mgh, delay_s=0.15, w=0.5)
+    target = np.concatenate([p.target for p in parts])
+
+    def params_of(x: np.ndarray) -> list[IcParameters]:
+        shared = _to_params(x[: len(free)], free, plant, fixed)
+        return [shared.replace(w=float(x[i])) for i in w_index]
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        return np.concatenate([p.weighted(np.degrees(p.model.sway(q)))
+                               for p, q in zip(parts, params_of(x), strict=True)]) - target
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        blocks = []
+        for k, (p, q) in enumerate(zip(parts, params_of(x), strict=True)):
+            _, dy = p.model.sway(q, gradient=True)
+            d = np.zeros((len(dy[0]), len(names)))
+            d[:, : len(free)] = np.degrees(dy[columns]).T * scales[None, :]
+            d[:, free.index("w")] = 0.0
+            d[:, w_index[k]] = np.degrees(dy[w_column])
+            blocks.append(p.weighted(d))
+        return np.vstack(blocks)
+
+    low = np.array([BOUNDS[n][0] for n in names])
+    high = np.array([BOUNDS[n][1] for n in names])
+    rng = np.random.default_rng(options.seed)
+    starts = [np.array([_TYPICAL[n] for n in names])]
+    for _ in range(options.starts - 1):
+        starts.append(low + (high - low) * rng.uniform(0.1, 0.9, len(names)))
+    enough = float(chi2_distribution.ppf(0.99, max(len(target) - len(names), 1)))
     best = None
     for x0 in starts:
         try:
@@ -315,20 +345,37 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> I
                                 method="trf", x_scale="jac", max_nfev=200)
         except (ValueError, FloatingPointError):
             continue
-        params = _to_params(fit.x, free, plant, fixed)
-        if not np.all(np.isfinite(fit.fun)) or not is_stable(params, plant):
+        if not np.all(np.isfinite(fit.fun)) or not all(is_stable(q, plant)
+                                                        for q in params_of(fit.x)):
             continue
         if best is None or fit.cost < best.cost:
             best = fit
         if 2 * best.cost <= enough:  # as close as the noise allows: no start does better
             break
     if best is None:
-        raise PostureIdError(f"{trial.name}: no IC model with a stable closed loop fits this "
+        raise PostureIdError(f"{name}: no IC model with a stable closed loop fits this "
                              "recording within MODEL §8's bounds")
-    params = _to_params(best.x, free, plant, fixed)
+    return _Search(best.x, best, tuple(params_of(best.x)), names)
+
+
+def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> IcFitResult:
+    """The IC parameters of ``trial``'s body COM sway (the module doc).
+
+    Raises:
+        PostureIdError: a stimulus that is not periodic (no locked harmonics), or no start
+            that gives a stable closed loop.
+    """
+    from scipy.stats import norm
+
+    options = options or IcFitOptions()
+    started = clock.perf_counter()
+    plant = IcPlant.of(body)
+    part = _Part(trial, body, plant, options.locked)
+    free = options.free
+    found = _search([part], free, plant, options, trial.name)
+    params, best = found.params[0], found.fit
     chi2 = float(2 * best.cost)
-    n_res = len(target)
-    dof = n_res - len(free)
+    dof = len(part.target) - len(free)
     jac = best.jac
     scale2 = max(1.0, chi2 / max(dof, 1))
     try:
@@ -336,24 +383,65 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> I
     except np.linalg.LinAlgError:
         cov = np.full((len(free), len(free)), np.inf)
     z = float(norm.ppf(0.5 + options.level / 2))
+    scales = np.array([_scale(n, plant) for n in free])
     half = z * np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
-    intervals = {n: (max(getattr(params, n) - h, 0.0 if n != "w" else 0.0),
-                     getattr(params, n) + h) for n, h in zip(free, half, strict=True)}
+    intervals = {n: (max(getattr(params, n) - h, 0.0), getattr(params, n) + h)
+                 for n, h in zip(free, half, strict=True)}
+    low = np.array([BOUNDS[n][0] for n in free])
+    high = np.array([BOUNDS[n][1] for n in free])
     span = high - low
-    on_bound = tuple(n for n, x, lo, hi, sp in zip(free, best.x, low, high, span, strict=True)
+    on_bound = tuple(n for n, x, lo, hi, sp in zip(free, found.x, low, high, span, strict=True)
                      if n in ("kp", "kd", "delay_s", "w") and lo > 0
                      and (x - lo < 1e-3 * sp or hi - x < 1e-3 * sp))
-    fitted = np.degrees(model.sway(params))
+    fitted = np.degrees(part.model.sway(params))
+    projection, sway = part.projection, part.sway
     explained = float(projection.explained(sway[:, None], fitted[:, None])[0])
-    tilt_deg = np.degrees(rec.tilt)
+    tilt_deg = np.degrees(trial.recording.tilt)
     u = projection.spectrum(tilt_deg[:, None])[:, 0]
     model_frf = closed_loop(params, plant, 2j * np.pi * projection.frequencies_hz)
     coherence = _coherence(projection, tilt_deg, sway)
     return IcFitResult(params, free, intervals, options.level, chi2, dof,
                        len(projection.harmonics), on_bound, True,
                        clock.perf_counter() - started, explained, fitted, sway,
-                       projection.frequencies_hz, recorded / u, model_frf, coherence,
+                       projection.frequencies_hz, part.recorded / u, model_frf, coherence,
                        trial.name)
+
+
+@dataclass(frozen=True)
+class IcPartsFit:
+    """The IC model fitted to the parts of a two-amplitude protocol at once: every
+    parameter shared but W, one per part (sensory re-weighting).
+
+    Attributes:
+        parameters: per part, its IC parameters (they differ in W only).
+        chi2: of all parts. fitted_deg: per part, the model's COM sway (S_p,) degrees.
+    """
+
+    parameters: tuple[IcParameters, ...]
+    chi2: float
+    fitted_deg: tuple[np.ndarray, ...]
+
+    @property
+    def w_by_part(self) -> tuple[float, ...]:
+        return tuple(p.w for p in self.parameters)
+
+    @property
+    def reweighting(self) -> float:
+        """How far W moved between the amplitudes: the last part's W minus the first's."""
+        return self.w_by_part[-1] - self.w_by_part[0]
+
+
+def fit_ic_parts(trials: list[PreparedTrial], body,
+                 options: IcFitOptions | None = None) -> IcPartsFit:
+    """The IC parameters of every one of ``trials`` (the same subject at several
+    amplitudes), shared but for W, one per part."""
+    options = options or IcFitOptions()
+    plant = IcPlant.of(body)
+    parts = [_Part(t, body, plant, options.locked) for t in trials]
+    found = _search(parts, options.free, plant, options, " + ".join(t.name for t in trials))
+    fitted = tuple(np.degrees(p.model.sway(q)) for p, q in zip(parts, found.params,
+                                                                strict=True))
+    return IcPartsFit(found.params, float(2 * found.fit.cost), fitted)
 
 
 def _coherence(projection: LockedProjection, tilt_deg: np.ndarray,

@@ -9,12 +9,16 @@ each compared as ``posture-id compare REC --body URDF`` compares it
 are three or more cycles):
 
 - bodies: Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg) and the TIP, in turn;
-- stimuli: the 242-state PRTS ×2 and the 80-state PRTS ×6 in turn, 0.5–2° peak to peak;
+- stimuli: the 242-state PRTS ×2 and the 80-state PRTS ×6 in turn, 0.5–2° peak to peak
+  (one amplitude);
 - DEC parameters from MODEL §5's prior; IC parameters drawn around the literature's
   (Kp 1.3–2.5·m·g·h, Kd 0.25–0.6·m·g·h·s, Δ 0.08–0.22 s, W 0.2–0.9, G 0–0.5, τ_f 5–40 s),
   redrawn until the closed loop is stable and the body stays up;
 - sway: half clean (0.02° sensor noise), half people-like (motor noise leaving 15–40 % of
-  the body COM sway locked, 0.05° sensor noise).
+  the body COM sway locked, 0.05° sensor noise);
+- a third of the subjects recorded at two amplitudes (1° and 3°; ``compare --second``): DEC
+  with one set of parameters, the IC subject re-weighting (its W 0.1–0.3 lower at 3°),
+  compared with a W per amplitude.
 
 Writes ``report.md`` (the share preferring the right model, the wrong one and undecided,
 by model and by sway) and ``rows.json``; a journal makes an interrupted run resumable.
@@ -43,7 +47,7 @@ def _case(k: int) -> dict:
     from posture_id import load_body
     from posture_id.dec.prior import sample_parameters
     from posture_id.ic import IcPlant
-    from posture_id.ic.compare import compare_models
+    from posture_id.ic.compare import compare_amplitudes, compare_models
     from posture_id.ic.subjects import draw_ic_parameters, ic_recording
     from posture_id.simulation.batch import simulate
     from posture_id.simulation.stimulus import prts
@@ -52,34 +56,54 @@ def _case(k: int) -> dict:
 
     rng = np.random.default_rng([SEED, k])
     model = "dec" if k % 2 == 0 else "ic"
-    urdf = URDFS[(k // 2) % len(URDFS)]
+    j = k // 2
+    urdf = URDFS[j % len(URDFS)]
     body = load_body(urdf)
-    states, cycles = ((242, 2), (80, 6))[(k // 8) % 2]
-    amplitude = float(rng.uniform(0.5, 2.0))
-    stimulus = prts(amplitude, cycles, states)
-    people = (k // 4) % 2 == 1
+    states, cycles = ((242, 2), (80, 6))[(j // len(URDFS)) % 2]
+    people = j % 2 == 1
+    two = j % 3 == 2  # a third of the recordings: two amplitudes, 1° and 3°
+    amplitudes = (1.0, 3.0) if two else (float(rng.uniform(0.5, 2.0)),)
+    stimuli = [prts(a, cycles, states) for a in amplitudes]
     share = float(rng.uniform(0.15, 0.4)) if people else None
+    recordings = []
     if model == "dec":
         while True:
             params = sample_parameters(body, 1, rng).trial(0, body.joint_names)
-            if simulate(body, params, stimulus).stable:
+            if all(simulate(body, params, s).stable for s in stimuli):
                 break
-        if people:
-            recording = people_like(body, params, stimulus, share, SEED + k).recording
-        else:
-            recording = simulate(body, params, stimulus).to_recording().with_sensor_noise(
-                0.02, SEED + k)
+        for p, s in enumerate(stimuli):
+            if people:
+                recordings.append(people_like(body, params, s, share, SEED + 100 * k + p
+                                              ).recording)
+            else:
+                recordings.append(simulate(body, params, s).to_recording().with_sensor_noise(
+                    0.02, SEED + 100 * k + p))
     else:
-        params = draw_ic_parameters(rng, IcPlant.of(body))
-        recording, _ = ic_recording(body, params, stimulus, share, SEED + k,
-                                    0.05 if people else 0.02)
+        plant = IcPlant.of(body)
+        while True:  # a subject whose noise topples them is drawn again
+            params = draw_ic_parameters(rng, plant)
+            # with two amplitudes, the IC subject re-weights: W falls at the larger tilt
+            ws = (params.w, max(0.0, params.w - rng.uniform(0.1, 0.3))) if two else (
+                params.w,)
+            recordings = [ic_recording(body, params.replace(w=w), s, share,
+                                       SEED + 100 * k + p, 0.05 if people else 0.02)[0]
+                          for p, (s, w) in enumerate(zip(stimuli, ws, strict=True))]
+            if all(np.all(np.isfinite(r.theta)) for r in recordings):
+                break
+    trials = [prepare_trial(r, s) for r, s in zip(recordings, stimuli, strict=True)]
     started = time.perf_counter()
-    result = compare_models(prepare_trial(recording, stimulus), body)
+    if two:
+        result = compare_amplitudes(trials, body)
+        held = None
+    else:
+        result = compare_models(trials[0], body)
+        held = result.held_out
     return {"k": k, "model": model, "body": urdf.stem, "states": states, "cycles": cycles,
-            "amplitude_deg": amplitude, "sway": "people-like" if people else "clean",
+            "amplitudes_deg": list(amplitudes), "sway": "people-like" if people else "clean",
             "locked_share": share, "preferred": result.preferred,
             "delta_bic_ic_minus_dec": result.bic["ic"] - result.bic["dec"],
-            "held_out": result.held_out, "within_noise": result.within_noise,
+            "held_out": held, "within_noise": result.within_noise,
+            "w_by_part": list(result.ic.w_by_part) if two else None,
             "seconds": time.perf_counter() - started}
 
 
@@ -87,17 +111,22 @@ def _report(rows: list[dict], command: str) -> str:
     lines = ["# DEC or IC: the comparison on recordings of each model", "",
              f"Made by `{command}` ({len(rows)} recordings; the module doc of "
              "`benchmarks/model_comparison.py` says how they are made).", "",
-             "| made by | sway | recordings | right | wrong | undecided |",
-             "|---|---|---|---|---|---|"]
+             "| made by | sway | amplitudes | recordings | right | wrong | undecided |",
+             "|---|---|---|---|---|---|---|"]
+    def amplitudes(r: dict) -> str:
+        return "two" if len(r["amplitudes_deg"]) == 2 else "one"
+
     for model in ("dec", "ic"):
-        for sway in ("clean", "people-like", "all"):
-            mine = [r for r in rows if r["model"] == model and sway in ("all", r["sway"])]
+        for sway, amps in (("clean", "one"), ("clean", "two"), ("people-like", "one"),
+                           ("people-like", "two"), ("all", "all")):
+            mine = [r for r in rows if r["model"] == model and sway in ("all", r["sway"])
+                    and amps in ("all", amplitudes(r))]
             if not mine:
                 continue
             right = sum(r["preferred"] == model for r in mine)
             undecided = sum(r["preferred"] == "undecided" for r in mine)
             wrong = len(mine) - right - undecided
-            lines.append(f"| {model.upper()} | {sway} | {len(mine)} | "
+            lines.append(f"| {model.upper()} | {sway} | {amps} | {len(mine)} | "
                          f"{right} ({100 * right / len(mine):.0f} %) | "
                          f"{wrong} ({100 * wrong / len(mine):.0f} %) | "
                          f"{undecided} ({100 * undecided / len(mine):.0f} %) |")
@@ -110,13 +139,15 @@ def _report(rows: list[dict], command: str) -> str:
               f"{np.median([r['seconds'] for r in rows]):.0f} s (both fits, and the two "
               "held-out fits where there are 6 cycles).", "",
               "| k | made by | body | stimulus | sway | ΔBIC (IC − DEC) | held-out χ²/dof "
-              "DEC, IC | preferred |", "|---|---|---|---|---|---|---|---|"]
+              "DEC, IC | IC's W by part | preferred |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         held = ("–" if r["held_out"] is None else
                 f"{r['held_out']['dec']:.2f}, {r['held_out']['ic']:.2f}")
+        amps = " + ".join(f"{a:.2f}" for a in r["amplitudes_deg"])
+        w = "–" if not r["w_by_part"] else ", ".join(f"{x:.2f}" for x in r["w_by_part"])
         lines.append(f"| {r['k']} | {r['model'].upper()} | {r['body']} | PRTS {r['states']}"
-                     f"×{r['cycles']}, {r['amplitude_deg']:.2f}° | {r['sway']} | "
-                     f"{r['delta_bic_ic_minus_dec']:.1f} | {held} | {r['preferred']} |")
+                     f"×{r['cycles']}, {amps}° | {r['sway']} | "
+                     f"{r['delta_bic_ic_minus_dec']:.1f} | {held} | {w} | {r['preferred']} |")
     return "\n".join(lines) + "\n"
 
 

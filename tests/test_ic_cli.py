@@ -99,3 +99,57 @@ def test_compare_prefers_the_model_that_made_each_recording(ic_files, tmp_path, 
     assert main(["compare", str(cohort), "--body", WINTER1, "--out", str(results)]) == 1
     rows = {r["recording"]: r for r in csv.DictReader((results / "summary.csv").open())}
     assert rows["ic.csv"]["status"] == "skipped"
+
+
+@pytest.mark.slow
+def test_two_amplitudes_one_dec_or_an_ic_that_reweights(tmp_path, winter1, capsys):
+    """A DEC subject at 1° and 3° (one set of parameters explains both) and an IC subject
+    whose W falls from 0.6 to 0.35 at 3°: compare --second prefers each one's model, and
+    the IC answer recovers the re-weighting."""
+    from posture_id.ic.subjects import ic_recording
+    from posture_id.simulation.stimulus import prts
+
+    plant = IcPlant.of(winter1)
+    truth = IcParameters(kp=1.8 * plant.mgh, kd=0.4 * plant.mgh, delay_s=0.15, w=0.6,
+                         torque_feedback_gain=0.2, torque_feedback_time_s=15.0)
+    for part, (amplitude, w) in enumerate(((1.0, 0.6), (3.0, 0.35)), 1):
+        recording, _ = ic_recording(winter1, truth.replace(w=w), prts(amplitude), None, part)
+        recording.to_csv(tmp_path / f"ic{part}.csv")
+        assert main(["simulate", "--body", WINTER1, "--amplitude-deg", str(amplitude),
+                     "--noise-deg", "0.02", "--seed", str(part),
+                     "--out", str(tmp_path / f"dec{part}.csv")]) == 0
+    protocol = tmp_path / "two.json"
+    protocol.write_text(json.dumps({"kind": "two_amplitudes", "base": {"kind": "prts"},
+                                    "amplitudes_deg": [1, 3]}))
+    for model in ("dec", "ic"):
+        out = tmp_path / f"{model}.json"
+        assert main(["compare", str(tmp_path / f"{model}1.csv"), "--second",
+                     str(tmp_path / f"{model}2.csv"), "--body", WINTER1, "--protocol",
+                     str(protocol), "--out", str(out)]) == 0
+        data = json.loads(out.read_text())
+        assert data["preferred"] == model, data["reason"]
+    w = json.loads((tmp_path / "ic.json").read_text())["ic"]["w_by_part"]
+    assert w == pytest.approx([0.6, 0.35], abs=0.02)
+    assert "IC re-weighting: W" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("flags, named", [
+    (["--second", "{dec}", "--part", "1"], "--part: with --second each recording"),
+    (["--out", "{ic}"], "--out is also an input"),
+])
+def test_compare_refuses_what_cannot_work(flags, named, ic_files, capsys):
+    folder, _ = ic_files
+    flags = [f.replace("{dec}", str(folder / "dec.csv")).replace("{ic}", str(folder / "ic.csv"))
+             for f in flags]
+    assert main(["compare", str(folder / "ic.csv"), "--body", WINTER1, *flags]) == 2
+    assert named in capsys.readouterr().err
+
+
+def test_compare_a_cohort_refuses_second_and_plot(ic_files, tmp_path, capsys):
+    folder, _ = ic_files
+    for flags, named in ((["--second", str(folder / "dec.csv")], "--second goes with one"),
+                         (["--plot", str(tmp_path / "p.png")], "--plot is for one recording")):
+        assert main(["compare", str(folder), "--body", WINTER1, "--out", str(tmp_path / "o"),
+                     *flags]) == 2
+        assert named in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

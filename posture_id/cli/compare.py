@@ -90,6 +90,9 @@ def run_cohort(args: argparse.Namespace) -> int:
     if args.plot:
         raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording "
                              "and summary.csv")
+    if args.second is not None:
+        raise PostureIdError("--second goes with one recording (the same subject's second "
+                             "amplitude), not with a folder or pattern")
     if args.out is None:
         raise PostureIdError(f"{args.recording}: a cohort's comparisons need a folder: --out "
                              "FOLDER")

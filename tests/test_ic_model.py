@@ -131,3 +131,29 @@ def test_the_fit_recovers_an_ic_recording(body_name, states, amplitude, request)
         assert getattr(result.parameters, name) == pytest.approx(getattr(truth, name),
                                                                  rel=0.05), name
     assert result.consistent and result.stable
+
+
+@pytest.mark.slow
+def test_the_design_predicts_the_fits_own_scatter(winter2):
+    """The predicted interval width of Kp, Kd, Δ and W for one IC subject and protocol
+    against the scatter of the fit over 16 draws of 0.05° sensor noise (the same
+    recording otherwise): within a factor 1.6 either way."""
+    from posture_id.ic.design import SHOWN, design_ic
+    from posture_id.ic.fit import BOUNDS, _scale
+    from posture_id.ic.subjects import draw_ic_parameters
+    from posture_id.simulation.protocols import PrtsProtocol
+
+    plant = IcPlant.of(winter2)
+    protocol = PrtsProtocol(80, 0.25, 1.0, 6)
+    predicted = design_ic(winter2, [protocol], sensor_noise_deg=0.05, draws=1, seed=5)
+    truth = draw_ic_parameters(np.random.default_rng(5), plant)  # design_ic's subject
+    stimulus = protocol.profile()
+    clean = simulate_ic(winter2, truth, stimulus)
+    estimates = np.array([[getattr(fit_ic(prepare_trial(clean.with_sensor_noise(0.05, k),
+                                                        stimulus), winter2).parameters, p)
+                           for p in SHOWN] for k in range(16)])
+    scatter = estimates.std(axis=0, ddof=1)
+    span = np.array([(BOUNDS[p][1] - BOUNDS[p][0]) * _scale(p, plant) for p in SHOWN])
+    predicted_sd = predicted.widths[0] * span / (2 * 1.6448536269514722)
+    ratio = predicted_sd / scatter
+    assert np.all((ratio > 1 / 1.6) & (ratio < 1.6)), dict(zip(SHOWN, ratio))

@@ -16,6 +16,7 @@ from posture_id.cli.arguments import (
 )
 from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
+from posture_id.errors import PostureIdError
 
 __all__ = ["add_parser"]
 
@@ -24,6 +25,9 @@ def add_parser(sub) -> None:
     p = sub.add_parser("design", help="predict, per candidate protocol, how well each "
                        "module's Kp, Ki, Kd, delay and class will be identified; rank them")
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
+    p.add_argument("--model", choices=("dec", "ic"), default="dec",
+                   help="the model to be fitted: dec (default) or ic (the independent-channel "
+                        "model: its Kp, Kd, delay and W; docs/ic.md)")
     p.add_argument("--protocol", type=Path, nargs="+", metavar="FILE",
                    help="candidate protocol files (JSON; default: ten built-in candidates, "
                         "today's PRTS first)")
@@ -66,7 +70,39 @@ def run(args: argparse.Namespace) -> int:
         return _design(args)
 
 
+def _design_ic(args: argparse.Namespace) -> int:
+    """``--model ic``: the IC fit's predicted widths per protocol."""
+    from posture_id.bodies.body import DEFAULT_URDF, load_body
+    from posture_id.design.candidates import default_candidates
+    from posture_id.ic.design import design_ic
+    from posture_id.simulation.protocols import read_protocol
+
+    given = [flag for flag, on in (("--goal", args.goal), ("--max-minutes", args.max_minutes),
+                                   ("--max-peak-to-peak-deg", args.max_peak_to_peak_deg),
+                                   ("--max-velocity-deg-s", args.max_velocity_deg_s),
+                                   ("--motor-sd-deg", args.motor_sd_deg),
+                                   ("--residual", args.residual != "locked")) if on]
+    if given:
+        raise PostureIdError(f"{', '.join(given)}: DEC's design only; --model ic ranks every "
+                             "candidate by Kp, Kd, delay and W (with --sensor-noise-deg and "
+                             "--locked-share)")
+    body = load_body(args.body or DEFAULT_URDF)
+    protocols = ([read_protocol(f) for f in args.protocol] if args.protocol
+                 else default_candidates())
+    with TerminalProgress("subject", prefix="posture-id design",
+                          quiet=args.quiet) as progress:
+        result = design_ic(body, protocols, args.sensor_noise_deg, args.locked_share,
+                           args.draws, args.seed, progress=progress)
+    result.write(args.out)
+    print(result.markdown())
+    say(f"wrote {args.out / 'design.md'}, design.json, design.png and the protocols "
+        f"({result.seconds:.0f} s)")
+    return 0
+
+
 def _design(args: argparse.Namespace) -> int:
+    if args.model == "ic":
+        return _design_ic(args)
     from posture_id.bodies.body import DEFAULT_URDF, load_body
     from posture_id.design.candidates import default_candidates
     from posture_id.design.goal import PARAMETERS, DesignGoal

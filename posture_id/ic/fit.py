@@ -13,15 +13,22 @@ the literature's typical values; the search stops at the first answer whose resi
 within the noise's 99th percentile); an answer
 whose closed loop is unstable is never returned (:func:`~posture_id.ic.response.is_stable`).
 
-Intervals: Gauss-Newton, the covariance (JᵀJ)⁻¹ of the weighted residual scaled by its
-χ² per degree of freedom where that exceeds 1, at the chosen level.
+Intervals: Gauss-Newton standard errors, the covariance (JᵀJ)⁻¹ of the weighted residual
+scaled by its χ² per degree of freedom where that exceeds 1, times a calibrated multiplier
+per parameter and level: the quantile of |estimate − truth| / standard error over IC
+recordings the project simulated (clean and people-like; ``calibration.json`` beside this
+module, made by ``benchmarks/ic_recovery.py --calibrate`` on recordings apart from those
+its report checks the coverage on). Without it, the normal quantile.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import time as clock
 from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -150,6 +157,8 @@ class IcFitResult(Result):
     model_frf: np.ndarray = field(repr=False)
     coherence: np.ndarray = field(repr=False)
     name: str = "recording"
+    standard_errors: dict = field(default_factory=dict)
+    calibrated: bool = False
 
     @property
     def noise_ratio(self) -> float:
@@ -209,7 +218,9 @@ class IcFitResult(Result):
         return {"model": "ic", "parameters": self.parameters.to_dict(),
                 "identified": list(self.free),
                 "intervals": {k: list(v) for k, v in self.intervals.items()},
-                "level": self.level, "chi2": self.chi2, "dof": self.dof,
+                "level": self.level, "calibrated": self.calibrated,
+                "standard_errors": self.standard_errors,
+                "chi2": self.chi2, "dof": self.dof,
                 "noise_ratio": self.noise_ratio, "consistent": self.consistent,
                 "harmonics": self.harmonics, "on_bound": list(self.on_bound),
                 "trust": {"level": self.trust_level,
@@ -240,6 +251,30 @@ class IcFitResult(Result):
                                {"IC model": self.model_frf}, self.coherence,
                                f"IC fit of {self.name}: residual {self.noise_ratio:.2f}× the "
                                "noise", path=path, ax=ax)
+
+
+#: The calibration of the intervals (the module doc).
+CALIBRATION = Path(__file__).with_name("calibration.json")
+
+
+@lru_cache(maxsize=1)
+def _calibration() -> dict | None:
+    try:
+        return json.loads(CALIBRATION.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def interval_multiplier(name: str, level: float) -> tuple[float, bool]:
+    """(the multiplier of the standard error for a ``level`` interval of ``name``,
+    whether it is calibrated)."""
+    from scipy.stats import norm
+
+    calibration = _calibration()
+    if calibration is None or name not in calibration.get("quantiles", {}):
+        return float(norm.ppf(0.5 + level / 2)), False
+    levels = calibration["levels"]
+    return float(np.interp(level, levels, calibration["quantiles"][name])), True
 
 
 def _scale(name: str, plant: IcPlant) -> float:
@@ -352,10 +387,23 @@ def _search(parts: list[_Part], free: tuple[str, ...], plant: IcPlant,
             best = fit
         if 2 * best.cost <= enough:  # as close as the noise allows: no start does better
             break
-    if best is None:
-        raise PostureIdError(f"{name}: no IC model with a stable closed loop fits this "
-                             "recording within MODEL §8's bounds")
+    if best is None:  # every search ran off to an unstable loop: the best stable start
+        stable = [x0 for x0 in starts if all(is_stable(q, plant) for q in params_of(x0))]
+        if not stable:
+            raise PostureIdError(f"{name}: no IC model with a stable closed loop fits this "
+                                 "recording within MODEL §8's bounds")
+        x0 = min(stable, key=lambda x: float(np.sum(residual(x) ** 2)))
+        best = _StartOnly(x0, residual(x0), jacobian(x0))
     return _Search(best.x, best, tuple(params_of(best.x)), names)
+
+
+class _StartOnly:
+    """A start kept as the answer (scipy's result's fields), its residual far beyond the
+    noise: the verdict says doubtful."""
+
+    def __init__(self, x: np.ndarray, fun: np.ndarray, jac: np.ndarray) -> None:
+        self.x, self.fun, self.jac = x, fun, jac
+        self.cost = 0.5 * float(fun @ fun)
 
 
 def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> IcFitResult:
@@ -365,8 +413,6 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> I
         PostureIdError: a stimulus that is not periodic (no locked harmonics), or no start
             that gives a stable closed loop.
     """
-    from scipy.stats import norm
-
     options = options or IcFitOptions()
     started = clock.perf_counter()
     plant = IcPlant.of(body)
@@ -382,9 +428,10 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> I
         cov = np.linalg.pinv(jac.T @ jac) * scale2
     except np.linalg.LinAlgError:
         cov = np.full((len(free), len(free)), np.inf)
-    z = float(norm.ppf(0.5 + options.level / 2))
     scales = np.array([_scale(n, plant) for n in free])
-    half = z * np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
+    standard_errors = np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
+    multipliers = [interval_multiplier(n, options.level) for n in free]
+    half = np.array([m for m, _ in multipliers]) * standard_errors
     intervals = {n: (max(getattr(params, n) - h, 0.0), getattr(params, n) + h)
                  for n, h in zip(free, half, strict=True)}
     low = np.array([BOUNDS[n][0] for n in free])
@@ -404,7 +451,8 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> I
                        len(projection.harmonics), on_bound, True,
                        clock.perf_counter() - started, explained, fitted, sway,
                        projection.frequencies_hz, part.recorded / u, model_frf, coherence,
-                       trial.name)
+                       trial.name, dict(zip(free, standard_errors.tolist(), strict=True)),
+                       all(c for _, c in multipliers))
 
 
 @dataclass(frozen=True)

@@ -167,7 +167,22 @@ def json_text(data: Any) -> str:
 
 
 
-class Result:
+class JsonFile:
+    """``to_json()`` of whatever has a ``to_dict()``: strict JSON, written atomically."""
+
+    def to_dict(self) -> dict:  # pragma: no cover - every user defines it
+        raise NotImplementedError
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """Strict JSON (:func:`json_text`) of ``to_dict()``; written atomically to ``path``
+        when given."""
+        text = json_text(self.to_dict())
+        if path is not None:
+            atomic_write_text(Path(path), text)
+        return text
+
+
+class Result(JsonFile):
     """The result family: every result of posture_id (a simulation, a fit, an
     identification, an FRF, a cohort, a training run, an evaluation, a benchmark, a
     calibration) has ``to_dict()`` (JSON-ready, strings for enums), ``to_json()`` (strict
@@ -184,10 +199,3 @@ class Result:
     def plot(self, path: str | Path | None = None, ax=None):  # pragma: no cover
         raise NotImplementedError
 
-    def to_json(self, path: str | Path | None = None) -> str:
-        """Strict JSON (:func:`json_text`) of ``to_dict()``; written atomically to ``path``
-        when given."""
-        text = json_text(self.to_dict())
-        if path is not None:
-            atomic_write_text(Path(path), text)
-        return text

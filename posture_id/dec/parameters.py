@@ -23,7 +23,7 @@ from types import MappingProxyType
 import numpy as np
 
 from posture_id.errors import ParameterError
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import JsonFile
 
 __all__ = [
     "Controls",
@@ -116,7 +116,7 @@ class ModuleParameters:
 
 
 @dataclass(frozen=True)
-class DecParameters:
+class DecParameters(JsonFile):
     """Parameters of every module of a body, keyed by URDF joint name, support upward.
 
     Immutable: ``modules`` is a read-only mapping; :meth:`replace` makes changed copies.
@@ -175,13 +175,6 @@ class DecParameters:
             lines.append(f"{joint:<10}{m.kp:>10.3f}{m.ki:>9.4f}{m.kd:>9.3f}{m.delay_s:>7.3f}"
                          f"{m.kpas:>9.3f}{m.bpas:>9.3f}  {m.controls}")
         return "\n".join(lines)
-
-    def to_json(self, path: str | Path | None = None) -> str:
-        """JSON text; written atomically to ``path`` when given."""
-        text = json_text(self.to_dict())
-        if path is not None:
-            atomic_write_text(Path(path), text)
-        return text
 
     @classmethod
     def from_dict(cls, data: Mapping, body, name: str = "parameters") -> DecParameters:

@@ -137,17 +137,26 @@ class DesignResult:
     def write(self, out: str | Path) -> list[Path]:
         """design.md, design.json, design.png and protocols/NN.json (each candidate's
         protocol, for ``posture-id stimulus`` and ``--protocol``) into ``out``."""
-        out = Path(out)
-        (out / "protocols").mkdir(parents=True, exist_ok=True)
-        files = [atomic_write_text(out / "design.md", self.markdown() + "\n"),
-                 atomic_write_text(out / "design.json", json_text(self.to_dict()))]
-        self.plot(out / "design.png")
-        files.append(out / "design.png")
-        for i, p in enumerate(self.predictions, 1):
-            files.append(write_protocol(p.protocol, out / "protocols" / f"{i:02d}.json"))
-        if self.best is not None:
-            files.append(write_protocol(self.best.protocol, out / "recommended.json"))
-        return files
+        return write_design_folder(out, self, [p.protocol for p in self.predictions],
+                                   None if self.best is None else self.best.protocol)
+
+
+def write_design_folder(out: str | Path, result, protocols: list,
+                        recommended) -> list[Path]:
+    """A design's folder: ``result``'s design.md (its ``markdown()``), design.json and
+    design.png, ``protocols``/NN.json in their order and ``recommended``.json (when one is
+    recommended)."""
+    out = Path(out)
+    (out / "protocols").mkdir(parents=True, exist_ok=True)
+    files = [atomic_write_text(out / "design.md", result.markdown() + "\n"),
+             atomic_write_text(out / "design.json", json_text(result.to_dict()))]
+    result.plot(out / "design.png")
+    files.append(out / "design.png")
+    for i, protocol in enumerate(protocols, 1):
+        files.append(write_protocol(protocol, out / "protocols" / f"{i:02d}.json"))
+    if recommended is not None:
+        files.append(write_protocol(recommended, out / "recommended.json"))
+    return files
 
 
 def _cell(value: float) -> str:

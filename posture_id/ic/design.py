@@ -115,25 +115,12 @@ class IcDesignResult(Result):
                                 (self.widths[order], (0.0, 0.5), ".3f")}, path=path, ax=ax)
 
     def write(self, out) -> list:
-        """design.md, design.json, design.png and protocols/NN.json (best first)."""
-        from pathlib import Path
+        """design.md, design.json, design.png, protocols/NN.json (best first) and
+        recommended.json."""
+        from posture_id.design.report import write_design_folder
 
-        from posture_id.fileio import atomic_write_text, json_text
-        from posture_id.simulation.protocols import write_protocol
-
-        out = Path(out)
-        (out / "protocols").mkdir(parents=True, exist_ok=True)
-        files = [atomic_write_text(out / "design.md", self.markdown() + "\n"),
-                 atomic_write_text(out / "design.json", json_text(self.to_dict()))]
-        self.plot(out / "design.png")
-        files.append(out / "design.png")
-        for rank, i in enumerate(self.order, 1):
-            files.append(write_protocol(self.protocols[i], out / "protocols" /
-                                        f"{rank:02d}.json"))
-        if self.order:
-            files.append(write_protocol(self.protocols[self.order[0]],
-                                        out / "recommended.json"))
-        return files
+        ranked = [self.protocols[i] for i in self.order]
+        return write_design_folder(out, self, ranked, ranked[0] if ranked else None)
 
 
 def _recording_information(body, plant: IcPlant, params, profile, cycles: int,

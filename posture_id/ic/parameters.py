@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 
 from posture_id.errors import ParameterError
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import JsonFile
 
 __all__ = ["IcParameters", "MODEL_NAME", "default_ic_parameters"]
 
@@ -23,7 +23,7 @@ MODEL_NAME = "ic"
 
 
 @dataclass(frozen=True)
-class IcParameters:
+class IcParameters(JsonFile):
     """The IC model of one body (SI units; MODEL §8).
 
     Attributes:
@@ -75,13 +75,6 @@ class IcParameters:
     def to_dict(self) -> dict:
         """The parameter-file format: ``{"model": "ic", "kp": ..., ...}`` (SI units)."""
         return {"model": MODEL_NAME, **asdict(self)}
-
-    def to_json(self, path: str | Path | None = None) -> str:
-        """JSON text; written atomically to ``path`` when given."""
-        text = json_text(self.to_dict())
-        if path is not None:
-            atomic_write_text(Path(path), text)
-        return text
 
     @classmethod
     def from_dict(cls, data: object, name: str = "IC parameters") -> IcParameters:

@@ -4,7 +4,8 @@
 - :data:`DOUBTFUL` (1): an answer is written, but it should not be used as it stands:
   ``identify``'s verdict is doubtful or its model falls in re-simulation, ``fit`` did not
   converge (beyond the recording's noise), the simulated body left its sway limit, a
-  recording of a cohort got no answer or a doubtful one.
+  recording of a cohort got no answer or a doubtful one, ``compare`` found neither model
+  within the recording's noise.
 - :data:`REFUSED` (2): input refused before any work; one line names the file or flag
   and the problem.
 - :data:`BUG` (3): an internal error; one line says so, ``--debug`` shows the traceback.

@@ -18,7 +18,9 @@ from posture_id.cli.stimulus import (
     add_lab_stimulus_arguments,
     recording_and_stimulus,
 )
+from posture_id.errors import PostureIdError
 from posture_id.frf import FrfOptions, frequency_response
+from posture_id.frf.bands import BAND_PRESETS, parse_bands
 from posture_id.trials import prepare_trial
 
 __all__ = ["add_parser", "run"]
@@ -49,6 +51,19 @@ def add_parser(sub) -> None:
     p.add_argument("--max-frequency-hz", type=positive_float,
                    default=default_of(FrfOptions, "max_frequency_hz"),
                    help="highest frequency kept (default %(default)g Hz)")
+    lab = p.add_argument_group("a lab's FRF points", "the spectra averaged over bands of "
+                               "stimulated harmonics, reported at fixed frequencies (docs/frf.md)")
+    lab.add_argument("--band-preset", choices=sorted(BAND_PRESETS),
+                     help="named points: peterka11, Peterka 2002's 11 points 0.05–2.2 Hz")
+    lab.add_argument("--band-harmonics", metavar="BANDS",
+                     help="bands as ordinals of the stimulated harmonics, e.g. "
+                          "\"1;2;3-4;4-5\" (overlap allowed)")
+    lab.add_argument("--band-ranges-hz", metavar="BANDS",
+                     help="bands as frequency ranges, e.g. \"0.2-0.4;0.4-0.8\"")
+    lab.add_argument("--lab-convention", action="store_true",
+                     help="the labs' convention: the first cycle left out, no drift removed "
+                          "(with a lab's bands; --skip-cycles and --drift-order then apply "
+                          "only when given)")
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with; "
                                   "give --period-s with it")
     add_column_arguments(p)
@@ -61,9 +76,36 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body) if args.body else None
     recording, stimulus = recording_and_stimulus(args, body)
-    options = FrfOptions(skip_cycles=args.skip_cycles, drift_order=args.drift_order,
-                         bands=args.bands, max_frequency_hz=args.max_frequency_hz)
+    options = _options(args)
     result = frequency_response(prepare_trial(recording, stimulus, rate_hz=None), body,
                                 options, args.period_s)
     write_result(result, args.out, args.plot)
     return 0
+
+
+def _options(args: argparse.Namespace) -> FrfOptions:
+    """FrfOptions from the flags: log-spaced bands, or a lab's points (one way only)."""
+    given = [flag for flag, value in (("--band-preset", args.band_preset),
+                                      ("--band-harmonics", args.band_harmonics),
+                                      ("--band-ranges-hz", args.band_ranges_hz)) if value]
+    if len(given) > 1 or (given and args.bands):
+        raise PostureIdError(f"{', '.join(given + (['--bands'] if args.bands else []))}: "
+                             "one way of averaging into bands at a time")
+    if args.lab_convention and not given:
+        raise PostureIdError("--lab-convention goes with a lab's bands (--band-preset, "
+                             "--band-harmonics or --band-ranges-hz)")
+    if not given:
+        return FrfOptions(skip_cycles=args.skip_cycles, drift_order=args.drift_order,
+                          bands=args.bands, max_frequency_hz=args.max_frequency_hz)
+    if args.band_preset:
+        bands = BAND_PRESETS[args.band_preset]
+    elif args.band_harmonics:
+        bands = parse_bands(args.band_harmonics, "harmonics")
+    else:
+        bands = parse_bands(args.band_ranges_hz, "ranges")
+    skip, drift = args.skip_cycles, args.drift_order
+    if args.lab_convention:
+        skip = skip if skip != default_of(FrfOptions, "skip_cycles") else 1
+        drift = drift if drift != default_of(FrfOptions, "drift_order") else 0
+    return FrfOptions(skip_cycles=skip, drift_order=drift, lab_bands=bands,
+                      max_frequency_hz=args.max_frequency_hz)

@@ -28,6 +28,7 @@ import numpy as np
 
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
+from posture_id.frf.bands import FrequencyBands, pseudo_impulse_response
 from posture_id.frf.cycles import cycle_average
 
 __all__ = ["FrfOptions", "FrequencyResponse", "frequency_response_arrays",
@@ -83,6 +84,9 @@ class FrfOptions:
         max_frequency_hz: excited frequencies above this are left out.
         excited_threshold: a harmonic is excited when its tilt amplitude exceeds this
             share of the largest one.
+        lab_bands: a lab's FRF points (:class:`~posture_id.frf.bands.FrequencyBands`, e.g.
+            :data:`~posture_id.frf.bands.PETERKA_11`): each band averages the stimulated
+            harmonics it names and is reported at its centre; not with ``bands``.
     """
 
     skip_cycles: int = 0
@@ -90,9 +94,19 @@ class FrfOptions:
     bands: int = 0
     max_frequency_hz: float = 3.0
     excited_threshold: float = 1e-3
+    lab_bands: FrequencyBands | None = None
 
     def __post_init__(self) -> None:
         check_analysis_options(self, "FRF", ("skip_cycles", "drift_order", "bands"))
+        if self.lab_bands is not None and self.bands:
+            raise PostureIdError("FRF: log-spaced bands and a lab's bands are two ways to "
+                                 "average; give one")
+
+    @classmethod
+    def lab_convention(cls, bands: FrequencyBands, **changes) -> FrfOptions:
+        """The labs' convention (Peterka 2002): the first cycle left out (the transient),
+        no drift removed, the spectra averaged over ``bands``."""
+        return cls(**{"skip_cycles": 1, "drift_order": 0, "lab_bands": bands, **changes})
 
 
 @dataclass(frozen=True)
@@ -151,6 +165,8 @@ class FrequencyResponse(Result):
             channels[name] = {
                 "gain": self.gain[:, m].tolist(),
                 "phase_deg": self.phase_deg[:, m].tolist(),
+                "re": self.response[:, m].real.tolist(),
+                "im": self.response[:, m].imag.tolist(),
                 "coherence": None if self.coherence is None else self.coherence[:, m].tolist(),
                 "locked_share": (float(self.locked_share[m])
                                  if np.isfinite(self.locked_share[m]) else None),
@@ -161,11 +177,32 @@ class FrequencyResponse(Result):
                 "coherence_significance": SIGNIFICANCE,
                 "cycles": self.cycles, "period_s": self.period_s,
                 "bands_empty": self.bands_empty,
+                "lab_bands": (None if self.options.lab_bands is None
+                              else self.options.lab_bands.to_dict()),
+                "pir": self._pir_dict() if self.options.lab_bands is not None else None,
                 "provenance": provenance(self.options, recording=self.name)}
+
+    def pir(self, rate_hz: float = 22.0) -> tuple[np.ndarray, np.ndarray]:
+        """(t (S,) s, x (S, M)): each channel's pseudo-impulse response over one common
+        period of the frequencies (:func:`~posture_id.frf.bands.pseudo_impulse_response`)."""
+        return pseudo_impulse_response(self.frequencies_hz, self.response, rate_hz)
+
+    def _pir_dict(self, rate_hz: float = 22.0) -> dict | None:
+        try:
+            t, x = self.pir(rate_hz)
+        except PostureIdError:  # frequencies above 11 Hz: no PIR at 22 Hz
+            return None
+        return {"rate_hz": rate_hz, "period_s": float(len(t) / rate_hz),
+                "channels": {name: x[:, m].tolist() for m, name in enumerate(self.channels)}}
 
     def summary(self) -> str:
         count = len(self.frequencies_hz)
-        if self.options.bands:
+        if self.options.lab_bands is not None:
+            lab = self.options.lab_bands
+            what = f"{count} points ({lab.name})" + (
+                f" (of {len(lab)}: {self.bands_empty} held no stimulated frequency)"
+                if self.bands_empty else "")
+        elif self.options.bands:
             what = f"{count} bands" + (
                 f" (of {self.options.bands} asked: {self.bands_empty} held no stimulated "
                 "frequency)" if self.bands_empty else "")
@@ -239,17 +276,27 @@ def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate
     averaged = n_cycles > 1
     averages = np.full(len(f), n_cycles)
     empty = 0
-    if options.bands:
-        edges = np.geomspace(f[0], f[-1] * (1 + 1e-9), options.bands + 1)
-        which = np.clip(np.searchsorted(edges, f, side="right") - 1, 0, options.bands - 1)
-        groups = [np.flatnonzero(which == b) for b in range(options.bands)]
+    if options.bands or options.lab_bands is not None:
+        if options.lab_bands is not None:
+            groups = options.lab_bands.groups(f, period_s)
+            centres = options.lab_bands.centres(f, groups)
+        else:
+            edges = np.geomspace(f[0], f[-1] * (1 + 1e-9), options.bands + 1)
+            which = np.clip(np.searchsorted(edges, f, side="right") - 1, 0,
+                            options.bands - 1)
+            groups = [np.flatnonzero(which == b) for b in range(options.bands)]
+            centres = np.array([math.exp(np.log(f[g]).mean()) if len(g) else math.nan
+                                for g in groups])
         empty = sum(1 for g in groups if not len(g))
+        centres = np.array([c for c, g in zip(centres, groups, strict=True) if len(g)])
         groups = [g for g in groups if len(g)]
+        if not groups:
+            raise PostureIdError(f"{name}: no band holds a stimulated frequency")
         averages = np.array([n_cycles * len(g) for g in groups])
         cross = np.stack([cross[g].sum(axis=0) for g in groups])
         u_power = np.stack([u_power[g].sum(axis=0) for g in groups])
         y_power = np.stack([y_power[g].sum(axis=0) for g in groups])
-        f = np.array([math.exp(np.log(f[g]).mean()) for g in groups])
+        f = centres
         averaged = averaged or any(len(g) > 1 for g in groups)
     response = cross / u_power
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -644,3 +644,62 @@ def plot_reweighting(names, w_by_part, bic: dict, path=None, ax=None):
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_norm_test(result, path=None, ax=None):
+    """A tested FRF against a norm: gain and phase with the members' (top two), its PIR in
+    the norm's prediction band (bottom), one column per channel."""
+    norm = result.norm
+    m = len(norm.channels)
+    fig, axes = _axes(ax, 3, m, (5 * m, 8))
+    f = norm.frequencies_hz
+    tested = np.asarray(result.response).reshape(len(f), m)
+    for c, name in enumerate(norm.channels):
+        mean = (norm.mean_re_im[: len(f) * m] + 1j * norm.mean_re_im[len(f) * m:]).reshape(
+            len(f), m)[:, c]
+        axes[0, c].plot(f, np.abs(mean), "k-", label="norm mean")
+        axes[0, c].plot(f, np.abs(tested[:, c]), "o-", color="C3", label=result.name)
+        axes[1, c].plot(f, np.degrees(np.unwrap(np.angle(mean))), "k-")
+        axes[1, c].plot(f, np.degrees(np.unwrap(np.angle(tested[:, c]))), "o-", color="C3")
+        axes[0, c].set_xscale("log")
+        axes[0, c].set_yscale("log")
+        axes[1, c].set_xscale("log")
+        axes[0, c].set_title(name)
+        axes[0, c].set_ylabel("gain")
+        axes[1, c].set_ylabel("phase (°)")
+        axes[1, c].set_xlabel("frequency (Hz)")
+        if result.pir is not None:
+            s = len(norm.pir_t)
+            mean_pir = norm.pir_mean[c * s : (c + 1) * s]
+            band = norm.prediction_constant * norm.pir_sd[c * s : (c + 1) * s]
+            axes[2, c].fill_between(norm.pir_t, mean_pir - band, mean_pir + band,
+                                    color="0.85", label=f"{100 * norm.level:.0f} % prediction")
+            axes[2, c].plot(norm.pir_t, mean_pir, "k-", lw=1)
+            axes[2, c].plot(norm.pir_t, result.pir[c * s : (c + 1) * s], color="C3", lw=1)
+            axes[2, c].set_xlabel("t (s)")
+            axes[2, c].set_ylabel("PIR")
+            axes[2, c].legend(fontsize=7)
+        axes[0, c].legend(fontsize=7)
+    fig.suptitle(f"{result.name}: human-likeness {result.human_likeness:.2f}")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_group_difference(result, path=None, ax=None):
+    """The difference of two groups' mean PIRs with its confidence band, per channel."""
+    m = len(result.channels)
+    fig, axes = _axes(ax, m, 1, (8, 2.8 * m))
+    for c, name in enumerate(result.channels):
+        a = axes[c, 0]
+        a.fill_between(result.t, result.low[c], result.high[c], color="0.85",
+                       label=f"{100 * result.level:.0f} % band")
+        a.plot(result.t, result.difference[c], color="C0", label="mean A − mean B")
+        a.axhline(0, color="k", lw=0.6)
+        a.set_ylabel(f"{name} PIR difference")
+        a.legend(fontsize=7)
+    axes[-1, 0].set_xlabel("t (s)")
+    fig.suptitle(f"{result.names[0]} − {result.names[1]}: p = {result.p_value:.4f}")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

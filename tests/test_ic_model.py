@@ -156,4 +156,4 @@ def test_the_design_predicts_the_fits_own_scatter(winter2):
     span = np.array([(BOUNDS[p][1] - BOUNDS[p][0]) * _scale(p, plant) for p in SHOWN])
     predicted_sd = predicted.widths[0] * span / (2 * 1.6448536269514722)
     ratio = predicted_sd / scatter
-    assert np.all((ratio > 1 / 1.6) & (ratio < 1.6)), dict(zip(SHOWN, ratio))
+    assert np.all((ratio > 1 / 1.6) & (ratio < 1.6)), dict(zip(SHOWN, ratio, strict=True))

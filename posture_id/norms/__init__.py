@@ -1,0 +1,1 @@
+"""Groups and norms of FRFs (issue 43)."""

@@ -1,0 +1,320 @@
+"""A normative set of FRFs, and one subject or robot tested against it.
+
+A norm is built from its members' FRFs at common points (a lab's points,
+:mod:`posture_id.frf.bands`), one or more channels each:
+
+- each member's pseudo-impulse response (PIR, :func:`~posture_id.frf.bands.
+  pseudo_impulse_response`), the channels' PIRs concatenated into one supervector x_i(t);
+  their mean and SD over the members;
+- **bootstrap constants** (B resamples of the members, with replacement, mean_b and SD_b
+  of each): the prediction band's constant, the ``level`` quantile of every member's
+  max_t |x_i(t) − mean_b(t)| / SD_b(t) over all resamples (the band mean ± c·SD holds a new
+  member's whole PIR with that probability), and the confidence band's, the ``level``
+  quantile over resamples of max_t |mean(t) − mean_b(t)| / SD_b(t) (a band for the group
+  mean);
+- the mean and covariance Σ of d = [Re H, Im H] (every point of every channel), and
+  frequency weights w (default 1), for the **human-likeness** score
+  sqrt(dᵀ·S·Σ⁻¹·S·d), d the tested FRF minus the mean, S = diag(w, w) (Σ⁻¹ as the
+  pseudo-inverse when there are fewer members than numbers: the score is then measured
+  in the directions the members span).
+
+A norm may also be given as summary statistics only (``frequencies_hz``, ``mean_re_im``,
+``covariance`` or ``inverse_covariance``, ``weights``), as labs publish them: it scores,
+but has no bands.
+
+:func:`against_norm` gives a tested FRF's PIR, whether it lies inside the prediction band,
+its distance percentile (for each resample, the share of the resampled members whose
+summed squared PIR distance to the resample's mean is below the tested one's; averaged)
+and its human-likeness.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.errors import PostureIdError
+from posture_id.fileio import JsonFile, Result
+from posture_id.frf.bands import pseudo_impulse_response
+
+__all__ = ["Norm", "NormTest", "build_norm", "against_norm", "FrfSet"]
+
+#: The format of a norm file.
+FORMAT = "posture_id-norm"
+
+
+@dataclass(frozen=True)
+class FrfSet:
+    """FRFs of several subjects at common points: ``frequencies_hz`` (F,),
+    ``response`` (N, F, M) complex, ``channels`` (M,), ``names`` (N,)."""
+
+    frequencies_hz: np.ndarray
+    response: np.ndarray
+    channels: tuple[str, ...]
+    names: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        r = np.asarray(self.response)
+        if r.ndim != 3 or r.shape[1:] != (len(self.frequencies_hz), len(self.channels)):
+            raise PostureIdError(f"FRFs of shape {r.shape}: expected (subjects, "
+                                 f"{len(self.frequencies_hz)} frequencies, "
+                                 f"{len(self.channels)} channels)")
+        if not np.all(np.isfinite(r)):
+            raise PostureIdError("FRFs hold values that are not finite")
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def pirs(self, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+        """(t (S,), x (N, S·M)): every subject's channels' PIRs concatenated."""
+        t, x = pseudo_impulse_response(self.frequencies_hz,
+                                       np.moveaxis(np.asarray(self.response), 0, -1),
+                                       rate_hz)  # (S, M, N)
+        return t, np.moveaxis(x, -1, 0).transpose(0, 2, 1).reshape(len(self), -1)
+
+    def re_im(self) -> np.ndarray:
+        """(N, 2·F·M): [Re H, Im H], each F × M flattened frequency-major."""
+        r = np.asarray(self.response).reshape(len(self), -1)
+        return np.concatenate([r.real, r.imag], axis=1)
+
+
+def _bootstrap(x: np.ndarray, b: int, rng: np.random.Generator
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """(B, D) means and SDs of B resamples (with replacement) of the rows of x."""
+    idx = rng.integers(0, len(x), size=(b, len(x)))
+    samples = x[idx]  # (B, N, D)
+    return samples.mean(axis=1), samples.std(axis=1, ddof=1)
+
+
+@dataclass(frozen=True)
+class Norm(JsonFile):
+    """A normative set (the module doc).
+
+    Attributes:
+        frequencies_hz: (F,). channels: (M,). weights: (F,).
+        mean_re_im: (2FM,). covariance: (2FM, 2FM) or None; inverse_covariance: or given.
+        members: (N,) names (empty for a summary-only norm). rate_hz: of the PIRs.
+        pir_t: (S,) s; pir_mean, pir_sd: (S·M,); pir_members: (N, S·M).
+        prediction_constant, confidence_constant, level, bootstrap: the bands'.
+    """
+
+    frequencies_hz: np.ndarray
+    channels: tuple[str, ...]
+    weights: np.ndarray
+    mean_re_im: np.ndarray
+    covariance: np.ndarray | None = None
+    inverse_covariance: np.ndarray | None = None
+    members: tuple[str, ...] = ()
+    rate_hz: float = 22.0
+    pir_t: np.ndarray | None = field(default=None, repr=False)
+    pir_mean: np.ndarray | None = field(default=None, repr=False)
+    pir_sd: np.ndarray | None = field(default=None, repr=False)
+    pir_members: np.ndarray | None = field(default=None, repr=False)
+    prediction_constant: float | None = None
+    confidence_constant: float | None = None
+    level: float = 0.95
+    bootstrap: int = 0
+    seed: int = 0
+
+    @property
+    def has_bands(self) -> bool:
+        return self.pir_members is not None and len(self.members) >= 3
+
+    def precision(self) -> np.ndarray:
+        """Σ⁻¹ (the pseudo-inverse of the members' covariance, or the one given)."""
+        if self.inverse_covariance is not None:
+            return np.asarray(self.inverse_covariance)
+        if self.covariance is None:
+            raise PostureIdError("the norm has neither a covariance nor its inverse")
+        return np.linalg.pinv(np.asarray(self.covariance), rcond=1e-10, hermitian=True)
+
+    def human_likeness(self, re_im: np.ndarray) -> float:
+        """sqrt(dᵀ·S·Σ⁻¹·S·d), d = ``re_im`` (2FM,) − the mean, S = diag(w, w)."""
+        d = np.asarray(re_im, dtype=float) - self.mean_re_im
+        m = len(self.channels)
+        w = np.concatenate([np.repeat(self.weights, m)] * 2)
+        sd = w * d
+        return float(math.sqrt(max(float(sd @ self.precision() @ sd), 0.0)))
+
+    def to_dict(self) -> dict:
+        def arr(a):
+            return None if a is None else np.asarray(a).tolist()
+
+        return {"format": FORMAT, "frequencies_hz": arr(self.frequencies_hz),
+                "channels": list(self.channels), "weights": arr(self.weights),
+                "mean_re_im": arr(self.mean_re_im), "covariance": arr(self.covariance),
+                "inverse_covariance": arr(self.inverse_covariance),
+                "members": list(self.members), "rate_hz": self.rate_hz,
+                "pir": None if self.pir_members is None else {
+                    "t": arr(self.pir_t), "mean": arr(self.pir_mean), "sd": arr(self.pir_sd),
+                    "members": arr(self.pir_members)},
+                "prediction_band": {"constant": self.prediction_constant,
+                                    "level": self.level, "bootstrap": self.bootstrap},
+                "confidence_band": {"constant": self.confidence_constant,
+                                    "level": self.level, "bootstrap": self.bootstrap},
+                "seed": self.seed}
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> Norm:
+        """A norm file: one ``build_norm`` wrote, or summary statistics as labs publish
+        them (``frequencies_hz``, ``mean_re_im``, ``covariance`` or
+        ``inverse_covariance``, optional ``weights`` and ``channels``)."""
+        path = Path(path)
+        if path.is_dir():
+            raise PostureIdError(f"{path}: is a folder, not a norm file (JSON)")
+        try:
+            data = json.loads(path.read_text(encoding="utf-8-sig"))
+        except FileNotFoundError:
+            raise PostureIdError(f"{path}: no such norm file") from None
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise PostureIdError(f"{path}: not valid JSON ({exc})") from None
+        if not isinstance(data, dict):
+            raise PostureIdError(f"{path}: a norm is a JSON object")
+        try:
+            f = np.asarray(data["frequencies_hz"], dtype=float)
+            mean = np.asarray(data["mean_re_im"], dtype=float)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise PostureIdError(f"{path}: a norm needs frequencies_hz and mean_re_im "
+                                 f"({exc})") from None
+        channels = tuple(data.get("channels") or ["COM"])
+        if mean.shape != (2 * len(f) * len(channels),):
+            raise PostureIdError(f"{path}: mean_re_im holds {mean.size} numbers; "
+                                 f"{len(f)} frequencies × {len(channels)} channel(s) need "
+                                 f"{2 * len(f) * len(channels)} (Re then Im)")
+        size = mean.size
+        matrices = {}
+        for key in ("covariance", "inverse_covariance"):
+            if data.get(key) is not None:
+                m = np.asarray(data[key], dtype=float)
+                if m.shape != (size, size):
+                    raise PostureIdError(f"{path}: {key} must be {size} × {size}, got "
+                                         f"{m.shape}")
+                matrices[key] = m
+        if not matrices:
+            raise PostureIdError(f"{path}: a norm needs a covariance or inverse_covariance")
+        weights = np.asarray(data.get("weights") or np.ones(len(f)), dtype=float)
+        if weights.shape != f.shape:
+            raise PostureIdError(f"{path}: weights must be one per frequency ({len(f)})")
+        pir = data.get("pir") or {}
+        bands = data.get("prediction_band") or {}
+        return cls(f, channels, weights, mean, matrices.get("covariance"),
+                   matrices.get("inverse_covariance"), tuple(data.get("members") or ()),
+                   float(data.get("rate_hz", 22.0)),
+                   *(np.asarray(pir[k]) if pir.get(k) is not None else None
+                     for k in ("t", "mean", "sd", "members")),
+                   bands.get("constant"), (data.get("confidence_band") or {}).get("constant"),
+                   float(bands.get("level", 0.95)), int(bands.get("bootstrap", 0)),
+                   int(data.get("seed", 0)))
+
+
+def build_norm(frfs: FrfSet, bootstrap: int = 1000, level: float = 0.95,
+               rate_hz: float = 22.0, weights: np.ndarray | None = None,
+               seed: int = 0) -> Norm:
+    """The norm of ``frfs`` (the module doc)."""
+    if len(frfs) < 3:
+        raise PostureIdError(f"a norm needs at least 3 members, got {len(frfs)}")
+    if not 0.5 <= level < 1:
+        raise PostureIdError(f"the bands' level must be within 0.5–0.99, got {level}")
+    if bootstrap < 10:
+        raise PostureIdError(f"--bootstrap {bootstrap}: at least 10 resamples")
+    t, x = frfs.pirs(rate_hz)
+    mean, sd = x.mean(axis=0), x.std(axis=0, ddof=1)
+    rng = np.random.default_rng(seed)
+    means_b, sds_b = _bootstrap(x, bootstrap, rng)
+    sds_b = np.where(sds_b > 0, sds_b, np.inf)
+    member_max = np.concatenate([  # (B, N), in blocks: B·N·D numbers at once is too many
+        (np.abs(x[None, :, :] - means_b[k : k + 64, None, :])
+         / sds_b[k : k + 64, None, :]).max(axis=2) for k in range(0, bootstrap, 64)])
+    prediction = float(np.quantile(member_max, level))
+    confidence = float(np.quantile((np.abs(mean[None] - means_b) / sds_b).max(axis=1), level))
+    re_im = frfs.re_im()
+    w = np.ones(len(frfs.frequencies_hz)) if weights is None else np.asarray(weights, float)
+    return Norm(np.asarray(frfs.frequencies_hz, float), tuple(frfs.channels), w,
+                re_im.mean(axis=0), np.cov(re_im, rowvar=False, ddof=1), None,
+                tuple(frfs.names), rate_hz, t, mean, sd, x, prediction, confidence, level,
+                bootstrap, seed)
+
+
+@dataclass(frozen=True)
+class NormTest(Result):
+    """One FRF tested against a norm.
+
+    Attributes:
+        name: what was tested. human_likeness: the score (0 at the norm's mean).
+        inside_prediction_band: its whole PIR within mean ± c·SD (None: the norm has no
+        bands). distance_percentile: 0–100 (None: no bands). pir: (S·M,) its PIR.
+    """
+
+    name: str
+    norm: Norm = field(repr=False)
+    response: np.ndarray = field(repr=False)
+    human_likeness: float
+    inside_prediction_band: bool | None
+    distance_percentile: float | None
+    pir: np.ndarray | None = field(default=None, repr=False)
+
+    def to_dict(self) -> dict:
+        from posture_id.provenance import provenance
+
+        return {"tested": self.name, "human_likeness": self.human_likeness,
+                "inside_prediction_band": self.inside_prediction_band,
+                "distance_percentile": self.distance_percentile,
+                "norm": {"members": len(self.norm.members), "level": self.norm.level,
+                         "frequencies_hz": self.norm.frequencies_hz.tolist(),
+                         "channels": list(self.norm.channels)},
+                "frf": {"re": self.response.real.tolist(), "im": self.response.imag.tolist()},
+                "provenance": provenance()}
+
+    def summary(self) -> str:
+        lines = [f"{self.name}: human-likeness {self.human_likeness:.2f} (0: the norm's mean)"]
+        if self.inside_prediction_band is not None:
+            lines.append(f"inside the norm's {100 * self.norm.level:.0f} % prediction band: "
+                         f"{'yes' if self.inside_prediction_band else 'NO'}; distance "
+                         f"percentile {self.distance_percentile:.0f} (of "
+                         f"{len(self.norm.members)} members)")
+        return "\n".join(lines)
+
+    def plot(self, path=None, ax=None):
+        """Gain and phase with the norm's members (top), the PIR in its bands (bottom)."""
+        from posture_id.plotting import plot_norm_test
+
+        return plot_norm_test(self, path=path, ax=ax)
+
+
+def against_norm(norm: Norm, frequencies_hz: np.ndarray, response: np.ndarray,
+                 name: str = "tested") -> NormTest:
+    """``response`` (F, M) at the norm's frequencies tested against ``norm``."""
+    f = np.asarray(frequencies_hz, dtype=float)
+    h = np.asarray(response, dtype=complex).reshape(len(f), -1)
+    if f.shape != norm.frequencies_hz.shape or not np.allclose(f, norm.frequencies_hz,
+                                                               atol=1e-6):
+        raise PostureIdError(f"{name}: its FRF is at {np.round(f, 3).tolist()} Hz, the norm's "
+                             f"at {np.round(norm.frequencies_hz, 3).tolist()} Hz: compute it "
+                             "at the norm's points (posture-id frf --band-preset ...)")
+    if h.shape[1] != len(norm.channels):
+        raise PostureIdError(f"{name}: {h.shape[1]} channel(s), the norm has "
+                             f"{len(norm.channels)} ({', '.join(norm.channels)})")
+    re_im = np.concatenate([h.reshape(-1).real, h.reshape(-1).imag])
+    score = norm.human_likeness(re_im)
+    inside = percentile = None
+    pir = None
+    if norm.has_bands:
+        _, x = pseudo_impulse_response(f, h, norm.rate_hz)
+        pir = x.T.reshape(-1)
+        inside = bool(np.all(np.abs(pir - norm.pir_mean)
+                             <= norm.prediction_constant * norm.pir_sd))
+        rng = np.random.default_rng(norm.seed + 1)
+        members = norm.pir_members
+        idx = rng.integers(0, len(members), size=(norm.bootstrap, len(members)))
+        shares = []
+        for rows in idx:
+            sample = members[rows]
+            centre = sample.mean(axis=0)
+            mine = float(np.sum((pir - centre) ** 2))
+            shares.append(np.mean(np.sum((sample - centre) ** 2, axis=1) < mine))
+        percentile = float(100 * np.mean(shares))
+    return NormTest(name, norm, h, score, inside, percentile, pir)

@@ -68,7 +68,19 @@ def test_human_likeness_is_the_hand_computed_mahalanobis_distance(tmp_path):
     norm = build_norm(members, bootstrap=50, weights=weights)
     tested = _population(rng, 1).response[0]
     d = np.concatenate([tested[:, 0].real, tested[:, 0].imag]) - members.re_im().mean(axis=0)
-    cov = np.cov(members.re_im(), rowvar=False)
+    # Schäfer-Strimmer by hand: correlations times 1 − λ, λ = Σ Var(r_ij) / Σ r_ij²
+    x = members.re_im()
+    n = len(x)
+    z = (x - x.mean(axis=0)) / x.std(axis=0, ddof=1)
+    r = np.corrcoef(x, rowvar=False)
+    var_r = np.array([[n / (n - 1) ** 3 * np.sum((z[:, i] * z[:, j]
+                                                  - np.mean(z[:, i] * z[:, j])) ** 2)
+                       for j in range(x.shape[1])] for i in range(x.shape[1])])
+    off = ~np.eye(x.shape[1], dtype=bool)
+    lam = min(1.0, var_r[off].sum() / (r[off] ** 2).sum())
+    sd = x.std(axis=0, ddof=1)
+    cov = np.where(off, (1 - lam) * r, 1.0) * np.outer(sd, sd)
+    assert norm.shrinkage == pytest.approx(lam)
     s = np.concatenate([weights, weights])
     hand = float(np.sqrt((s * d) @ np.linalg.pinv(cov, rcond=1e-10, hermitian=True)
                          @ (s * d)))
@@ -103,3 +115,58 @@ def test_a_norm_refuses_what_it_cannot_score(tmp_path):
     bad.write_text(json.dumps({"frequencies_hz": [0.1, 0.2], "mean_re_im": [1, 2, 3]}))
     with pytest.raises(PostureIdError, match="mean_re_im holds 3 numbers"):
         Norm.from_json(bad)
+
+
+def _frf_json(path, f, h):
+    path.write_text(json.dumps({"frequencies_hz": list(f), "channels": {
+        "body COM": {"re": list(np.real(h)), "im": list(np.imag(h)), "gain": list(np.abs(h)),
+                     "phase_deg": list(np.degrees(np.angle(h)))}}}))
+    return path
+
+
+def test_the_command_line_builds_tests_and_compares(tmp_path, capsys):
+    """FRF JSONs, a CSV table and a .mat file give the same norm; a subject is tested; two
+    groups are compared; bad sources are refused in one line."""
+    from scipy.io import savemat
+
+    from posture_id.cli import main
+
+    rng = np.random.default_rng(5)
+    group = _population(rng, 12)
+    files = [_frf_json(tmp_path / f"s{i}.json", F, group.response[i, :, 0])
+             for i in range(12)]
+    table = tmp_path / "table.csv"
+    table.write_text("subject," + ",".join(f"{f:g}_re,{f:g}_im" for f in F) + "\n" + "".join(
+        f"s{i}," + ",".join(f"{float(h.real)!r},{float(h.imag)!r}" for h in group.response[i, :, 0]) + "\n"
+        for i in range(12)))
+    savemat(tmp_path / "group.mat", {"H": group.response[:, :, 0]})
+    outs = []
+    for k, source in enumerate(([str(f) for f in files], [str(table)],
+                                [str(tmp_path / "group.mat"), "--variable", "H",
+                                 "--frequencies", *map(str, F)])):
+        out = tmp_path / f"norm{k}.json"
+        assert main(["norm", "build", *source, "--bootstrap", "50", "--out", str(out)]) == 0
+        outs.append(json.loads(out.read_text()))
+    for other in outs[1:]:
+        np.testing.assert_allclose(other["mean_re_im"], outs[0]["mean_re_im"], rtol=1e-9)
+    assert main(["norm", "test", str(files[0]), "--norm", str(tmp_path / "norm0.json"),
+                 "--out", str(tmp_path / "t.json"), "--plot", str(tmp_path / "t.png")]) in (0, 1)
+    assert "human_likeness" in json.loads((tmp_path / "t.json").read_text())
+    assert main(["norm", "compare", "--group", *map(str, files[:6]), "--group",
+                 *map(str, files[6:]), "--permutations", "99", "--bootstrap", "50",
+                 "--out", str(tmp_path / "c.json"), "--plot", str(tmp_path / "c.png")]) == 0
+    assert 0 < json.loads((tmp_path / "c.json").read_text())["p_value"] <= 1
+    capsys.readouterr()
+    for argv, named in (
+            (["norm", "build", str(tmp_path / "group.mat"), "--out", "x.json"],
+             "needs --variable NAME and --frequencies"),
+            (["norm", "build", str(table), str(files[0]), "--out", "x.json"],
+             "not .csv, .json together"),
+            (["norm", "build", *map(str, files[:2]), "--out", "x.json"], "at least 3 members"),
+            (["norm", "build", str(tmp_path / "missing.json"), "--out", "x.json"],
+             "no such file"),
+            (["norm", "compare", "--group", str(files[0]), "--out", "x.json"],
+             "give two groups")):
+        assert main([*argv[:-1], str(tmp_path / argv[-1])]) == 2, argv
+        assert named in capsys.readouterr().err, argv
+    assert not (tmp_path / "x.json").exists()

@@ -13,7 +13,7 @@ TUTORIALS = sorted((Path(__file__).parents[1] / "docs" / "tutorials").glob("*.py
 
 def test_there_are_tutorials():
     assert [t.name for t in TUTORIALS] == ["cohort.py", "ic_model.py", "lab_recording.py",
-                                            "python_api.py"]
+                                            "norms.py", "python_api.py"]
 
 
 @pytest.mark.slow

@@ -1,5 +1,5 @@
 """Command line: ``posture-id body | simulate | fit | frf | dataset | train | evaluate |
-calibration | identify | demo | benchmark | universal | design | stimulus | compare``,
+calibration | identify | demo | benchmark | universal | design | stimulus | compare | norm``,
 one module per command.
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
@@ -26,6 +26,7 @@ from posture_id.cli import (
     fit,
     frf,
     identify,
+    norm,
     platform_command,
     simulate,
     train,
@@ -45,7 +46,8 @@ def build_parser() -> Parser:
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for command in (body, simulate, fit, frf, dataset, train, evaluate, calibration, identify,
-                    demo, benchmark, universal, design, platform_command, compare):
+                    demo, benchmark, universal, design, platform_command, compare,
+                    norm):
         command.add_parser(sub)
     for command_parser in sub.choices.values():  # one meaning per exit status, said by all
         command_parser.epilog = EPILOG

@@ -117,6 +117,20 @@ class FrequencyBands:
         return np.array([math.exp(np.log(f[g]).mean()) if len(g) else math.nan
                          for g in groups])
 
+    @classmethod
+    def from_dict(cls, data: dict) -> FrequencyBands:
+        """What :meth:`to_dict` wrote (a preset by its name)."""
+        if data.get("name") in BAND_PRESETS:
+            return BAND_PRESETS[data["name"]]
+        return cls(harmonics=None if data.get("harmonics") is None else tuple(
+                       tuple(b) for b in data["harmonics"]),
+                   ranges_hz=None if data.get("ranges_hz") is None else tuple(
+                       tuple(b) for b in data["ranges_hz"]),
+                   centres_hz=None if data.get("centres_hz") is None else tuple(
+                       data["centres_hz"]),
+                   reference_period_s=data.get("reference_period_s"),
+                   name=data.get("name", "custom"))
+
     def to_dict(self) -> dict:
         return {"name": self.name,
                 "harmonics": None if self.harmonics is None else [list(b) for b in

@@ -14,9 +14,13 @@ A norm is built from its members' FRFs at common points (a lab's points,
   mean);
 - the mean and covariance Σ of d = [Re H, Im H] (every point of every channel), and
   frequency weights w (default 1), for the **human-likeness** score
-  sqrt(dᵀ·S·Σ⁻¹·S·d), d the tested FRF minus the mean, S = diag(w, w) (Σ⁻¹ as the
-  pseudo-inverse when there are fewer members than numbers: the score is then measured
-  in the directions the members span).
+  sqrt(dᵀ·S·Σ⁻¹·S·d), d the tested FRF minus the mean, S = diag(w, w). **[decision]** Σ
+  is the members' covariance shrunk towards its diagonal by Schäfer and Strimmer's
+  (2005) estimate of the optimal intensity λ (the correlations times 1 − λ, the
+  variances kept): a norm has tens of members for 2·F·M numbers (22 for Peterka's points
+  on one channel), and the sample covariance of so few is singular or nearly so, its
+  inverse blowing up every direction the members happen not to span (a left-out healthy
+  subject then scores like a patient). λ is stored with the norm.
 
 A norm may also be given as summary statistics only (``frequencies_hz``, ``mean_re_im``,
 ``covariance`` or ``inverse_covariance``, ``weights``), as labs publish them: it scores,
@@ -41,7 +45,7 @@ from posture_id.errors import PostureIdError
 from posture_id.fileio import JsonFile, Result
 from posture_id.frf.bands import pseudo_impulse_response
 
-__all__ = ["Norm", "NormTest", "build_norm", "against_norm", "FrfSet"]
+__all__ = ["Norm", "NormTest", "build_norm", "against_norm", "FrfSet", "shrunk_covariance"]
 
 #: The format of a norm file.
 FORMAT = "posture_id-norm"
@@ -82,6 +86,23 @@ class FrfSet:
         return np.concatenate([r.real, r.imag], axis=1)
 
 
+def shrunk_covariance(x: np.ndarray) -> tuple[np.ndarray, float]:
+    """(Σ*, λ): the covariance of the rows of ``x`` (N, P) with its correlations shrunk
+    towards 0 by Schäfer and Strimmer's (2005, target "D") optimal λ."""
+    n = len(x)
+    sd = x.std(axis=0, ddof=1)
+    sd = np.where(sd > 0, sd, 1.0)
+    z = (x - x.mean(axis=0)) / sd
+    w = z[:, :, None] * z[:, None, :]  # (N, P, P)
+    r = w.sum(axis=0) / (n - 1)
+    variance = n / (n - 1) ** 3 * ((w - w.mean(axis=0)) ** 2).sum(axis=0)
+    off = ~np.eye(x.shape[1], dtype=bool)
+    denominator = float(np.sum(r[off] ** 2))
+    lam = float(np.clip(np.sum(variance[off]) / denominator, 0, 1)) if denominator else 1.0
+    shrunk = np.where(off, (1 - lam) * r, 1.0)
+    return shrunk * np.outer(sd, sd), lam
+
+
 def _bootstrap(x: np.ndarray, b: int, rng: np.random.Generator
                ) -> tuple[np.ndarray, np.ndarray]:
     """(B, D) means and SDs of B resamples (with replacement) of the rows of x."""
@@ -119,6 +140,8 @@ class Norm(JsonFile):
     level: float = 0.95
     bootstrap: int = 0
     seed: int = 0
+    lab_bands: dict | None = None
+    shrinkage: float | None = None
 
     @property
     def has_bands(self) -> bool:
@@ -156,7 +179,8 @@ class Norm(JsonFile):
                                     "level": self.level, "bootstrap": self.bootstrap},
                 "confidence_band": {"constant": self.confidence_constant,
                                     "level": self.level, "bootstrap": self.bootstrap},
-                "seed": self.seed}
+                "seed": self.seed, "lab_bands": self.lab_bands,
+                "covariance_shrinkage": self.shrinkage}
 
     @classmethod
     def from_json(cls, path: str | Path) -> Norm:
@@ -208,12 +232,13 @@ class Norm(JsonFile):
                      for k in ("t", "mean", "sd", "members")),
                    bands.get("constant"), (data.get("confidence_band") or {}).get("constant"),
                    float(bands.get("level", 0.95)), int(bands.get("bootstrap", 0)),
-                   int(data.get("seed", 0)))
+                   int(data.get("seed", 0)), data.get("lab_bands"),
+                   data.get("covariance_shrinkage"))
 
 
 def build_norm(frfs: FrfSet, bootstrap: int = 1000, level: float = 0.95,
                rate_hz: float = 22.0, weights: np.ndarray | None = None,
-               seed: int = 0) -> Norm:
+               seed: int = 0, lab_bands: dict | None = None) -> Norm:
     """The norm of ``frfs`` (the module doc)."""
     if len(frfs) < 3:
         raise PostureIdError(f"a norm needs at least 3 members, got {len(frfs)}")
@@ -233,10 +258,11 @@ def build_norm(frfs: FrfSet, bootstrap: int = 1000, level: float = 0.95,
     confidence = float(np.quantile((np.abs(mean[None] - means_b) / sds_b).max(axis=1), level))
     re_im = frfs.re_im()
     w = np.ones(len(frfs.frequencies_hz)) if weights is None else np.asarray(weights, float)
+    covariance, lam = shrunk_covariance(re_im)
     return Norm(np.asarray(frfs.frequencies_hz, float), tuple(frfs.channels), w,
-                re_im.mean(axis=0), np.cov(re_im, rowvar=False, ddof=1), None,
+                re_im.mean(axis=0), covariance, None,
                 tuple(frfs.names), rate_hz, t, mean, sd, x, prediction, confidence, level,
-                bootstrap, seed)
+                bootstrap, seed, lab_bands, lam)
 
 
 @dataclass(frozen=True)

@@ -703,3 +703,22 @@ def plot_group_difference(result, path=None, ax=None):
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_parameter_differences(result, path=None, ax=None):
+    """Each parameter's difference between two groups, relative to group B's mean, with
+    its confidence interval; p < 0.05 in red."""
+    rows = result.rows
+    fig, axes = _axes(ax, 1, 1, (7, 0.3 * len(rows) + 1.5))
+    a = axes[0, 0]
+    for k, r in enumerate(rows):
+        scale = abs(r["mean_b"]) or 1.0
+        colour = "C3" if r["p_value"] < 0.05 else "C0"
+        a.plot([100 * r["low"] / scale, 100 * r["high"] / scale], [k, k], color=colour)
+        a.plot(100 * r["difference"] / scale, k, "o", color=colour)
+    a.axvline(0, color="k", lw=0.6)
+    a.set_yticks(range(len(rows)), [r["parameter"] for r in rows], fontsize=7)
+    a.set_xlabel(f"{result.names[0]} − {result.names[1]} (% of {result.names[1]}'s mean)")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

@@ -170,3 +170,72 @@ def test_the_command_line_builds_tests_and_compares(tmp_path, capsys):
         assert main([*argv[:-1], str(tmp_path / argv[-1])]) == 2, argv
         assert named in capsys.readouterr().err, argv
     assert not (tmp_path / "x.json").exists()
+
+
+def test_a_cohort_writes_its_frfs_and_the_norms_columns(tmp_path):
+    """identify DIR --frf-preset peterka11: one <recording>.frf.json each, a norm in one
+    more command; identify DIR --norm: summary.csv gains the norm test's columns."""
+    import csv
+
+    from posture_id import load_body
+    from posture_id.cli import main
+    from posture_id.dec.prior import sample_parameters
+    from posture_id.simulation import prts, simulate_batch
+
+    body = load_body()
+    params = sample_parameters(body, 5, np.random.default_rng(6), sigma=0.1)
+    params.sign[:] = [1, -1, 1]
+    batch = simulate_batch(body, params, prts(1.0, 6, 80))
+    recs = tmp_path / "recs"
+    recs.mkdir()
+    for b in range(5):
+        batch.trial(b).to_recording().with_sensor_noise(0.05, b).to_csv(recs / f"s{b}.csv")
+    out = tmp_path / "out"
+    assert main(["identify", str(recs), "--method", "cnn", "--frf-preset", "peterka11",
+                 "--out", str(out)]) in (0, 1)
+    frfs = sorted(out.glob("*.frf.json"))
+    assert [p.name for p in frfs] == [f"s{b}.frf.json" for b in range(5)]
+    assert main(["norm", "build", *map(str, frfs), "--channel", "body COM", "--bootstrap",
+                 "50", "--out", str(tmp_path / "norm.json")]) == 0
+    again = tmp_path / "again"
+    assert main(["identify", str(recs), "--method", "cnn", "--norm", str(tmp_path / "norm.json"),
+                 "--out", str(again)]) in (0, 1)
+    rows = list(csv.DictReader((again / "summary.csv").open()))
+    assert all(float(r["human_likeness"]) >= 0 for r in rows)
+    assert {r["inside_prediction_band"] for r in rows} <= {"True", "False"}
+
+
+@pytest.mark.slow
+def test_identified_groups_differ_where_their_parameters_do(tmp_path):
+    """Six subjects and six with 1.6× longer delays, identified (the network): every
+    module's delay is longer in the second group, significantly (p < 0.05) at two of the
+    three modules at least; the ankle's Kp does not differ."""
+    from posture_id import load_body
+    from posture_id.cli import main
+    from posture_id.dec.prior import sample_parameters
+    from posture_id.simulation import prts, simulate_batch
+
+    body = load_body()
+    rng = np.random.default_rng(8)
+    folders = []
+    for g, factor in enumerate((1.0, 1.6)):
+        params = sample_parameters(body, 6, rng, sigma=0.1)
+        params.sign[:] = [1, -1, 1]
+        params.delay_s[:] *= factor
+        batch = simulate_batch(body, params, prts())
+        recs = tmp_path / f"recs{g}"
+        recs.mkdir()
+        for b in range(6):
+            batch.trial(b).to_recording().with_sensor_noise(0.02, b).to_csv(recs / f"s{b}.csv")
+        out = tmp_path / f"out{g}"
+        assert main(["identify", str(recs), "--method", "cnn", "--out", str(out)]) in (0, 1)
+        folders.append(sorted(str(p) for p in out.glob("s*.json")))
+    result = tmp_path / "params.json"
+    assert main(["norm", "compare", "--group", *folders[0], "--group", *folders[1],
+                 "--names", "healthy", "slow", "--permutations", "499", "--bootstrap",
+                 "200", "--out", str(result), "--plot", str(tmp_path / "p.png")]) == 0
+    rows = {r["parameter"]: r for r in json.loads(result.read_text())["parameters"]}
+    delays = [rows[f"{joint} delay_s"] for joint in ("ankle", "knee", "hip")]
+    assert all(r["difference"] < 0 for r in delays)
+    assert sum(r["p_value"] < 0.05 for r in delays) >= 2
+    assert rows["ankle kp"]["p_value"] > 0.01

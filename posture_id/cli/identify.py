@@ -68,6 +68,14 @@ def add_parser(sub) -> None:
                         "interval beside it (NAME.intervals.png)")
     p.add_argument("--level", type=interval_level, default=0.9,
                    help="the intervals' nominal coverage (default %(default)g)")
+    p.add_argument("--frf-preset", choices=("peterka11",),
+                   help="cohort: also write each recording's FRF at these points, the labs' "
+                        "way (<recording>.frf.json: a normative set in one more command, "
+                        "posture-id norm build)")
+    p.add_argument("--norm", type=Path,
+                   help="cohort: test each recording against this norm (its points): "
+                        "summary.csv gains human_likeness, inside_prediction_band and "
+                        "distance_percentile")
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recordings were made with")
     add_column_arguments(p)
     add_search_arguments(p)
@@ -91,9 +99,10 @@ def run(args: argparse.Namespace) -> int:
     if _is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)
-    if args.scheduler or args.bodies:
-        raise PostureIdError("--scheduler and --bodies go with a folder or pattern of "
-                             "recordings")
+    if args.scheduler or args.bodies or args.frf_preset or args.norm:
+        raise PostureIdError("--scheduler, --bodies, --frf-preset and --norm go with a folder "
+                             "or pattern of recordings (one recording: posture-id frf, "
+                             "posture-id norm test)")
     fit_options = FitOptions(**search_keywords(args))
     inputs = (args.recording, args.body, args.model, args.tilt)
     check_output_file(args.out, "--out", inputs)
@@ -134,7 +143,10 @@ def run_cohort(args: argparse.Namespace) -> int:
                              "FOLDER (one JSON per recording and summary.csv)")
     fit_options = FitOptions(**search_keywords(args))
     recordings = find_recordings(args.recording)
-    writes = (*(f"{glob.escape(p.stem)}.json" for p in recordings), "summary.csv")
+    writes = (*(f"{glob.escape(p.stem)}.json" for p in recordings), "summary.csv",
+              *((f"{glob.escape(p.stem)}.frf.json" for p in recordings)
+                if args.frf_preset or args.norm else ()))
+    norm = _cohort_norm(args)
     if args.scheduler:
         from posture_id.executors import check_scheduler_address
 
@@ -154,5 +166,44 @@ def run_cohort(args: argparse.Namespace) -> int:
             result = identify_cohort(recordings, args.out, identifier, args.scheduler,
                                      progress, stimulus, args.model, columns_from_args(args),
                                      args.bodies)
+        if args.frf_preset or norm is not None:
+            _cohort_frfs(args, recordings, body, norm)
     say(result.summary())
     return answered(bool(result.failed or result.doubtful))
+
+
+def _cohort_norm(args: argparse.Namespace):
+    """The --norm, read before any work (its points must be a lab's)."""
+    if args.norm is None:
+        return None
+    from posture_id.norms.norm import Norm
+
+    norm = Norm.from_json(args.norm)
+    if norm.lab_bands is None and args.frf_preset is None:
+        raise PostureIdError(f"{args.norm}: the norm does not say at which points its FRFs "
+                             "were computed; give --frf-preset")
+    return norm
+
+
+def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm) -> None:
+    """Each recording's FRF at the lab's points, and the norm's columns in summary.csv."""
+    from posture_id.frf.bands import BAND_PRESETS, FrequencyBands
+    from posture_id.norms.cohort import cohort_frfs
+    from posture_id.trials import prepare_trial
+
+    bands = (BAND_PRESETS[args.frf_preset] if args.frf_preset
+             else FrequencyBands.from_dict(norm.lab_bands))
+    own = None if args.bodies is None else Path(args.bodies)
+
+    def body_of(path: Path):
+        urdf = None if own is None else own / f"{path.stem}.urdf"
+        return load_body(urdf) if urdf is not None and urdf.is_file() else body
+
+    def read(path: Path):
+        args.recording = path
+        recording, stimulus = recording_and_stimulus(args, body_of(path))
+        return prepare_trial(recording, stimulus, rate_hz=None)
+
+    failed = cohort_frfs(recordings, args.out, read, body_of, bands, norm)
+    for name, why in failed.items():
+        say(f"{name}: no FRF ({why})")

@@ -62,8 +62,9 @@ def add_parser(sub) -> None:
     add_lab_stimulus_arguments(t, "tilt CSV (time_s,tilt_deg) the recording was made with")
     add_column_arguments(t)
     t.set_defaults(func=run_test)
-    c = n.add_parser("compare", help="two groups of FRFs: the difference of their mean PIRs "
-                                     "and a permutation test")
+    c = n.add_parser("compare", help="two groups of FRFs (the difference of their mean PIRs "
+                                     "and a permutation test), or of identify results "
+                                     "(parameter by parameter)")
     c.add_argument("--group", type=Path, nargs="+", action="append", required=True,
                    metavar="FILE", help="one group's files (give --group twice)")
     c.add_argument("--names", nargs=2, default=["A", "B"], help="the groups' names")
@@ -144,10 +145,36 @@ def run_compare(args: argparse.Namespace) -> int:
     from posture_id.norms.groups import compare_groups
     from posture_id.norms.readers import read_frfs
 
+    if all(_is_identified(p) for g in args.group for p in g):
+        return _compare_identified(args)
     channels = tuple(args.channel) if args.channel else None
     a, _ = read_frfs(args.group[0], channels, args.variable, args.frequencies)
     b, _ = read_frfs(args.group[1], channels, args.variable, args.frequencies)
     result = compare_groups(a, b, tuple(args.names), args.permutations, args.bootstrap,
                             args.level, args.rate_hz, args.seed)
+    write_result(result, args.out, args.plot)
+    return 0
+
+
+def _is_identified(path: Path) -> bool:
+    """An identify result (parameters and intervals), not an FRF."""
+    import json
+
+    if path.suffix.lower() != ".json" or path.name.endswith(".frf.json"):
+        return False
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(data, dict) and "parameters" in data and "intervals" in data
+
+
+def _compare_identified(args: argparse.Namespace) -> int:
+    """Two groups of identify results, parameter by parameter."""
+    from posture_id.norms.parameters import compare_parameters, read_identified
+
+    result = compare_parameters(read_identified(args.group[0]), read_identified(args.group[1]),
+                                tuple(args.names), args.permutations, args.bootstrap,
+                                args.level, args.seed)
     write_result(result, args.out, args.plot)
     return 0

@@ -123,8 +123,15 @@ def calibrate(per_cell: int) -> int:
     from posture_id.ic.fit import CALIBRATION
 
     rows = run(per_cell, CALIBRATION_SEED)
-    quantiles = {name: [float(np.quantile([r[f"{name}_z"] for r in rows], level))
-                        for level in LEVELS] for name in CALIBRATED}
+    quantiles = {}
+    for name in CALIBRATED:
+        z = np.array([r[f"{name}_z"] for r in rows])
+        q = [float(np.quantile(z, level)) for level in LEVELS]
+        # a parameter whose standard error is no guide (an error a thousand times it, or a
+        # standard error of 0 on a bound) is left uncalibrated: its interval is the
+        # normal one, and its width says what the recording leaves of it
+        if all(np.isfinite(q)) and q[-1] < 1e3:
+            quantiles[name] = q
     atomic_write_text(CALIBRATION, json_text({
         "about": "IC intervals: a level's interval is the estimate ± quantile × its "
                  "Gauss-Newton standard error (posture_id/ic/fit.py)",
@@ -133,7 +140,8 @@ def calibrate(per_cell: int) -> int:
         "recordings": len(rows), "seed": CALIBRATION_SEED, "levels": list(LEVELS),
         "quantiles": quantiles}))
     print(f"wrote {CALIBRATION}: " + ", ".join(
-        f"{n} ×{q[LEVELS.index(0.9)]:.2f}" for n, q in quantiles.items()) + " at 90 %")
+        f"{n} ×{q[LEVELS.index(0.9)]:.2f}" for n, q in quantiles.items()) + " at 90 %; "
+        f"uncalibrated: {', '.join(sorted(set(CALIBRATED) - set(quantiles))) or 'none'}")
     return 0
 
 

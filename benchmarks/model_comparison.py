@@ -47,6 +47,7 @@ def _case(k: int) -> dict:
     """Recording k: its model, body, stimulus, sway and truth, then the comparison."""
     from posture_id import load_body
     from posture_id.dec.prior import sample_parameters
+    from posture_id.errors import SimulationError
     from posture_id.ic import IcPlant
     from posture_id.ic.compare import compare_amplitudes, compare_models
     from posture_id.ic.subjects import draw_ic_parameters, ic_recording
@@ -68,17 +69,19 @@ def _case(k: int) -> dict:
     share = float(rng.uniform(0.15, 0.4)) if people else None
     recordings = []
     if model == "dec":
-        while True:
+        while True:  # a subject who falls, or whose noise topples them, is drawn again
             params = sample_parameters(body, 1, rng).trial(0, body.joint_names)
-            if all(simulate(body, params, s).stable for s in stimuli):
-                break
-        for p, s in enumerate(stimuli):
-            if people:
-                recordings.append(people_like(body, params, s, share, SEED + 100 * k + p
-                                              ).recording)
-            else:
-                recordings.append(simulate(body, params, s).to_recording().with_sensor_noise(
-                    0.02, SEED + 100 * k + p))
+            if not all(simulate(body, params, s).stable for s in stimuli):
+                continue
+            try:
+                recordings = [
+                    people_like(body, params, s, share, SEED + 100 * k + p).recording
+                    if people else simulate(body, params, s).to_recording()
+                    .with_sensor_noise(0.02, SEED + 100 * k + p)
+                    for p, s in enumerate(stimuli)]
+            except SimulationError:
+                continue
+            break
     else:
         plant = IcPlant.of(body)
         while True:  # a subject whose noise topples them is drawn again

@@ -158,7 +158,7 @@ class IcFitResult(Result):
     coherence: np.ndarray = field(repr=False)
     name: str = "recording"
     standard_errors: dict = field(default_factory=dict)
-    calibrated: bool = False
+    calibrated: tuple[str, ...] = ()
 
     @property
     def noise_ratio(self) -> float:
@@ -218,7 +218,7 @@ class IcFitResult(Result):
         return {"model": "ic", "parameters": self.parameters.to_dict(),
                 "identified": list(self.free),
                 "intervals": {k: list(v) for k, v in self.intervals.items()},
-                "level": self.level, "calibrated": self.calibrated,
+                "level": self.level, "calibrated": list(self.calibrated),
                 "standard_errors": self.standard_errors,
                 "chi2": self.chi2, "dof": self.dof,
                 "noise_ratio": self.noise_ratio, "consistent": self.consistent,
@@ -238,8 +238,9 @@ class IcFitResult(Result):
                  f"{100 * self.explained:.1f} % of the locked COM sway; {self.seconds:.2f} s"]
         for name in self.free:
             low, high = self.intervals[name]
+            how = "calibrated " if name in self.calibrated else ""
             lines.append(f"  {name:<24} {getattr(p, name):10.4g}   {100 * self.level:.0f} % "
-                         f"interval {low:.4g} – {high:.4g}")
+                         f"{how}interval {low:.4g} – {high:.4g}")
         lines.append(self.verdict_line())
         return "\n".join(lines)
 
@@ -271,10 +272,10 @@ def interval_multiplier(name: str, level: float) -> tuple[float, bool]:
     from scipy.stats import norm
 
     calibration = _calibration()
-    if calibration is None or name not in calibration.get("quantiles", {}):
+    quantiles = None if calibration is None else calibration.get("quantiles", {}).get(name)
+    if quantiles is None or not all(isinstance(q, int | float) for q in quantiles):
         return float(norm.ppf(0.5 + level / 2)), False
-    levels = calibration["levels"]
-    return float(np.interp(level, levels, calibration["quantiles"][name])), True
+    return float(np.interp(level, calibration["levels"], quantiles)), True
 
 
 def _scale(name: str, plant: IcPlant) -> float:
@@ -452,7 +453,7 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> I
                        clock.perf_counter() - started, explained, fitted, sway,
                        projection.frequencies_hz, part.recorded / u, model_frf, coherence,
                        trial.name, dict(zip(free, standard_errors.tolist(), strict=True)),
-                       all(c for _, c in multipliers))
+                       tuple(n for n, (_, c) in zip(free, multipliers, strict=True) if c))
 
 
 @dataclass(frozen=True)

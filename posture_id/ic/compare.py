@@ -172,6 +172,15 @@ def _judged(projection: LockedProjection, rows: np.ndarray, noise: np.ndarray,
     return chi2, spectrum
 
 
+def _falls(theta: np.ndarray) -> bool:
+    """Whether a fitted DEC sway (S, N) rad leaves the sway limit (or is not finite)."""
+    from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG
+
+    theta = np.asarray(theta, dtype=float)
+    return bool(not np.all(np.isfinite(theta))
+                or np.max(np.abs(theta)) >= math.radians(MAX_SWAY_LIMIT_DEG) * (1 - 1e-9))
+
+
 def _dec_fit(trial: PreparedTrial, body, locked: LockedOptions, progress=None):
     from posture_id.fitting.least_squares import fit_recording
     from posture_id.fitting.options import FitOptions
@@ -250,6 +259,11 @@ def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None =
             if held_out and projection.cycles >= 3 else None)
     within = {m: bool(chi2[m] <= _chi2_quantile(n - k[m])) for m in ("dec", "ic")}
     preferred, reason = _verdict(bic, held, projection.cycles, within)
+    if _falls(dec.fitted):
+        preferred, reason = "undecided", (
+            "the DEC fit ended on a model that falls in re-simulation: a fit that failed is "
+            "no evidence about DEC itself (fit DEC alone, e.g. posture-id identify REC, and "
+            "compare the answers)")
     return ModelComparison(dec, ic, judged.frequencies_hz, projection.excited[judged.rows],
                            chi2, k, bic, n, held, preferred, reason, judged.recorded,
                            dec_spectrum, ic_spectrum, judged.noise,
@@ -349,6 +363,10 @@ def compare_amplitudes(trials: list[PreparedTrial], body,
     bic = {m: chi2[m] + k[m] * math.log(n) for m in ("dec", "ic")}
     within = {m: bool(chi2[m] <= _chi2_quantile(n - k[m])) for m in ("dec", "ic")}
     preferred, reason = _verdict(bic, None, None, within)
+    if any(_falls(theta) for theta in dec.fitted):
+        preferred, reason = "undecided", (
+            "the joint DEC fit ended on a model that falls in re-simulation: a fit that "
+            "failed is no evidence about DEC itself")
     return AmplitudesComparison(dec, ic, chi2, k, bic, n, preferred, reason,
                                 tuple(t.name for t in trials),
                                 clock.perf_counter() - started)

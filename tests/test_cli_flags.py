@@ -19,7 +19,8 @@ from posture_id.cli.arguments import (
 CHECKED = {positive_int: "≥ 1", positive_float: "> 0", non_negative_int: "≥ 0",
            non_negative_float: "≥ 0", interval_level: "from 0.5 to 0.99"}
 #: Values that satisfy what every required option asks for, to reach the flag under test.
-REQUIRED = {"--out": "out.json", "--trials": "3", "--shards": "2"}
+REQUIRED = {"--out": "out.json", "--trials": "3", "--shards": "2", "--norm": "norm.json",
+            "--group": "a.json"}
 
 
 def _commands(parser: argparse.ArgumentParser, prefix=()):

@@ -136,9 +136,10 @@ def test_the_command_line_builds_tests_and_compares(tmp_path, capsys):
     files = [_frf_json(tmp_path / f"s{i}.json", F, group.response[i, :, 0])
              for i in range(12)]
     table = tmp_path / "table.csv"
-    table.write_text("subject," + ",".join(f"{f:g}_re,{f:g}_im" for f in F) + "\n" + "".join(
-        f"s{i}," + ",".join(f"{float(h.real)!r},{float(h.imag)!r}" for h in group.response[i, :, 0]) + "\n"
-        for i in range(12)))
+    cells = [",".join(f"{float(h.real)!r},{float(h.imag)!r}" for h in group.response[i, :, 0])
+             for i in range(12)]
+    table.write_text("subject," + ",".join(f"{f:g}_re,{f:g}_im" for f in F) + "\n"
+                     + "".join(f"s{i},{c}\n" for i, c in enumerate(cells)))
     savemat(tmp_path / "group.mat", {"H": group.response[:, :, 0]})
     outs = []
     for k, source in enumerate(([str(f) for f in files], [str(table)],

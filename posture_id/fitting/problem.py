@@ -9,6 +9,13 @@ Two levels:
   it: a cohort of subjects with their own anthropometric bodies compiles once.
 - a :class:`FitProblem` is one body on that model: its constants and defaults, filled in.
 
+The compiled model is built for a **length bucket**, not for the recording's exact length:
+the recording's samples rounded up to a whole number of :data:`BUCKET_SAMPLES` (10 s at
+50 Hz). The simulation is causal, so its first S samples do not depend on what follows;
+the problem returns those S and the Jacobian's rows for them, and a lab's trials that
+differ in length by a few seconds (121.3 s, 119.8 s, ...) share one compile instead of
+paying a minute of compiler each.
+
 Both are safe to use from several threads at once (two fits side by side share them).
 :meth:`FitProblem.get` and :meth:`CompiledModel.get` keep a few in process-wide caches
 keyed only on what they depend on (:class:`ProblemKey`, :class:`ModelKey`): changing an
@@ -45,6 +52,16 @@ from posture_id.fitting.symbolic import (
 from posture_id.fitting.unknowns import PER_MODULE
 
 __all__ = ["ProblemKey", "ModelKey", "CompiledModel", "FitProblem"]
+
+#: Recording lengths share a compiled model within buckets of this many samples.
+BUCKET_SAMPLES = 500
+
+
+def bucket_samples(n_samples: int) -> int:
+    """The compiled model's length for a recording of ``n_samples``: rounded up to a
+    whole number of :data:`BUCKET_SAMPLES`."""
+    return -(-int(n_samples) // BUCKET_SAMPLES) * BUCKET_SAMPLES
+
 
 #: Default values that scale the unknowns (q = value / default − 1); Δ is fixed per model.
 _SCALED_FIELDS = ("kp", "ki", "kd", "kpas", "bpas")
@@ -105,8 +122,10 @@ class ProblemKey:
                    options.compilation)
 
     def model_key(self, default_delay_steps: np.ndarray) -> ModelKey:
-        """The key of the compiled model this body's problem runs on."""
-        return ModelKey(self.body.n_segments, self.n_samples, self.sample_every, self.dt,
+        """The key of the compiled model this body's problem runs on (its length the
+        recording's bucket, :func:`bucket_samples`)."""
+        return ModelKey(self.body.n_segments, bucket_samples(self.n_samples),
+                        self.sample_every, self.dt,
                         self.deadband_rad_s, self.smooth_deadband_rad_s, self.delay_upper,
                         tuple(float(d) for d in default_delay_steps), self.threads,
                         self.compilation)
@@ -226,6 +245,7 @@ class FitProblem:
         self.defaults: DecParameters = default_parameters(body)
         delay0 = self.defaults.array("delay_s") / key.dt
         self.model = CompiledModel.get(key.model_key(delay0), notify)
+        self.n_samples = key.n_samples  # the recording's; the model's may be longer
         self.n_steps_u = self.model.n_steps_u
         self.backend: Backend = self.model.backend
         self.context = np.concatenate([body_constants(body)]
@@ -240,8 +260,9 @@ class FitProblem:
         return cls._cache.get(key, lambda: cls(key, notify))
 
     def simulate(self, q: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """(S, N) rad segment angles for unknowns q (7N,) and rollout input u."""
-        return np.array(self.model.sim(q, u, self.context)).T
+        """(S, N) rad segment angles for unknowns q (7N,) and rollout input u (S: the
+        recording's samples)."""
+        return np.array(self.model.sim(q, u, self.context)).T[: self.n_samples]
 
     def jacobian(self, q: np.ndarray, u: np.ndarray, columns: list[int]) -> np.ndarray:
         """(S·N, len(columns)) ∂θ/∂q (rad), columns evaluated in parallel chunks."""
@@ -253,4 +274,5 @@ class FitProblem:
             seeds[chunk, range(len(chunk))] = 1.0
             return np.array(self.model.dirs(q, u, self.context, seeds))[:, : len(chunk)]
 
-        return np.hstack(list(self.model.pool.map(run, chunks)))
+        rows = self.n_samples * self.n  # sample-major: the recording's samples come first
+        return np.hstack(list(self.model.pool.map(run, chunks)))[:rows]

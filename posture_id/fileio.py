@@ -18,8 +18,10 @@ from typing import Any
 
 import numpy as np
 
+from posture_id.errors import PostureIdError
+
 __all__ = ["atomic_write", "atomic_write_text", "file_sha256", "read_numeric_csv",
-           "jsonable", "json_text", "Result",
+           "jsonable", "json_text", "Result", "JsonFile", "read_json",
            "check_time_column", "PLAUSIBLE_INTERVAL_S"]
 
 
@@ -165,6 +167,23 @@ def json_text(data: Any) -> str:
     """Strict JSON (no NaN or Infinity: non-finite numbers become null), indented."""
     return json.dumps(jsonable(data), indent=2, allow_nan=False) + "\n"
 
+
+
+def read_json(path: str | Path, what: str, error: type[Exception] = PostureIdError):
+    """The JSON value in ``path`` (UTF-8, a byte-order mark allowed); ``error`` naming the
+    file and the problem for a folder, a missing file, other text or invalid JSON. ``what``:
+    what the file should be ("a norm file", ...)."""
+    path = Path(path)
+    if path.is_dir():
+        raise error(f"{path}: is a folder, not {what} (JSON)")
+    try:
+        return json.loads(path.read_text(encoding="utf-8-sig"))
+    except FileNotFoundError:
+        raise error(f"{path}: no such file ({what})") from None
+    except UnicodeDecodeError as exc:
+        raise error(f"{path}: not UTF-8 text (byte {exc.start})") from None
+    except json.JSONDecodeError as exc:
+        raise error(f"{path}: not valid JSON ({exc})") from None
 
 
 class JsonFile:

@@ -8,13 +8,12 @@ The keys of a parameter file: ``kp`` (N·m/rad), ``kd`` (N·m·s/rad), ``ki`` (N
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 
 from posture_id.errors import ParameterError
-from posture_id.fileio import JsonFile
+from posture_id.fileio import JsonFile, read_json
 
 __all__ = ["IcParameters", "MODEL_NAME", "default_ic_parameters"]
 
@@ -104,17 +103,7 @@ class IcParameters(JsonFile):
     @classmethod
     def from_json(cls, path: str | Path) -> IcParameters:
         """Read and validate an IC parameter file."""
-        path = Path(path)
-        if path.is_dir():
-            raise ParameterError(f"{path}: is a folder, expected an IC parameter file (JSON)")
-        try:
-            data = json.loads(path.read_text(encoding="utf-8-sig"))
-        except FileNotFoundError:
-            raise ParameterError(f"{path}: no such parameter file") from None
-        except UnicodeDecodeError as exc:
-            raise ParameterError(f"{path}: not UTF-8 text (byte {exc.start})") from None
-        except json.JSONDecodeError as exc:
-            raise ParameterError(f"{path}: not valid JSON ({exc})") from None
+        data = read_json(path, "an IC parameter file", ParameterError)
         return cls.from_dict(data, str(path))
 
     def summary(self) -> str:

@@ -34,7 +34,6 @@ and its human-likeness.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.errors import PostureIdError
-from posture_id.fileio import JsonFile, Result
+from posture_id.fileio import JsonFile, Result, read_json
 from posture_id.frf.bands import pseudo_impulse_response
 
 __all__ = ["Norm", "NormTest", "build_norm", "against_norm", "FrfSet", "shrunk_covariance"]
@@ -187,15 +186,7 @@ class Norm(JsonFile):
         """A norm file: one ``build_norm`` wrote, or summary statistics as labs publish
         them (``frequencies_hz``, ``mean_re_im``, ``covariance`` or
         ``inverse_covariance``, optional ``weights`` and ``channels``)."""
-        path = Path(path)
-        if path.is_dir():
-            raise PostureIdError(f"{path}: is a folder, not a norm file (JSON)")
-        try:
-            data = json.loads(path.read_text(encoding="utf-8-sig"))
-        except FileNotFoundError:
-            raise PostureIdError(f"{path}: no such norm file") from None
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise PostureIdError(f"{path}: not valid JSON ({exc})") from None
+        data = read_json(path, "a norm file")
         if not isinstance(data, dict):
             raise PostureIdError(f"{path}: a norm is a JSON object")
         try:

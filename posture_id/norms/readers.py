@@ -6,13 +6,13 @@
 from __future__ import annotations
 
 import csv
-import json
 import re
 from pathlib import Path
 
 import numpy as np
 
 from posture_id.errors import PostureIdError
+from posture_id.fileio import read_json
 from posture_id.norms.norm import FrfSet
 
 __all__ = ["read_frfs", "frf_from_json"]
@@ -21,14 +21,7 @@ __all__ = ["read_frfs", "frf_from_json"]
 def frf_from_json(path: Path, channels: tuple[str, ...] | None = None
                   ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], dict | None]:
     """(frequencies (F,), H (F, M), channels, its lab bands or None) of one FRF JSON."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8-sig"))
-    except FileNotFoundError:
-        raise PostureIdError(f"{path}: no such FRF file") from None
-    except IsADirectoryError:
-        raise PostureIdError(f"{path}: is a folder, not an FRF file (JSON)") from None
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise PostureIdError(f"{path}: not valid JSON ({exc})") from None
+    data = read_json(path, "an FRF file")
     if not isinstance(data, dict) or "frequencies_hz" not in data or "channels" not in data:
         raise PostureIdError(f"{path}: not an FRF file (posture-id frf writes "
                              "frequencies_hz and channels)")

@@ -37,7 +37,7 @@ def test_the_prediction_band_holds_new_members_at_its_level(members, low, high):
     rng = np.random.default_rng(1)
     held = []
     for k in range(8):
-        norm = build_norm(_population(rng, members), bootstrap=400, level=0.95, seed=k)
+        norm = build_norm(_population(rng, members), bootstrap=200, level=0.95, seed=k)
         new = _population(rng, 100)
         held += [against_norm(norm, F, new.response[i]).inside_prediction_band
                  for i in range(len(new))]

@@ -139,7 +139,7 @@ def test_the_design_predicts_the_fits_own_scatter(winter2):
     against the scatter of the fit over 16 draws of 0.05° sensor noise (the same
     recording otherwise): within a factor 1.6 either way."""
     from posture_id.ic.design import SHOWN, design_ic
-    from posture_id.ic.fit import BOUNDS, _scale
+    from posture_id.ic.fit import BOUNDS, parameter_scale
     from posture_id.ic.subjects import draw_ic_parameters
     from posture_id.simulation.protocols import PrtsProtocol
 
@@ -153,7 +153,7 @@ def test_the_design_predicts_the_fits_own_scatter(winter2):
                                                         stimulus), winter2).parameters, p)
                            for p in SHOWN] for k in range(16)])
     scatter = estimates.std(axis=0, ddof=1)
-    span = np.array([(BOUNDS[p][1] - BOUNDS[p][0]) * _scale(p, plant) for p in SHOWN])
+    span = np.array([(BOUNDS[p][1] - BOUNDS[p][0]) * parameter_scale(p, plant) for p in SHOWN])
     predicted_sd = predicted.widths[0] * span / (2 * 1.6448536269514722)
     ratio = predicted_sd / scatter
     assert np.all((ratio > 1 / 1.6) & (ratio < 1.6)), dict(zip(SHOWN, ratio, strict=True))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+from functools import cache
 from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
@@ -188,16 +189,17 @@ def _cohort_norm(args: argparse.Namespace):
 def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm) -> None:
     """Each recording's FRF at the lab's points, and the norm's columns in summary.csv."""
     from posture_id.frf.bands import BAND_PRESETS, FrequencyBands
+    from posture_id.identify.cohort import subject_urdf
     from posture_id.norms.cohort import cohort_frfs
     from posture_id.trials import prepare_trial
 
     bands = (BAND_PRESETS[args.frf_preset] if args.frf_preset
              else FrequencyBands.from_dict(norm.lab_bands))
-    own = None if args.bodies is None else Path(args.bodies)
+
+    load = cache(load_body)  # one load per URDF, however many recordings share it
 
     def body_of(path: Path):
-        urdf = None if own is None else own / f"{path.stem}.urdf"
-        return load_body(urdf) if urdf is not None and urdf.is_file() else body
+        return load(subject_urdf(path, args.bodies, Path(body.urdf_path)))
 
     def read(path: Path):
         args.recording = path

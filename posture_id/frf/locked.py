@@ -33,7 +33,7 @@ from posture_id.frf.cycles import cycle_average, cycle_spans
 from posture_id.frf.response import check_analysis_options, samples_per_cycle
 from posture_id.trials import PreparedTrial
 
-__all__ = ["LockedOptions", "LockedProjection", "noise_levels", "cycle_spectrum"]
+__all__ = ["LockedOptions", "LockedProjection", "noise_levels", "floored", "cycle_spectrum"]
 
 
 def cycle_spectrum(x: np.ndarray, start: int, period: int, cycles: int,
@@ -47,15 +47,25 @@ def cycle_spectrum(x: np.ndarray, start: int, period: int, cycles: int,
 
 
 def noise_levels(power: np.ndarray, excited: np.ndarray, rows: np.ndarray,
-                 neighbours: int) -> np.ndarray:
+                 neighbours: int, exclude_self: bool = False) -> np.ndarray:
     """(K, ...) noise level (SD of the real and of the imaginary part) at harmonics
     ``rows`` (indices into the P/2 harmonics 1..P/2), from the mean ``power`` (P/2, ...) of
-    the 2·``neighbours`` nearest harmonics the stimulus leaves empty (``excited`` false)."""
+    the 2·``neighbours`` nearest harmonics the stimulus leaves empty (``excited`` false);
+    with ``exclude_self``, an empty harmonic's own power is left out of its estimate."""
     empty = np.flatnonzero(~excited)
-    order = np.argsort(np.abs(empty[None, :] - np.asarray(rows)[:, None]), axis=1,
-                       kind="stable")[:, : 2 * neighbours]
+    distance = np.abs(empty[None, :] - np.asarray(rows)[:, None]).astype(float)
+    if exclude_self:
+        distance[distance == 0] = np.inf
+    order = np.argsort(distance, axis=1, kind="stable")[:, : 2 * neighbours]
     # E|X|² = σ² splits evenly into the real and imaginary parts
     return np.sqrt(power[empty[order]].mean(axis=1) / 2)
+
+
+def floored(noise: np.ndarray) -> np.ndarray:
+    """``noise`` (K, ...) with none below 1 % of its median over the harmonics: a harmonic
+    can never be trusted more than 100× the median one."""
+    floor = 0.01 * np.median(noise, axis=0)
+    return np.maximum(noise, np.where(floor > 0, floor, 1.0))
 
 
 @dataclass(frozen=True)
@@ -157,10 +167,8 @@ class LockedProjection:
             if excited.all():
                 raise PostureIdError(f"{name}: the stimulus excites every harmonic; the "
                                      "noise cannot be told apart (use weighted=False)")
-            noise = noise_levels(power, excited, np.flatnonzero(keep), options.neighbours)
-            # a harmonic can never be trusted more than 100× the median one
-            floor = 0.01 * np.median(noise, axis=0)
-            noise = np.maximum(noise, np.where(floor > 0, floor, 1.0))
+            noise = floored(noise_levels(power, excited, np.flatnonzero(keep),
+                                         options.neighbours))
         return cls(start, p, cycles, drift, excited, np.flatnonzero(keep) + 1,
                    frequencies[keep], noise)
 

@@ -33,8 +33,15 @@ import numpy as np
 
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
-from posture_id.frf.locked import LockedOptions, LockedProjection
-from posture_id.ic.fit import IcFitOptions, IcFitResult, IcModelResponse, com_sway_deg, fit_ic
+from posture_id.frf.locked import LockedOptions, LockedProjection, floored, noise_levels
+from posture_id.ic.fit import (
+    IcFitOptions,
+    IcFitResult,
+    IcModelResponse,
+    com_deg,
+    com_sway_deg,
+    fit_ic,
+)
 from posture_id.ic.response import IcPlant
 from posture_id.trials import PreparedTrial
 
@@ -49,8 +56,29 @@ HELD_OUT_MARGIN = 0.25
 MAX_FREQUENCY_HZ = 2.0
 
 
+def _within(chi2: dict, compared: int, parameters: dict) -> dict:
+    """{"dec", "ic"}: whether the model's χ² is within the 99th percentile of its χ²
+    distribution (``compared`` − its ``parameters`` degrees of freedom)."""
+    return {m: bool(chi2[m] <= _chi2_quantile(compared - parameters[m])) for m in ("dec", "ic")}
+
+
+class _ModelVerdicts:
+    """What both comparisons say of their models' residuals (their fields ``chi2``,
+    ``compared`` and ``parameters``)."""
+
+    @property
+    def within_noise(self) -> dict:
+        return _within(self.chi2, self.compared, self.parameters)
+
+    @property
+    def doubtful(self) -> bool:
+        """Neither model explains the locked sway within its noise: the comparison is
+        between two models that both miss something."""
+        return not any(self.within_noise.values())
+
+
 @dataclass(frozen=True)
-class ModelComparison(Result):
+class ModelComparison(_ModelVerdicts, Result):
     """DEC against IC on one recording.
 
     Attributes:
@@ -81,19 +109,6 @@ class ModelComparison(Result):
     noise: np.ndarray = field(default=None, repr=False)
     seconds: float = 0.0
     name: str = "recording"
-
-    @property
-    def within_noise(self) -> dict:
-        """{"dec", "ic"}: whether the model's χ² is within the 99th percentile of its
-        χ² distribution (n − k degrees of freedom)."""
-        return {m: bool(self.chi2[m] <= _chi2_quantile(self.compared - self.parameters[m]))
-                for m in ("dec", "ic")}
-
-    @property
-    def doubtful(self) -> bool:
-        """Neither model explains the locked sway within its noise: the comparison is
-        between two models that both miss something."""
-        return not any(self.within_noise.values())
 
     def to_dict(self) -> dict:
         from posture_id.provenance import provenance
@@ -144,20 +159,6 @@ class ModelComparison(Result):
             f"{self.name}: preferred {self.preferred.upper()}", path=path, ax=ax)
 
 
-def _noise_everywhere(power: np.ndarray, excited: np.ndarray, rows: np.ndarray,
-                      neighbours: int) -> np.ndarray:
-    """(K,) the noise level at every harmonic ``rows``, from the nearest empty harmonics
-    other than the harmonic itself."""
-    empty = np.flatnonzero(~excited)
-    out = np.empty(len(rows))
-    for i, r in enumerate(rows):
-        others = empty[empty != r]
-        nearest = others[np.argsort(np.abs(others - r), kind="stable")[: 2 * neighbours]]
-        out[i] = math.sqrt(power[nearest].mean() / 2)
-    floor = 0.01 * np.median(out)
-    return np.maximum(out, floor if floor > 0 else 1.0)
-
-
 def _judged(projection: LockedProjection, rows: np.ndarray, noise: np.ndarray,
             recorded: np.ndarray, model_deg: np.ndarray, neighbours: int
             ) -> tuple[float, np.ndarray]:
@@ -188,11 +189,6 @@ def _dec_fit(trial: PreparedTrial, body, locked: LockedOptions, progress=None):
     return fit_recording(trial, body, None, FitOptions(locked=locked), progress=progress)
 
 
-def _dec_com_deg(fit, body) -> np.ndarray:
-    theta = np.asarray(fit.fitted, dtype=float)
-    return np.degrees(body.com_angles(theta)[:, 0] - body.reference_com_angles[0])
-
-
 def _first_cycles(trial: PreparedTrial, cycles: int, projection: LockedProjection
                   ) -> PreparedTrial:
     """The trial cut after ``cycles`` analysed cycles."""
@@ -202,8 +198,7 @@ def _first_cycles(trial: PreparedTrial, cycles: int, projection: LockedProjectio
     rec = trial.recording
     cut = Recording(rec.time[:end], rec.tilt[:end], rec.theta[:end], rec.segments,
                     rec.name, rec.tilt_recorded)
-    stimulus = trial.stimulus
-    return replace(trial, recording=cut, stimulus=stimulus)
+    return replace(trial, recording=cut)
 
 
 @dataclass(frozen=True)
@@ -230,8 +225,8 @@ class _Judged:
         spectrum = projection.all_harmonics(sway[:, None])[:, 0]
         frequencies = np.arange(1, len(spectrum) + 1) * rec.sample_rate_hz / projection.period
         rows = np.flatnonzero(frequencies <= MAX_FREQUENCY_HZ)
-        noise = _noise_everywhere(np.abs(spectrum) ** 2, projection.excited, rows,
-                                  locked.neighbours)
+        noise = floored(noise_levels(np.abs(spectrum) ** 2, projection.excited, rows,
+                                     locked.neighbours, exclude_self=True))
         return cls(projection, rows, frequencies[rows], noise, spectrum[rows], sway)
 
     def judge(self, model_deg: np.ndarray, neighbours: int) -> tuple[float, np.ndarray]:
@@ -249,7 +244,7 @@ def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None =
     projection = judged.projection
     dec = _dec_fit(trial, body, locked, progress)
     ic = fit_ic(trial, body, replace(ic_options, locked=locked))
-    chi2_dec, dec_spectrum = judged.judge(_dec_com_deg(dec, body), locked.neighbours)
+    chi2_dec, dec_spectrum = judged.judge(com_deg(dec.fitted, body), locked.neighbours)
     chi2_ic, ic_spectrum = judged.judge(ic.fitted_deg, locked.neighbours)
     n = 2 * len(judged.rows)
     k = {"dec": 5 * body.n_segments, "ic": len(ic.free)}
@@ -257,7 +252,7 @@ def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None =
     bic = {m: chi2[m] + k[m] * math.log(n) for m in ("dec", "ic")}
     held = (_held_out(trial, body, projection, locked, ic_options, judged.sway)
             if held_out and projection.cycles >= 3 else None)
-    within = {m: bool(chi2[m] <= _chi2_quantile(n - k[m])) for m in ("dec", "ic")}
+    within = _within(chi2, n, k)
     preferred, reason = _verdict(bic, held, projection.cycles, within)
     if _falls(dec.fitted):
         preferred, reason = "undecided", (
@@ -271,7 +266,7 @@ def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None =
 
 
 @dataclass(frozen=True)
-class AmplitudesComparison(Result):
+class AmplitudesComparison(_ModelVerdicts, Result):
     """DEC against IC on the parts of a two-amplitude protocol: DEC with one set of
     parameters for every part, IC with every parameter shared but W (one per part).
 
@@ -292,15 +287,6 @@ class AmplitudesComparison(Result):
     reason: str
     names: tuple[str, ...]
     seconds: float = 0.0
-
-    @property
-    def within_noise(self) -> dict:
-        return {m: bool(self.chi2[m] <= _chi2_quantile(self.compared - self.parameters[m]))
-                for m in ("dec", "ic")}
-
-    @property
-    def doubtful(self) -> bool:
-        return not any(self.within_noise.values())
 
     def to_dict(self) -> dict:
         from posture_id.provenance import provenance
@@ -352,16 +338,14 @@ def compare_amplitudes(trials: list[PreparedTrial], body,
     judged = [_Judged.of(t, body, locked) for t in trials]
     dec = fit_recordings_jointly(trials, body, FitOptions(locked=locked), progress)
     ic = fit_ic_parts(trials, body, replace(ic_options, locked=locked))
-    reference = body.reference_com_angles[0]
     chi2 = {"dec": 0.0, "ic": 0.0}
     for part, theta, ic_deg in zip(judged, dec.fitted, ic.fitted_deg, strict=True):
-        dec_deg = np.degrees(body.com_angles(theta)[:, 0] - reference)
-        chi2["dec"] += part.judge(dec_deg, locked.neighbours)[0]
+        chi2["dec"] += part.judge(com_deg(theta, body), locked.neighbours)[0]
         chi2["ic"] += part.judge(ic_deg, locked.neighbours)[0]
     n = sum(2 * len(p.rows) for p in judged)
     k = {"dec": 5 * body.n_segments, "ic": len(ic_options.free) + len(trials) - 1}
     bic = {m: chi2[m] + k[m] * math.log(n) for m in ("dec", "ic")}
-    within = {m: bool(chi2[m] <= _chi2_quantile(n - k[m])) for m in ("dec", "ic")}
+    within = _within(chi2, n, k)
     preferred, reason = _verdict(bic, None, None, within)
     if any(_falls(theta) for theta in dec.fitted):
         preferred, reason = "undecided", (
@@ -385,7 +369,7 @@ def _held_out(trial: PreparedTrial, body, projection: LockedProjection,
     rec = trial.recording
     options = SimulationOptions(sample_rate_hz=rec.sample_rate_hz)
     dec_sway = simulate(body, dec.parameters, trial.stimulus, options).theta[: len(rec.time)]
-    dec_com = np.degrees(body.com_angles(dec_sway)[:, 0] - body.reference_com_angles[0])
+    dec_com = com_deg(dec_sway, body)
     ic_com = np.degrees(IcModelResponse(rec.tilt, rec.sample_rate_hz, IcPlant.of(body))
                         .sway(ic.parameters))
     last = slice(projection.start + (c - 1) * projection.period,

@@ -31,7 +31,7 @@ import numpy as np
 
 from posture_id.fileio import Result
 from posture_id.frf.locked import LockedOptions, LockedProjection
-from posture_id.ic.fit import BOUNDS, IcFitOptions, IcModelResponse, _scale
+from posture_id.ic.fit import BOUNDS, IcFitOptions, IcModelResponse, parameter_scale
 from posture_id.ic.response import PARAMETER_ORDER, IcPlant
 from posture_id.ic.subjects import draw_ic_parameters
 from posture_id.progress import Progress, report
@@ -123,7 +123,7 @@ class IcDesignResult(Result):
         return write_design_folder(out, self, ranked, ranked[0] if ranked else None)
 
 
-def _recording_information(body, plant: IcPlant, params, profile, cycles: int,
+def _recording_information(body, plant: IcPlant, params, profile,
                            free: tuple[str, ...], sensor_deg: float,
                            locked_share: float | None, seed: int,
                            locked: LockedOptions) -> np.ndarray:
@@ -141,7 +141,7 @@ def _recording_information(body, plant: IcPlant, params, profile, cycles: int,
     model = IcModelResponse(tilt, _SAMPLE_RATE_HZ, plant)
     clean, dy = model.sway(params, gradient=True)
     columns = [PARAMETER_ORDER.index(f) for f in free]
-    scales = np.array([_scale(f, plant) for f in free])
+    scales = np.array([parameter_scale(f, plant) for f in free])
     jac = projection.spectrum(np.degrees(dy[columns]).T * scales[None, :])  # (K, P)
     p = projection.period
     variance = np.full(len(projection.harmonics), sensor_deg ** 2 / (2 * p * projection.cycles))
@@ -184,7 +184,7 @@ def design_ic(body, protocols: list[Protocol], sensor_noise_deg: float = 0.05,
             information = np.zeros((len(free), len(free)))
             for recording in protocol.recordings:
                 information += recording.repetitions * _recording_information(
-                    body, plant, params, recording.profile(), recording.cycles, free,
+                    body, plant, params, recording.profile(), free,
                     sensor_noise_deg, locked_share, seed + d, options.locked)
             covariance = np.linalg.pinv(information)
             se = np.sqrt(np.clip(np.diag(covariance), 0, None))[shown]

@@ -87,10 +87,16 @@ class IcFitOptions:
         return tuple(n for n in PARAMETER_ORDER if n in names)
 
 
-def com_sway_deg(trial: PreparedTrial, body) -> np.ndarray:
-    """(S,) degrees: the body COM sway α_BS of a trial, from its reference posture."""
-    theta = trial.recording.theta
+def com_deg(theta: np.ndarray, body) -> np.ndarray:
+    """(S,) degrees: the body COM sway α_BS of segment angles ``theta`` (S, N) rad, from
+    the body's reference posture."""
+    theta = np.asarray(theta, dtype=float)
     return np.degrees(body.com_angles(theta)[:, 0] - body.reference_com_angles[0])
+
+
+def com_sway_deg(trial: PreparedTrial, body) -> np.ndarray:
+    """(S,) degrees: the body COM sway α_BS of a trial (:func:`com_deg`)."""
+    return com_deg(trial.recording.theta, body)
 
 
 class IcModelResponse:
@@ -206,12 +212,6 @@ class IcFitResult(Result):
                     "recording; the intervals give the precision")
         return "trust: good"
 
-    def relative_width(self, name: str) -> float:
-        """Half the interval's width over the value (∞ for a value of 0)."""
-        low, high = self.intervals[name]
-        value = getattr(self.parameters, name)
-        return (high - low) / 2 / abs(value) if value else math.inf
-
     def to_dict(self) -> dict:
         from posture_id.provenance import provenance
 
@@ -278,13 +278,14 @@ def interval_multiplier(name: str, level: float) -> tuple[float, bool]:
     return float(np.interp(level, calibration["levels"], quantiles)), True
 
 
-def _scale(name: str, plant: IcPlant) -> float:
+def parameter_scale(name: str, plant: IcPlant) -> float:
+    """The unit a parameter is searched in: m·g·h for the gains, 1 for the rest."""
     return plant.mgh if name in _PER_MGH else 1.0
 
 
 def _to_params(x: np.ndarray, free: tuple[str, ...], plant: IcPlant,
                fixed: IcParameters) -> IcParameters:
-    return fixed.replace(**{n: float(v) * _scale(n, plant) for n, v in zip(free, x,
+    return fixed.replace(**{n: float(v) * parameter_scale(n, plant) for n, v in zip(free, x,
                                                                             strict=True)})
 
 
@@ -344,7 +345,7 @@ def _search(parts: list[_Part], free: tuple[str, ...], plant: IcPlant,
     w_index = [free.index("w")] + list(range(len(free), len(names)))
     columns = [PARAMETER_ORDER.index(n) for n in free]
     w_column = PARAMETER_ORDER.index("w")
-    scales = np.array([_scale(n, plant) for n in free])
+    scales = np.array([parameter_scale(n, plant) for n in free])
     fixed = IcParameters(kp=plant.mgh, kd=0.3 * plant.mgh, delay_s=0.15, w=0.5)
     target = np.concatenate([p.target for p in parts])
 
@@ -429,7 +430,7 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> I
         cov = np.linalg.pinv(jac.T @ jac) * scale2
     except np.linalg.LinAlgError:
         cov = np.full((len(free), len(free)), np.inf)
-    scales = np.array([_scale(n, plant) for n in free])
+    scales = np.array([parameter_scale(n, plant) for n in free])
     standard_errors = np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
     multipliers = [interval_multiplier(n, options.level) for n in free]
     half = np.array([m for m, _ in multipliers]) * standard_errors
@@ -447,7 +448,7 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> I
     tilt_deg = np.degrees(trial.recording.tilt)
     u = projection.spectrum(tilt_deg[:, None])[:, 0]
     model_frf = closed_loop(params, plant, 2j * np.pi * projection.frequencies_hz)
-    coherence = _coherence(projection, tilt_deg, sway)
+    coherence = _coherence(projection, sway)
     return IcFitResult(params, free, intervals, options.level, chi2, dof,
                        len(projection.harmonics), on_bound, True,
                        clock.perf_counter() - started, explained, fitted, sway,
@@ -493,8 +494,7 @@ def fit_ic_parts(trials: list[PreparedTrial], body,
     return IcPartsFit(found.params, float(2 * found.fit.cost), fitted)
 
 
-def _coherence(projection: LockedProjection, tilt_deg: np.ndarray,
-               sway_deg: np.ndarray) -> np.ndarray:
+def _coherence(projection: LockedProjection, sway_deg: np.ndarray) -> np.ndarray:
     """(K,) the share of the sway's power at each compared harmonic that is locked to the
     stimulus (its locked power over locked plus noise power; 1 without noise)."""
     locked = np.abs(projection.spectrum(sway_deg[:, None])[:, 0]) ** 2

@@ -184,6 +184,13 @@ def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | N
     return {**result, "cohort_options": cohort_options(identifier, stimulus, columns)}
 
 
+def subject_urdf(recording: Path, bodies: Path | None, default: Path) -> Path:
+    """A recording's subject's URDF: ``bodies``/<recording stem>.urdf when there is one,
+    ``default`` otherwise."""
+    own = None if bodies is None else Path(bodies) / f"{recording.stem}.urdf"
+    return own if own is not None and own.is_file() else default
+
+
 def subjects_without_a_body(recordings: list[Path], bodies: str | Path) -> list[Path]:
     """The recordings whose subject has no ``<recording stem>.urdf`` in ``bodies``; a
     folder of bodies that holds none of the recordings' is refused (the names do not
@@ -218,8 +225,7 @@ class SubjectIdentifiers:
 
     def urdf_of(self, recording: Path) -> Path:
         """The URDF of a recording's subject."""
-        own = None if self.bodies is None else self.bodies / f"{recording.stem}.urdf"
-        return own if own is not None and own.is_file() else Path(self.default.body.urdf_path)
+        return subject_urdf(recording, self.bodies, Path(self.default.body.urdf_path))
 
     def __call__(self, recording: Path) -> Identifier:
         urdf = self.urdf_of(recording)

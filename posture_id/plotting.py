@@ -17,7 +17,7 @@ from posture_id.fileio import atomic_write
 
 __all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit", "plot_locked_sway",
            "plot_coverage", "plot_reliability", "plot_identifiability", "plot_intervals",
-           "plot_score_grid"]
+           "plot_score_grid", "plot_marker_angles"]
 
 
 def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
@@ -719,6 +719,46 @@ def plot_parameter_differences(result, path=None, ax=None):
     a.axvline(0, color="k", lw=0.6)
     a.set_yticks(range(len(rows)), [r["parameter"] for r in rows], fontsize=7)
     a.set_xlabel(f"{result.names[0]} − {result.names[1]} (% of {result.names[1]}'s mean)")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_marker_angles(angles, path=None, ax=None):
+    """A motion-capture trial's marker route checked by eye: the raw traces of every point
+    used (forward and vertical coordinates about their means, mm; gaps filled shaded)
+    beside the angles derived from them (degrees).
+
+    Args:
+        angles: a :class:`~posture_id.motion_capture.angles.MarkerAngles`.
+    """
+    fig, axes = _axes(ax, 3, 1, (10, 8), sharex=True)
+    time = angles.time
+    forward = angles.mapping.axes.forward_vector
+    vertical = angles.mapping.axes.vertical_vector
+    for name, track in angles.points.items():
+        axes[0, 0].plot(time, 1e3 * (track @ forward - np.mean(track @ forward)), lw=0.7,
+                        label=name)
+        axes[1, 0].plot(time, 1e3 * (track @ vertical - np.mean(track @ vertical)), lw=0.7,
+                        label=name)
+    for gap in angles.gaps:
+        for a in axes[:2, 0]:
+            a.axvspan(time[gap.start], time[min(gap.stop, len(time) - 1)], color="C3",
+                      alpha=0.2)
+    axes[0, 0].set_ylabel(f"forward ({angles.mapping.axes.forward}) about mean (mm)")
+    axes[1, 0].set_ylabel(f"vertical ({angles.mapping.axes.vertical}) about mean (mm)")
+    axes[0, 0].legend(fontsize=7, ncol=4, loc="upper right")
+    for k, name in enumerate(angles.mapping.segment_labels):
+        axes[2, 0].plot(time, np.degrees(angles.theta[:, k]), lw=0.9, label=name)
+    if angles.tilt is not None:
+        axes[2, 0].plot(time, np.degrees(angles.tilt), color="0.3", lw=0.9, label="tilt")
+    axes[2, 0].set_ylabel("derived angle (°)")
+    axes[2, 0].set_xlabel("time (s)")
+    axes[2, 0].legend(fontsize=7, ncol=4, loc="upper right")
+    for a in axes[:, 0]:
+        a.grid(alpha=0.3)
+    fig.suptitle(f"{angles.trial.path.name}: markers (shaded: gaps filled) and the angles "
+                 "derived from them")
     fig.tight_layout()
     _save(fig, path)
     return fig

@@ -11,7 +11,7 @@ from typing import Any
 from posture_id._version import __version__
 from posture_id.fileio import jsonable
 
-__all__ = ["provenance", "body_identity", "jsonable"]
+__all__ = ["provenance", "body_identity", "jsonable", "recording_identity"]
 
 
 def provenance(options: Any = None, body: Any = None, **extra: Any) -> dict:
@@ -29,3 +29,11 @@ def body_identity(body: Any) -> dict:
     """The body's name, URDF path, SHA-256 and segment and joint names."""
     return {"name": body.name, "urdf": str(body.urdf_path), "sha256": body.sha256,
             "segments": list(body.segment_names), "joints": list(body.joint_names)}
+
+
+def recording_identity(trial: Any) -> dict:
+    """``{"recording": name}`` of a trial or recording, with ``"recording_source"`` (the
+    markers, axes and channels its angles came from) when they were derived from a
+    motion-capture file."""
+    source = getattr(getattr(trial, "recording", trial), "source", None)
+    return {"recording": trial.name, **({"recording_source": source} if source else {})}

@@ -11,7 +11,7 @@ import enum
 import io
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -94,6 +94,8 @@ class Recording:
         tilt_recorded: the tilt comes from the file (or the simulation); False when the
             file had no tilt column and the named stimulus filled it in (its onset then
             rests on the lab's word alone).
+        source: how the angles were derived when not read from columns (a motion-capture
+            trial's markers, axes and channels: JSON-ready), or None.
 
     Raises:
         RecordingError: shapes that disagree, fewer than 2 samples, a time column that
@@ -106,6 +108,7 @@ class Recording:
     segments: tuple[str, ...]
     name: str = "recording"
     tilt_recorded: bool = True
+    source: dict | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         time = np.asarray(self.time, dtype=float)

@@ -20,6 +20,7 @@ from posture_id.cli.exit_status import answered
 from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
 from posture_id.dec.parameters import DecParameters
 from posture_id.errors import PostureIdError
+from posture_id.motion_capture.mapping import AXES
 from posture_id.simulation.batch import simulate
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorNoise
 from posture_id.simulation.options import SimulationOptions
@@ -71,9 +72,70 @@ def add_parser(sub) -> None:
     add_motor_noise_arguments(sim, "this many degrees")
     sim.add_argument("--seed", type=non_negative_int, default=0,
                      help="seed of the sensor and motor noise (default %(default)d)")
-    sim.add_argument("--out", type=Path, required=True, help="recording CSV to write")
+    sim.add_argument("--out", type=Path, required=True,
+                     help="recording to write: CSV, or a motion-capture trial (NAME.c3d: "
+                          "markers at the body's joints, platform markers, an analog tilt "
+                          "channel)")
     sim.add_argument("--plot", type=Path, help="plot of tilt and sway to write (PNG)")
+    add_c3d_writing_arguments(sim)
     sim.set_defaults(func=run)
+
+
+def add_c3d_writing_arguments(parser: argparse.ArgumentParser) -> None:
+    """The flags of a C3D trial written by ``simulate --out NAME.c3d``."""
+    group = parser.add_argument_group("a C3D trial (--out NAME.c3d)")
+    group.add_argument("--c3d-forward-axis", choices=AXES[:2] + AXES[3:5],
+                       help="the axis the subject faces in the file (default x; a negative "
+                            "one as --c3d-forward-axis=-y)")
+    group.add_argument("--c3d-unit", choices=("mm", "m"), help="POINT:UNITS (default mm)")
+    group.add_argument("--frame-rate-hz", type=positive_float,
+                       help="marker frames per second (default 100)")
+    group.add_argument("--analog-per-frame", type=non_negative_int,
+                       help="analog samples per frame of the tilt channel (default 10; 0: "
+                            "no analog channels)")
+    group.add_argument("--marker-noise-mm", type=non_negative_float,
+                       help="white noise on every marker coordinate, mm (SD; default 0)")
+    group.add_argument("--marker-gap", nargs=3, action="append",
+                       metavar=("MARKER", "START_S", "DURATION_S"),
+                       help="frames where MARKER is not seen (may repeat)")
+    group.add_argument("--subject-height-m", type=positive_float,
+                       help="the subject's height in the file's metadata, m")
+    group.add_argument("--subject-mass-kg", type=positive_float,
+                       help="the subject's mass in the file's metadata, kg")
+
+
+_C3D_FLAGS = ("c3d_forward_axis", "c3d_unit", "frame_rate_hz", "analog_per_frame",
+              "marker_noise_mm", "marker_gap", "subject_height_m", "subject_mass_kg")
+
+
+def _write_recording(args: argparse.Namespace, recording, body) -> None:
+    """``--out``: CSV, or a C3D trial with the C3D flags."""
+    from posture_id.motion_capture import is_c3d
+
+    given = [f"--{f.replace('_', '-')}" for f in _C3D_FLAGS if getattr(args, f) is not None]
+    if not is_c3d(args.out):
+        if given:
+            raise PostureIdError(f"{', '.join(given)} write a C3D trial: give --out NAME.c3d")
+        recording.to_csv(args.out)
+        return
+    from posture_id.motion_capture import C3dWriteOptions, LabAxes, write_c3d
+
+    gaps = []
+    for marker, start, duration in args.marker_gap or ():
+        try:
+            gaps.append((marker, float(start), float(duration)))
+        except ValueError:
+            raise PostureIdError(f"--marker-gap {marker} {start} {duration}: START_S and "
+                                 "DURATION_S must be numbers of seconds") from None
+    defaults = C3dWriteOptions()
+    options = C3dWriteOptions(
+        axes=LabAxes(args.c3d_forward_axis or "x"), unit=args.c3d_unit or defaults.unit,
+        rate_hz=args.frame_rate_hz or defaults.rate_hz,
+        marker_noise_mm=args.marker_noise_mm or 0.0, gaps=tuple(gaps),
+        analog_per_frame=(defaults.analog_per_frame if args.analog_per_frame is None
+                          else args.analog_per_frame),
+        height_m=args.subject_height_m, mass_kg=args.subject_mass_kg, seed=args.seed)
+    write_c3d(args.out, recording, tuple(s.length for s in body.segments), options)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -92,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
     recording = result.to_recording()
     if args.noise_deg > 0:
         recording = recording.with_sensor_noise(args.noise_deg, args.seed)
-    recording.to_csv(args.out)
+    _write_recording(args, recording, body)
     say(f"wrote {args.out} ({len(result.time)} samples at {options.sample_rate_hz:g} Hz)")
     if args.plot:
         result.plot(args.plot)
@@ -115,7 +177,7 @@ def _simulate_ic(args: argparse.Namespace, body, stimulus, options) -> int:
                             args.motor_cutoff_hz, args.seed)
     if args.noise_deg > 0:
         recording = recording.with_sensor_noise(args.noise_deg, args.seed)
-    recording.to_csv(args.out)
+    _write_recording(args, recording, body)
     say(f"wrote {args.out} ({len(recording.time)} samples at {options.sample_rate_hz:g} Hz; "
         f"{params.summary()})")
     if args.plot:

@@ -13,7 +13,9 @@ from posture_id.cli.arguments import (
     positive_float,
     positive_int,
 )
+from posture_id.cli.markers import add_marker_arguments, mapping_from_args, write_marker_plot
 from posture_id.errors import PostureIdError
+from posture_id.motion_capture.mapping import MarkerMapping
 from posture_id.recording import AngleUnit, Recording, RecordingColumns
 from posture_id.simulation.protocols import Protocol, read_protocol
 from posture_id.simulation.stimulus import (
@@ -23,6 +25,7 @@ from posture_id.simulation.stimulus import (
     prts,
     tilt_from_csv,
 )
+from posture_id.trials.reading import RecordingLayout, read_recording
 
 __all__ = ["add_stimulus_arguments", "add_lab_stimulus_arguments", "prts_arguments",
            "protocol_profile",
@@ -131,10 +134,23 @@ def add_column_arguments(parser: argparse.ArgumentParser) -> None:
                        help="unit of the tilt and angle columns (default %(default)s)")
     group.add_argument("--sample-rate-hz", type=positive_float,
                        help="the true sampling rate: overrides a wrong time column")
+    add_marker_arguments(parser)
 
 
-def columns_from_args(args: argparse.Namespace) -> RecordingColumns | None:
-    """The columns the flags name, or None for the standard header."""
+def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
+    """How the flags say the file is read: a lab's columns, a C3D's marker mapping, or
+    None for the standard header."""
+    mapping = mapping_from_args(args)
+    if mapping is not None:
+        columns = [f for f, given in (("--angle-columns", getattr(args, "angle_columns", None)),
+                                      ("--units", getattr(args, "units", "deg") != "deg"),
+                                      ("--sample-rate-hz",
+                                       getattr(args, "sample_rate_hz", None) is not None))
+                   if given]
+        if columns:
+            raise PostureIdError(f"{', '.join(columns)} read a CSV file's columns, and the "
+                                 "marker flags a C3D trial: give the ones for the file")
+        return mapping
     if not getattr(args, "angle_columns", None):
         if getattr(args, "sample_rate_hz", None) is not None or \
                 getattr(args, "units", "deg") != "deg":
@@ -155,7 +171,9 @@ def recording_and_stimulus(args: argparse.Namespace, body) -> tuple[Recording,
     """The recording ``args.recording`` for ``body`` (None: any angle columns) and the
     stimulus the flags name (its tilt fills in a recording without a tilt column)."""
     stimulus = stimulus_from_args(args, default=None)
-    recording = Recording.read(args.recording, None if body is None else body.segment_names,
-                               None if stimulus is None else stimulus.angle,
-                               columns_from_args(args))
+    layout = columns_from_args(args)
+    recording = read_recording(args.recording, None if body is None else body.segment_names,
+                               None if stimulus is None else stimulus.angle, layout)
+    if isinstance(layout, MarkerMapping) and getattr(args, "plot", None):
+        write_marker_plot(Path(args.recording), layout, Path(args.plot))
     return recording, stimulus

@@ -61,7 +61,7 @@ from posture_id.fitting.unknowns import (
 )
 from posture_id.frf.locked import LockedProjection
 from posture_id.progress import Progress, report
-from posture_id.provenance import provenance
+from posture_id.provenance import provenance, recording_identity
 from posture_id.trials import PreparedTrial
 
 __all__ = ["fit_recording", "FitRun"]
@@ -226,7 +226,7 @@ class FitRun:
             time=self.trial.recording.time, recorded=self.measured,
             fitted=self.problem.simulate(best.q, self.u), segments=body.segment_names,
             joints=body.joint_names,
-            provenance=provenance(self.options, body, recording=self.trial.name),
+            provenance=provenance(self.options, body, **recording_identity(self.trial)),
             residual_sd=residual_sd, noise_floor_deg=self.options.noise_floor_deg,
             time_offset_s=self.trial.time_offset_s, trial=self.trial, defaults=defaults,
             on_bounds=self._on_bounds(best.q, params),

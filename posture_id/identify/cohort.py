@@ -13,8 +13,8 @@ recording that cannot be identified (a bad file) gets its one-line reason in the
 the others go on.
 
 With a scheduler address the recordings are sent to a running Dask distributed cluster
-as tasks that carry the CSV text and the body's URDF text (the workers need not see the
-files); results come back and are written here, so the folder is the same as a local
+as tasks that carry the recording file's bytes and the body's URDF text (the workers need
+not see the files); results come back and are written here, so the folder is the same as a local
 run's.
 """
 
@@ -39,8 +39,8 @@ from posture_id.identify.core import Identifier, Method
 from posture_id.learning.identifier import DEFAULT_LEVEL
 from posture_id.plotting import plot_cohort
 from posture_id.progress import Progress, report
-from posture_id.recording import Recording, RecordingColumns
 from posture_id.simulation.stimulus import TiltProfile
+from posture_id.trials.reading import RECORDING_SUFFIXES, RecordingLayout, read_recording
 
 __all__ = ["CohortResult", "SubjectIdentifiers", "find_recordings", "identify_cohort",
            "cohort_options"]
@@ -50,7 +50,7 @@ _FINISHED = ("done", "skipped", "redone")
 
 
 def cohort_options(identifier: Identifier, stimulus: TiltProfile | None,
-                   columns: RecordingColumns | None) -> dict:
+                   columns: RecordingLayout) -> dict:
     """What a cohort's result depends on besides the recording (JSON-ready): the method,
     the network's weights, the least-squares options, the level, the stimulus, the
     columns and the body."""
@@ -83,14 +83,16 @@ def _differences(old: dict, new: dict) -> tuple[str, ...]:
 
 
 def find_recordings(pattern: str | Path) -> list[Path]:
-    """The CSV files of a folder, or those a glob pattern matches, sorted."""
+    """The recordings (CSV and C3D files) of a folder, or the files a glob pattern
+    matches, sorted."""
     path = Path(pattern)
     if path.is_dir():
-        found = sorted(path.glob("*.csv"))
+        found = sorted(p for p in path.iterdir()
+                       if p.is_file() and p.suffix.lower() in RECORDING_SUFFIXES)
     else:
         found = sorted(Path(p) for p in glob.glob(str(pattern)))
     if not found:
-        raise PostureIdError(f"{pattern}: no recording (CSV) found")
+        raise PostureIdError(f"{pattern}: no recording (CSV or C3D) found")
     return found
 
 
@@ -150,18 +152,18 @@ class CohortResult(Result):
                    "their intervals give the precision)" if imprecise else ""))
 
 
-def _identify_text(recording: tuple[str, str, str, str], method: str,
+def _identify_text(recording: tuple[str, bytes, str, str], method: str,
                    model: str | None, stimulus: TiltProfile | None = None,
                    fit_options: FitOptions | None = None, level: float = DEFAULT_LEVEL,
-                   columns: RecordingColumns | None = None) -> dict:
-    """One recording (its name and CSV text, its body's URDF text and file name) on a
+                   columns: RecordingLayout = None) -> dict:
+    """One recording (its name and file's bytes, its body's URDF text and file name) on a
     cluster worker: the result as a dict, or the error."""
-    name, csv_text, urdf_text, urdf_name = recording
+    name, content, urdf_text, urdf_name = recording
     with tempfile.TemporaryDirectory() as tmp:
         urdf = Path(tmp) / urdf_name
         urdf.write_text(urdf_text)
         rec_path = Path(tmp) / name
-        rec_path.write_text(csv_text)
+        rec_path.write_bytes(content)
         try:
             identifier = Identifier(load_body(urdf), Method(method), model, fit_options, level)
         except PostureIdError as exc:
@@ -170,11 +172,11 @@ def _identify_text(recording: tuple[str, str, str, str], method: str,
 
 
 def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | None = None,
-                   name: str | None = None, columns: RecordingColumns | None = None) -> dict:
+                   name: str | None = None, columns: RecordingLayout = None) -> dict:
     """One recording file through ``identifier``: the result as a dict, or the error;
     ``name``: what messages call it (default the path)."""
     try:
-        recording = Recording.read(path, identifier.body.segment_names,
+        recording = read_recording(path, identifier.body.segment_names,
                                    None if stimulus is None else stimulus.angle, columns)
         if name is not None:
             recording = replace(recording, name=name)
@@ -241,7 +243,7 @@ class SubjectIdentifiers:
 def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identifier,
                     scheduler: str | None = None, progress: Progress | None = None,
                     stimulus: TiltProfile | None = None, model: str | Path | None = None,
-                    columns: RecordingColumns | None = None,
+                    columns: RecordingLayout = None,
                     bodies: str | Path | None = None) -> CohortResult:
     """Identify ``recordings`` into ``out`` (see the module doc) with ``identifier``.
 
@@ -306,11 +308,11 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
 
 def _run_on_cluster(address: str, todo: list[Path], subjects: SubjectIdentifiers, model,
                     record, stimulus: TiltProfile | None = None,
-                    columns: RecordingColumns | None = None) -> None:
-    """The recordings as tasks that carry their CSV text and their body's URDF text."""
+                    columns: RecordingLayout = None) -> None:
+    """The recordings as tasks that carry their files' bytes and their body's URDF text."""
     identifier = subjects.default
     by_name = {path.name: path for path in todo}
-    tasks = [(p.name, p.read_text(), subjects.urdf_of(p).read_text(), subjects.urdf_of(p).name)
+    tasks = [(p.name, p.read_bytes(), subjects.urdf_of(p).read_text(), subjects.urdf_of(p).name)
              for p in todo]
     with DaskExecutor(address) as cluster:
         for (name, *_), result in cluster.unordered(

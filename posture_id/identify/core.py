@@ -52,7 +52,7 @@ from posture_id.learning.config import LearningError
 from posture_id.learning.identifier import DEFAULT_LEVEL
 from posture_id.learning.universal.identifier import UniversalIdentifier
 from posture_id.progress import Progress
-from posture_id.provenance import provenance
+from posture_id.provenance import provenance, recording_identity
 from posture_id.recording import Recording
 from posture_id.simulation.batch import simulate
 from posture_id.simulation.metrics import sway_errors
@@ -196,7 +196,7 @@ class Identifier:
             joints=body.joint_names, cnn=cnn, fit=fit, intervals=intervals,
             notices=tuple(dict.fromkeys(notices)),
             provenance=provenance(options if fit is not None else None, body,
-                                  recording=trial.name, method=method.value),
+                                  **recording_identity(trial), method=method.value),
             verdict=verdict, relaxed_refit=relaxed_refit, **checked,
         )
 

@@ -364,7 +364,9 @@ def recognise_lab_prts(times_s: np.ndarray, tilt_rad: np.ndarray) -> TiltProfile
                     start_state=first_state, sign=negated)
 
     def misfit(p: np.ndarray) -> np.ndarray:
-        return (profile(p).angle(t) - a) / span
+        """The column less the profile ``p[:4]`` and a constant offset ``p[4]`` (rad: a
+        sensor's zero, two platform markers at slightly different heights), per span."""
+        return (profile(p[:4]).angle(t) + p[4] - a) / span
 
     from scipy.optimize import least_squares  # only for a tilt that is not the plain PRTS
 
@@ -388,22 +390,48 @@ def recognise_lab_prts(times_s: np.ndarray, tilt_rad: np.ndarray) -> TiltProfile
     cost = before + after_r2 + 2 * m0 * after_r + m0**2 * count
     k0 = int(candidates[int(np.argmin(cost))])
     onset = float(tau[k0])
-    guess = np.array([onset, start + (onset - t[first]) / state_s, state_s, amplitude])
-    fitted = least_squares(misfit, guess, x_scale=[0.01, 0.05, 0.001, abs(amplitude)],
-                           bounds=([0.0, -np.inf, 0.05, 0.0], [np.inf, np.inf, 1.0, np.inf]),
-                           method="trf")
+    guess = np.array([onset, start + (onset - t[first]) / state_s, state_s, amplitude, 0.0])
+    scales = np.array([0.01, 0.05, 0.001, abs(amplitude), 1e-3 * span])
+    low = np.array([0.0, -np.inf, 0.05, 0.0, -np.inf])
+    high = np.array([np.inf, np.inf, 1.0, np.inf, np.inf])
+
+    def fit(x0: np.ndarray, free: np.ndarray):
+        """Least squares over the parameters ``free`` (bool (5,)), the rest held at x0's."""
+        def full(q: np.ndarray) -> np.ndarray:
+            p = x0.copy()
+            p[free] = q
+            return p
+        done = least_squares(lambda q: misfit(full(q)), x0[free], x_scale=scales[free],
+                             bounds=(low[free], high[free]), method="trf")
+        return full(done.x), float(done.cost)
+
+    every = np.ones(5, dtype=bool)
+    # the lead-in the search found, and the sequence from the recording's start: noise can
+    # hide first states that move little, and the search then takes them for level
+    at_once = np.array([0.0, start - t[first] / state_s, state_s, amplitude, 0.0])
+    fitted, cost = min((fit(x0, every) for x0 in (guess, at_once)), key=lambda f: f[1])
+    if fitted[0] > 0:
+        # a short lead-in and a constant offset can stand in for the first part of a
+        # state: no lead-in is kept unless the noise cannot explain the difference (a
+        # χ² of one parameter at 1 %: 6.6 noise variances, cost being half the sum)
+        without = every.copy()
+        without[0] = False
+        fitted_zero = fit(np.where(np.arange(5) == 0, 0.0, fitted), without)
+        if fitted_zero[1] - cost <= 3.3 * (noise / span) ** 2 + 1e-12:
+            fitted, cost = fitted_zero
     # a lab's state lasts a round number of 0.1 ms (its period is then a whole number of
     # samples at a lab's rates, as cycle averages need): the rest fitted again with it
-    onset_s, first_state, state_s, peak = fitted.x
-    state_s = round(state_s, 4)
-    rounded = least_squares(lambda p: misfit(np.array([p[0], p[1], state_s, p[2]])),
-                            np.array([onset_s, first_state, peak]),
-                            x_scale=[0.01, 0.05, abs(amplitude)],
-                            bounds=([0.0, -np.inf, 0.0], [np.inf, np.inf, np.inf]))
+    fitted[2] = round(fitted[2], 4)
+    free = every.copy()
+    free[2] = False
+    if fitted[0] == 0.0:
+        free[0] = False
+    rounded, _ = fit(fitted, free)
+    onset_s, first_state, state_s, peak, _ = rounded
+    residual = misfit(rounded)
     # the right sequence leaves the column's own noise; a wrong one leaves more
-    if np.sqrt(np.mean(rounded.fun**2)) > _MAX_MISFIT + 1.25 * noise / span:
+    if np.sqrt(np.mean(residual**2)) > _MAX_MISFIT + 1.25 * noise / span:
         return None
-    onset_s, first_state, peak = rounded.x
     return profile(np.array([onset_s, first_state, state_s, peak]), snap=True)
 
 

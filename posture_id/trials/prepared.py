@@ -196,6 +196,11 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
     # the model runs exactly as long as the recording: a stimulus that ends before it
     # (a level tail) is held, one that ends after it (a shorter recording) is cut
     stimulus = stimulus.spanning(resampled.duration_s)
+    if stimulus.period_s is not None:
+        # a named or recognised PRTS: the tilt is its exact profile at the samples (a
+        # tilt column's noise, a sensor's or two platform markers', stays out of the
+        # stimulus-locked sway and the network's inputs)
+        resampled = replace(resampled, tilt=stimulus.angle(resampled.time))
     return PreparedTrial(resampled, stimulus, tuple(notices), original, rate_hint=hint)
 
 

@@ -1,0 +1,115 @@
+"""The flags that read a motion-capture trial (C3D): which markers make each segment, the
+platform's tilt, the lab's axes, and how long a gap may be filled."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.cli.arguments import non_negative_float, say
+from posture_id.errors import PostureIdError
+from posture_id.motion_capture.mapping import (
+    AXES,
+    DEFAULT_MAX_GAP_S,
+    LabAxes,
+    MarkerMapping,
+    TiltChannel,
+    parse_com_markers,
+    parse_segment_markers,
+    parse_tilt_markers,
+)
+
+__all__ = ["add_marker_arguments", "mapping_from_args", "marker_flags_given",
+           "write_marker_plot"]
+
+#: The marker flags and their defaults (a flag is given when its value differs).
+_MARKER_FLAGS = {"segment_markers": None, "com_markers": None, "tilt_markers": None,
+                 "tilt_channel": None, "tilt_scale": None, "forward_axis": None,
+                 "vertical_axis": "z", "max_gap_s": DEFAULT_MAX_GAP_S}
+
+
+def add_marker_arguments(parser: argparse.ArgumentParser) -> None:
+    """--segment-markers, --com-markers, --tilt-markers, --tilt-channel, --tilt-scale,
+    --forward-axis, --vertical-axis, --max-gap-s."""
+    group = parser.add_argument_group(
+        "a motion-capture trial (C3D)",
+        "the angles from markers: segment angles in space from the vertical, positive "
+        "forward; the tilt positive when the platform's front edge goes down "
+        "(docs/motion_capture.md)")
+    group.add_argument("--segment-markers", nargs="+", metavar="SEGMENT=LOWER,UPPER",
+                       help="each segment's lower and upper point, support upward (e.g. "
+                            "leg=ANK,HIP trunk=HIP,SHO); a point may average markers: "
+                            "LGTR+RGTR")
+    group.add_argument("--com-markers", nargs="+", metavar="POINT",
+                       help="a 1-segment body's COM: the support point, then the weighted "
+                            "points whose mean is the COM (e.g. LANK+RANK LGTR+RGTR:0.6 "
+                            "LSHO+RSHO:0.4)")
+    group.add_argument("--tilt-markers", metavar="BACK,FRONT",
+                       help="the platform's tilt from two markers on it, behind and in front "
+                            "of the ankles (level at the trial's start)")
+    group.add_argument("--tilt-channel", metavar="NAME",
+                       help="the platform's tilt from an analog channel (its angle sensor), "
+                            "resampled to the marker rate")
+    group.add_argument("--tilt-scale", type=float, metavar="DEG_PER_UNIT",
+                       help="--tilt-channel's degrees per unit, positive for the front edge "
+                            "down (default 1: the channel is in degrees)")
+    group.add_argument("--forward-axis", choices=AXES,
+                       help="the file's axis the subject faces (needed for C3D; a negative "
+                            "one as --forward-axis=-y)")
+    group.add_argument("--vertical-axis", choices=AXES, default="z",
+                       help="the file's upward axis (default %(default)s)")
+    group.add_argument("--max-gap-s", type=non_negative_float, default=DEFAULT_MAX_GAP_S,
+                       help="the longest gap of an occluded marker filled (cubic spline), s; "
+                            "a longer one is refused (default %(default)g)")
+
+
+def marker_flags_given(args: argparse.Namespace) -> list[str]:
+    """The marker flags given, spelled as flags."""
+    return [f"--{name.replace('_', '-')}" for name, default in _MARKER_FLAGS.items()
+            if getattr(args, name, default) != default]
+
+
+def mapping_from_args(args: argparse.Namespace) -> MarkerMapping | None:
+    """The mapping the marker flags give, or None when none is given.
+
+    Raises:
+        PostureIdError: both or neither of --segment-markers and --com-markers, both tilt
+            sources, --tilt-scale without --tilt-channel, no --forward-axis.
+    """
+    given = marker_flags_given(args)
+    if not given:
+        return None
+    if args.tilt_markers and args.tilt_channel:
+        raise PostureIdError("--tilt-markers and --tilt-channel are two sources of the "
+                             "platform's tilt: give one")
+    if args.tilt_scale is not None and not args.tilt_channel:
+        raise PostureIdError("--tilt-scale goes with --tilt-channel (an analog channel's "
+                             "degrees per unit)")
+    if not (args.segment_markers or args.com_markers):
+        raise PostureIdError(f"{', '.join(given)} read a C3D trial: name its markers too "
+                             "(--segment-markers SEGMENT=LOWER,UPPER ..., or --com-markers)")
+    if args.forward_axis is None:
+        raise PostureIdError("a C3D trial needs --forward-axis: the file's axis the subject "
+                             f"faces ({', '.join(AXES)}); angles are signed by it")
+    tilt = None
+    if args.tilt_markers:
+        tilt = parse_tilt_markers(args.tilt_markers)
+    elif args.tilt_channel:
+        tilt = TiltChannel(args.tilt_channel,
+                           1.0 if args.tilt_scale is None else args.tilt_scale)
+    return MarkerMapping(
+        axes=LabAxes(args.forward_axis, args.vertical_axis),
+        segments=parse_segment_markers(args.segment_markers or ()),
+        com=parse_com_markers(args.com_markers) if args.com_markers else None,
+        tilt=tilt, max_gap_s=args.max_gap_s)
+
+
+def write_marker_plot(recording_path: Path, mapping: MarkerMapping, plot: Path) -> Path:
+    """The marker check beside ``plot`` (``NAME.markers.png``): raw traces and the angles
+    derived from them."""
+    from posture_id.motion_capture import marker_angles, read_c3d
+
+    beside = plot.with_name(plot.stem + ".markers" + plot.suffix)
+    marker_angles(read_c3d(recording_path), mapping).plot(beside)
+    say(f"wrote {beside}")
+    return beside

@@ -1,0 +1,49 @@
+"""One reader for every recording a user brings: a CSV file (the standard header, or a
+lab's own columns) or a motion-capture trial (C3D: its markers turned into angles)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.errors import RecordingError
+from posture_id.motion_capture import MarkerMapping, is_c3d, marker_angles, read_c3d
+from posture_id.recording import Recording, RecordingColumns
+
+__all__ = ["read_recording", "RecordingLayout", "RECORDING_SUFFIXES"]
+
+#: How a file's contents are read: a lab's columns (CSV), a marker mapping (C3D), or None
+#: (the standard CSV header).
+RecordingLayout = RecordingColumns | MarkerMapping | None
+#: The suffixes a cohort's folder is searched for.
+RECORDING_SUFFIXES = (".csv", ".c3d")
+
+
+def read_recording(path: str | Path, segments: tuple[str, ...] | None = None,
+                   tilt_of: Callable[[np.ndarray], np.ndarray] | None = None,
+                   layout: RecordingLayout = None) -> Recording:
+    """The recording in ``path`` for a body of ``segments`` (link names, in order).
+
+    Args:
+        tilt_of: the named stimulus's tilt (rad) at given times (s): fills in a file
+            without a tilt (no tilt column; no platform markers or channel).
+        layout: a CSV's columns, or a C3D's :class:`MarkerMapping` (required for C3D).
+
+    Raises:
+        RecordingError: naming the file and the problem (a C3D without a marker mapping,
+            a marker mapping for a CSV, and whatever its reader refuses).
+    """
+    if is_c3d(path):
+        if not isinstance(layout, MarkerMapping):
+            raise RecordingError(
+                f"{path}: a C3D file: name the markers of each segment (--segment-markers "
+                "SEGMENT=LOWER,UPPER ...; or --com-markers for a 1-segment body) and the "
+                "axis the subject faces (--forward-axis); docs/motion_capture.md")
+        return marker_angles(read_c3d(path), layout).recording(segments, tilt_of)
+    if isinstance(layout, MarkerMapping):
+        raise RecordingError(f"{path}: the marker flags (--segment-markers, --com-markers, "
+                             "--tilt-markers, --tilt-channel, --forward-axis) read a C3D "
+                             "file (.c3d); this is not one")
+    return Recording.read(path, segments, tilt_of, layout)

@@ -12,12 +12,14 @@ from posture_id.cli.arguments import (
     interval_level,
     non_negative_float,
     non_negative_int,
+    nonzero_float,
     positive_float,
     positive_int,
 )
 
 CHECKED = {positive_int: "≥ 1", positive_float: "> 0", non_negative_int: "≥ 0",
-           non_negative_float: "≥ 0", interval_level: "from 0.5 to 0.99"}
+           non_negative_float: "≥ 0", interval_level: "from 0.5 to 0.99",
+           nonzero_float: "other than 0"}
 #: Values that satisfy what every required option asks for, to reach the flag under test.
 REQUIRED = {"--out": "out.json", "--trials": "3", "--shards": "2", "--norm": "norm.json",
             "--group": "a.json"}
@@ -71,11 +73,12 @@ def test_numeric_flag_takes_only_valid_values(prefix, parser, action, capsys):
     assert action.type in CHECKED or action.choices, action.option_strings
     for value in ("0", "-1", "nan", "word"):
         argv = _argv(prefix, parser, action, value)
-        accepted = (action.type in (non_negative_int, non_negative_float) and value == "0")
+        accepted = ((action.type in (non_negative_int, non_negative_float) and value == "0")
+                    or (action.type is nonzero_float and value == "-1"))  # a sign is a sense
         if accepted:
             args = build_parser().parse_args(argv)
             value = getattr(args, action.dest)
-            assert value == 0 or set(value) == {0}, (argv, value)
+            assert value in (0, -1) or set(value) == {0}, (argv, value)
             continue
         assert main(argv) == 2, argv
         err = capsys.readouterr().err

@@ -73,7 +73,7 @@ def test_cohort_on_a_local_cluster_equals_a_local_run(cohort, tmp_path):
 
 def test_a_pattern_that_matches_nothing(tmp_path, capsys):
     assert main(["identify", str(tmp_path / "*.csv"), "--out", str(tmp_path / "r")]) == 2
-    assert "no recording (CSV) found" in capsys.readouterr().err
+    assert "no recording (CSV or C3D) found" in capsys.readouterr().err
 
 
 def test_a_cohort_of_subjects_with_bodies_of_their_own(tmp_path, capsys):

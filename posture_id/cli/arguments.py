@@ -25,6 +25,7 @@ __all__ = [
     "positive_int",
     "non_negative_int",
     "positive_float",
+    "nonzero_float",
     "non_negative_float",
     "check_output_file",
     "check_output_folder",
@@ -70,6 +71,8 @@ positive_int = _number(int, lambda x: x >= 1, "an integer ≥ 1")
 non_negative_int = _number(int, lambda x: x >= 0, "an integer ≥ 0")
 positive_float = _number(float, lambda x: x > 0, "a number > 0")
 non_negative_float = _number(float, lambda x: x >= 0, "a number ≥ 0")
+#: A scale whose sign is a sense (a sensor's units per degree): any finite number but 0.
+nonzero_float = _number(float, lambda x: x != 0, "a number other than 0")
 #: A platform's command rate, Hz: a motion controller takes 1 Hz to 10 kHz (a higher
 #: rate writes a file of millions of lines per minute, a lower one no tilt).
 command_rate = _number(float, lambda x: 1 <= x <= 10_000, "a rate from 1 to 10000 Hz")

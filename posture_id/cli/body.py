@@ -34,6 +34,9 @@ def add_parser(sub) -> None:
                       help="lump a humanoid shipped by example-robot-data")
     mode.add_argument("--lump", type=Path, metavar="URDF",
                       help="lump a whole-body URDF (floating base, two legs) into a chain")
+    mode.add_argument("--from-trial", type=Path, metavar="C3D",
+                      help="write the Winter body of the subject a motion-capture trial's "
+                           "metadata describe (height and mass)")
     body.add_argument("--mass", type=positive_float, help="write a Winter body: mass, kg")
     body.add_argument("--segments", type=int, default=3, choices=(1, 2, 3),
                       help="written body: 3 shank+thigh+trunk, 2 leg+trunk, 1 whole body")
@@ -53,6 +56,11 @@ def _write(args: argparse.Namespace) -> Path | None:
     """Write the body the flags ask for; its path, or None when only describing."""
     if args.mass is not None and args.height is None:
         raise PostureIdError("--mass goes with --height (a Winter body)")
+    if args.from_trial is not None:
+        from posture_id.cli.markers import trial_subject
+
+        args.height, args.mass = trial_subject(args.from_trial)
+        say(f"{args.from_trial}: the subject is {args.height:.3g} m and {args.mass:.4g} kg")
     writing = args.height is not None or args.default_tip or args.from_robot or args.lump
     lump_only = [f"--{f.replace('_', '-')}" for f in ("ankle_joints", "knee_joints",
                                                       "hip_joints", "srdf", "posture")
@@ -73,7 +81,8 @@ def _write(args: argparse.Namespace) -> Path | None:
         return None
     if args.out is None:
         raise PostureIdError("--out is required to write a body URDF")
-    check_output_file(args.out, "--out", inputs=(args.urdf, args.lump, args.srdf))
+    check_output_file(args.out, "--out", inputs=(args.urdf, args.lump, args.srdf,
+                                                  args.from_trial))
     if args.urdf is not None:
         raise PostureIdError("give either a URDF to describe or flags to write one, not both")
     if args.from_robot:

@@ -9,6 +9,7 @@ from pathlib import Path
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import check_output_file, non_negative_int, positive_int, write_result
 from posture_id.cli.exit_status import answered
+from posture_id.cli.markers import recording_body
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_column_arguments,
@@ -65,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     from posture_id.ic.compare import compare_models
     from posture_id.trials import prepare_trial
 
-    body = load_body(args.body or DEFAULT_URDF)
+    body = recording_body(args, DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)
     recording.check_segments(body.segment_names)
     trial = prepare_trial(recording, stimulus)

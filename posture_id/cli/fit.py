@@ -6,7 +6,7 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 
-from posture_id.bodies.body import DEFAULT_URDF, load_body
+from posture_id.bodies.body import DEFAULT_URDF
 from posture_id.cli.arguments import (
     check_output_file,
     default_of,
@@ -17,6 +17,7 @@ from posture_id.cli.arguments import (
     write_result,
 )
 from posture_id.cli.exit_status import answered
+from posture_id.cli.markers import recording_body
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_column_arguments,
@@ -153,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
     if args.fit_ki:
         raise PostureIdError("--fit-ki goes with --model ic (DEC's Ki is always identified)")
     options = options_from(args)
-    body = load_body(args.body or DEFAULT_URDF)
+    body = recording_body(args, DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)
     init = DecParameters.from_json(args.init, body) if args.init else None
     from posture_id.fitting.least_squares import fit_recording  # CasADi loads here
@@ -184,7 +185,7 @@ def _fit_ic(args: argparse.Namespace) -> int:
                              "stimulus-locked COM sway within MODEL §8's bounds")
     from posture_id.ic import IcFitOptions, fit_ic
 
-    body = load_body(args.body or DEFAULT_URDF)
+    body = recording_body(args, DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)
     recording.check_segments(body.segment_names)
     trial = prepare_trial(recording, stimulus)

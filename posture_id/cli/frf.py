@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from posture_id.bodies.body import load_body
 from posture_id.cli.arguments import (
     check_output_file,
     default_of,
@@ -13,6 +12,7 @@ from posture_id.cli.arguments import (
     positive_float,
     write_result,
 )
+from posture_id.cli.markers import recording_body
 from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     inputs = (args.recording, args.body, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
-    body = load_body(args.body) if args.body else None
+    body = recording_body(args, None)
     recording, stimulus = recording_and_stimulus(args, body)
     options = _options(args)
     result = frequency_response(prepare_trial(recording, stimulus, rate_hz=None), body,

@@ -16,6 +16,7 @@ from posture_id.cli.arguments import (
 )
 from posture_id.cli.exit_status import answered
 from posture_id.cli.fit import add_search_arguments, search_flags_given, search_keywords
+from posture_id.cli.markers import recording_body
 from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
@@ -110,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     # torch and CasADi load here, not when the parser is built: other commands start fast
     from posture_id.identify import Identifier, Method
-    body = load_body(args.body or DEFAULT_URDF)
+    body = recording_body(args, DEFAULT_URDF)
     identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
     recording, stimulus = recording_and_stimulus(args, body)
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:

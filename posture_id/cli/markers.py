@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from posture_id.cli.arguments import non_negative_float, say
+from posture_id.cli.arguments import non_negative_float, nonzero_float, say
 from posture_id.errors import PostureIdError
 from posture_id.motion_capture.mapping import (
     AXES,
@@ -50,7 +50,7 @@ def add_marker_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--tilt-channel", metavar="NAME",
                        help="the platform's tilt from an analog channel (its angle sensor), "
                             "resampled to the marker rate")
-    group.add_argument("--tilt-scale", type=float, metavar="DEG_PER_UNIT",
+    group.add_argument("--tilt-scale", type=nonzero_float, metavar="DEG_PER_UNIT",
                        help="--tilt-channel's degrees per unit, positive for the front edge "
                             "down (default 1: the channel is in degrees)")
     group.add_argument("--forward-axis", choices=AXES,
@@ -113,3 +113,57 @@ def write_marker_plot(recording_path: Path, mapping: MarkerMapping, plot: Path) 
     marker_angles(read_c3d(recording_path), mapping).plot(beside)
     say(f"wrote {beside}")
     return beside
+
+
+def winter_body_file(height_m: float, mass_kg: float, segments: int) -> Path:
+    """The Winter body of ``height_m``, ``mass_kg`` and ``segments`` as a URDF in the cache
+    folder (written once)."""
+    from posture_id.bodies.anthropometry import straight_links, winter_segments
+    from posture_id.bodies.urdf_writer import write_chain_urdf
+    from posture_id.cache import cache_folder
+
+    name = f"winter_{height_m:.3g}m_{mass_kg:.4g}kg_{segments}seg"
+    path = cache_folder("bodies") / f"{name}.urdf"
+    if not path.is_file():
+        write_chain_urdf(path, name, straight_links(winter_segments(height_m, mass_kg,
+                                                                    segments)))
+    return path
+
+
+def trial_subject(path: Path) -> tuple[float, float]:
+    """(height m, mass kg) from a C3D trial's metadata, or a one-line refusal naming the
+    parameters looked for."""
+    from posture_id.motion_capture.c3d_file import (
+        HEIGHT_PARAMETERS,
+        MASS_PARAMETERS,
+        read_c3d,
+    )
+
+    trial = read_c3d(path)
+    if trial.height_m is None or trial.mass_kg is None:
+        looked = ", ".join(f"{g}:{p}" for g, p in HEIGHT_PARAMETERS + MASS_PARAMETERS)
+        raise PostureIdError(f"{path}: the file does not give the subject's height and mass "
+                             f"(looked for {looked}): give --height and --mass")
+    return trial.height_m, trial.mass_kg
+
+
+def recording_body(args: argparse.Namespace, default: Path | None):
+    """The body a command reads ``args.recording`` for: ``--body``; else, for a C3D trial
+    whose metadata give the subject's height and mass, their Winter body with as many
+    segments as the markers name (said on stderr); else ``default`` (None: no body)."""
+    from posture_id.bodies.body import load_body
+    from posture_id.motion_capture import is_c3d, read_c3d
+
+    if args.body is not None:
+        return load_body(args.body)
+    mapping = (mapping_from_args(args)
+               if is_c3d(getattr(args, "recording", "") or "") else None)
+    if mapping is not None and Path(args.recording).is_file():
+        trial = read_c3d(args.recording)
+        if trial.height_m is not None and trial.mass_kg is not None:
+            path = winter_body_file(trial.height_m, trial.mass_kg, mapping.n_segments)
+            say(f"{args.recording}: the subject's body from the file's metadata: Winter's "
+                f"tables for {trial.height_m:.3g} m and {trial.mass_kg:.4g} kg, "
+                f"{mapping.n_segments} segment(s) (--body URDF gives another)")
+            return load_body(path)
+    return None if default is None else load_body(default)

@@ -15,6 +15,7 @@ from posture_id.cli.arguments import (
     write_result,
 )
 from posture_id.cli.exit_status import answered
+from posture_id.cli.markers import recording_body
 from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
@@ -114,7 +115,6 @@ def run_test(args: argparse.Namespace) -> int:
 
 def _recording_frf(args: argparse.Namespace, norm) -> tuple:
     """A recording's FRF at the norm's points, by the labs' convention."""
-    from posture_id.bodies.body import load_body
     from posture_id.frf.analysis import frequency_response
     from posture_id.frf.bands import FrequencyBands
     from posture_id.frf.response import FrfOptions
@@ -123,7 +123,7 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
     if norm.lab_bands is None:
         raise PostureIdError(f"{args.norm}: the norm does not say at which bands its FRFs "
                              "were computed; give the recording's FRF JSON (posture-id frf)")
-    body = load_body(args.body) if args.body else None
+    body = recording_body(args, None)
     recording, stimulus = recording_and_stimulus(args, body)
     options = FrfOptions.lab_convention(FrequencyBands.from_dict(norm.lab_bands))
     frf = frequency_response(prepare_trial(recording, stimulus, rate_hz=None), body, options)

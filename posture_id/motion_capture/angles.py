@@ -31,13 +31,17 @@ from posture_id.motion_capture.mapping import (
 from posture_id.recording import Recording
 
 __all__ = ["MarkerAngles", "marker_angles", "LEVEL_S", "UPRIGHT_LIMIT_DEG",
-           "PLATFORM_HEADING_LIMIT_DEG"]
+           "PLATFORM_HEADING_LIMIT_DEG", "SAGITTAL_SHARE"]
 
 #: s, the start of the trial over which the platform markers' level is taken.
 LEVEL_S = 0.1
 #: A segment leaning further than this from the vertical on average, degrees, is not a
 #: standing body's: the vertical axis, or the segment's markers, are wrong.
 UPRIGHT_LIMIT_DEG = 45.0
+#: A segment's share of its length in the sagittal plane the axes name below which the axes
+#: are wrong (a body sways a few degrees out of it; a lateral axis named forward or up
+#: leaves a fraction).
+SAGITTAL_SHARE = 0.7
 #: The platform markers' back-to-front line must point within this of the forward axis,
 #: degrees (in the horizontal plane): else the forward axis named is not the subject's.
 PLATFORM_HEADING_LIMIT_DEG = 45.0
@@ -162,9 +166,20 @@ def _check_three_d(trial: MotionCaptureTrial, tracks: dict[str, np.ndarray],
                 "vertical coordinates of 3-D markers")
 
 
-def _check_upright(trial: MotionCaptureTrial, label: str, theta: np.ndarray,
-                   flag: str, vertical: str) -> None:
-    lean = float(np.degrees(np.abs(np.mean(theta))))
+def _check_upright(trial: MotionCaptureTrial, label: str, vector: np.ndarray,
+                   theta: np.ndarray, mapping: MarkerMapping, flag: str) -> None:
+    """Refuse a segment that lies mostly outside the sagittal plane the axes name, or
+    leans like no standing body's."""
+    axes = mapping.axes
+    sagittal = np.hypot(vector @ axes.forward_vector, vector @ axes.vertical_vector)
+    share = float(np.median(sagittal / np.linalg.norm(vector, axis=1)))
+    if share < SAGITTAL_SHARE:
+        raise RecordingError(
+            f"{trial.path}: {label} lies mostly outside the plane of --forward-axis "
+            f"{axes.forward} and --vertical-axis {axes.vertical} (only {100 * share:.0f} % "
+            "of its length in it): name the file's axes the subject faces and stands along")
+    vertical = axes.vertical
+    lean = float(np.degrees(np.mean(np.abs(theta))))
     if lean > UPRIGHT_LIMIT_DEG:
         raise RecordingError(
             f"{trial.path}: {label} leans {lean:.0f}° from the vertical on average, no "
@@ -230,14 +245,15 @@ def marker_angles(trial: MotionCaptureTrial, mapping: MarkerMapping) -> MarkerAn
         points[str(com.support)] = support
         points["COM"] = centre
         theta = _sagittal_angle(centre - support, forward, vertical)
-        _check_upright(trial, "the body COM", theta, "--com-markers", mapping.axes.vertical)
+        _check_upright(trial, "the body COM", centre - support, theta, mapping,
+                       "--com-markers")
         angles.append(theta)
     for segment in mapping.segments:
         lower, upper = _point(segment.lower, tracks), _point(segment.upper, tracks)
         points[str(segment.lower)], points[str(segment.upper)] = lower, upper
         theta = _sagittal_angle(upper - lower, forward, vertical)
-        _check_upright(trial, f"segment {segment.segment!r} ({segment})", theta,
-                       "--segment-markers", mapping.axes.vertical)
+        _check_upright(trial, f"segment {segment.segment!r} ({segment})", upper - lower,
+                       theta, mapping, "--segment-markers")
         angles.append(theta)
     tilt, level = None, None
     if isinstance(mapping.tilt, TiltMarkers):

@@ -8,6 +8,7 @@ write it as the point (0, 0, 0). Both are read as missing (NaN) here.
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -127,6 +128,32 @@ def _metadata(parameters: dict, candidates) -> float | None:
     return None
 
 
+def _check_length(path: Path, head: bytes) -> None:
+    """Refuse a file shorter than the frames its header promises (ezc3d reads the frames
+    a truncated file still holds and says nothing).
+
+    The C3D header's 16-bit words: 2 markers, 3 analog values per frame, 4 and 5 the first
+    and last frame, 7–8 the scale (negative: 4-byte floats, else 2-byte integers), 9 the
+    data's first 512-byte block. Big-endian only for files of a MIPS processor (the
+    parameter section's 4th byte, 86)."""
+    with path.open("rb") as handle:
+        handle.seek(512 * max(head[0] - 1, 0))
+        processor = handle.read(4)[3:4]
+    order = ">" if processor == b"\x56" else "<"
+    points, analog, first, last = struct.unpack(order + "4H", head[2:10])
+    (scale,) = struct.unpack(order + "f", head[12:16])
+    (data_block,) = struct.unpack(order + "H", head[16:18])
+    if last == 0xFFFF or last < first or data_block == 0:
+        return  # a long trial's count lives elsewhere: left to the reader
+    word = 4 if scale < 0 else 2
+    frames = last - first + 1
+    needed = 512 * (data_block - 1) + word * frames * (4 * points + analog)
+    size = path.stat().st_size
+    if size < needed:
+        raise RecordingError(f"{path}: a C3D file that cannot be read (truncated: {size} "
+                             f"bytes, its header promises {needed} for {frames} frames)")
+
+
 def read_c3d(path: str | Path) -> MotionCaptureTrial:
     """Read a C3D file (any C3D: Vicon, Qualisys, Motion Analysis, ezc3d, ...).
 
@@ -143,6 +170,7 @@ def read_c3d(path: str | Path) -> MotionCaptureTrial:
     if len(head) < 512 or head[1] != C3D_KEY:
         raise RecordingError(f"{path}: not a C3D file (its header lacks the C3D key 0x50"
                              f"{'; the file is shorter than a header' if len(head) < 512 else ''})")
+    _check_length(path, head)
     import ezc3d  # loaded here: only motion capture needs it
 
     try:

@@ -200,7 +200,9 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
         # a named or recognised PRTS: the tilt is its exact profile at the samples (a
         # tilt column's noise, a sensor's or two platform markers', stays out of the
         # stimulus-locked sway and the network's inputs)
-        resampled = replace(resampled, tilt=stimulus.angle(resampled.time))
+        exact = stimulus.angle(resampled.time)
+        if not np.array_equal(exact, resampled.tilt):
+            resampled = replace(resampled, tilt=exact)
     return PreparedTrial(resampled, stimulus, tuple(notices), original, rate_hint=hint)
 
 

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.errors import RecordingError
-from posture_id.motion_capture import MarkerMapping, is_c3d, marker_angles, read_c3d
+from posture_id.motion_capture import is_c3d
+from posture_id.motion_capture.mapping import MarkerMapping
 from posture_id.recording import Recording, RecordingColumns
 
 __all__ = ["read_recording", "RecordingLayout", "RECORDING_SUFFIXES"]
@@ -41,6 +42,9 @@ def read_recording(path: str | Path, segments: tuple[str, ...] | None = None,
                 f"{path}: a C3D file: name the markers of each segment (--segment-markers "
                 "SEGMENT=LOWER,UPPER ...; or --com-markers for a 1-segment body) and the "
                 "axis the subject faces (--forward-axis); docs/motion_capture.md")
+        from posture_id.motion_capture.angles import marker_angles
+        from posture_id.motion_capture.c3d_file import read_c3d
+
         return marker_angles(read_c3d(path), layout).recording(segments, tilt_of)
     if isinstance(layout, MarkerMapping):
         raise RecordingError(f"{path}: the marker flags (--segment-markers, --com-markers, "

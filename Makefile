@@ -25,7 +25,9 @@ demo: $(STAMP)
 
 # The example recordings shipped for the demo: simulated subjects (their true parameters
 # in *.truth.json) with 0.01° white sensor noise; and a lab-like file for the tutorial
-# (docs/tutorials/lab_recording.py): COM only, the lab's columns, a lab's PRTS.
+# (docs/tutorials/lab_recording.py): COM only, the lab's columns, a lab's PRTS; and a
+# motion-capture trial of the straight-leg subject (docs/tutorials/c3d_trial.py): C3D,
+# markers with 0.3 mm noise and a gap, platform markers and an analog tilt channel.
 EXAMPLES := posture_id/studies/examples
 examples: $(STAMP)
 	$(BIN)/posture-id simulate --params $(EXAMPLES)/tip_subject.truth.json \
@@ -34,6 +36,11 @@ examples: $(STAMP)
 	  --params $(EXAMPLES)/straight_leg_subject.truth.json \
 	  --noise-deg 0.01 --seed 2 --out $(EXAMPLES)/straight_leg_subject.csv
 	$(BIN)/python -m posture_id.studies.lab_example $(EXAMPLES)
+	$(BIN)/posture-id simulate --body urdf/winter_1.75m_70kg_2seg.urdf \
+	  --params $(EXAMPLES)/straight_leg_subject.truth.json --motor-noise 0.02 --seed 3 \
+	  --out $(EXAMPLES)/straight_leg_subject.c3d --c3d-forward-axis=-y --frame-rate-hz 50 \
+	  --analog-per-frame 2 --marker-noise-mm 0.3 --marker-gap LHIP 40 0.12 \
+	  --subject-height-m 1.75 --subject-mass-kg 70
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

@@ -92,7 +92,7 @@ def _inputs_exist(command: str) -> bool:
     words = shlex.split(command)
     outputs = {words[k + 1] for k, w in enumerate(words[:-1]) if w in ("--out", "--plot")}
     return all((ROOT / w).is_file() for w in words
-               if w.endswith((".csv", ".urdf", ".json")) and w not in outputs)
+               if w.endswith((".csv", ".urdf", ".json", ".c3d")) and w not in outputs)
 
 
 @pytest.mark.parametrize("command", sorted({c for _, c in COMMANDS if _RUNNABLE.match(c)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from posture_id.bodies.body import Body
@@ -41,8 +43,10 @@ def frequency_response(trial: PreparedTrial, body: Body | None = None,
         trial.require_segments(body.segment_names)
         outputs = np.column_stack([outputs, body.com_angles(recording.theta[start:])[:, 0]])
         channels += ("body COM",)
-    return frequency_response_arrays(recording.tilt[start:], outputs, recording.sample_rate_hz,
-                                     period_s, channels, options, trial.name)
+    response = frequency_response_arrays(recording.tilt[start:], outputs,
+                                         recording.sample_rate_hz, period_s, channels, options,
+                                         trial.name)
+    return replace(response, recording_source=recording.source)
 
 
 #: The tilt's change from one cycle to the next, against its own RMS, above which a

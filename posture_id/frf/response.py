@@ -124,6 +124,8 @@ class FrequencyResponse(Result):
         coherence_level: (F,) the γ² pure noise exceeds with probability
             :data:`SIGNIFICANCE` at each frequency (its averages: cycles × frequencies of
             the band), or None with the coherence.
+        recording_source: how the recording's angles were derived (a motion-capture
+            trial's markers, axes and channels), or None.
         bands_empty: with ``options.bands``, how many of the bands held no stimulated
             frequency (dropped).
     """
@@ -139,6 +141,7 @@ class FrequencyResponse(Result):
     name: str = "recording"
     coherence_level: np.ndarray | None = None
     bands_empty: int = 0
+    recording_source: dict | None = None
 
     @property
     def significant(self) -> np.ndarray | None:
@@ -180,7 +183,9 @@ class FrequencyResponse(Result):
                 "lab_bands": (None if self.options.lab_bands is None
                               else self.options.lab_bands.to_dict()),
                 "pir": self._pir_dict() if self.options.lab_bands is not None else None,
-                "provenance": provenance(self.options, recording=self.name)}
+                "provenance": provenance(self.options, recording=self.name,
+                                         **({"recording_source": self.recording_source}
+                                            if self.recording_source else {}))}
 
     def pir(self, rate_hz: float = 22.0) -> tuple[np.ndarray, np.ndarray]:
         """(t (S,) s, x (S, M)): each channel's pseudo-impulse response over one common

@@ -277,9 +277,11 @@ def test_the_subjects_body_comes_from_the_files_metadata(sway, tip, tmp_path, ca
 def test_a_cohort_of_c3d_files_locally_and_on_dask(sway, tip, tmp_path):
     distributed = pytest.importorskip("distributed")
     folder = tmp_path / "trials"
-    for k in range(2):
+    subjects = ((1.62, 58.0), (1.85, 90.0))
+    for k, (height, mass) in enumerate(subjects):
         write_c3d(folder / f"s{k}.c3d", sway, _lengths(tip),
-                  C3dWriteOptions(marker_noise_mm=NOISE_MM, seed=k))
+                  C3dWriteOptions(marker_noise_mm=NOISE_MM, seed=k, height_m=height,
+                                  mass_kg=mass))
     flags = [*_markers("--tilt-channel", TILT_CHANNEL, "--tilt-scale", "2"),
              "--method", "cnn"]
     local, remote = tmp_path / "local", tmp_path / "remote"
@@ -290,9 +292,11 @@ def test_a_cohort_of_c3d_files_locally_and_on_dask(sway, tip, tmp_path):
                                   dashboard_address=None) as cluster:
         assert main(["identify", str(folder), "--out", str(remote), *flags, "--scheduler",
                      cluster.scheduler_address]) == status
-    for path in local.glob("s*.json"):
-        a, b = json.loads(path.read_text()), json.loads((remote / path.name).read_text())
+    for k, (height, mass) in enumerate(subjects):  # each subject's body, from their file
+        a = json.loads((local / f"s{k}.json").read_text())
+        b = json.loads((remote / f"s{k}.json").read_text())
         assert a["parameters"] == b["parameters"]
+        assert a["provenance"]["body"]["name"] == f"winter_{height:g}m_{mass:g}kg_3seg"
 
 
 def test_plot_shows_the_markers_beside_the_angles(sway, tip, tmp_path):

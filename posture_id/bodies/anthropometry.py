@@ -13,6 +13,7 @@ from posture_id.errors import BodyError
 
 __all__ = [
     "SegmentSpec",
+    "winter_body_file",
     "straight_links",
     "default_tip_segments",
     "winter_segments",
@@ -125,3 +126,21 @@ def straight_links(segments: list[SegmentSpec]) -> list[LinkSpec]:
         )
         below = seg.length
     return links
+
+
+def winter_body_file(height_m: float, mass_kg: float, n_segments: int):
+    """The URDF of the Winter body of ``height_m`` (m), ``mass_kg`` (kg) and ``n_segments``
+    in the cache folder, written once: a subject's body from a trial's metadata.
+
+    Returns:
+        its path.
+    """
+    from posture_id.bodies.urdf_writer import write_chain_urdf
+    from posture_id.cache import cache_folder
+
+    name = f"winter_{height_m:.3g}m_{mass_kg:.4g}kg_{n_segments}seg"
+    path = cache_folder("bodies") / f"{name}.urdf"
+    if not path.is_file():
+        write_chain_urdf(path, name, straight_links(winter_segments(height_m, mass_kg,
+                                                                    n_segments)))
+    return path

@@ -28,6 +28,7 @@ from posture_id.cli.stimulus import (
 )
 from posture_id.errors import PostureIdError
 from posture_id.fitting.options import FitOptions
+from posture_id.motion_capture.mapping import MarkerMapping
 
 __all__ = ["add_parser"]
 
@@ -167,7 +168,7 @@ def run_cohort(args: argparse.Namespace) -> int:
         with TerminalProgress("recordings", prefix="posture-id identify") as progress:
             result = identify_cohort(recordings, args.out, identifier, args.scheduler,
                                      progress, stimulus, args.model, columns_from_args(args),
-                                     args.bodies)
+                                     args.bodies, trial_bodies=args.body is None)
         if args.frf_preset or norm is not None:
             _cohort_frfs(args, recordings, body, norm)
     say(result.summary())
@@ -199,8 +200,11 @@ def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm) -
 
     load = cache(load_body)  # one load per URDF, however many recordings share it
 
+    layout = columns_from_args(args)
+    trial_bodies = layout if args.body is None and isinstance(layout, MarkerMapping) else None
+
     def body_of(path: Path):
-        return load(subject_urdf(path, args.bodies, Path(body.urdf_path)))
+        return load(subject_urdf(path, args.bodies, Path(body.urdf_path), trial_bodies))
 
     def read(path: Path):
         args.recording = path

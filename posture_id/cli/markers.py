@@ -115,21 +115,6 @@ def write_marker_plot(recording_path: Path, mapping: MarkerMapping, plot: Path) 
     return beside
 
 
-def winter_body_file(height_m: float, mass_kg: float, segments: int) -> Path:
-    """The Winter body of ``height_m``, ``mass_kg`` and ``segments`` as a URDF in the cache
-    folder (written once)."""
-    from posture_id.bodies.anthropometry import straight_links, winter_segments
-    from posture_id.bodies.urdf_writer import write_chain_urdf
-    from posture_id.cache import cache_folder
-
-    name = f"winter_{height_m:.3g}m_{mass_kg:.4g}kg_{segments}seg"
-    path = cache_folder("bodies") / f"{name}.urdf"
-    if not path.is_file():
-        write_chain_urdf(path, name, straight_links(winter_segments(height_m, mass_kg,
-                                                                    segments)))
-    return path
-
-
 def trial_subject(path: Path) -> tuple[float, float]:
     """(height m, mass kg) from a C3D trial's metadata, or a one-line refusal naming the
     parameters looked for."""
@@ -151,6 +136,7 @@ def recording_body(args: argparse.Namespace, default: Path | None):
     """The body a command reads ``args.recording`` for: ``--body``; else, for a C3D trial
     whose metadata give the subject's height and mass, their Winter body with as many
     segments as the markers name (said on stderr); else ``default`` (None: no body)."""
+    from posture_id.bodies.anthropometry import winter_body_file
     from posture_id.bodies.body import load_body
     from posture_id.motion_capture import is_c3d, read_c3d
 

@@ -30,6 +30,7 @@ import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from posture_id.bodies.anthropometry import winter_body_file
 from posture_id.bodies.body import load_body
 from posture_id.errors import PostureIdError
 from posture_id.executors import DaskExecutor
@@ -37,6 +38,8 @@ from posture_id.fileio import Result, atomic_write_text, json_text, jsonable
 from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Identifier, Method
 from posture_id.learning.identifier import DEFAULT_LEVEL
+from posture_id.motion_capture import is_c3d
+from posture_id.motion_capture.mapping import MarkerMapping
 from posture_id.plotting import plot_cohort
 from posture_id.progress import Progress, report
 from posture_id.simulation.stimulus import TiltProfile
@@ -186,11 +189,25 @@ def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | N
     return {**result, "cohort_options": cohort_options(identifier, stimulus, columns)}
 
 
-def subject_urdf(recording: Path, bodies: Path | None, default: Path) -> Path:
-    """A recording's subject's URDF: ``bodies``/<recording stem>.urdf when there is one,
+def subject_urdf(recording: Path, bodies: Path | None, default: Path,
+                 trial_bodies: MarkerMapping | None = None) -> Path:
+    """A recording's subject's URDF: ``bodies``/<recording stem>.urdf when there is one;
+    else, with ``trial_bodies`` (the cohort's marker mapping) for a C3D trial whose metadata
+    give the subject's height and mass, their Winter body of the mapping's segments;
     ``default`` otherwise."""
     own = None if bodies is None else Path(bodies) / f"{recording.stem}.urdf"
-    return own if own is not None and own.is_file() else default
+    if own is not None and own.is_file():
+        return own
+    if trial_bodies is not None and is_c3d(recording):
+        from posture_id.motion_capture.c3d_file import read_c3d
+
+        try:
+            trial = read_c3d(recording)
+        except PostureIdError:
+            return default  # reading the recording refuses it, with the reason, later
+        if trial.height_m is not None and trial.mass_kg is not None:
+            return winter_body_file(trial.height_m, trial.mass_kg, trial_bodies.n_segments)
+    return default
 
 
 def subjects_without_a_body(recordings: list[Path], bodies: str | Path) -> list[Path]:
@@ -213,21 +230,25 @@ def subjects_without_a_body(recordings: list[Path], bodies: str | Path) -> list[
 
 class SubjectIdentifiers:
     """The identifier of each recording of a cohort: for a subject with a body of their
-    own (``bodies/<recording stem>.urdf``) one made like ``identifier`` for that body,
-    built once per body; otherwise ``identifier``."""
+    own (``bodies/<recording stem>.urdf``, or with ``trial_bodies`` the Winter body a C3D
+    trial's metadata give) one made like ``identifier`` for that body, built once per body;
+    otherwise ``identifier``."""
 
     def __init__(self, identifier: Identifier, bodies: str | Path | None = None,
-                 model: str | Path | None = None) -> None:
+                 model: str | Path | None = None,
+                 trial_bodies: MarkerMapping | None = None) -> None:
         self.default, self.model = identifier, model
         self.bodies = None if bodies is None else Path(bodies)
         if self.bodies is not None and not self.bodies.is_dir():
             raise PostureIdError(f"{self.bodies}: not a folder of bodies (one URDF per "
                                  "subject, named like their recording)")
+        self.trial_bodies = trial_bodies
         self._built: dict[Path, Identifier] = {}
 
     def urdf_of(self, recording: Path) -> Path:
         """The URDF of a recording's subject."""
-        return subject_urdf(recording, self.bodies, Path(self.default.body.urdf_path))
+        return subject_urdf(recording, self.bodies, Path(self.default.body.urdf_path),
+                            self.trial_bodies)
 
     def __call__(self, recording: Path) -> Identifier:
         urdf = self.urdf_of(recording)
@@ -244,7 +265,8 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
                     scheduler: str | None = None, progress: Progress | None = None,
                     stimulus: TiltProfile | None = None, model: str | Path | None = None,
                     columns: RecordingLayout = None,
-                    bodies: str | Path | None = None) -> CohortResult:
+                    bodies: str | Path | None = None,
+                    trial_bodies: bool = False) -> CohortResult:
     """Identify ``recordings`` into ``out`` (see the module doc) with ``identifier``.
 
     Args:
@@ -256,9 +278,13 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
             (default: ``time_s,tilt_deg,<segment>_deg``).
         bodies: a folder of the subjects' own bodies, ``<recording stem>.urdf`` each (a
             subject without one gets ``identifier``'s body).
+        trial_bodies: a C3D trial whose metadata give the subject's height and mass (and
+            no URDF in ``bodies``) gets that subject's Winter body.
     """
     out = Path(out)
-    subjects = SubjectIdentifiers(identifier, bodies, model)
+    subjects = SubjectIdentifiers(identifier, bodies, model,
+                                  columns if trial_bodies and isinstance(columns, MarkerMapping)
+                                  else None)
     status: dict[str, str] = {}
     changed: dict[str, tuple[str, ...]] = {}
     todo = []

@@ -317,3 +317,28 @@ def test_simulate_writes_a_c3d_trial_and_its_flags_need_one(tmp_path, capsys):
     assert np.isnan(trial.marker("LHIP")[300:310]).all()
     assert main(["simulate", "--out", str(tmp_path / "x.csv"), "--c3d-unit", "m"]) == 2
     assert "give --out NAME.c3d" in capsys.readouterr().err
+
+
+def test_frf_and_fit_read_a_c3d_trial(sway, tip, tmp_path):
+    """The other commands that read a recording take the marker flags too (one reader)."""
+    path = _write_default(tmp_path, sway, tip, marker_noise_mm=NOISE_MM)
+    flags = _markers("--tilt-channel", TILT_CHANNEL, "--tilt-scale", "2", "--body",
+                     str(tip.urdf_path))
+    one_cycle = ["--drift-order", "0"]  # the sway is one cycle long
+    assert main(["frf", str(path), *flags, *one_cycle, "--out", str(tmp_path / "frf.json")]) == 0
+    frf = json.loads((tmp_path / "frf.json").read_text())
+    assert frf["provenance"]["recording_source"]["tilt_channel"] == TILT_CHANNEL
+    csv = tmp_path / "same.csv"
+    sway.to_csv(csv)
+    assert main(["frf", str(csv), "--body", str(tip.urdf_path), *one_cycle, "--out",
+                 str(tmp_path / "csv.json")]) == 0
+    same = json.loads((tmp_path / "csv.json").read_text())
+    # below 0.5 Hz the sway's harmonics stand well above the marker noise (0.03°; one
+    # cycle averages nothing away): gains within 5 %
+    low = np.asarray(frf["frequencies_hz"]) < 0.5
+    for channel in ("shank", "trunk", "body COM"):
+        gain = np.asarray(frf["channels"][channel]["gain"])[low]
+        reference = np.asarray(same["channels"][channel]["gain"])[low]
+        assert np.median(np.abs(gain / reference - 1)) < 0.05, channel
+    assert main(["fit", str(path), *flags, "--model", "ic", "--out",
+                 str(tmp_path / "ic.json")]) in (0, 1)

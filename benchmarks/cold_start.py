@@ -1,6 +1,17 @@
 """Cold start: what a new process pays before it does any work.
 
 Run:  .venv/bin/python benchmarks/cold_start.py [--before REV] [--repeats 3]
+      .venv/bin/python benchmarks/cold_start.py --first-session [--before REV]
+
+``--first-session``: a new user's first commands, each on an empty cache folder
+(``POSTURE_ID_CACHE`` a new folder: no compiled simulator, no compiled fit model) and then
+again on the cache that run filled, for this checkout and for revision ``--before``
+(default: the last commit before issue 44's work), side by side in one run: ``posture-id
+simulate`` (121 s TIP), ``posture-id identify tip_subject.csv`` (auto) and ``posture-id
+identify tip_subject.csv --method hybrid``. Writes benchmarks/results/first_session.json
+and docs/results/first_session.md.
+
+Without it:
 
 With every cache already filled (one warm-up run of each), it measures in fresh child
 processes (medians of ``--repeats``):
@@ -35,6 +46,18 @@ from posture_id.fileio import atomic_write_text
 ROOT = Path(__file__).resolve().parents[1]
 #: The last commit of the flat layout (before the package layout).
 BEFORE = "cc63128"
+#: The last commit before issue 44's work (length buckets, -Og, the length-free model).
+FIRST_SESSION_BEFORE = "f15f0ca"
+#: The example recording the first-session commands identify.
+EXAMPLE = ROOT / "posture_id" / "studies" / "examples" / "tip_subject.csv"
+#: (what, command line) of a new user's first commands.
+FIRST_SESSION = (
+    ("posture-id simulate (121 s TIP)", ["simulate", "--out", "{tmp}/trial.csv"]),
+    ("posture-id identify tip_subject.csv (auto)",
+     ["identify", str(EXAMPLE), "--out", "{tmp}/auto.json"]),
+    ("posture-id identify tip_subject.csv --method hybrid",
+     ["identify", str(EXAMPLE), "--method", "hybrid", "--out", "{tmp}/hybrid.json"]),
+)
 
 FIRST_SIMULATION = """
 import time
@@ -84,13 +107,82 @@ def first_simulation(repeats: int) -> tuple[float, float]:
     return (statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs))
 
 
+def first_session_of(cli: list[str], env: dict, tmp: Path) -> dict:
+    """Each first-session command on a new empty cache folder, then again on it: wall s."""
+    subprocess.run([*cli, "--help"], capture_output=True, env=env)  # byte-compile first
+    rows = {}
+    for k, (what, argv) in enumerate(FIRST_SESSION):
+        cache = tmp / f"cache-{k}"
+        run_env = {**env, "POSTURE_ID_CACHE": str(cache)}
+        command = [*cli, *(a.format(tmp=tmp) for a in argv)]
+        rows[what] = {"first_s": wall(command, run_env), "again_s": wall(command, run_env)}
+        print(f"{what}: first {rows[what]['first_s']:.1f} s, again "
+              f"{rows[what]['again_s']:.1f} s", flush=True)
+    return rows
+
+
+def first_session(before: str) -> None:
+    """The ``--first-session`` table, this checkout beside ``before``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        (tmp / "after").mkdir()
+        after = first_session_of([sys.executable, "-c", CLI], dict(os.environ), tmp / "after")
+        worktree = tmp / "tree"
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(worktree),
+                        before], check=True, capture_output=True)
+        try:
+            (tmp / "before").mkdir()
+            env = {**os.environ, "POSTURE_ID_BEFORE": str(worktree)}
+            earlier = first_session_of([sys.executable, "-c", CLI_BEFORE], env,
+                                       tmp / "before")
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
+                            str(worktree)], check=True, capture_output=True)
+    results = {"package_version": __version__, "before": before,
+               "machine": {"processor": platform.processor() or platform.machine(),
+                           "cpus": os.cpu_count(), "python": platform.python_version()},
+               "rows": {what: {"before": earlier[what], "after": after[what]}
+                        for what in after}}
+    out = Path(__file__).parent / "results" / "first_session.json"
+    atomic_write_text(out, json.dumps(results, indent=2) + "\n")
+    lines = [
+        "# A new user's first commands: an empty cache, then again",
+        "",
+        f"Made by `.venv/bin/python benchmarks/cold_start.py --first-session --before "
+        f"{before}`: each command on a new empty cache folder (`POSTURE_ID_CACHE`: no "
+        "compiled simulator, no compiled fit model), then again on the cache it filled; "
+        f"this checkout beside {before} (the last commit before issue 44's work), one run "
+        f"on this machine ({os.cpu_count()} cores), wall seconds of the whole command.",
+        "",
+        f"| command | first, {before} | first, now | ratio | again, {before} | again, now "
+        "| ratio |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for what, row in results["rows"].items():
+        b, a = row["before"], row["after"]
+        lines.append(f"| `{what}` | {b['first_s']:.1f} s | {a['first_s']:.1f} s | "
+                     f"{a['first_s'] / b['first_s']:.2f} | {b['again_s']:.1f} s | "
+                     f"{a['again_s']:.1f} s | {a['again_s'] / b['again_s']:.2f} |")
+    report = ROOT / "docs" / "results" / "first_session.md"
+    atomic_write_text(report, "\n".join(lines) + "\n")
+    print("\n".join(lines))
+    print(f"wrote {out} and {report}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--before", default=BEFORE, help="revision to compare the fit with")
+    parser.add_argument("--before", help="revision to compare with (default: "
+                                         f"{BEFORE}; with --first-session {FIRST_SESSION_BEFORE})")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--first-session", action="store_true",
+                        help="a new user's first commands on an empty cache, then again")
     parser.add_argument("--out", type=Path,
                         default=Path(__file__).parent / "results" / "cold_start.json")
     args = parser.parse_args()
+    if args.first_session:
+        first_session(args.before or FIRST_SESSION_BEFORE)
+        return
+    args.before = args.before or BEFORE
 
     import_s, simulate_s = first_simulation(args.repeats)
     print(f"first simulation in a new process: {simulate_s:.3f} s "

@@ -2,11 +2,12 @@
 
 Run:  .venv/bin/python benchmarks/compile_flags.py [--segments 3] [--samples 6051]
 
-Generates the C code of the fit's compiled model (the simulation and its directional
-derivatives, ``posture_id.fitting.problem.CompiledModel``) for the TIP (or a Winter body
-of ``--segments``) and a recording of ``--samples``, compiles it with -O1, -Og and -O0
-(with ``-fPIC -shared -march=native``), and times in one run: the compile, one
-simulation and one Jacobian chunk (the columns one thread evaluates), medians of three.
+Generates the C code of the fit's compiled model (one block's simulation and its
+directional derivatives, ``posture_id.fitting.problem.CompiledModel``) for the TIP (or a
+Winter body of ``--segments``), compiles it with -O1, -Og and -O0 (with ``-fPIC -shared
+-march=native``), and times in one run: the compile, and on a recording of ``--samples``
+one simulation and one Jacobian chunk (the columns one thread evaluates, carried through
+the blocks), medians of three.
 Writes benchmarks/results/compile_flags.json.
 """
 
@@ -61,15 +62,16 @@ def main(argv: list[str] | None = None) -> int:
         problem_module.compile_functions = real
     functions = captured["functions"]
     n = body.n_segments
-    tilt, velocity = prts().on_grid(key.dt, model.n_steps_u)
-    u = step_inputs(tilt, velocity, model.n_steps_u)
+    blocks = -(-(args.samples - 1) // problem_module.BLOCK_SAMPLES)
+    n_steps_u = blocks * model.block_steps
+    tilt, velocity = prts().on_grid(key.dt, n_steps_u)
+    u = step_inputs(tilt, velocity, n_steps_u)
     classes = np.zeros((n, 5))
     classes[:, 4] = default_parameters(body).array("sign")
     q = q_from_targets(classes, np.zeros((n, 2)))
     context = np.concatenate([body_constants(body)] + [default_parameters(body).array(f)
                                                        for f in problem_module._SCALED_FIELDS])
-    seeds = np.zeros((7 * n, model.width))
-    seeds[np.arange(model.width), np.arange(model.width)] = 1.0
+    chunk = list(range(model.width))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         generator = ca.CodeGenerator("model.c")
@@ -83,15 +85,15 @@ def main(argv: list[str] | None = None) -> int:
             subprocess.run(["gcc", *flags, "-fPIC", "-shared", "-march=native", str(source),
                             "-o", str(library), "-lm"], check=True)
             compile_s = time.perf_counter() - start
-            sim = ca.external(functions[0].name(), str(library))
-            dirs = ca.external(functions[1].name(), str(library))
+            model.sim = ca.external(functions[0].name(), str(library))
+            model.dirs = ca.external(functions[1].name(), str(library))
             sim_s, jac_s = [], []
             for _ in range(3):
                 start = time.perf_counter()
-                sim(q, u, context)
+                _, starts = model.rollout(q, u, context)
                 sim_s.append(time.perf_counter() - start)
                 start = time.perf_counter()
-                dirs(q, u, context, seeds)
+                model.directions(q, u, context, starts, chunk)
                 jac_s.append(time.perf_counter() - start)
             rows.append({"flags": " ".join(flags), "compile_s": round(compile_s, 2),
                          "simulation_s": round(float(np.median(sim_s)), 4),

@@ -1,6 +1,7 @@
-"""Recordings of other lengths share one compiled fit model (issue 44): lengths within a
-bucket of 500 samples (10 s at 50 Hz) run on the same compiled code, and the model's
-first samples are the recording's."""
+"""Recordings of any length share one compiled fit model (issue 44): the compiled code
+simulates one block of samples and a recording runs block after block, so its length is
+not compiled in; the simulation and its Jacobian are the compiled simulator's and the
+finite differences' whatever the length."""
 
 from __future__ import annotations
 
@@ -9,25 +10,21 @@ import pytest
 
 from posture_id.fitting import problem as problem_module
 from posture_id.fitting.options import FitOptions
-from posture_id.fitting.problem import BUCKET_SAMPLES, FitProblem, bucket_samples
-from posture_id.fitting.symbolic import step_inputs
+from posture_id.fitting.problem import FitProblem
+from posture_id.fitting.symbolic import BLOCK_SAMPLES, step_inputs
 from posture_id.fitting.unknowns import q_from_targets
 from posture_id.recording import Recording
 from posture_id.simulation import prts, simulate
 from posture_id.trials import prepare_trial
 
 
-def test_buckets_round_up_to_whole_buckets():
-    assert bucket_samples(1) == BUCKET_SAMPLES
-    assert bucket_samples(6051) == bucket_samples(6001) == 6500
-    assert bucket_samples(6500) == 6500 and bucket_samples(6501) == 7000
-
-
 @pytest.mark.slow
 def test_five_lengths_fit_on_one_compiled_model(tip, monkeypatch):
-    """A lab's five trials of 121.0–124.6 s (the same 242-state PRTS, level stretches of
-    different lengths after it) are fitted on one compiled model; each fit's simulated
-    sway has the recording's length and matches the compiled simulator's own."""
+    """A lab's trials of 40 s to 124.6 s (the same 242-state PRTS, level stretches of
+    different lengths after it; one shorter than a block, one a block and a sample) run
+    on one compiled model; each simulated sway has the recording's length and matches
+    the compiled simulator's own, and the Jacobian carried through the blocks matches
+    central differences."""
     keys = []
     real_get = problem_module.CompiledModel.get.__func__
 
@@ -40,21 +37,28 @@ def test_five_lengths_fit_on_one_compiled_model(tip, monkeypatch):
     stimulus = prts()
     base = simulate(tip, stimulus=stimulus).to_recording()
     options = FitOptions()
-    for extra in (0, 20, 50, 110, 180):  # samples after the last cycle
-        n = len(base.time) + extra
+    classes = np.array([[0, 0, 0, 0, 1], [0, 0, 0, 0, -1], [0, 0, 0, 0, 1]])
+    q = q_from_targets(classes.astype(float), np.zeros((tip.n_segments, 2)))
+    for n in (BLOCK_SAMPLES // 2, BLOCK_SAMPLES + 1, 2001, 6051, 6051 + 180):
         time = np.arange(n) / base.sample_rate_hz
-        theta = np.vstack([base.theta, np.repeat(base.theta[-1:], extra, axis=0)])
-        recording = Recording(time, stimulus.angle(time), theta, base.segments)
-        trial = prepare_trial(recording, stimulus)
+        keep = min(n, len(base.time))
+        theta = np.vstack([base.theta[:keep], np.repeat(base.theta[keep - 1:keep],
+                                                        n - keep, axis=0)])
+        trial = prepare_trial(Recording(time, stimulus.angle(time), theta, base.segments),
+                              stimulus if n > len(base.time) else None)
         problem = FitProblem.get(tip, len(trial.recording.time), options)
         tilt, velocity = stimulus.on_grid(options.simulation.dt, problem.n_steps_u)
         u = step_inputs(tilt, velocity, problem.n_steps_u)
-        # the defaults (q = 0) with the default classes: com, joint, com
-        classes = np.array([[0, 0, 0, 0, 1], [0, 0, 0, 0, -1], [0, 0, 0, 0, 1]])
-        q = q_from_targets(classes.astype(float), np.zeros((tip.n_segments, 2)))
         sway = problem.simulate(q, u)
         assert sway.shape == (n, tip.n_segments)
-        np.testing.assert_allclose(sway[: len(base.time)], base.theta, atol=1e-6)
-        jac = problem.jacobian(q, u, [0, 1])
+        np.testing.assert_allclose(sway[:keep], base.theta[:keep], atol=1e-6)
+        jac = problem.jacobian(q, u, [0, 8])
         assert jac.shape == (n * tip.n_segments, 2)
-    assert len(set(keys)) == 1 and keys[0].n_samples == bucket_samples(6051)
+        if n == 2001:  # the chain rule across blocks, against central differences
+            for k, column in enumerate((0, 8)):
+                step = np.zeros_like(q)
+                step[column] = 1e-5
+                diff = (problem.simulate(q + step, u) - problem.simulate(q - step, u)) / 2e-5
+                np.testing.assert_allclose(jac[:, k], diff.ravel(), rtol=0,
+                                           atol=1e-4 * np.abs(diff).max())
+    assert len(set(keys)) == 1

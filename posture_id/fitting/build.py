@@ -26,10 +26,11 @@ from posture_id.fitting.options import Compilation
 
 __all__ = ["compile_functions", "Backend"]
 
-#: gcc's flags. -Og, not -O1: on the 3-segment model of a 121 s recording (3 MB of C) it
-#: compiles in 10 s instead of 35 s, and the compiled code runs as fast (0.058 s a
-#: simulation with either, 1.61 s against 1.73 s a Jacobian chunk; -O0 compiles in 4 s but
-#: runs 2.5-3x slower). Measured side by side by benchmarks/compile_flags.py.
+#: gcc's flags. -Og, not -O1: the 3-segment model (one block of 1000 samples and its
+#: derivatives) compiles in 7 s instead of 27 s, and the compiled code runs as fast on a
+#: 121 s recording (0.062 s against 0.060 s a simulation, 2.03 s against 1.96 s a
+#: Jacobian chunk; -O0 compiles in 3 s but runs 2.5x slower). Measured side by side by
+#: benchmarks/compile_flags.py (benchmarks/results/compile_flags.json).
 _FLAGS = ["-Og", "-fPIC", "-shared", "-march=native"]
 
 

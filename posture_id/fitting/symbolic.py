@@ -37,6 +37,7 @@ from posture_id.bodies.body import Body
 
 __all__ = ["SymbolicModel", "BodyTerms", "body_constants", "n_body_constants",
            "chain_dynamics", "step_function", "rollout_function", "rollout_steps",
+           "block_function", "BLOCK_SAMPLES",
            "delay_weights", "buffer_sizes", "step_inputs"]
 
 
@@ -272,16 +273,24 @@ def rollout_steps(n_samples: int, sample_every: int) -> int:
     return blocks * _INNER * sample_every
 
 
-def rollout_function(model: SymbolicModel, n_samples: int, sample_every: int) -> ca.Function:
-    """(u (3, rollout_steps), p (7N,), w, b) → θ samples (N, S) at t = 0, every·dt, …
+#: Inner blocks of 100 samples in one block of the compiled fit model (which simulates a
+#: recording block by block, so its length is not compiled in). CasADi's derivative of a
+#: longer loop costs less per sample: one Jacobian chunk of a 121 s recording took 0.089 s
+#: a 100-sample block alone, 2.16 s in all with blocks of 10 (2.39 s with 5, 2.35 s with
+#: 20 for its padding), against 1.77 s for the whole recording compiled as one loop.
+BLOCK_INNER = 10
+#: Samples of one block of the compiled fit model.
+BLOCK_SAMPLES = _INNER * BLOCK_INNER
 
-    The step is folded ``sample_every`` times per sample, accumulated over blocks of 100
-    samples, and the blocks accumulated over the trial (CasADi ``fold``/``mapaccum``:
-    loops, not an unrolled graph). u holds [step index, α_FS, α̇_FS] per step.
-    """
+
+def block_function(model: SymbolicModel, sample_every: int,
+                   inner_blocks: int = BLOCK_INNER) -> ca.Function:
+    """(x0, u (3, inner_blocks·100·sample_every), p, w, b) → (x_end, θ (N, inner_blocks·100)):
+    one block of the rollout, the step folded ``sample_every`` times per sample and
+    accumulated over blocks of 100 samples, ``inner_blocks`` of them (CasADi
+    ``fold``/``mapaccum``: loops); θ the segment angles at the end of each sample."""
     step = step_function(model)
-    per_sample = step.fold(sample_every)
-    inner = per_sample.mapaccum("block", _INNER)
+    inner = step.fold(sample_every).mapaccum("block", _INNER)
     x0 = ca.MX.sym("x0", model.n_state)
     u_block = ca.MX.sym("u", 3, _INNER * sample_every)
     p = ca.MX.sym("p", 7 * model.n)
@@ -290,6 +299,25 @@ def rollout_function(model: SymbolicModel, n_samples: int, sample_every: int) ->
     states = inner(x0, u_block, p, w, b)
     block = ca.Function("block", [x0, u_block, p, w, b],
                         [states[:, -1], states[: model.n, :]])
+    if inner_blocks == 1:
+        return block
+    chained = block.mapaccum("blocks", inner_blocks, [0], [0])
+    u_all = ca.MX.sym("u", 3, inner_blocks * _INNER * sample_every)
+    x_ends, theta = chained(x0, u_all, p, w, b)
+    return ca.Function("block", [x0, u_all, p, w, b], [x_ends[:, -1], theta])
+
+
+def rollout_function(model: SymbolicModel, n_samples: int, sample_every: int) -> ca.Function:
+    """(u (3, rollout_steps), p (7N,), w, b) → θ samples (N, S) at t = 0, every·dt, …
+
+    The step is folded ``sample_every`` times per sample, accumulated over blocks of 100
+    samples, and the blocks accumulated over the trial (CasADi ``fold``/``mapaccum``:
+    loops, not an unrolled graph). u holds [step index, α_FS, α̇_FS] per step.
+    """
+    block = block_function(model, sample_every, 1)
+    p = ca.MX.sym("p", 7 * model.n)
+    w = ca.MX.sym("w", sum(model.sizes))
+    b = ca.MX.sym("b", n_body_constants(model.n))
     blocks = -(-(n_samples - 1) // _INNER)
     trial = block.mapaccum("trial", blocks, [0], [0])
     u = ca.MX.sym("u", 3, rollout_steps(n_samples, sample_every))

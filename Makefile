@@ -17,6 +17,9 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e ".[dev]"
 	@if $(BIN)/pip list 2>/dev/null | grep -qi '^nvidia-'; then \
 	  echo "error: CUDA packages were installed on a CPU set-up; see README" >&2; exit 1; fi
+	# the simulator and the fit's model for 1-3 segments, compiled once here: a first
+	# command compiles nothing (posture_id/cache.py, docs/performance.md)
+	$(BIN)/python -m posture_id.studies.prebuild
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -122,27 +122,38 @@ def first_session_of(cli: list[str], env: dict, tmp: Path) -> dict:
 
 
 def first_session(before: str) -> None:
-    """The ``--first-session`` table, this checkout beside ``before``."""
+    """The ``--first-session`` table, this checkout beside ``before``: this checkout with
+    no set-up compile (``POSTURE_ID_PREBUILT=none``) and after the set-up's (a prebuilt
+    folder made by ``python -m posture_id.studies.prebuild``, timed)."""
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        (tmp / "after").mkdir()
-        after = first_session_of([sys.executable, "-c", CLI], dict(os.environ), tmp / "after")
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "posture_id.studies.prebuild",
+                        str(tmp / "prebuilt")], check=True, capture_output=True)
+        setup_s = time.perf_counter() - start
+        print(f"set-up compile (python -m posture_id.studies.prebuild): {setup_s:.1f} s")
+        runs = {}
+        for label, prebuilt in (("now", "none"), ("now, after set-up", str(tmp / "prebuilt"))):
+            (tmp / label).mkdir()
+            runs[label] = first_session_of(
+                [sys.executable, "-c", CLI],
+                {**os.environ, "POSTURE_ID_PREBUILT": prebuilt}, tmp / label)
         worktree = tmp / "tree"
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(worktree),
                         before], check=True, capture_output=True)
         try:
             (tmp / "before").mkdir()
             env = {**os.environ, "POSTURE_ID_BEFORE": str(worktree)}
-            earlier = first_session_of([sys.executable, "-c", CLI_BEFORE], env,
-                                       tmp / "before")
+            runs[before] = first_session_of([sys.executable, "-c", CLI_BEFORE], env,
+                                            tmp / "before")
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
                             str(worktree)], check=True, capture_output=True)
-    results = {"package_version": __version__, "before": before,
+    results = {"package_version": __version__, "before": before, "setup_compile_s": setup_s,
                "machine": {"processor": platform.processor() or platform.machine(),
                            "cpus": os.cpu_count(), "python": platform.python_version()},
-               "rows": {what: {"before": earlier[what], "after": after[what]}
-                        for what in after}}
+               "rows": {what: {label: run[what] for label, run in runs.items()}
+                        for what in runs["now"]}}
     out = Path(__file__).parent / "results" / "first_session.json"
     atomic_write_text(out, json.dumps(results, indent=2) + "\n")
     lines = [
@@ -151,18 +162,23 @@ def first_session(before: str) -> None:
         f"Made by `.venv/bin/python benchmarks/cold_start.py --first-session --before "
         f"{before}`: each command on a new empty cache folder (`POSTURE_ID_CACHE`: no "
         "compiled simulator, no compiled fit model), then again on the cache it filled; "
-        f"this checkout beside {before} (the last commit before issue 44's work), one run "
-        f"on this machine ({os.cpu_count()} cores), wall seconds of the whole command.",
+        f"this checkout beside {before} (the last commit before issue 44's work), with no "
+        "set-up compile (`POSTURE_ID_PREBUILT=none`) and after the set-up's "
+        f"(`python -m posture_id.studies.prebuild`, which `make` runs: {setup_s:.0f} s "
+        f"here); one run on this machine ({os.cpu_count()} cores), wall seconds of the "
+        "whole command, ratios against " + before + ".",
         "",
-        f"| command | first, {before} | first, now | ratio | again, {before} | again, now "
-        "| ratio |",
-        "|---|---|---|---|---|---|---|",
+        f"| command | first, {before} | first, now (ratio) | first, now after set-up "
+        f"(ratio) | again, {before} | again, now (ratio) |",
+        "|---|---|---|---|---|---|",
     ]
     for what, row in results["rows"].items():
-        b, a = row["before"], row["after"]
-        lines.append(f"| `{what}` | {b['first_s']:.1f} s | {a['first_s']:.1f} s | "
-                     f"{a['first_s'] / b['first_s']:.2f} | {b['again_s']:.1f} s | "
-                     f"{a['again_s']:.1f} s | {a['again_s'] / b['again_s']:.2f} |")
+        b, a, p = row[before], row["now"], row["now, after set-up"]
+        lines.append(
+            f"| `{what}` | {b['first_s']:.1f} s | {a['first_s']:.1f} s "
+            f"({a['first_s'] / b['first_s']:.2f}) | {p['first_s']:.1f} s "
+            f"({p['first_s'] / b['first_s']:.2f}) | {b['again_s']:.1f} s | "
+            f"{a['again_s']:.1f} s ({a['again_s'] / b['again_s']:.2f}) |")
     report = ROOT / "docs" / "results" / "first_session.md"
     atomic_write_text(report, "\n".join(lines) + "\n")
     print("\n".join(lines))

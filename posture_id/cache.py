@@ -5,6 +5,12 @@
 written, a private temporary folder for this process (slower: nothing is reused).
 Subfolders: ``kernels/`` (the generated simulator modules and numba's cache of them) and
 ``casadi/`` (the fit's compiled C libraries).
+
+Beside it, read first when it holds what is wanted: the **prebuilt** folder that the
+project's set-up fills (``python -m posture_id.studies.prebuild``, run by ``make``'s install step:
+the simulator for 1–3 segments and the fit's compiled models for them), so that the first
+command on a new machine, or with a new cache folder, compiles nothing.
+``$POSTURE_ID_PREBUILT`` moves it, or switches it off with ``none``.
 """
 
 from __future__ import annotations
@@ -14,7 +20,26 @@ import tempfile
 from functools import cache
 from pathlib import Path
 
-__all__ = ["cache_root", "cache_folder"]
+__all__ = ["cache_root", "cache_folder", "prebuilt_root", "prebuilt_file"]
+
+#: The prebuilt folder's default place: inside the package (an editable install's
+#: checkout; ignored by git).
+_PREBUILT = Path(__file__).resolve().parent / "_prebuilt"
+
+
+def prebuilt_root() -> Path | None:
+    """The prebuilt folder (it may not exist), or None when switched off."""
+    root = os.environ.get("POSTURE_ID_PREBUILT")
+    if root is not None and root.strip().lower() in ("none", "0", ""):
+        return None
+    return Path(root) if root else _PREBUILT
+
+
+def prebuilt_file(name: str, file: str) -> Path | None:
+    """``prebuilt_root()/name/file`` when it exists, else None."""
+    root = prebuilt_root()
+    path = None if root is None else root / name / file
+    return path if path is not None and path.exists() else None
 
 
 def cache_root() -> Path:

@@ -47,3 +47,24 @@ def test_unwritable_cache_compiles_privately(monkeypatch):
     monkeypatch.setenv("POSTURE_ID_CACHE", "/proc/not-writable")
     (f,), backend = compile_functions("t", b"key", _square)
     assert str(backend) == "compiled" and float(f(6)) == 36.0
+
+
+def test_a_prebuilt_library_serves_an_empty_cache(tmp_path, monkeypatch):
+    """What the set-up compiled (the prebuilt folder) is loaded when the cache has nothing;
+    switched off, the function is compiled into the cache."""
+    monkeypatch.setenv("POSTURE_ID_CACHE", str(tmp_path / "setup"))
+    compile_functions("t", b"prebuilt key", _square)  # the set-up's compile
+    monkeypatch.setenv("POSTURE_ID_PREBUILT", str(tmp_path / "setup"))
+    monkeypatch.setenv("POSTURE_ID_CACHE", str(tmp_path / "new"))
+    built = []
+
+    def build():
+        built.append(1)
+        return _square()
+
+    (f,), backend = compile_functions("t", b"prebuilt key", build)
+    assert str(backend) == "compiled (cached)" and not built and float(f(3)) == 9.0
+    assert not list((tmp_path / "new" / "casadi").glob("*.so"))
+    monkeypatch.setenv("POSTURE_ID_PREBUILT", "none")
+    (_,), backend = compile_functions("t", b"prebuilt key", build)
+    assert str(backend) == "compiled" and built

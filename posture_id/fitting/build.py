@@ -2,7 +2,8 @@
 
 The generated C source is hashed with the compiler command; the shared library is kept
 in the ``casadi/`` folder of the cache (:mod:`posture_id.cache`) under that hash, so a
-second fit of the same body and recording length loads it at once. Without a compiler,
+second fit of as many segments loads it at once (or from the prebuilt folder the set-up
+filled). Without a compiler,
 or if compiling fails, the functions run in CasADi's virtual machine (slower) and the
 caller is told why.
 """
@@ -20,7 +21,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from posture_id.cache import cache_folder
+from posture_id.cache import cache_folder, prebuilt_file
 from posture_id.fileio import atomic_write_text
 from posture_id.fitting.options import Compilation
 
@@ -80,6 +81,9 @@ def compile_functions(name: str, key: bytes, build: Callable[[], list[ca.Functio
         return build(), Backend(False, reason="no C compiler found")
     digest = hashlib.sha256(key + ca.__version__.encode() + " ".join(_FLAGS).encode())
     library = cache_folder("casadi") / f"{name}-{digest.hexdigest()[:24]}.so"
+    prebuilt = prebuilt_file("casadi", library.name)
+    if not library.exists() and prebuilt is not None:
+        library = prebuilt  # compiled at set-up
     names_file = library.with_suffix(".names")
     if library.exists() and names_file.exists():
         names = names_file.read_text().split()

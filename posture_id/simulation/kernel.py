@@ -22,7 +22,8 @@ elementary functions come from :mod:`.fastmath` for the same reason. Delay-buffe
 Warm start: the copy for N lives in the cache folder (:mod:`posture_id.cache`) under a name
 that hashes its source, the sources it inlines and numba's version; numba caches its
 machine code beside it, so a new process loads the compiled simulator instead of
-compiling it (about 4 s per N, once per machine).
+compiling it (about 4 s per N, once per machine). A copy the set-up compiled into the
+prebuilt folder (:func:`posture_id.cache.prebuilt_file`) serves when the cache has none.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from pathlib import Path
 
 import numba
 
-from posture_id.cache import cache_folder
+from posture_id.cache import cache_folder, prebuilt_file
 from posture_id.fileio import atomic_write_text
 from posture_id.simulation.kernel_layout import LANES, ParRows, Rows, buffer_length
 
@@ -84,7 +85,10 @@ def kernels(n: int) -> Kernels:
     with _LOCK:
         name, text = kernel_source(n)
         path = cache_folder("kernels") / f"{name}.py"
-        if not path.exists() or path.read_text(encoding="utf-8") != text:
+        prebuilt = prebuilt_file("kernels", f"{name}.py")
+        if not path.exists() and prebuilt is not None:
+            path = prebuilt  # compiled at set-up (numba's cache beside it)
+        elif not path.exists() or path.read_text(encoding="utf-8") != text:
             atomic_write_text(path, text)
         spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)

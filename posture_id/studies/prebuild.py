@@ -31,7 +31,8 @@ def prebuild(folder: str | Path | None = None, say=None) -> Path:
     root = Path(folder) if folder is not None else prebuilt_root()
     if root is None:
         raise SystemExit("POSTURE_ID_PREBUILT is 'none': nothing to prebuild into")
-    os.environ["POSTURE_ID_CACHE"] = str(root)  # this process compiles into it
+    os.environ["POSTURE_ID_CACHE"] = str(root)  # this process compiles into it,
+    os.environ["POSTURE_ID_PREBUILT"] = "none"  # whatever another prebuilt folder holds
     from posture_id.bodies.anthropometry import winter_body_file
     from posture_id.bodies.body import load_body
     from posture_id.fitting.options import FitOptions

@@ -62,7 +62,8 @@ def main(argv: list[str] | None = None) -> int:
         problem_module.compile_functions = real
     functions = captured["functions"]
     n = body.n_segments
-    n_steps_u = model.steps(args.samples)
+    blocks = -(-(args.samples - 1) // problem_module.BLOCK_SAMPLES)
+    n_steps_u = blocks * model.block_steps
     tilt, velocity = prts().on_grid(key.dt, n_steps_u)
     u = step_inputs(tilt, velocity, n_steps_u)
     classes = np.zeros((n, 5))
@@ -84,8 +85,8 @@ def main(argv: list[str] | None = None) -> int:
             subprocess.run(["gcc", *flags, "-fPIC", "-shared", "-march=native", str(source),
                             "-o", str(library), "-lm"], check=True)
             compile_s = time.perf_counter() - start
-            model.sim, model.dirs, model.sim_tail, model.dirs_tail = (
-                ca.external(f.name(), str(library)) for f in functions)
+            model.sim = ca.external(functions[0].name(), str(library))
+            model.dirs = ca.external(functions[1].name(), str(library))
             sim_s, jac_s = [], []
             for _ in range(3):
                 start = time.perf_counter()

@@ -3,12 +3,11 @@
 Two levels:
 
 - a :class:`CompiledModel` owns the compiled CasADi simulation of one **block** of
-  :data:`~posture_id.fitting.symbolic.BLOCK_SAMPLES` samples for N-segment bodies, and of
-  a tail block of 100, with their exact directional derivatives (with respect to the
-  block's initial state and the unknowns), and a thread pool that evaluates Jacobian
-  columns. A recording of any length is simulated block after block (:meth:`CompiledModel.
-  plan`), each block starting from the state the last one ended in, and its Jacobian
-  carried through the blocks the same way (forward mode): the
+  :data:`~posture_id.fitting.symbolic.BLOCK_SAMPLES` samples for N-segment bodies and its
+  exact directional derivatives (with respect to the block's initial state and the
+  unknowns), and a thread pool that evaluates Jacobian columns. A recording of any length
+  is simulated block after block, each block starting from the state the last one ended
+  in, and its Jacobian carried through the blocks the same way (forward mode): the
   recording's length is not in the compiled code, so one compile serves every length. The
   body's constants and the normalisation of the unknowns (the body's default gains) are
   inputs too, so every body with N segments shares it: a cohort of subjects with their
@@ -40,7 +39,6 @@ from posture_id.fitting import symbolic
 from posture_id.fitting.build import Backend, compile_functions
 from posture_id.fitting.options import Compilation, FitOptions
 from posture_id.fitting.symbolic import (
-    BLOCK_INNER,
     BLOCK_SAMPLES,
     SymbolicModel,
     block_function,
@@ -53,12 +51,6 @@ from posture_id.fitting.symbolic import (
 from posture_id.fitting.unknowns import PER_MODULE
 
 __all__ = ["ProblemKey", "ModelKey", "CompiledModel", "FitProblem"]
-
-#: Samples of one loop of the compiled block (its tail blocks are one loop each).
-TAIL_SAMPLES = BLOCK_SAMPLES // BLOCK_INNER
-#: The most loops of 100 samples a recording's rest runs in one by one (the tail function
-#: costs about three times a whole block's per sample); more, and one padded whole block.
-TAIL_LOOPS = 3
 
 #: Default values that scale the unknowns (q = value / default − 1); Δ is fixed per model.
 _SCALED_FIELDS = ("kp", "ki", "kd", "kpas", "bpas")
@@ -181,10 +173,31 @@ class CompiledModel:
         self.width = -(-unknowns // key.threads)  # Jacobian columns per thread
 
         def build() -> list[ca.Function]:
-            functions = []
-            for name, inner in (("dec_block", BLOCK_INNER), ("dec_tail", 1)):
-                functions += self._block_functions(model, name, inner, delay0, sizes, n_body)
-            return functions
+            block = block_function(model, key.sample_every)
+            z = ca.MX.sym("z", self.n_state + unknowns)
+            x0, q = z[: self.n_state], z[self.n_state :]
+            u = ca.MX.sym("u", 3, self.block_steps)
+            c = ca.MX.sym("c", n_body + 5 * n)
+            base = {f: c[n_body + i * n : n_body + (i + 1) * n]
+                    for i, f in enumerate(_SCALED_FIELDS)}
+            delay = delay0 * (1 + q[3 * n : 4 * n])
+            p = ca.vertcat(base["kp"] * (1 + q[0:n]), base["ki"] * (1 + q[n : 2 * n]),
+                           base["kd"] * (1 + q[2 * n : 3 * n]), delay, q[4 * n : 5 * n],
+                           base["kpas"] * (1 + q[5 * n : 6 * n]),
+                           base["bpas"] * (1 + q[6 * n : 7 * n]))
+            x_end, theta = block(x0, u, p, delay_weights(delay, sizes), c[:n_body])
+            # vec() of the (N, B) samples is sample-major: row s·N + j, as numpy ravels (B, N)
+            out = ca.vertcat(x_end, ca.vec(theta))
+            sim = ca.Function("dec_block", [z, u, c], [out])
+            forward = sim.forward(self.width)
+            zs, us, cs = (ca.MX.sym("z", z.sparsity()), ca.MX.sym("u", u.sparsity()),
+                          ca.MX.sym("c", c.sparsity()))
+            seeds = ca.MX.sym("Z", self.n_state + unknowns, self.width)
+            tangent = forward(zs, us, cs, sim(zs, us, cs), seeds,
+                              ca.MX(3, self.block_steps * self.width),
+                              ca.MX(c.shape[0], self.width))
+            dirs = ca.Function("dec_block_dirs", [zs, us, cs, seeds], [tangent])
+            return [sim, dirs]
 
         # everything the compiled functions depend on: the step's generated C, the sizes,
         # the default delays, and this module's and the model's code
@@ -195,9 +208,8 @@ class CompiledModel:
                                  key.default_delay_steps)),
             Path(__file__).read_text(), Path(symbolic.__file__).read_text(),
         ]).encode()
-        (self.sim, self.dirs, self.sim_tail, self.dirs_tail), self.backend = \
-            compile_functions(f"dec_fit_n{n}", code_key, build, notify=notify,
-                              mode=key.compilation)
+        (self.sim, self.dirs), self.backend = compile_functions(
+            f"dec_fit_n{n}", code_key, build, notify=notify, mode=key.compilation)
         self.backend: Backend
         self.pool = ThreadPoolExecutor(max_workers=key.threads,
                                        thread_name_prefix="posture_id-fit")
@@ -208,69 +220,20 @@ class CompiledModel:
         before (thread-safe; at most one build per key at a time)."""
         return cls._cache.get(key, lambda: cls(key, notify))
 
-    def _block_functions(self, model, name: str, inner: int, delay0, sizes,
-                         n_body: int) -> list[ca.Function]:
-        """The simulation of a block of ``inner`` loops of 100 samples and its
-        directional derivatives in ``width`` directions of z."""
-        n, unknowns = self.n, PER_MODULE * self.n
-        steps = inner * TAIL_SAMPLES * self.key.sample_every
-        block = block_function(model, self.key.sample_every, inner)
-        z = ca.MX.sym("z", self.n_state + unknowns)
-        x0, q = z[: self.n_state], z[self.n_state :]
-        u = ca.MX.sym("u", 3, steps)
-        c = ca.MX.sym("c", n_body + 5 * n)
-        base = {f: c[n_body + i * n : n_body + (i + 1) * n]
-                for i, f in enumerate(_SCALED_FIELDS)}
-        delay = delay0 * (1 + q[3 * n : 4 * n])
-        p = ca.vertcat(base["kp"] * (1 + q[0:n]), base["ki"] * (1 + q[n : 2 * n]),
-                       base["kd"] * (1 + q[2 * n : 3 * n]), delay, q[4 * n : 5 * n],
-                       base["kpas"] * (1 + q[5 * n : 6 * n]),
-                       base["bpas"] * (1 + q[6 * n : 7 * n]))
-        x_end, theta = block(x0, u, p, delay_weights(delay, sizes), c[:n_body])
-        # vec() of the (N, B) samples is sample-major: row s·N + j, as numpy ravels (B, N)
-        out = ca.vertcat(x_end, ca.vec(theta))
-        seeds = ca.MX.sym("Z", self.n_state + unknowns, self.width)
-        return [ca.Function(name, [z, u, c], [out]),
-                ca.Function(f"{name}_dirs", [z, u, c, seeds], [ca.jtimes(out, z, seeds)])]
-
-    def plan(self, n_samples: int) -> list[int]:
-        """The blocks a recording of ``n_samples`` runs on, in loops of 100 samples each:
-        whole blocks of :data:`BLOCK_INNER`, then the rest in loops of 100 when there are
-        at most :data:`TAIL_LOOPS` of them, else one more (padded) whole block."""
-        loops = max(-(-(n_samples - 1) // TAIL_SAMPLES), 1)
-        whole, rest = divmod(loops, BLOCK_INNER)
-        if rest > TAIL_LOOPS:
-            return [BLOCK_INNER] * (whole + 1)
-        return [BLOCK_INNER] * whole + [1] * rest
-
-    def steps(self, n_samples: int) -> int:
-        """Steps of the rollout input u a recording of ``n_samples`` needs (its
-        :meth:`plan`'s; the stimulus is padded past the end, those samples dropped)."""
-        return sum(self.plan(n_samples)) * TAIL_SAMPLES * self.key.sample_every
-
-    def _blocks(self, u: np.ndarray):
-        """(functions (sim, dirs), u's columns) of each block of u's plan, in order."""
-        every = self.key.sample_every
-        loops = u.shape[1] // (TAIL_SAMPLES * every)
-        at = 0
-        for inner in self.plan(loops * TAIL_SAMPLES + 1):
-            steps = inner * TAIL_SAMPLES * every
-            pair = (self.sim, self.dirs) if inner == BLOCK_INNER else (self.sim_tail,
-                                                                       self.dirs_tail)
-            yield pair, u[:, at : at + steps]
-            at += steps
-
     def rollout(self, q: np.ndarray, u: np.ndarray, c: np.ndarray
                 ) -> tuple[np.ndarray, list[np.ndarray]]:
-        """The samples (S_u, N) rad of the whole rollout input u (3, :meth:`steps`) from
-        rest, the first one the initial 0, and each block's initial state."""
+        """The samples (S_u, N) rad of the whole rollout input u (3, blocks·block_steps)
+        from rest, the first one the initial 0, and each block's initial state."""
+        n, blocks = self.n, u.shape[1] // self.block_steps
         state = np.zeros(self.n_state)
-        starts, samples = [], [np.zeros((1, self.n))]
-        for (sim, _), u_block in self._blocks(u):
+        starts, samples = [], [np.zeros((1, n))]
+        for k in range(blocks):
             starts.append(state)
-            out = np.array(sim(np.concatenate([state, q]), u_block, c)).ravel()
+            out = np.array(self.sim(np.concatenate([state, q]),
+                                    u[:, k * self.block_steps : (k + 1) * self.block_steps],
+                                    c)).ravel()
             state = out[: self.n_state]
-            samples.append(out[self.n_state :].reshape(-1, self.n))
+            samples.append(out[self.n_state :].reshape(BLOCK_SAMPLES, n))
         return np.vstack(samples), starts
 
     def directions(self, q: np.ndarray, u: np.ndarray, c: np.ndarray, starts,
@@ -282,8 +245,10 @@ class CompiledModel:
         seeds = np.zeros((n_z, self.width))
         seeds[self.n_state + np.asarray(columns), range(len(columns))] = 1.0
         rows = [np.zeros((self.n, self.width))]
-        for ((_, dirs), u_block), state in zip(self._blocks(u), starts, strict=True):
-            out = np.array(dirs(np.concatenate([state, q]), u_block, c, seeds))
+        for k, state in enumerate(starts):
+            out = np.array(self.dirs(np.concatenate([state, q]),
+                                     u[:, k * self.block_steps : (k + 1) * self.block_steps],
+                                     c, seeds))
             seeds[: self.n_state] = out[: self.n_state]
             rows.append(out[self.n_state :])
         return np.vstack(rows)[:, : len(columns)]
@@ -310,7 +275,8 @@ class FitProblem:
         delay0 = self.defaults.array("delay_s") / key.dt
         self.model = CompiledModel.get(key.model_key(delay0), notify)
         self.n_samples = key.n_samples
-        self.n_steps_u = self.model.steps(key.n_samples)
+        blocks = -(-(key.n_samples - 1) // BLOCK_SAMPLES)  # whole blocks: u padded past
+        self.n_steps_u = max(blocks, 1) * self.model.block_steps  # the end, dropped after
         self.backend: Backend = self.model.backend
         self.context = np.concatenate([body_constants(body)]
                                       + [self.defaults.array(f) for f in _SCALED_FIELDS])

@@ -275,9 +275,11 @@ def rollout_steps(n_samples: int, sample_every: int) -> int:
 
 #: Inner blocks of 100 samples in one block of the compiled fit model (which simulates a
 #: recording block by block, so its length is not compiled in). CasADi's derivative of a
-#: longer loop costs less per sample: one Jacobian chunk of a 121 s recording took 0.089 s
-#: a 100-sample block alone, 2.16 s in all with blocks of 10 (2.39 s with 5, 2.35 s with
-#: 20 for its padding), against 1.77 s for the whole recording compiled as one loop.
+#: longer loop costs less per sample: one Jacobian chunk of a 121 s recording (11 columns)
+#: took 2.16 s with blocks of 10 padded to whole blocks, 2.39 s with 5 and 2.35 s with 20,
+#: against 1.8 s for the whole recording compiled as one loop (measured side by side
+#: here). Running the rest in blocks of one instead of a padded block saved 7 % (2.01 s)
+#: but the second function took the 3-segment compile from 11 s to 16 s: not kept.
 BLOCK_INNER = 10
 #: Samples of one block of the compiled fit model.
 BLOCK_SAMPLES = _INNER * BLOCK_INNER

@@ -90,6 +90,10 @@ def kernels(n: int) -> Kernels:
             path = prebuilt  # compiled at set-up (numba's cache beside it)
         elif not path.exists() or path.read_text(encoding="utf-8") != text:
             atomic_write_text(path, text)
+        if not any((path.parent / "__pycache__").glob(f"{name}.*.nbi")):
+            # numba compiles on the first call: say so, once per machine and N
+            print(f"posture-id: compiling the simulator for {n} segment(s) (once; cached "
+                  f"in {path.parent})", file=sys.stderr, flush=True)
         spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module

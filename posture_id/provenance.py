@@ -31,9 +31,7 @@ def body_identity(body: Any) -> dict:
             "segments": list(body.segment_names), "joints": list(body.joint_names)}
 
 
-def recording_identity(trial: Any) -> dict:
-    """``{"recording": name}`` of a trial or recording, with ``"recording_source"`` (the
-    markers, axes and channels its angles came from) when they were derived from a
-    motion-capture file."""
-    source = getattr(getattr(trial, "recording", trial), "source", None)
-    return {"recording": trial.name, **({"recording_source": source} if source else {})}
+def recording_identity(name: str, source: dict | None = None) -> dict:
+    """``{"recording": name}``, with ``"recording_source"`` (the markers, axes and channels
+    its angles came from) when they were derived from a motion-capture file."""
+    return {"recording": name, **({"recording_source": source} if source else {})}

@@ -226,7 +226,8 @@ class FitRun:
             time=self.trial.recording.time, recorded=self.measured,
             fitted=self.problem.simulate(best.q, self.u), segments=body.segment_names,
             joints=body.joint_names,
-            provenance=provenance(self.options, body, **recording_identity(self.trial)),
+            provenance=provenance(self.options, body, **recording_identity(
+                self.trial.name, self.trial.recording.source)),
             residual_sd=residual_sd, noise_floor_deg=self.options.noise_floor_deg,
             time_offset_s=self.trial.time_offset_s, trial=self.trial, defaults=defaults,
             on_bounds=self._on_bounds(best.q, params),

@@ -161,7 +161,7 @@ class FrequencyResponse(Result):
         return np.degrees(np.unwrap(np.angle(self.response), axis=0))
 
     def to_dict(self) -> dict:
-        from posture_id.provenance import provenance
+        from posture_id.provenance import provenance, recording_identity
 
         channels = {}
         for m, name in enumerate(self.channels):
@@ -183,9 +183,8 @@ class FrequencyResponse(Result):
                 "lab_bands": (None if self.options.lab_bands is None
                               else self.options.lab_bands.to_dict()),
                 "pir": self._pir_dict() if self.options.lab_bands is not None else None,
-                "provenance": provenance(self.options, recording=self.name,
-                                         **({"recording_source": self.recording_source}
-                                            if self.recording_source else {}))}
+                "provenance": provenance(self.options, **recording_identity(
+                    self.name, self.recording_source))}
 
     def pir(self, rate_hz: float = 22.0) -> tuple[np.ndarray, np.ndarray]:
         """(t (S,) s, x (S, M)): each channel's pseudo-impulse response over one common

@@ -196,7 +196,8 @@ class Identifier:
             joints=body.joint_names, cnn=cnn, fit=fit, intervals=intervals,
             notices=tuple(dict.fromkeys(notices)),
             provenance=provenance(options if fit is not None else None, body,
-                                  **recording_identity(trial), method=method.value),
+                                  **recording_identity(trial.name, trial.recording.source),
+                                  method=method.value),
             verdict=verdict, relaxed_refit=relaxed_refit, **checked,
         )
 

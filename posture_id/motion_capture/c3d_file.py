@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import struct
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -157,6 +158,10 @@ def _check_length(path: Path, head: bytes) -> None:
 def read_c3d(path: str | Path) -> MotionCaptureTrial:
     """Read a C3D file (any C3D: Vicon, Qualisys, Motion Analysis, ezc3d, ...).
 
+    The last few files read are kept (keyed on the file's path, size and modification
+    time): a command that takes the subject's body from the file's metadata, reads its
+    angles and plots its markers reads it once. The trial's arrays are read-only.
+
     Raises:
         RecordingError: naming the file: not a C3D file, a file ezc3d cannot read
             (truncated, corrupt), no markers, a unit other than mm, cm or m, no frame rate.
@@ -165,6 +170,13 @@ def read_c3d(path: str | Path) -> MotionCaptureTrial:
     if not path.is_file():
         raise RecordingError(f"{path}: no such file" if not path.exists()
                              else f"{path}: a folder, not a C3D file")
+    stat = path.stat()
+    return _read_c3d(path, stat.st_size, stat.st_mtime_ns)
+
+
+@lru_cache(maxsize=2)
+def _read_c3d(path: Path, size: int, mtime_ns: int) -> MotionCaptureTrial:
+    """:func:`read_c3d` of one version of a file (``size`` and ``mtime_ns`` tell it)."""
     with path.open("rb") as handle:
         head = handle.read(512)
     if len(head) < 512 or head[1] != C3D_KEY:
@@ -194,6 +206,8 @@ def read_c3d(path: str | Path) -> MotionCaptureTrial:
         raise RecordingError(f"{path}: POINT:RATE is {rate}: the file gives no frame rate")
     points = raw[:3].transpose(2, 1, 0) * METRES_PER_UNIT[unit.lower()]
     points[np.all(points == 0.0, axis=2)] = np.nan  # an older file's mark of a missing one
+    points.flags.writeable = False
+    analogs.flags.writeable = False
     n_channels = analogs.shape[1] if analogs.ndim == 3 else 0
     analog_rate = float(np.atleast_1d(_value(parameters, "ANALOG", "RATE") or [0.0])[0])
     height = _metadata(parameters, HEIGHT_PARAMETERS)

@@ -130,9 +130,9 @@ def write_c3d(path: str | Path, recording: Recording, lengths: tuple[float, ...]
                              f"{recording.theta.shape[1]} segments")
     valid = np.all(np.isfinite(recording.theta), axis=1)
     if not valid.all():  # a fall: the trial ends there, as the CSV does
-        recording = replace(recording, time=recording.time[:int(np.argmin(valid))],
-                            tilt=recording.tilt[:int(np.argmin(valid))],
-                            theta=recording.theta[:int(np.argmin(valid))])
+        end = int(np.argmin(valid))
+        recording = replace(recording, time=recording.time[:end], tilt=recording.tilt[:end],
+                            theta=recording.theta[:end])
     recording = recording.resampled(options.rate_hz)
     frames = len(recording.time)
     rng = np.random.default_rng(options.seed)

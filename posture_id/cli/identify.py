@@ -191,9 +191,9 @@ def _cohort_norm(args: argparse.Namespace):
 def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm) -> None:
     """Each recording's FRF at the lab's points, and the norm's columns in summary.csv."""
     from posture_id.frf.bands import BAND_PRESETS, FrequencyBands
-    from posture_id.identify.cohort import subject_urdf
     from posture_id.norms.cohort import cohort_frfs
     from posture_id.trials import prepare_trial
+    from posture_id.trials.subjects import subject_urdf
 
     bands = (BAND_PRESETS[args.frf_preset] if args.frf_preset
              else FrequencyBands.from_dict(norm.lab_bands))

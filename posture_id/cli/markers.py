@@ -136,20 +136,20 @@ def recording_body(args: argparse.Namespace, default: Path | None):
     """The body a command reads ``args.recording`` for: ``--body``; else, for a C3D trial
     whose metadata give the subject's height and mass, their Winter body with as many
     segments as the markers name (said on stderr); else ``default`` (None: no body)."""
-    from posture_id.bodies.anthropometry import winter_body_file
     from posture_id.bodies.body import load_body
     from posture_id.motion_capture import is_c3d, read_c3d
+    from posture_id.trials.subjects import subject_urdf
 
     if args.body is not None:
         return load_body(args.body)
     mapping = (mapping_from_args(args)
                if is_c3d(getattr(args, "recording", "") or "") else None)
-    if mapping is not None and Path(args.recording).is_file():
-        trial = read_c3d(args.recording)
-        if trial.height_m is not None and trial.mass_kg is not None:
-            path = winter_body_file(trial.height_m, trial.mass_kg, mapping.n_segments)
-            say(f"{args.recording}: the subject's body from the file's metadata: Winter's "
-                f"tables for {trial.height_m:.3g} m and {trial.mass_kg:.4g} kg, "
-                f"{mapping.n_segments} segment(s) (--body URDF gives another)")
-            return load_body(path)
+    urdf = None if mapping is None else subject_urdf(Path(args.recording), None, None,
+                                                     mapping)
+    if urdf is not None:  # the file gives the subject's height and mass
+        trial = read_c3d(args.recording)  # kept from subject_urdf's read
+        say(f"{args.recording}: the subject's body from the file's metadata: Winter's "
+            f"tables for {trial.height_m:.3g} m and {trial.mass_kg:.4g} kg, "
+            f"{mapping.n_segments} segment(s) (--body URDF gives another)")
+        return load_body(urdf)
     return None if default is None else load_body(default)

@@ -30,7 +30,6 @@ import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from posture_id.bodies.anthropometry import winter_body_file
 from posture_id.bodies.body import load_body
 from posture_id.errors import PostureIdError
 from posture_id.executors import DaskExecutor
@@ -38,12 +37,12 @@ from posture_id.fileio import Result, atomic_write_text, json_text, jsonable
 from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Identifier, Method
 from posture_id.learning.identifier import DEFAULT_LEVEL
-from posture_id.motion_capture import is_c3d
 from posture_id.motion_capture.mapping import MarkerMapping
 from posture_id.plotting import plot_cohort
 from posture_id.progress import Progress, report
 from posture_id.simulation.stimulus import TiltProfile
 from posture_id.trials.reading import RECORDING_SUFFIXES, RecordingLayout, read_recording
+from posture_id.trials.subjects import subject_urdf
 
 __all__ = ["CohortResult", "SubjectIdentifiers", "find_recordings", "identify_cohort",
            "cohort_options"]
@@ -187,27 +186,6 @@ def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | N
     except PostureIdError as exc:
         return {"error": str(exc)}
     return {**result, "cohort_options": cohort_options(identifier, stimulus, columns)}
-
-
-def subject_urdf(recording: Path, bodies: Path | None, default: Path,
-                 trial_bodies: MarkerMapping | None = None) -> Path:
-    """A recording's subject's URDF: ``bodies``/<recording stem>.urdf when there is one;
-    else, with ``trial_bodies`` (the cohort's marker mapping) for a C3D trial whose metadata
-    give the subject's height and mass, their Winter body of the mapping's segments;
-    ``default`` otherwise."""
-    own = None if bodies is None else Path(bodies) / f"{recording.stem}.urdf"
-    if own is not None and own.is_file():
-        return own
-    if trial_bodies is not None and is_c3d(recording):
-        from posture_id.motion_capture.c3d_file import read_c3d
-
-        try:
-            trial = read_c3d(recording)
-        except PostureIdError:
-            return default  # reading the recording refuses it, with the reason, later
-        if trial.height_m is not None and trial.mass_kg is not None:
-            return winter_body_file(trial.height_m, trial.mass_kg, trial_bodies.n_segments)
-    return default
 
 
 def subjects_without_a_body(recordings: list[Path], bodies: str | Path) -> list[Path]:

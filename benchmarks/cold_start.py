@@ -40,6 +40,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from revisions import IMPORT_BEFORE, checkout
+
 from posture_id import __version__
 from posture_id.fileio import atomic_write_text
 
@@ -73,14 +75,7 @@ print(t1 - t0, t2 - t1)
 CLI = "import sys; from posture_id.cli import main; sys.exit(main(sys.argv[1:]))"
 #: Runs the command line of the checkout in $POSTURE_ID_BEFORE: the editable install's
 #: import hook is removed first, so that the older tree's modules are the ones imported.
-CLI_BEFORE = (
-    "import os, sys; "
-    "sys.meta_path[:] = [f for f in sys.meta_path "
-    "if '__editable__' not in getattr(f, '__module__', '')]; "
-    "sys.path.insert(0, os.environ['POSTURE_ID_BEFORE']); "
-    "import posture_id; assert posture_id.__file__.startswith(sys.path[0]), posture_id.__file__; "
-    "from posture_id.cli import main; sys.exit(main(sys.argv[1:]))"
-)
+CLI_BEFORE = IMPORT_BEFORE + "from posture_id.cli import main; sys.exit(main(sys.argv[1:]))"
 
 
 def wall(cmd: list[str], env: dict | None = None) -> float:
@@ -138,17 +133,11 @@ def first_session(before: str) -> None:
             runs[label] = first_session_of(
                 [sys.executable, "-c", CLI],
                 {**os.environ, "POSTURE_ID_PREBUILT": prebuilt}, tmp / label)
-        worktree = tmp / "tree"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(worktree),
-                        before], check=True, capture_output=True)
-        try:
+        with checkout(before) as worktree:
             (tmp / "before").mkdir()
             env = {**os.environ, "POSTURE_ID_BEFORE": str(worktree)}
             runs[before] = first_session_of([sys.executable, "-c", CLI_BEFORE], env,
                                             tmp / "before")
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
-                            str(worktree)], check=True, capture_output=True)
     results = {"package_version": __version__, "before": before, "setup_compile_s": setup_s,
                "machine": {"processor": platform.processor() or platform.machine(),
                            "cpus": os.cpu_count(), "python": platform.python_version()},
@@ -229,10 +218,7 @@ def main() -> None:
         after_s = median_wall([*cli, *fit_args], args.repeats)
         print(f"posture-id fit, 121 s TIP recording, this checkout: {after_s:.1f} s wall")
 
-        worktree = tmp / "before"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(worktree),
-                        args.before], check=True, capture_output=True)
-        try:
+        with checkout(args.before) as worktree:
             env = {**os.environ, "POSTURE_ID_BEFORE": str(worktree)}
             before_s = median_wall([sys.executable, "-c", CLI_BEFORE, *fit_args],
                                    args.repeats, env)
@@ -241,9 +227,6 @@ def main() -> None:
             identify_before_s = median_wall(
                 [sys.executable, "-c", CLI_BEFORE, "identify", str(recording), "--method",
                  "cnn", "--out", str(tmp / "cnn_before.json")], args.repeats, env)
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
-                            str(worktree)], check=True, capture_output=True)
         print(f"posture-id fit, same recording, {args.before}: {before_s:.1f} s wall "
               f"(this checkout takes {after_s / before_s:.2f}× as long)")
         print(f"posture-id simulate, {args.before}: {sim_before_s:.2f} s wall "

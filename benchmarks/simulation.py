@@ -1,13 +1,24 @@
-"""Simulation throughput: compiled batch kernel versus the Pinocchio reference path.
+"""Simulation throughput: compiled batch kernel versus the Pinocchio reference path, and
+against another revision's kernel side by side.
 
 Run:  .venv/bin/python benchmarks/simulation.py [--trials 2048] [--workers 2]
+      .venv/bin/python benchmarks/simulation.py --before REV [--rounds 6]
 
 Measures, in one run on this machine (medians of --repeats runs):
   1. compiled batch: 121 s TIP trials per second (default parameters, and MODEL §5
-     random parameters, about half of which fall and are aborted);
+     random parameters, about a fifth of which fall and are aborted);
   2. the Pinocchio reference path (``pinocchio.aba`` every 2 ms step) on one such trial;
 and prints their ratio. Compilation is done (or loaded from cache) before timing.
-Writes the figures to benchmarks/results/simulation.json.
+
+``--before REV``: this checkout's kernel and revision REV's (a temporary git worktree, the
+same interpreter) measured in child processes that take turns, ``--rounds`` rounds in the
+order now, REV, REV, now, ...: a shared machine's drift falls on both alike. Each child
+compiles (or loads) its kernel first, then times its batches (the best of
+``--repeats``); reported: each side's median over the rounds and the median of the
+rounds' ratios.
+
+Writes the figures to benchmarks/results/simulation.json (``--before``:
+simulation_before.json).
 """
 
 from __future__ import annotations
@@ -16,10 +27,14 @@ import argparse
 import json
 import os
 import platform
+import statistics
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from revisions import IMPORT_BEFORE, checkout
 
 from posture_id import __version__, load_body
 from posture_id.dec.parameters import ParameterArrays, default_parameters
@@ -27,6 +42,30 @@ from posture_id.dec.prior import sample_parameters
 from posture_id.fileio import atomic_write_text
 from posture_id.simulation import SimulationOptions, simulate, simulate_batch
 from posture_id.simulation.reference import simulate_reference
+
+#: A child's measurement: trials/s with default and with random parameters (JSON on stdout).
+CHILD = """
+import json, os, sys, time
+from posture_id import load_body, simulate
+from posture_id.dec.parameters import ParameterArrays, default_parameters
+from posture_id.dec.prior import sample_parameters
+from posture_id.simulation import simulate_batch
+import numpy as np
+trials, workers, repeats = (int(a) for a in sys.argv[1:4])
+body = load_body()
+simulate(body)
+sets = {"default": ParameterArrays.from_parameters([default_parameters(body)] * trials),
+        "random": sample_parameters(body, trials, np.random.default_rng(0))}
+rates = {}
+for name, params in sets.items():
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        simulate_batch(body, params, workers=workers)
+        best = min(best, time.perf_counter() - start)
+    rates[name] = trials / best
+print(json.dumps(rates))
+"""
 
 
 def timed(fn, repeats: int = 1):
@@ -39,15 +78,71 @@ def timed(fn, repeats: int = 1):
     return out, float(np.median(times))
 
 
+def machine() -> str:
+    return f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
+
+
+def child_rates(code: str, env: dict, trials: int, workers: int, repeats: int) -> dict:
+    """Trials/s of one child process running ``code`` + :data:`CHILD`."""
+    out = subprocess.run([sys.executable, "-c", code + CHILD, str(trials), str(workers),
+                          str(repeats)], capture_output=True, text=True, env=env)
+    if out.returncode != 0:
+        raise SystemExit(f"the timing child failed:\n{out.stderr}")
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+def side_by_side(args) -> None:
+    """This checkout's kernel against ``args.before``'s, rounds taking turns."""
+    rounds: list[dict] = []
+    with checkout(args.before) as tree:
+        sides = {"now": ("", dict(os.environ)),
+                 args.before: (IMPORT_BEFORE, {**os.environ, "POSTURE_ID_BEFORE": str(tree)})}
+        for code, env in sides.values():  # compile or load both kernels first
+            child_rates(code, env, 32, 1, 1)
+        for k in range(args.rounds):
+            order = list(sides) if k % 2 == 0 else list(sides)[::-1]
+            rounds.append({side: child_rates(*sides[side], args.trials, args.workers,
+                                             args.repeats) for side in order})
+            print(f"round {k + 1}: " + ", ".join(
+                f"{side} {r['default']:.0f}/{r['random']:.0f}" for side, r in rounds[-1].items())
+                + " trials/s (default/random parameters)", flush=True)
+    summary = {}
+    for kind in ("default", "random"):
+        now = [r["now"][kind] for r in rounds]
+        before = [r[args.before][kind] for r in rounds]
+        ratios = [r["now"][kind] / r[args.before][kind] for r in rounds]
+        summary[kind] = {
+            "now_trials_per_s": statistics.median(now),
+            "before_trials_per_s": statistics.median(before),
+            "ratio_median": statistics.median(ratios),
+            "ratio_min": min(ratios),
+        }
+        print(f"{kind} parameters: now {summary[kind]['now_trials_per_s']:.0f} trials/s, "
+              f"{args.before} {summary[kind]['before_trials_per_s']:.0f} trials/s; now/before "
+              f"median {summary[kind]['ratio_median']:.2f}× (lowest round "
+              f"{summary[kind]['ratio_min']:.2f}×)")
+    results = {"package_version": __version__, "machine": machine(), "before": args.before,
+               "workers": args.workers, "trials": args.trials, "repeats": args.repeats,
+               "rounds": rounds, "summary": summary}
+    out = args.out or Path(__file__).parent / "results" / "simulation_before.json"
+    atomic_write_text(out, json.dumps(results, indent=2) + "\n")
+    print(f"wrote {out}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=2048)
     parser.add_argument("--workers", type=int, default=os.cpu_count())
     parser.add_argument("--repeats", type=int, default=3,
-                        help="timings are the median of this many runs")
-    parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "simulation.json")
+                        help="timings are the median (--before: the best) of this many runs")
+    parser.add_argument("--before", help="a revision whose kernel runs beside this one")
+    parser.add_argument("--rounds", type=int, default=6,
+                        help="with --before: rounds of one child each, taking turns")
+    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
+    if args.before:
+        side_by_side(args)
+        return
 
     body = load_body()
     options = SimulationOptions()
@@ -69,7 +164,7 @@ def main() -> None:
     rate_random = args.trials / t_random
     results = {
         "package_version": __version__,
-        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores",
+        "machine": machine(),
         "workers": args.workers,
         "repeats": args.repeats,
         "trials": args.trials,
@@ -90,8 +185,9 @@ def main() -> None:
     print(f"ratio compiled/reference: {results['speedup_default_vs_reference']:.0f}× (default), "
           f"{results['speedup_random_vs_reference']:.0f}× (random)")
     print(f"same trial, compiled vs reference: max |Δθ| = {max_diff:.2e} rad")
-    atomic_write_text(args.out, json.dumps(results, indent=2) + "\n")
-    print(f"wrote {args.out}")
+    out = args.out or Path(__file__).parent / "results" / "simulation.json"
+    atomic_write_text(out, json.dumps(results, indent=2) + "\n")
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":

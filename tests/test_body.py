@@ -57,8 +57,8 @@ def _kernel_state(body, theta, omega, tau):
     k.kinematics(w, s.real.copy(), s.imag.copy(), 10.0)
     k.dynamics(w, d.real.copy(), d.imag.copy(), body.inertias, body.gravity, 0.0)
     acc = w[r.acc * LANES : (r.acc + n) * LANES].reshape(n, LANES).T
-    chol = w[r.mass * LANES : (r.mass + n * n) * LANES].reshape(n, n, LANES)
-    return acc, chol
+    ldl = w[r.mass * LANES : (r.mass + n * n) * LANES].reshape(n, n, LANES)
+    return acc, ldl
 
 
 def test_plant_matches_pinocchio_at_random_states(any_body):
@@ -71,12 +71,13 @@ def test_plant_matches_pinocchio_at_random_states(any_body):
     tau = rng.uniform(-300, 300, (LANES, n))
     lower = np.tril(np.ones((n, n)))  # θ = lower @ q
     theta, omega = q @ lower.T, v @ lower.T
-    acc, chol = _kernel_state(body, theta, omega, tau)
+    acc, ldl = _kernel_state(body, theta, omega, tau)
     acc_g, _ = _kernel_state(body, theta, np.zeros_like(omega), np.zeros_like(tau))
     model, data = body.model, body.model.createData()
     for lane in range(LANES):
-        c = np.tril(chol[:, :, lane])
-        m_theta = c @ c.T
+        # M = L·diag(d)·Lᵀ: L unit lower triangular below the diagonal, d on it
+        unit_lower = np.tril(ldl[:, :, lane], -1) + np.eye(n)
+        m_theta = unit_lower @ np.diag(np.diag(ldl[:, :, lane])) @ unit_lower.T
         m_pin = pin.crba(model, data, q[lane])
         m_pin = np.triu(m_pin) + np.triu(m_pin, 1).T
         np.testing.assert_allclose(lower.T @ m_theta @ lower, m_pin, rtol=1e-12, atol=1e-12)

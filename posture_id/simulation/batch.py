@@ -54,7 +54,7 @@ def block_arrays(k, body: Body, params: ParameterArrays, options: SimulationOpti
     pr = k.par_rows
     trials = slice(first, first + count)
     delay = options.delay_steps(params.delay_s[trials])
-    delay_ceil = np.ceil(delay)
+    delay_ceil = np.maximum(np.ceil(delay), 1.0)  # ≥ 1: the kernel reads slot n + 1 − ⌈Δ/dt⌉
     alpha_ref = body.reference_com_angles
     kp = params.kp[trials]
     rows = {

@@ -90,7 +90,7 @@ class Rows:
         return 14 * self.n
 
     @property
-    def mass(self) -> int:  # M (N×N rows), Cholesky factor in place
+    def mass(self) -> int:  # M (N×N rows), its LDLᵀ factors in place
         return 15 * self.n
 
     @property
@@ -106,12 +106,20 @@ class Rows:
         return self.estimate + 2
 
     @property
-    def vsum(self) -> int:  # 4 rows: running COM-above sum (re, im) and its rate
+    def vsum(self) -> int:  # 4N rows: COM-above sums Σ_{j≥i} e^{iθ_j} S_j (re, im), rates
         return self.estimate + 3
 
     @property
+    def pivot_inverse(self) -> int:  # 1/d_j of M = L·diag(d)·Lᵀ (N rows)
+        return self.estimate + 3 + 4 * self.n
+
+    @property
+    def servo_before(self) -> int:  # the servo command of the step before (N rows)
+        return self.estimate + 3 + 5 * self.n
+
+    @property
     def count(self) -> int:
-        return self.estimate + 7
+        return self.estimate + 3 + 6 * self.n
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,10 @@ P = ParRows(N)
 TH, OM, INT, AL, ALD = R.theta, R.omega, R.integral, R.alpha, R.alpha_dot
 TG, TGD, COS, SIN, LEV = R.tg, R.tg_dot, R.cos, R.sin, R.lever
 TAU, SERVO, Q, QD, ACC, MASS = R.tau, R.servo, R.q, R.qd, R.acc, R.mass
-EST, ESTR, INSIDE, VSUM = R.estimate, R.estimate_rate, R.inside, R.vsum
+SPREV = R.servo_before
+EST, ESTR, INSIDE = R.estimate, R.estimate_rate, R.inside
+VRE, VIM, VDRE, VDIM = R.vsum, R.vsum + N, R.vsum + 2 * N, R.vsum + 3 * N
+PIVINV = R.pivot_inverse
 KP, KI, KD, SIGN, KPAS, BPAS = P.kp, P.ki, P.kd, P.sign, P.kpas, P.bpas
 DLY, DCEIL, DFRAC = P.delay, P.delay_ceil, P.delay_frac
 AREF, HOLD = P.alpha_ref, P.hold
@@ -36,36 +39,51 @@ def kinematics(w, s_re, s_im, sway_limit):
     """COM-above angles, gravity terms and the sway-limit flag from θ, θ̇ (all lanes).
 
     s_re, s_im: (N,) gravity levers S (kg·m); sway_limit: rad.
+    Three passes over the lanes, each with short dependency chains (the simulator is
+    bound by their latency): sin and cos of every θ_j; the COM-above sums from the top
+    down; then every segment's angle, rate and gravity term.
     """
-    # segments from the top down, lanes innermost; running sums in rows VSUM..VSUM+3
     for lane in range(L):
-        w[(VSUM + 0) * L + lane] = 0.0
-        w[(VSUM + 1) * L + lane] = 0.0
-        w[(VSUM + 2) * L + lane] = 0.0
-        w[(VSUM + 3) * L + lane] = 0.0
         w[INSIDE * L + lane] = 1.0
+    for i in range(N):
+        for lane in range(L):
+            th = w[(TH + i) * L + lane]
+            w[(COS + i) * L + lane] = cos_poly(th)
+            w[(SIN + i) * L + lane] = sin_poly(th)
+            if not abs(th) <= sway_limit:
+                w[INSIDE * L + lane] = 0.0
+    # running sums Σ_{j≥i} e^{iθ_j} S_j (re, im) and their rates, from the top down
     for top_down in range(N):
         i = N - 1 - top_down
         sr = s_re[i]
         si = s_im[i]
         for lane in range(L):
-            th = w[(TH + i) * L + lane]
-            c = cos_poly(th)
-            s = sin_poly(th)
-            w[(COS + i) * L + lane] = c
-            w[(SIN + i) * L + lane] = s
+            c = w[(COS + i) * L + lane]
+            s = w[(SIN + i) * L + lane]
             e_re = c * sr - s * si
             e_im = s * sr + c * si
             w[(LEV + i) * L + lane] = e_im
             om = w[(OM + i) * L + lane]
-            v_re = w[(VSUM + 0) * L + lane] + e_re
-            v_im = w[(VSUM + 1) * L + lane] + e_im
-            vd_re = w[(VSUM + 2) * L + lane] - om * e_im
-            vd_im = w[(VSUM + 3) * L + lane] + om * e_re
-            w[(VSUM + 0) * L + lane] = v_re
-            w[(VSUM + 1) * L + lane] = v_im
-            w[(VSUM + 2) * L + lane] = vd_re
-            w[(VSUM + 3) * L + lane] = vd_im
+            if top_down == 0:
+                v_re = e_re
+                v_im = e_im
+                vd_re = -om * e_im
+                vd_im = om * e_re
+            else:
+                v_re = w[(VRE + i + 1) * L + lane] + e_re
+                v_im = w[(VIM + i + 1) * L + lane] + e_im
+                vd_re = w[(VDRE + i + 1) * L + lane] - om * e_im
+                vd_im = w[(VDIM + i + 1) * L + lane] + om * e_re
+            w[(VRE + i) * L + lane] = v_re
+            w[(VIM + i) * L + lane] = v_im
+            w[(VDRE + i) * L + lane] = vd_re
+            w[(VDIM + i) * L + lane] = vd_im
+    for i in range(N):
+        for lane in range(L):
+            v_re = w[(VRE + i) * L + lane]
+            v_im = w[(VIM + i) * L + lane]
+            vd_re = w[(VDRE + i) * L + lane]
+            vd_im = w[(VDIM + i) * L + lane]
             r = math.sqrt(v_re * v_re + v_im * v_im)
             inv_r = 1.0 / r
             rate = (vd_im * v_re - vd_re * v_im) * (inv_r * inv_r)
@@ -73,8 +91,6 @@ def kinematics(w, s_re, s_im, sway_limit):
             w[(ALD + i) * L + lane] = rate
             w[(TG + i) * L + lane] = v_im * inv_r
             w[(TGD + i) * L + lane] = v_re * inv_r * rate
-            if not abs(th) <= sway_limit:
-                w[INSIDE * L + lane] = 0.0
 
 @njit(cache=True, error_model="numpy", inline="always")
 def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
@@ -124,21 +140,24 @@ def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
             below_rate = om
         w[ESTR * L + lane] = est_rate
         w[EST * L + lane] += dt * est_rate
-    # phase 2: store the command (contiguous, vectorised) ...
+    # phase 2: store the command already interpolated for its reader (vectorised):
+    # slot m holds u(m−1) + frac·(u(m) − u(m−1)), the servo command Δ/dt steps before
+    # step m + ⌈Δ/dt⌉ − 1, so a lane reads one slot ...
     slot = n & mask
     for i in range(N):
         row = i * n_buf + slot
         for lane in range(L):
-            buf[row * L + lane] = w[(SERVO + i) * L + lane]
-    # ... and read it back Δ later, interpolated (scalar: one gather per lane); before
-    # the first command is Δ old, the servo sent what held the reference posture at rest
+            u_now = w[(SERVO + i) * L + lane]
+            u_before = w[(SPREV + i) * L + lane]
+            buf[row * L + lane] = u_before + par[(DFRAC + i) * L + lane] * (u_now - u_before)
+            w[(SPREV + i) * L + lane] = u_now
+    # ... (scalar: one gather per lane); before the first command is Δ old, the servo sent
+    # what held the reference posture at rest
     for i in range(N):
         base = i * n_buf * L
         for lane in range(L):
-            k = n - int(par[(DCEIL + i) * L + lane])
-            u0 = buf[base + (k & mask) * L + lane]
-            u1 = buf[base + ((k + 1) & mask) * L + lane]
-            delayed = u0 + par[(DFRAC + i) * L + lane] * (u1 - u0)
+            k = n + 1 - int(par[(DCEIL + i) * L + lane])
+            delayed = buf[base + (k & mask) * L + lane]
             w[(TAU + i) * L + lane] = (delayed if n >= par[(DLY + i) * L + lane]
                                        else par[(HOLD + i) * L + lane])
     # phase 3 (vectorised): τ = −servo(t − Δ) − PD on T_g (undelayed) − passive
@@ -156,54 +175,73 @@ def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def dynamics(w, d_re, d_im, inertia, gravity, dt):
-    """θ̈ from M θ̈ = Q − c − G (Cholesky), then one semi-implicit Euler step.
+    """θ̈ from M θ̈ = Q − c − G (LDLᵀ), then one semi-implicit Euler step.
 
     d_re, d_im: (N, N) coupling D (kg·m²); inertia: (N,) kg·m²; gravity: m/s²; dt: s.
+    Every loop over lanes is innermost (vectorised); M's diagonal is constant.
     """
-    for lane in range(L):
-        for j in range(N):
+    # right-hand side Q − G in the θ̈ rows, M's lower triangle, Coriolis/centrifugal terms
+    for j in range(N):
+        for lane in range(L):
             rhs = w[(TAU + j) * L + lane] + gravity * w[(LEV + j) * L + lane]
             if j + 1 < N:
                 rhs -= w[(TAU + j + 1) * L + lane]
             w[(ACC + j) * L + lane] = rhs
-            w[(MASS + j * N + j) * L + lane] = d_re[j, j] + inertia[j]
-        for j in range(N):
-            cj = w[(COS + j) * L + lane]
-            sj = w[(SIN + j) * L + lane]
-            oj = w[(OM + j) * L + lane]
-            for k in range(j):
+    for j in range(N):
+        for k in range(j):
+            dr = d_re[j, k]
+            di = d_im[j, k]
+            for lane in range(L):
+                cj = w[(COS + j) * L + lane]
+                sj = w[(SIN + j) * L + lane]
                 ck = w[(COS + k) * L + lane]
                 sk = w[(SIN + k) * L + lane]
-                ok = w[(OM + k) * L + lane]
                 e_re = cj * ck + sj * sk
                 e_im = sj * ck - cj * sk
-                w[(MASS + j * N + k) * L + lane] = d_re[j, k] * e_re - d_im[j, k] * e_im
-                cor = d_re[j, k] * e_im + d_im[j, k] * e_re
+                w[(MASS + j * N + k) * L + lane] = dr * e_re - di * e_im
+                cor = dr * e_im + di * e_re
+                ok = w[(OM + k) * L + lane]
+                oj = w[(OM + j) * L + lane]
                 w[(ACC + j) * L + lane] -= ok * ok * cor
                 w[(ACC + k) * L + lane] += oj * oj * cor
-        # Cholesky M = L Lᵀ (lower triangle), forward and back substitution
+    # M = L·diag(d)·Lᵀ, L unit lower triangular (in place of M's lower triangle), the
+    # pivots d in M's diagonal rows, 1/d in the PIVINV rows; then L y = b, Lᵀ θ̈ = y / d.
+    # The segment loops run over all of range(N) with a condition (never range(j)), so
+    # LLVM unrolls them whole and the lane loop vectorises.
+    for lane in range(L):
         for j in range(N):
-            s = w[(MASS + j * N + j) * L + lane]
-            for k in range(j):
-                s -= w[(MASS + j * N + k) * L + lane] ** 2
-            djj = math.sqrt(s)
-            w[(MASS + j * N + j) * L + lane] = djj
-            for i in range(j + 1, N):
-                s = w[(MASS + i * N + j) * L + lane]
-                for k in range(j):
-                    s -= w[(MASS + i * N + k) * L + lane] * w[(MASS + j * N + k) * L + lane]
-                w[(MASS + i * N + j) * L + lane] = s / djj
+            s = d_re[j, j] + inertia[j]
+            for k in range(N):
+                if k < j:
+                    l_jk = w[(MASS + j * N + k) * L + lane]
+                    s -= l_jk * l_jk * w[(MASS + k * N + k) * L + lane]
+            w[(MASS + j * N + j) * L + lane] = s
+            inv = 1.0 / s
+            w[(PIVINV + j) * L + lane] = inv
+            for i in range(N):
+                if i > j:
+                    s = w[(MASS + i * N + j) * L + lane]
+                    for k in range(N):
+                        if k < j:
+                            s -= (w[(MASS + i * N + k) * L + lane]
+                                  * w[(MASS + j * N + k) * L + lane]
+                                  * w[(MASS + k * N + k) * L + lane])
+                    w[(MASS + i * N + j) * L + lane] = s * inv
         for i in range(N):
             s = w[(ACC + i) * L + lane]
-            for k in range(i):
-                s -= w[(MASS + i * N + k) * L + lane] * w[(ACC + k) * L + lane]
-            w[(ACC + i) * L + lane] = s / w[(MASS + i * N + i) * L + lane]
-        for i in range(N - 1, -1, -1):
-            s = w[(ACC + i) * L + lane]
-            for k in range(i + 1, N):
-                s -= w[(MASS + k * N + i) * L + lane] * w[(ACC + k) * L + lane]
-            w[(ACC + i) * L + lane] = s / w[(MASS + i * N + i) * L + lane]
-        for j in range(N):
+            for k in range(N):
+                if k < i:
+                    s -= w[(MASS + i * N + k) * L + lane] * w[(ACC + k) * L + lane]
+            w[(ACC + i) * L + lane] = s
+        for back in range(N):
+            i = N - 1 - back
+            s = w[(ACC + i) * L + lane] * w[(PIVINV + i) * L + lane]
+            for k in range(N):
+                if k > i:
+                    s -= w[(MASS + k * N + i) * L + lane] * w[(ACC + k) * L + lane]
+            w[(ACC + i) * L + lane] = s
+    for j in range(N):
+        for lane in range(L):
             om = w[(OM + j) * L + lane] + dt * w[(ACC + j) * L + lane]
             w[(OM + j) * L + lane] = om
             w[(TH + j) * L + lane] += dt * om
@@ -248,6 +286,7 @@ def simulate_block(w, par, buf, d_re, d_im, inertia, s_re, s_im, gravity, tilt, 
                 w[(TH + j) * L + lane] = 0.0
                 w[(OM + j) * L + lane] = 0.0
                 w[(INT + j) * L + lane] = 0.0
+                w[(SPREV + j) * L + lane] = 0.0
             for p in range(lane, buf.shape[0], L):
                 buf[p] = 0.0
         if n_alive == 0:

@@ -178,7 +178,7 @@ def dynamics(w, d_re, d_im, inertia, gravity, dt):
     """θ̈ from M θ̈ = Q − c − G (LDLᵀ), then one semi-implicit Euler step.
 
     d_re, d_im: (N, N) coupling D (kg·m²); inertia: (N,) kg·m²; gravity: m/s²; dt: s.
-    Every loop over lanes is innermost (vectorised); M's diagonal is constant.
+    M's diagonal is constant.
     """
     # right-hand side Q − G in the θ̈ rows, M's lower triangle, Coriolis/centrifugal terms
     for j in range(N):
@@ -227,6 +227,7 @@ def dynamics(w, d_re, d_im, inertia, gravity, dt):
                                   * w[(MASS + j * N + k) * L + lane]
                                   * w[(MASS + k * N + k) * L + lane])
                     w[(MASS + i * N + j) * L + lane] = s * inv
+    for lane in range(L):
         for i in range(N):
             s = w[(ACC + i) * L + lane]
             for k in range(N):

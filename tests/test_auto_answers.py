@@ -24,7 +24,7 @@ from posture_id.simulation.subjects import people_like
 
 @pytest.fixture(scope="module")
 def subject(tip):
-    return people_like(tip, default_parameters(tip), prts(), 0.25, seed=12)
+    return people_like(tip, default_parameters(tip), prts(states=80, cycles=3), 0.25, seed=12)
 
 
 @pytest.fixture

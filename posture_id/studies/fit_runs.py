@@ -6,14 +6,17 @@ set's PRTS. The CNN identifies it and least squares refines the CNN's answer wit
 classes kept (the hybrid's usual route, :func:`posture_id.identify.core._refine`); the row
 keeps what coverage needs: the true and fitted normalised parameters, the Gauss-Newton
 standard errors (−1 where infinite), the residual RMS, the recording's estimated sensor
-noise and the CNN's answer. Trials run in parallel processes, one per core, each on one thread,
-and every finished trial is appended to a journal, so an interrupted run resumes.
+noise and the CNN's answer. Trials run in parallel processes (one per core by default),
+each with the cores left to it as Jacobian threads (one each when every core has a
+process; at most the fit's default), and every finished trial is appended to a journal,
+so an interrupted run resumes.
 """
 
 from __future__ import annotations
 
 import functools
 import json
+import os
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -71,7 +74,7 @@ def _dataset(dataset_dir: str) -> Dataset:
 
 def _one(task: tuple) -> dict:
     """One trial identified by the hybrid (a worker process)."""
-    model_dir, dataset_dir, split, position, shard, local, noise_deg = task
+    model_dir, dataset_dir, split, position, shard, local, noise_deg, threads = task
     data = _dataset(dataset_dir)
     identifier = worker_identifier(data.manifest["body"]["urdf"], Method.CNN.value, model_dir)
     body = identifier.body
@@ -82,7 +85,7 @@ def _one(task: tuple) -> dict:
     trial = prepare_trial(replace(recording, name=f"{split} trial {position}"))
     cnn = identifier.cnn.identify(trial)
     fit = fit_recording(trial, body, cnn.parameters,
-                        FitOptions(threads=1, classes=FixedClasses()))
+                        FitOptions(threads=threads, classes=FixedClasses()))
     return {"split": split, "position": position, "noise_deg": noise_deg,
             "seconds": time.perf_counter() - start, "truth": truth.tolist(),
             "estimate": np.asarray(fit.normalised).tolist(),
@@ -110,11 +113,14 @@ def run_fits(model_dir: str | Path, dataset_dir: str | Path, split: str, count: 
     header = {"format": "posture_id-fit-journal", "model_weights_sha256": weights,
               "dataset": data.manifest["shards"][0]["sha256"]}
     trials = split_trials(data, split, count)
-    tasks = [(str(model_dir), str(dataset_dir), split, p, k, i, float(noise))
+    cores = os.cpu_count() or 1
+    # the cores a process has to itself, up to the fit's default (its prebuilt model)
+    threads = max(1, min(FitOptions().threads, cores // (workers or cores)))
+    tasks = [(str(model_dir), str(dataset_dir), split, p, k, i, float(noise), threads)
              for noise in noise_levels for p, (k, i) in enumerate(trials)]
     book = Journal(Path(journal), header, _key)
     done = book.read()
-    rows = [done[t] for t in ((s, p, n) for _, _, s, p, _, _, n in tasks) if t in done]
+    rows = [done[t] for t in ((s, p, n) for _, _, s, p, _, _, n, _ in tasks) if t in done]
     todo = [t for t in tasks if (t[2], t[3], t[6]) not in done]
     report(progress, len(rows), len(tasks), "fit")
     with LocalExecutor(workers, processes=True) as pool:

@@ -182,8 +182,12 @@ noise-lofo: $(STAMP)
 	  --learning-rate 5e-4 --subjects 24 --models data/models/noise_lofo_long \
 	  --out docs/results/noise_lofo
 
+# The simulator's throughput, then its kernel beside the kernel before issue 44's work
+# (BENCH_BEFORE, a temporary worktree), child processes taking turns (docs/performance.md).
+BENCH_BEFORE ?= 1235176
 bench: $(STAMP)
 	$(BIN)/python benchmarks/simulation.py
+	$(BIN)/python benchmarks/simulation.py --before $(BENCH_BEFORE)
 
 # Experiment design (docs/design.md): the Ki question under sensor noise and people-like
 # sway on the TIP, then the predictions checked against least-squares fits (resumable).

@@ -180,8 +180,9 @@ def test_a_fit_stopped_at_the_noise_level_is_converged_and_exits_0(tip, tmp_path
 
     monkeypatch.setattr(least_squares, "fit_recording", stops_short)
     path = tmp_path / "rec.csv"
-    simulate(tip, default_parameters(tip), prts(cycles=1)).to_recording().with_sensor_noise(
-        0.05, 3).to_csv(path)  # one cycle: the status, not the length, is under test
+    # one 80-state cycle (20 s): the status, not the length, is under test
+    simulate(tip, default_parameters(tip), prts(cycles=1, states=80)).to_recording(
+    ).with_sensor_noise(0.05, 3).to_csv(path)
     assert main(["fit", str(path), "--locked", "--out", str(tmp_path / "fit.json")]) == 0
     out = capsys.readouterr().out
     assert "converged in" in out and "NOT converged" not in out

@@ -19,11 +19,11 @@ from posture_id.simulation import SimulationOptions, prts, simulate
 from posture_id.trials import prepare_trial
 
 
-def _stable_trial(body, seed):
+def _stable_trial(body, seed, stimulus=None):
     rng = np.random.default_rng(seed)
     while True:
         truth = sample_parameters(body, 1, rng).trial(0, body.joint_names)
-        result = simulate(body, truth)
+        result = simulate(body, truth, stimulus)
         if result.stable:
             return truth, result, rng
 
@@ -77,7 +77,7 @@ def test_noise_free_fit_recovers_the_truth(noise_free, tip):
 
 @pytest.mark.slow
 def test_noisy_fit_within_ten_percent_or_flagged(tip):
-    truth, result, rng = _stable_trial(tip, seed=12)
+    truth, result, rng = _stable_trial(tip, 12, prts(states=80, cycles=3))  # 60 s
     noisy = result.theta + np.radians(0.01) * rng.standard_normal(result.theta.shape)
     noisy_rec = Recording(result.time, result.tilt, noisy, result.segments)
     fitted = fit_recording(prepare_trial(noisy_rec), tip)

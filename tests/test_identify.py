@@ -12,14 +12,14 @@ from posture_id.cli import main
 from posture_id.dec import sample_parameters
 from posture_id.identify import Method, identify
 from posture_id.recording import Recording
-from posture_id.simulation import simulate
+from posture_id.simulation import prts, simulate
 
 
-def _noisy_trial(body, seed, noise_deg):
+def _noisy_trial(body, seed, noise_deg, stimulus=None):
     rng = np.random.default_rng(seed)
     while True:
         truth = sample_parameters(body, 1, rng).trial(0, body.joint_names)
-        trial = simulate(body, truth)
+        trial = simulate(body, truth, stimulus)
         if trial.stable:
             break
     noisy = trial.theta + np.radians(noise_deg) * rng.standard_normal(trial.theta.shape)
@@ -99,7 +99,8 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
 
     from posture_id.learning.universal.identifier import UniversalIdentifier
 
-    truth, recording = _noisy_trial(tip, 12, 0.01)
+    # two 80-state cycles (40 s): the route, not the recording's length, is under test
+    truth, recording = _noisy_trial(tip, 12, 0.01, prts(states=80, cycles=2))
     honest = UniversalIdentifier.identify
 
     def confidently_wrong(self, trial, level=0.9):

@@ -75,7 +75,6 @@ def test_noise_free_fit_recovers_the_truth(noise_free, tip):
     assert (folder / "fit.png").stat().st_size > 10_000
 
 
-@pytest.mark.slow
 def test_noisy_fit_within_ten_percent_or_flagged(tip):
     truth, result, rng = _stable_trial(tip, 12, prts(states=80, cycles=3))  # 60 s
     noisy = result.theta + np.radians(0.01) * rng.standard_normal(result.theta.shape)

@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: design-results universal-model demo test test-fast lint bench bodies models model calibration examples real-like \
+.PHONY: design-results universal-model typicality demo test test-fast lint bench bodies models model calibration examples real-like \
         honest-verdict noise-lofo \
         real-like-models real-like-model clean
 
@@ -109,13 +109,39 @@ universal-model: $(STAMP)
 	$(BIN)/posture-id universal check data/models/universal data/universal \
 	  data/universal_people data/universal_presets data/universal_small \
 	  data/universal_robots > /dev/null
+	$(BIN)/posture-id universal typicality data/models/universal data/universal \
+	  data/universal_people data/universal_presets data/universal_small \
+	  data/universal_robots > /dev/null
 	mkdir -p $(UNIVERSAL_DIR) docs/models/universal
 	cp data/models/universal/model.safetensors data/models/universal/model.json \
-	  data/models/universal/calibration.json $(UNIVERSAL_DIR)/
+	  data/models/universal/calibration.json data/models/universal/typicality.safetensors \
+	  $(UNIVERSAL_DIR)/
 	cp data/models/universal/model.json data/models/universal/check.md \
-	  data/models/universal/check.json docs/models/universal/
+	  data/models/universal/check.json data/models/universal/typicality.md \
+	  data/models/universal/typicality.json docs/models/universal/
 	$(BIN)/posture-id universal table --trials 2048 --cache data/table_cells --quiet \
 	  --out docs/results/universal > /dev/null
+
+# The bundled universal model's typicality reference (docs/universal.md, "Typicality"):
+# the first tenth of each of the five sets of universal-model (the same seeds and flags:
+# the same shards), then its calibration and validation splits fitted and scored, its
+# test split's false alarms counted. Part of universal-model on the whole sets.
+TYPICALITY_DIR := data/typicality
+typicality: $(STAMP)
+	$(BIN)/posture-id universal data --out $(TYPICALITY_DIR)/universal --shards 300 --quiet
+	$(BIN)/posture-id universal data --out $(TYPICALITY_DIR)/universal_people --shards 450 \
+	  --seed 1 --clean-share 0 --locked-share 0.1 0.4 --quiet
+	$(BIN)/posture-id universal data --out $(TYPICALITY_DIR)/universal_presets --shards 120 \
+	  --seed 2 --tip-share 0 --preset-share 1 --quiet
+	$(BIN)/posture-id universal data --out $(TYPICALITY_DIR)/universal_small --shards 150 \
+	  --seed 3 --amplitude-deg 0.35 1 --tip-share 0.1 --preset-share 0.4 --quiet
+	$(BIN)/posture-id universal data --out $(TYPICALITY_DIR)/universal_robots --shards 90 \
+	  --seed 4 --amplitude-deg 0.35 1.5 --tip-share 0.05 --preset-share 0.9 \
+	  --preset-jitter 0.15 --quiet
+	$(BIN)/posture-id universal typicality $(UNIVERSAL_DIR) $(TYPICALITY_DIR)/universal \
+	  $(TYPICALITY_DIR)/universal_people $(TYPICALITY_DIR)/universal_presets \
+	  $(TYPICALITY_DIR)/universal_small $(TYPICALITY_DIR)/universal_robots > /dev/null
+	cp $(UNIVERSAL_DIR)/typicality.json $(UNIVERSAL_DIR)/typicality.md docs/models/universal/
 
 model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(MODEL_TRIALS) --body $(URDF) \

@@ -81,8 +81,9 @@ def test_hybrid_on_a_noisy_recording_recovers_classes_and_kp(tip, tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.slow
 def test_fit_method_needs_no_model(tip):
-    truth, recording = _noisy_trial(tip, 11, 0.0)
+    truth, recording = _noisy_trial(tip, 11, 0.0, prts(states=80, cycles=3))  # 60 s
     result = identify(recording, tip, Method.FIT)
     assert result.class_probability is None and result.cnn is None
     assert result.classes == tuple(truth[j].controls for j in tip.joint_names)

@@ -1,6 +1,6 @@
-"""``posture-id universal data | train | check | table``: the universal identifier's
-training set, training, calibration and check, and its table over body families and
-stimuli (docs/universal.md)."""
+"""``posture-id universal data | train | check | typicality | table``: the universal
+identifier's training set, training, calibration and check, its typicality reference, and
+its table over body families and stimuli (docs/universal.md)."""
 
 from __future__ import annotations
 
@@ -106,6 +106,14 @@ def add_parser(sub) -> None:
     c.add_argument("data", type=Path, nargs="+", help="the sets it was trained on")
     c.set_defaults(func=run_check)
 
+    y = u.add_parser("typicality", help="the typicality reference of a model (its inputs "
+                     "on the calibration and validation splits of the sets it was trained "
+                     "on), written beside it; its false alarms on the test split")
+    y.add_argument("model", type=Path, help="model directory")
+    y.add_argument("data", type=Path, nargs="+", help="the sets it was trained on (or sets "
+                   "drawn from the same distribution)")
+    y.set_defaults(func=run_typicality)
+
     b = u.add_parser("table", help="the table over body families, stimuli and sway")
     b.add_argument("model", type=Path, nargs="?", help="model directory (default: bundled)")
     b.add_argument("--out", type=Path, required=True, help="report folder")
@@ -193,6 +201,15 @@ def run_check(args: argparse.Namespace) -> int:
     report = calibrate_model(args.model, args.data)
     print(report.markdown())
     say(f"wrote {args.model / 'calibration.json'}, check.json and check.md")
+    return 0
+
+
+def run_typicality(args: argparse.Namespace) -> int:
+    from posture_id.learning.universal.typicality import TYPICALITY_FILE, reference_from_sets
+
+    report = reference_from_sets(args.model, args.data)
+    print(report.markdown())
+    say(f"wrote {args.model / TYPICALITY_FILE}, typicality.json and typicality.md")
     return 0
 
 

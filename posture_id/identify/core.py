@@ -554,8 +554,12 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
         unpinned += tuple(f"the {j}'s class (P(com) {p:.2f})"
                           for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
                           if low < p < high)
-    verdict = TrustVerdict(noise, on_bounds, tuple(outside), share,
-                           mistakes=tuple(m.sentence for m in mistakes), unpinned=unpinned)
+    sentences = tuple(m.sentence for m in mistakes)
+    typicality = None if cnn is None else cnn.typicality
+    if typicality is not None and typicality.atypical:  # not a recording the model made
+        sentences += (typicality.sentence(),)
+    verdict = TrustVerdict(noise, on_bounds, tuple(outside), share, mistakes=sentences,
+                           unpinned=unpinned)
     if not verdict.doubtful or verdict.mistakes:  # a mistake: the recording to mend first
         return verdict
     return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,

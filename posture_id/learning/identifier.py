@@ -67,6 +67,8 @@ class CnnIdentification(Result):
         notices: things to know. provenance: version, body identity, recording name.
         outside: ways the recording lies outside what the network was trained or
             calibrated on (another body; more sensor noise than the calibration saw).
+        typicality: how typical the recording's inputs are of the training distribution
+            (:mod:`posture_id.learning.universal.typicality`; None without a reference).
     """
 
     parameters: DecParameters
@@ -78,6 +80,7 @@ class CnnIdentification(Result):
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
     outside: tuple[str, ...] = ()
+    typicality: object | None = None
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -90,6 +93,7 @@ class CnnIdentification(Result):
             "model": self.model,
             "intervals": None if self.intervals is None else self.intervals.to_dict(),
             "outside": list(self.outside),
+            "typicality": None if self.typicality is None else self.typicality.to_dict(),
             "notices": list(self.notices),
             "provenance": self.provenance,
         }

@@ -46,6 +46,7 @@ from posture_id.learning.universal.harmonics import (
 from posture_id.learning.universal.model import SIDECAR, ModelError, UniversalModel
 from posture_id.learning.universal.samples import inputs_and_noise, module_inputs
 from posture_id.learning.universal.scope import UniversalScope
+from posture_id.learning.universal.typicality import TypicalityReference
 from posture_id.provenance import body_identity, provenance
 from posture_id.simulation.stimulus import LAB_STATE_RANGE_S
 from posture_id.trials import PreparedTrial
@@ -97,6 +98,12 @@ class UniversalIdentifier:
         elif self.calibration is None:
             self.notices += (f"{model.path}: the model has no calibration, so its answer has "
                              "no intervals",)
+        self.typicality = TypicalityReference.load(model.path) if model.path else None
+        if self.typicality is not None and (self.typicality.weights_sha256
+                                            != model.sidecar.get("weights_sha256")):
+            self.notices += (f"{model.path}: its typicality reference was made for other "
+                             "weights and is not used",)
+            self.typicality = None
         self.scope = model.scope
         self.descriptors = body_descriptors(body)
         self.com = com_weights(body)
@@ -193,6 +200,8 @@ class UniversalIdentifier:
         y = sway_harmonics(layout, theta)[:, None, :]
         inputs, ratios, colours = inputs_and_noise(layout, y, self.descriptors, self.com)
         prediction = self.model.predict(inputs)
+        typicality = (None if self.typicality is None else self.typicality.of(
+            (inputs - self.model.input_mean) / self.model.input_std))
         n = self.body.n_segments
         ratio, colour = float(ratios[0]), float(colours[0])
         regime = str(regime_of(n, ratio, colour))
@@ -234,7 +243,7 @@ class UniversalIdentifier:
         return CnnIdentification(
             parameters=params, normalised=normalised, class_probability=probability,
             joints=self.body.joint_names, model=model_info, intervals=intervals,
-            notices=notices, outside=tuple(outside),
+            notices=notices, outside=tuple(outside), typicality=typicality,
             provenance={**provenance(None, self.body, recording=trial.name),
                         "body": body_identity(self.body)})
 

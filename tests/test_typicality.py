@@ -4,6 +4,8 @@ command doubting recordings unlike anything the universal network was trained on
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -78,3 +80,47 @@ def test_the_reference_file_round_trips_and_a_damaged_one_is_named(tmp_path):
     (tmp_path / TYPICALITY_FILE).write_bytes(b"not safetensors")
     with pytest.raises(PostureIdError, match="not a readable typicality reference"):
         TypicalityReference.load(tmp_path)
+
+
+@pytest.fixture(scope="module")
+def subject(tip):
+    from posture_id.dec.parameters import default_parameters
+    from posture_id.simulation import prts
+    from posture_id.simulation.subjects import people_like
+
+    return people_like(tip, default_parameters(tip), prts(), 0.3, seed=1)
+
+
+def test_the_bundled_reference_is_the_bundled_models(tip):
+    from posture_id.learning.universal.identifier import UniversalIdentifier
+
+    identifier = UniversalIdentifier.bundled(tip)
+    assert identifier.typicality is not None
+    assert identifier.typicality.weights_sha256 == identifier.model.sidecar["weights_sha256"]
+    assert len(identifier.typicality.scores) >= 1000  # p can reach below ATYPICAL_P
+
+
+def test_the_default_command_doubts_sway_unlike_any_trained_on(tip, subject, tmp_path):
+    """A people-like recording as recorded is typical; the same angles ten times as large
+    (a lab's file in tenths of a degree read as degrees) are unlike anything the network
+    was trained on: the default command says so and doubts the answer for it."""
+    from dataclasses import replace
+
+    from posture_id.cli import main
+    from posture_id.identify import identify
+
+    as_recorded = identify(subject.recording, tip)
+    assert not as_recorded.cnn.typicality.atypical
+    assert not any("unlike any the network" in m for m in as_recorded.verdict.mistakes)
+    tenfold = replace(subject.recording, theta=10 * subject.recording.theta)
+    result = identify(tenfold, tip)
+    assert result.cnn.typicality.atypical
+    assert result.verdict.doubtful
+    assert any("unlike any the network was trained on" in m for m in result.verdict.mistakes)
+    path = tmp_path / "tenfold.csv"
+    tenfold.to_csv(path)
+    out = tmp_path / "tenfold.json"
+    assert main(["identify", str(path), "--out", str(out)]) == 1
+    data = json.loads(out.read_text())
+    assert data["trust"]["level"] == "doubtful"
+    assert data["cnn"]["typicality"]["atypical"] and data["cnn"]["typicality"]["p"] < ATYPICAL_P

@@ -124,3 +124,19 @@ def test_the_default_command_doubts_sway_unlike_any_trained_on(tip, subject, tmp
     data = json.loads(out.read_text())
     assert data["trust"]["level"] == "doubtful"
     assert data["cnn"]["typicality"]["atypical"] and data["cnn"]["typicality"]["p"] < ATYPICAL_P
+
+
+def test_a_reference_made_for_other_weights_is_not_used(tip, tmp_path):
+    import shutil
+
+    from posture_id.learning.universal.identifier import BUNDLED_DIR, UniversalIdentifier
+
+    folder = tmp_path / "model"
+    shutil.copytree(BUNDLED_DIR, folder)
+    bundled = TypicalityReference.load(folder)
+    TypicalityReference(bundled.mean, bundled.whitening, bundled.scores, bundled.shrinkage,
+                        "0" * 64, bundled.source).save(folder)
+    identifier = UniversalIdentifier.load(folder, tip)
+    assert identifier.typicality is None
+    assert any("typicality reference was made for other weights" in n
+               for n in identifier.notices)

@@ -44,8 +44,9 @@ def _check_recovery(fitted, truth, tolerance, max_flagged):
 
 @pytest.fixture(scope="module")
 def noise_free(tip, tmp_path_factory):
-    """A noise-free 121 s recording from random parameters, fitted by the command line."""
-    truth, result, _ = _stable_trial(tip, seed=11)
+    """A noise-free 60 s recording (three 80-state cycles) from random parameters, fitted
+    by the command line."""
+    truth, result, _ = _stable_trial(tip, 11, prts(states=80, cycles=3))
     folder = tmp_path_factory.mktemp("fit")
     result.to_csv(folder / "rec.csv")
     code = main(["fit", str(folder / "rec.csv"), "--out", str(folder / "fit.json"),

@@ -112,14 +112,17 @@ def test_two_amplitudes_one_dec_or_an_ic_that_reweights(tmp_path, winter1, capsy
     plant = IcPlant.of(winter1)
     truth = IcParameters(kp=1.8 * plant.mgh, kd=0.4 * plant.mgh, delay_s=0.15, w=0.6,
                          torque_feedback_gain=0.2, torque_feedback_time_s=15.0)
+    # three 80-state cycles a part (60 s): what is under test is the two parts' model
     for part, (amplitude, w) in enumerate(((1.0, 0.6), (3.0, 0.35)), 1):
-        recording, _ = ic_recording(winter1, truth.replace(w=w), prts(amplitude), None, part)
+        recording, _ = ic_recording(winter1, truth.replace(w=w),
+                                    prts(amplitude, cycles=3, states=80), None, part)
         recording.to_csv(tmp_path / f"ic{part}.csv")
         assert main(["simulate", "--body", WINTER1, "--amplitude-deg", str(amplitude),
-                     "--noise-deg", "0.02", "--seed", str(part),
-                     "--out", str(tmp_path / f"dec{part}.csv")]) == 0
+                     "--states", "80", "--cycles", "3", "--noise-deg", "0.02", "--seed",
+                     str(part), "--out", str(tmp_path / f"dec{part}.csv")]) == 0
     protocol = tmp_path / "two.json"
-    protocol.write_text(json.dumps({"kind": "two_amplitudes", "base": {"kind": "prts"},
+    protocol.write_text(json.dumps({"kind": "two_amplitudes",
+                                    "base": {"kind": "prts", "states": 80, "cycles": 3},
                                     "amplitudes_deg": [1, 3]}))
     for model in ("dec", "ic"):
         out = tmp_path / f"{model}.json"

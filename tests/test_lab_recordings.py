@@ -154,7 +154,7 @@ def test_a_model_that_falls_is_said_in_one_line(tmp_path, tip, monkeypatch, caps
 def test_answers_say_how_much_of_the_locked_sway_they_explain(tip):
     from posture_id.identify import Method, identify
 
-    stim = prts(states=80, cycles=3)
+    stim = prts(states=80, cycles=2)
     rec = simulate(tip, stimulus=stim).to_recording().with_sensor_noise(0.05, 3)
     result = identify(rec, tip, Method.FIT, stimulus=stim)
     for s in result.segments:

@@ -180,12 +180,12 @@ def test_a_stimulus_time_offset_is_found_and_fitted(tip):
     """The platform followed its command 60 ms late and the lab did not say so: with the
     offset fitted, the parameters come back; without, they do not."""
     truth = default_parameters(tip)
-    named = prts(states=80, cycles=3)
+    named = prts(states=80, cycles=2)
     late = named.delayed(0.06)
     np.testing.assert_allclose(late.angle(np.array([0.0, 10.06, 30.0])),
                                named.angle(np.array([-0.06, 10.0, 29.94])), atol=1e-15)
     sway = simulate(tip, truth, late).to_recording()
-    cut = slice(0, int(round(named.duration * 50)) + 1)  # the lab records the named 60 s
+    cut = slice(0, int(round(named.duration * 50)) + 1)  # the lab records the named 40 s
     rec = Recording(sway.time[cut], named.angle(sway.time[cut]), sway.theta[cut],
                     sway.segments)
     found = fit_recording(prepare_trial(rec, named), tip, options=FitOptions(
@@ -218,7 +218,7 @@ def test_the_resimulation_check_uses_the_fitted_offset(tip):
     is the fit's own residual (once 6.9 % against 0.07 %, the offset ignored)."""
     from posture_id.identify import Method, identify
 
-    named = prts(states=80, cycles=3)
+    named = prts(states=80, cycles=2)
     sway = simulate(tip, default_parameters(tip), named.delayed(0.06)).to_recording()
     cut = slice(0, int(round(named.duration * 50)) + 1)
     rec = Recording(sway.time[cut], named.angle(sway.time[cut]), sway.theta[cut],

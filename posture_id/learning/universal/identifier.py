@@ -89,21 +89,16 @@ class UniversalIdentifier:
         self.body = body
         self.notices = tuple(notices)
         self.trained_on = "the universal scope"
-        self.calibration = UniversalCalibration.load(model.path) if model.path else None
-        if self.calibration is not None and (self.calibration.weights_sha256
-                                             != model.sidecar.get("weights_sha256")):
-            self.notices += (f"{model.path}: its calibration was made for other weights and "
-                             "is not used: no intervals",)
-            self.calibration = None
-        elif self.calibration is None:
+        calibration = UniversalCalibration.load(model.path) if model.path else None
+        self.calibration = self._own(
+            calibration, "its calibration was made for other weights and is not used: "
+            "no intervals")
+        if calibration is None:
             self.notices += (f"{model.path}: the model has no calibration, so its answer has "
                              "no intervals",)
-        self.typicality = TypicalityReference.load(model.path) if model.path else None
-        if self.typicality is not None and (self.typicality.weights_sha256
-                                            != model.sidecar.get("weights_sha256")):
-            self.notices += (f"{model.path}: its typicality reference was made for other "
-                             "weights and is not used",)
-            self.typicality = None
+        self.typicality = self._own(
+            TypicalityReference.load(model.path) if model.path else None,
+            "its typicality reference was made for other weights and is not used")
         self.scope = model.scope
         self.descriptors = body_descriptors(body)
         self.com = com_weights(body)
@@ -111,6 +106,16 @@ class UniversalIdentifier:
         self.defaults = default_parameters(body)
         self.body_outside = self._outside(self.descriptors, range(0, DESCRIPTORS - 4),
                                           f"body '{body.name}'")
+
+    def _own(self, loaded, refused: str):
+        """``loaded`` (what was read beside the model: a calibration or a typicality
+        reference, or None) if it was made for this model's weights; else None, and the
+        notice ``refused``."""
+        if loaded is not None and loaded.weights_sha256 != self.model.sidecar.get(
+                "weights_sha256"):
+            self.notices += (f"{self.model.path}: {refused}",)
+            return None
+        return loaded
 
     @classmethod
     def load(cls, folder: str | Path, body: Body) -> UniversalIdentifier:

@@ -15,7 +15,8 @@ same interpreter) measured in child processes that take turns, ``--rounds`` roun
 order now, REV, REV, now, ...: a shared machine's drift falls on both alike. Each child
 compiles (or loads) its kernel first, then times its batches (the best of
 ``--repeats``); reported: each side's median over the rounds and the median of the
-rounds' ratios.
+rounds' ratios, and how far the two kernels' sway of the same 96 MODEL §5 random trials
+(TIP and the bent TALOS) lies apart.
 
 Writes the figures to benchmarks/results/simulation.json (``--before``:
 simulation_before.json).
@@ -68,6 +69,43 @@ print(json.dumps(rates))
 """
 
 
+#: A child's sway of 96 MODEL §5 random trials of 121 s on the TIP and the bent TALOS,
+#: saved to the .npz named by its argument (the two kernels' answers compared).
+SWAY = """
+import sys
+import numpy as np
+from posture_id import load_body
+from posture_id.dec.prior import sample_parameters
+from posture_id.simulation import simulate_batch
+bodies = {"tip": load_body(), "talos": load_body(sys.argv[2])}
+out = {}
+for name, body in bodies.items():
+    batch = simulate_batch(body, sample_parameters(body, 96, np.random.default_rng(0)))
+    out[name] = batch.theta
+    out[name + "_fell"] = np.isfinite(batch.abort_time)
+np.savez(sys.argv[1], **out)
+"""
+TALOS = Path(__file__).resolve().parents[1] / "urdf" / "talos_tip.urdf"
+
+
+def same_answers(sides: dict, folder: Path) -> dict:
+    """Max |Δθ| (rad) between the two kernels' sway of the same random trials, and whether
+    the same trials fell, per body."""
+    sway = {}
+    for side, (code, env) in sides.items():
+        path = folder / f"sway_{len(sway)}.npz"
+        done = subprocess.run([sys.executable, "-c", code + SWAY, str(path), str(TALOS)],
+                              capture_output=True, text=True, env=env)
+        if done.returncode != 0:
+            raise SystemExit(f"the sway child failed:\n{done.stderr}")
+        sway[side] = np.load(path)
+    a, b = sway.values()
+    return {body: {"max_abs_difference_rad": float(np.nanmax(np.abs(a[body] - b[body]))),
+                   "same_trials_fell": bool(np.array_equal(a[body + "_fell"],
+                                                           b[body + "_fell"]))}
+            for body in ("tip", "talos")}
+
+
 def timed(fn, repeats: int = 1):
     """(result, median wall time in s) over ``repeats`` calls."""
     times = []
@@ -99,6 +137,11 @@ def side_by_side(args) -> None:
                  args.before: (IMPORT_BEFORE, {**os.environ, "POSTURE_ID_BEFORE": str(tree)})}
         for code, env in sides.values():  # compile or load both kernels first
             child_rates(code, env, 32, 1, 1)
+        answers = same_answers(sides, tree.parent)
+        for body, found in answers.items():
+            print(f"{body}: the two kernels' sway of 96 random trials differs by at most "
+                  f"{found['max_abs_difference_rad']:.1e} rad; the same trials fall: "
+                  f"{found['same_trials_fell']}", flush=True)
         for k in range(args.rounds):
             order = list(sides) if k % 2 == 0 else list(sides)[::-1]
             rounds.append({side: child_rates(*sides[side], args.trials, args.workers,
@@ -123,7 +166,7 @@ def side_by_side(args) -> None:
               f"{summary[kind]['ratio_min']:.2f}×)")
     results = {"package_version": __version__, "machine": machine(), "before": args.before,
                "workers": args.workers, "trials": args.trials, "repeats": args.repeats,
-               "rounds": rounds, "summary": summary}
+               "rounds": rounds, "summary": summary, "same_answers": answers}
     out = args.out or Path(__file__).parent / "results" / "simulation_before.json"
     atomic_write_text(out, json.dumps(results, indent=2) + "\n")
     print(f"wrote {out}")

@@ -40,12 +40,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from revisions import IMPORT_BEFORE, checkout
+from revisions import IMPORT_BEFORE, ROOT, checkout
 
 from posture_id import __version__
 from posture_id.fileio import atomic_write_text
 
-ROOT = Path(__file__).resolve().parents[1]
 #: The last commit of the flat layout (before the package layout).
 BEFORE = "cc63128"
 #: The last commit before issue 44's work (length buckets, -Og, the length-free model).

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -46,6 +47,9 @@ from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.identifiability import prior_interval
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
+
+if TYPE_CHECKING:
+    from posture_id.learning.universal.typicality import Typicality
 
 __all__ = ["CnnIdentifier", "CnnIdentification", "DEFAULT_LEVEL"]
 
@@ -80,7 +84,7 @@ class CnnIdentification(Result):
     notices: tuple[str, ...] = ()
     provenance: dict = field(default_factory=dict, repr=False)
     outside: tuple[str, ...] = ()
-    typicality: object | None = None
+    typicality: Typicality | None = None
 
     @property
     def classes(self) -> tuple[str, ...]:

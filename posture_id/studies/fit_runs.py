@@ -101,6 +101,11 @@ def _key(row: dict) -> tuple:
     return (row["split"], int(row["position"]), float(row["noise_deg"]))
 
 
+def _task_key(task: tuple) -> tuple:
+    """:func:`_key` of the row a task makes."""
+    return task[2], task[3], task[6]
+
+
 def run_fits(model_dir: str | Path, dataset_dir: str | Path, split: str, count: int,
              noise_levels: tuple[float, ...], journal: str | Path,
              workers: int | None = None, progress: Progress | None = None) -> list[dict]:
@@ -120,8 +125,8 @@ def run_fits(model_dir: str | Path, dataset_dir: str | Path, split: str, count: 
              for noise in noise_levels for p, (k, i) in enumerate(trials)]
     book = Journal(Path(journal), header, _key)
     done = book.read()
-    rows = [done[t] for t in ((s, p, n) for _, _, s, p, _, _, n, _ in tasks) if t in done]
-    todo = [t for t in tasks if (t[2], t[3], t[6]) not in done]
+    rows = [done[_task_key(t)] for t in tasks if _task_key(t) in done]
+    todo = [t for t in tasks if _task_key(t) not in done]
     report(progress, len(rows), len(tasks), "fit")
     with LocalExecutor(workers, processes=True) as pool:
         for _, row in pool.unordered(_one, todo):

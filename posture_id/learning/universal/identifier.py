@@ -205,8 +205,8 @@ class UniversalIdentifier:
         y = sway_harmonics(layout, theta)[:, None, :]
         inputs, ratios, colours = inputs_and_noise(layout, y, self.descriptors, self.com)
         prediction = self.model.predict(inputs)
-        typicality = (None if self.typicality is None else self.typicality.of(
-            (inputs - self.model.input_mean) / self.model.input_std))
+        typicality = (None if self.typicality is None
+                      else self.typicality.of(self.model.standardised(inputs)))
         n = self.body.n_segments
         ratio, colour = float(ratios[0]), float(colours[0])
         regime = str(regime_of(n, ratio, colour))

@@ -67,8 +67,13 @@ class UniversalModel:
     def scope(self) -> UniversalScope:
         return UniversalScope.from_dict(self.sidecar["scope"])
 
+    def standardised(self, inputs: np.ndarray) -> np.ndarray:
+        """(M, N_INPUTS) inputs as the network reads them: less the mean, over the SD."""
+        return (inputs - self.input_mean) / self.input_std
+
     def standardise(self, inputs: np.ndarray) -> torch.Tensor:
-        return torch.from_numpy(((inputs - self.input_mean) / self.input_std).astype(np.float32))
+        """:meth:`standardised` as a float32 tensor."""
+        return torch.from_numpy(self.standardised(inputs).astype(np.float32))
 
     @torch.inference_mode()
     def predict(self, inputs: np.ndarray, batch_size: int = 8192) -> UniversalPrediction:

@@ -87,8 +87,8 @@ class Typicality:
     def sentence(self) -> str:
         return (f"its inputs are unlike any the network was trained on: typicality score "
                 f"{self.score:.0f} (the largest module's squared Mahalanobis distance), "
-                f"beyond all but p = {self.p:.1g} of {self.reference_recordings} training-like "
-                "recordings")
+                f"reached by a share p = {self.p:.1g} of {self.reference_recordings} "
+                "training-like recordings")
 
     def to_dict(self) -> dict:
         return {"score": self.score, "p": self.p, "atypical": self.atypical,
@@ -243,19 +243,16 @@ def reference_from_sets(model_dir: str | Path, data_path) -> TypicalityReport:
                                                  left_out), data, name, left_out)
         return make_samples(shards, model.scope, np.random.default_rng(seed))
 
-    def standardised(inputs: np.ndarray) -> np.ndarray:
-        return (inputs - model.input_mean) / model.input_std
-
     fit = samples("calibration", CALIBRATION_SEED)
     scored = samples("validation", VALIDATION_SEED)
     reference = fit_reference(
-        standardised(fit.inputs), standardised(scored.inputs), scored.trial,
+        model.standardised(fit.inputs), model.standardised(scored.inputs), scored.trial,
         model.sidecar.get("weights_sha256", ""),
         {"sets": [str(p) for p in ([data_path] if isinstance(data_path, (str, Path))
                                    else data_path)],
          "fit_modules": int(len(fit.inputs)), "left_out_families": list(left_out)})
     test = samples("test", TEST_SEED)
-    scores = recording_scores(reference.d2(standardised(test.inputs)), test.trial)
+    scores = recording_scores(reference.d2(model.standardised(test.inputs)), test.trial)
     atypical = np.array([reference.tail(s) < ATYPICAL_P for s in scores])
     _, first = np.unique(test.trial, return_index=True)
     regimes = true_regimes(test)[np.sort(first)]

@@ -165,7 +165,11 @@ def _one(task: tuple) -> dict:
                 "method_used": result.method.value,
                 "p_com": None if result.class_probability is None
                 else [float(x) for x in result.class_probability],
-                "notices": [n for n in result.notices if "refined" in n or "stimulus" in n]})
+                "notices": [n for n in result.notices if "refined" in n or "stimulus" in n],
+                "noise_ratio": result.verdict.benchmark_fields()["noise_ratio"],
+                "locked_share_measured": result.verdict.locked_share,
+                "typicality_p": None if result.cnn is None or result.cnn.typicality is None
+                else float(result.cnn.typicality.p)})
     if truth is not None:
         iv = result.intervals
         truth_si = np.array([[getattr(truth[j], f) for f in TARGET_FIELDS]
@@ -179,7 +183,8 @@ def _one(task: tuple) -> dict:
                               for j in body.joint_names],
             "kp_error": (found[:, 0] / truth_si[:, 0] - 1).tolist(),
             "inside": inside.tolist(),
-            "kp_far": (np.abs(found[:, 0] - truth_si[:, 0]) > 2 * half[:, 0]).tolist()})
+            "kp_far": (np.abs(found[:, 0] - truth_si[:, 0]) > 2 * half[:, 0]).tolist(),
+            "relative_half_width": (half / np.abs(found)).tolist()})
     return row
 
 

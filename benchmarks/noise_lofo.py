@@ -27,7 +27,6 @@ import sys
 from pathlib import Path
 
 from posture_id.fileio import atomic_write_text
-from posture_id.learning.universal.identifier import BUNDLED_DIR
 from posture_id.simulation.noise_families import NoiseFamily
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -35,17 +34,20 @@ from honest_verdict import family_cells  # noqa: E402  (a sibling script)
 
 HELD_OUT = [f.value for f in NoiseFamily if f is not NoiseFamily.LOW_PASS]
 HERE = Path(__file__).resolve().parent
+#: The network trained on the low-pass noise alone (``make universal-model``'s first stage).
+BASE = Path("data/models/universal")
 
 
 def _fine_tune(data: Path, out: Path, exclude: tuple[str, ...], epochs: int,
-               learning_rate: float) -> None:
+               learning_rate: float, base: Path, tilt: float) -> None:
     from posture_id.learning.universal.checking import calibrate_model
     from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
 
     if not (out / "model.json").exists():
-        config = UniversalTrainingConfig(epochs=epochs, init=str(BUNDLED_DIR),
+        config = UniversalTrainingConfig(epochs=epochs, init=str(base),
                                          max_learning_rate=learning_rate,
-                                         exclude_families=exclude, fresh_motor_noise=True)
+                                         exclude_families=exclude, fresh_motor_noise=True,
+                                         motor_noise_tilt=tilt)
         train_universal(data, out, config, log=lambda m: print(f"  {out.name}: {m}",
                                                                flush=True))
     if not (out / "calibration.json").exists():
@@ -66,41 +68,59 @@ def _judge(model: Path | None, families: list[str], groups: list[str], subjects:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", type=Path, default=Path("data/universal_families"))
+    parser.add_argument("--base", type=Path, default=BASE,
+                        help="the network to fine-tune from, trained on the low-pass noise "
+                             f"alone (default {BASE}: make universal-model's first stage)")
     parser.add_argument("--models", type=Path, default=Path("data/models/noise_lofo"))
     parser.add_argument("--epochs", type=int, default=6)
     parser.add_argument("--learning-rate", type=float, default=3e-4)
+    parser.add_argument("--motor-noise-tilt", type=float, default=0.0,
+                        help="the fine-tunes' motor-noise tilt (posture-id universal train "
+                             "--motor-noise-tilt; default 0)")
+    parser.add_argument("--held-out", nargs="+", default=HELD_OUT, choices=HELD_OUT,
+                        help="the families to hold out, one at a time (default: all five)")
     parser.add_argument("--subjects", type=int, default=24)
     parser.add_argument("--out", type=Path, default=Path("docs/results/noise_lofo"))
     args = parser.parse_args()
-    bundled = _judge(None, [f.value for f in NoiseFamily], ["people-like"], args.subjects,
-                     args.out / "bundled")
+    if not (args.base / "model.json").is_file():
+        raise SystemExit(f"{args.base}: no universal model there (make universal-model "
+                         "trains it; or name one trained on the low-pass noise with --base)")
+    base = _judge(args.base, [f.value for f in NoiseFamily], ["people-like"], args.subjects,
+                  args.out / "base")
+    tilt = (f" --motor-noise-tilt {args.motor_noise_tilt:g}" if args.motor_noise_tilt
+            else "")
+    held = "" if list(args.held_out) == HELD_OUT else " --held-out " + " ".join(args.held_out)
     lines = ["# Noise the network never saw: leave one family out", "",
-             f"Made by `.venv/bin/python benchmarks/noise_lofo.py --set {args.set} --epochs "
-             f"{args.epochs} --learning-rate {args.learning_rate:g} --subjects {args.subjects} "
-             f"--models {args.models} --out {args.out}` (the set and the stages: its "
-             "docstring). Each row: "
+             f"Made by `.venv/bin/python benchmarks/noise_lofo.py --set {args.set} --base "
+             f"{args.base} --epochs {args.epochs} --learning-rate {args.learning_rate:g}{tilt}"
+             f"{held} --subjects {args.subjects} --models {args.models} --out {args.out}` "
+             "(the set and the stages: its docstring). Each row: "
              f"{args.subjects} people-like subjects (15–40 % locked) of one noise family, "
-             "identified by the default method with the bundled network, and with the "
-             "network fine-tuned on the set's other families (the family never seen).", "",
+             "identified by the default method with the base network (trained on the "
+             "low-pass noise alone), and with it fine-tuned on the set's other families "
+             "(the family never simulated for it).", "",
              "| held-out family | network | modules: every class right | median \\|Kp error\\| "
              "| 90 % intervals holding the true Kp | all parameters |",
              "|---|---|---|---|---|---|"]
-    for family in HELD_OUT:
+    for family in args.held_out:
         model = args.models / f"without_{family}"
         print(f"{family}: fine-tuning without it", flush=True)
-        _fine_tune(args.set, model, (family,), args.epochs, args.learning_rate)
+        _fine_tune(args.set, model, (family,), args.epochs, args.learning_rate, args.base,
+                   args.motor_noise_tilt)
         rows = _judge(model, [family], ["people-like"], args.subjects, args.out / family)
-        lines.append(f"| {family} | bundled | {family_cells(bundled, family)} |")
+        lines.append(f"| {family} | base | {family_cells(base, family)} |")
         lines.append(f"| {family} | fine-tuned without it | {family_cells(rows, family)} |")
-    everything = args.models / "all_families"
-    print("all families: fine-tuning", flush=True)
-    _fine_tune(args.set, everything, (), args.epochs, args.learning_rate)
-    rows = _judge(everything, [f.value for f in NoiseFamily], ["clean", "people-like"],
-                  args.subjects, args.out / "all_families")
-    lines += ["", "Fine-tuned on every family (each row's family seen):", "",
-              "| family | modules: every class right | median \\|Kp error\\| | 90 % intervals "
-              "holding the true Kp | all parameters |", "|---|---|---|---|---|"]
-    lines += [f"| {f.value} | {family_cells(rows, f.value)} |" for f in NoiseFamily]
+    if list(args.held_out) == HELD_OUT:
+        everything = args.models / "all_families"
+        print("all families: fine-tuning", flush=True)
+        _fine_tune(args.set, everything, (), args.epochs, args.learning_rate, args.base,
+                   args.motor_noise_tilt)
+        rows = _judge(everything, [f.value for f in NoiseFamily], ["clean", "people-like"],
+                      args.subjects, args.out / "all_families")
+        lines += ["", "Fine-tuned on every family (each row's family seen):", "",
+                  "| family | modules: every class right | median \\|Kp error\\| | 90 % "
+                  "intervals holding the true Kp | all parameters |", "|---|---|---|---|---|"]
+        lines += [f"| {f.value} | {family_cells(rows, f.value)} |" for f in NoiseFamily]
     atomic_write_text(args.out / "report.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 

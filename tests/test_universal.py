@@ -856,10 +856,14 @@ def test_the_training_configuration_names_its_point_loss():
     assert args.point_loss == "absolute"
 
 
-def _motor_noise_harmonics(draws: int):
+def _motor_noise_harmonics(draws: int, shape=None, cutoff_hz: float = 0.2,
+                           with_frequencies: bool = False):
     """(E, draws, N) harmonics of what motor noise adds to the sway of one 2-segment
     Winter body, one parameter set, under an 80-state PRTS ×4 at 0.5° (the dead-band
-    weighs most at small tilts), one noise draw per trial; and (E, N) the locked sway's."""
+    weighs most at small tilts), one noise draw per trial (torque noise of ``shape``,
+    a :class:`~posture_id.simulation.noise.MotorShape`, default the first-order
+    low-pass); and (E, N) the locked sway's (and (E,) their frequencies, Hz, when
+    ``with_frequencies``)."""
     from posture_id.dec.parameters import ParameterArrays
     from posture_id.dec.prior import sample_parameters
     from posture_id.learning.universal.bodies import build_body
@@ -873,11 +877,15 @@ def _motor_noise_harmonics(draws: int):
     params = ParameterArrays(**{f: np.repeat(getattr(one, f), draws, axis=0)
                                 for f in ParameterArrays.FIELDS})
     clean = simulate_batch(body, params, profile, workers=1)
-    noisy = simulate_batch(body, params, profile, workers=1, motor_noise=MotorNoise(0.3, 0.2, 7))
+    motor = MotorNoise(0.3, cutoff_hz, 7) if shape is None else \
+        MotorNoise(0.3, cutoff_hz, 7, shape)
+    noisy = simulate_batch(body, params, profile, workers=1, motor_noise=motor)
     layout = harmonic_layout(clean.tilt, 50.0, profile.period_s, profile.periodic_from_s)
     locked = sway_harmonics(layout, np.moveaxis(clean.theta, 0, 1))
     noise = sway_harmonics(layout, np.moveaxis(noisy.theta, 0, 1)) - locked
     excited = layout.excited & (layout.frequencies_hz < 2.5)
+    if with_frequencies:
+        return noise[excited], locked[excited, 0], layout.frequencies_hz[excited]
     return noise[excited], locked[excited, 0]
 
 
@@ -923,6 +931,60 @@ def test_turning_motor_noise_keeps_its_power_cross_spectra_and_the_locked_sway()
     assert np.array_equal(turned, again)  # reproducible from the generator
 
 
+@pytest.mark.slow
+def test_a_torque_noise_of_another_slope_moves_the_sway_noise_by_the_psd_ratio():
+    """The premise of ``motor_noise_tilt`` (:func:`.samples.tilt_motor_noise`): the same
+    body and controller under torque noise of PSD slope 2 and of slope 1 above the same
+    0.2 Hz corner: the sway noise's mean power at each excited harmonic, over 160 draws,
+    moves by the torque PSDs' ratio (a factor of about 12 over the band): the log of the
+    measured ratio follows the log of the PSD ratio with a slope within 15 % of one and a
+    scatter of what 160 draws of exponential powers leave. (Under a corner far below the
+    first harmonic, 0.02 Hz, a steep noise's power below the harmonics leaks into the
+    cycle average and the slope is about 0.75: the tilt is a shape of noise, not every
+    one.) A prediction 1.5 times too steep would not pass."""
+    from posture_id.simulation.noise import MotorShape
+
+    steep, shallow = MotorShape(slope=2.0), MotorShape(slope=1.0)
+    a, _, f = _motor_noise_harmonics(160, steep, with_frequencies=True)
+    b, _ = _motor_noise_harmonics(160, shallow)
+    measured = np.log(np.mean(np.abs(b) ** 2, axis=(1, 2)) / np.mean(np.abs(a) ** 2, axis=(1, 2)))
+    predicted = np.log(shallow.psd(f, 0.2) / steep.psd(f, 0.2))
+    assert np.ptp(predicted) > np.log(8)  # the shapes differ over the band
+    slope, intercept = np.polyfit(predicted, measured, 1)
+    assert 0.85 < slope < 1.15
+    scatter = measured - (slope * predicted + intercept)
+    assert np.sqrt(np.mean(scatter ** 2)) < 0.3
+    assert not 0.85 < np.polyfit(1.5 * predicted, measured, 1)[0] < 1.15
+
+
+def test_tilting_motor_noise_gives_each_trial_a_power_law_factor_and_keeps_its_power():
+    from posture_id.learning.universal.samples import TILT_PIVOT_HZ, tilt_motor_noise
+
+    rng = np.random.default_rng(5)
+    f = np.geomspace(0.05, 2.5, 30)
+    locked = rng.standard_normal((30, 200, 3)) + 1j * rng.standard_normal((30, 200, 3))
+    noise = rng.standard_normal((30, 200, 3)) + 1j * rng.standard_normal((30, 200, 3))
+    noise[:, 7] = 0  # a clean trial
+    y = locked + noise
+    tilted = tilt_motor_noise(y, locked, f, 1.5, np.random.default_rng(0))
+    new = tilted - locked
+    assert np.allclose(np.sum(np.abs(new) ** 2, axis=(0, 2)), np.sum(np.abs(noise) ** 2,
+                                                                     axis=(0, 2)))
+    assert np.array_equal(tilted[:, 7], y[:, 7])
+    keep = np.arange(200) != 7
+    factor = np.abs(new[:, keep, 0] / noise[:, keep, 0])  # (K, T): the same at every segment
+    assert np.allclose(factor, np.abs(new[:, keep, 2] / noise[:, keep, 2]))
+    assert np.allclose(np.angle(new[:, keep] / noise[:, keep]), 0)  # phases as they were
+    slopes = [np.polyfit(np.log(f), np.log(factor[:, t] ** 2), 1) for t in range(199)]
+    residual = [np.ptp(np.log(factor[:, t] ** 2) - np.polyval(p, np.log(f)))
+                for t, p in enumerate(slopes)]
+    assert max(residual) < 1e-9  # a power law in frequency
+    s = -np.array([p[0] for p in slopes])  # the PSD slope added
+    assert s.min() > -1.5 and s.max() < 1.5 and s.min() < -1.2 and s.max() > 1.2
+    assert TILT_PIVOT_HZ[0] < TILT_PIVOT_HZ[1]
+    assert tilt_motor_noise(y, locked, f, 0.0, rng) is y  # off
+
+
 def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it(
         tmp_path, monkeypatch):
     """`universal train` hands the flag to the training configuration (what it would
@@ -939,4 +1001,6 @@ def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it(
     argv = ["universal", "train", str(tmp_path / "set"), "--quiet", "--out"]
     assert main([*argv, str(tmp_path / "m1")]) == 0
     assert main([*argv, str(tmp_path / "m2"), "--fresh-motor-noise"]) == 0
-    assert [c.fresh_motor_noise for c in seen] == [False, True]
+    assert main([*argv, str(tmp_path / "m3"), "--motor-noise-tilt", "1"]) == 0
+    assert [c.fresh_motor_noise for c in seen] == [False, True, False]
+    assert [c.motor_noise_tilt for c in seen] == [0.0, 0.0, 1.0]

@@ -171,3 +171,61 @@ def test_an_answer_the_recording_does_not_pin_is_imprecise_and_says_what():
     doubtful = replace(verdict, noise=beyond)
     assert doubtful.level is TrustLevel.DOUBTFUL and doubtful.imprecision == ()
     assert doubtful.to_dict()["level"] == "doubtful" and doubtful.to_dict()["doubtful"]
+
+
+def test_classes_the_network_gives_less_than_four_in_five_together_make_the_answer_doubtful():
+    """A class at P(com) 0.62 is named as unpinned; the product of the chosen classes'
+    probabilities below CLASSES_RIGHT_AT_LEAST makes the answer doubtful and says why,
+    above it the answer stays imprecise; the JSON carries the sentence."""
+    from posture_id.identify.noise_check import NoiseCheck
+    from posture_id.identify.verdict import (
+        CLASSES_RIGHT_AT_LEAST,
+        TrustLevel,
+        TrustVerdict,
+        class_doubts,
+    )
+
+    joints = ("ankle", "knee", "hip")
+    sure = class_doubts(joints, [0.001, 0.999, 0.99])
+    assert sure == ((), "")
+    unsure, doubt = class_doubts(joints, [0.001, 0.9, 0.99])  # 0.999 · 0.9 · 0.99 ≈ 0.89
+    assert unsure == ("the knee's class (P(com) 0.90)",) and doubt == ""
+    unsure, doubt = class_doubts(joints, [0.001, 0.62, 0.99])  # ≈ 0.61 together
+    assert unsure == ("the knee's class (P(com) 0.62)",)
+    assert "the network cannot tell the knee's class (P(com) 0.62)" in doubt
+    assert "all right only 61 %" in doubt
+    _, two = class_doubts(joints, [0.15, 0.999, 0.12])  # each sure enough, together not
+    assert 0.85 * 0.88 < CLASSES_RIGHT_AT_LEAST and two
+    assert "the ankle's class (P(com) 0.15) and the hip's class (P(com) 0.12)" in two
+    close = NoiseCheck(1.1, "locked", 0.001, relative=0.03, noise_relative=0.02)
+    verdict = TrustVerdict(close, unpinned=unsure, classes_doubted=doubt)
+    assert verdict.level is TrustLevel.DOUBTFUL and verdict.reasons == (doubt,)
+    assert verdict.to_dict()["classes_doubted"] == doubt
+    assert TrustVerdict(close, unpinned=unsure).level is TrustLevel.IMPRECISE
+
+
+@pytest.mark.slow
+def test_the_default_command_doubts_an_answer_whose_class_the_network_cannot_tell(
+        tip, monkeypatch):
+    """Through ``identify`` (``auto``, the bundled universal network) on people-like sway:
+    the network's hip logit set to 0.4 (P(com) about 0.6) makes the answer doubtful for that
+    reason, named; the same recording as the network gives it is not doubtful for it."""
+    from posture_id.learning.universal.model import UniversalModel
+
+    subject = people_like(tip, default_parameters(tip), prts(), 0.3, seed=7)
+    plain = identify(subject.recording, tip)
+    assert not plain.verdict.classes_doubted
+    predict = UniversalModel.predict
+
+    def unsure_hip(self, inputs, batch_size=8192):
+        out = predict(self, inputs, batch_size)
+        logit = out.logit.copy()
+        logit[2::3] = 0.4  # the hip of each 3-segment trial
+        return replace(out, logit=logit)
+
+    monkeypatch.setattr(UniversalModel, "predict", unsure_hip)
+    result = identify(subject.recording, tip)
+    assert 0.55 < result.class_probability[2] < 0.65  # (through the calibrated temperature)
+    assert result.verdict.doubtful
+    assert "the network cannot tell the hip's class (P(com) 0.60)" in result.verdict.classes_doubted
+    assert result.verdict.classes_doubted in result.verdict.reasons

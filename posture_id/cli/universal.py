@@ -87,6 +87,10 @@ def add_parser(sub) -> None:
                    help="turn each training trial's motor noise to a new draw every epoch "
                         "(each harmonic's noise by a random phase), as the bundled model "
                         "was trained (`make universal-model`); off by default")
+    t.add_argument("--motor-noise-tilt", type=non_negative_float, default=0.0, metavar="SLOPE",
+                   help="every epoch, tilt each training trial's motor-noise spectrum by a PSD "
+                        "slope drawn in ±SLOPE (torque noise of shapes no simulation made; "
+                        "default 0: as simulated)")
     t.add_argument("--init", type=Path, metavar="MODEL_DIR",
                    help="start from this universal model (its weights and standardisation: "
                         "fine-tuning; its network settings are kept)")
@@ -183,6 +187,7 @@ def run_train(args: argparse.Namespace) -> int:
              if v is not None}
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads,
                                      fresh_motor_noise=args.fresh_motor_noise,
+                                     motor_noise_tilt=args.motor_noise_tilt,
                                      exclude_families=tuple(args.exclude_families), **given)
     shape = {k: v for k, v in (("dropout", args.dropout),
                                ("hidden", tuple(args.hidden) if args.hidden else None))

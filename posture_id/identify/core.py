@@ -44,7 +44,9 @@ from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, noise_check
 from posture_id.identify.result import NOTHING_BALANCES, IdentificationResult, SegmentFit
 from posture_id.identify.verdict import (
     PEOPLE_LIKE_SHARE,
+    UNSURE_CLASS,
     TrustVerdict,
+    class_doubts,
     suggestion,
     unpinned_parameters,
 )
@@ -62,10 +64,6 @@ from posture_id.trials import PreparedTrial, prepare_trial
 
 __all__ = ["Method", "identify", "Identifier", "DEFAULT_METHOD", "Refinement", "auto_refinement",
            "network_prior"]
-
-#: The CNN is said to be unsure of a class when P(C = +1) is inside this band.
-UNSURE_CLASS = (0.05, 0.95)
-
 
 def identify(recording: Recording, body: Body | None = None, method: Method = DEFAULT_METHOD,
              model: str | Path | Network | None = None,
@@ -549,18 +547,19 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
     estimate = np.array([[getattr(parameters[j], f) for f in TARGET_FIELDS]
                          for j in body.joint_names])
     unpinned = unpinned_parameters(intervals, estimate)
-    if method is Method.CNN and cnn is not None:  # a class the network is unsure of
-        low, high = UNSURE_CLASS
-        unpinned += tuple(f"the {j}'s class (P(com) {p:.2f})"
-                          for j, p in zip(body.joint_names, cnn.class_probability, strict=True)
-                          if low < p < high)
+    classes_doubted = ""
+    if method is Method.CNN and cnn is not None:  # classes the network is unsure of
+        unsure, classes_doubted = class_doubts(body.joint_names, cnn.class_probability)
+        unpinned += unsure
     sentences = tuple(m.sentence for m in mistakes)
     typicality = None if cnn is None else cnn.typicality
     if typicality is not None and typicality.atypical:  # not a recording the model made
         sentences += (typicality.sentence(),)
     verdict = TrustVerdict(noise, on_bounds, tuple(outside), share, mistakes=sentences,
-                           unpinned=unpinned)
+                           unpinned=unpinned, classes_doubted=classes_doubted)
     if not verdict.doubtful or verdict.mistakes:  # a mistake: the recording to mend first
+        return verdict
+    if verdict.reasons == (classes_doubted,):  # its sentence says what decides them
         return verdict
     return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,
                                                   options.prior_sd is not None,

@@ -30,7 +30,10 @@ Three levels (:class:`TrustLevel`), because "wrong" and "imprecise" are differen
 - ``doubtful``: evidence that the answer is wrong: a residual beyond the recording's noise
   (and more than :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of its locked
   sway), Kp or Kd on a search bound, a recording outside what the method was trained on,
-  or a mistake found in the recording. The verdict names the method or flags that suit
+  a mistake found in the recording, or classes the network itself gives less than
+  :data:`CLASSES_RIGHT_AT_LEAST` of being right together (the product over modules of
+  its probability of the class it chose: a coin flip of a class is not imprecision, it
+  is an even chance of a wrong answer). The verdict names the method or flags that suit
   the recording (:func:`suggestion`).
 - ``imprecise``: nothing says the answer is wrong, but the recording cannot pin it: its
   noise alone leaves more than ``CLOSE_ENOUGH`` of the locked sway (no answer can be
@@ -57,7 +60,8 @@ from posture_id.identify.noise_check import CLOSE_ENOUGH, NoiseCheck
 from posture_id.uncertainty.intervals import LABELS
 
 __all__ = ["TrustVerdict", "TrustLevel", "PEOPLE_LIKE_SHARE", "PINNED_FIELDS", "PINNED_TO",
-           "suggestion", "unpinned_parameters"]
+           "CLASSES_RIGHT_AT_LEAST", "UNSURE_CLASS", "suggestion", "unpinned_parameters",
+           "class_doubts"]
 
 #: Body sway whose noise-corrected stimulus-locked share is below this is people-like:
 #: the subject's own sway dominates (docs/real_recordings.md: 10–40 % in people).
@@ -75,6 +79,14 @@ DOUBTFUL_ON_BOUND = ("kp", "kd", "kpas", "bpas")
 PINNED_FIELDS = ("kp", "kd", "delay_s")
 #: Pinned: the interval's half-width is at most this share of the value.
 PINNED_TO = 0.10
+
+#: The network is said to be unsure of a class when P(C = +1) is inside this band; such a
+#: class is named as what the recording does not pin.
+UNSURE_CLASS = (0.05, 0.95)
+#: Below this probability that every class the network chose is right (the product of
+#: max(P, 1 − P) over the modules), the answer is doubtful: more than one chance in five
+#: that a controlled variable is wrong (docs/identify.md, "Trust", measured there).
+CLASSES_RIGHT_AT_LEAST = 0.8
 
 
 class TrustLevel(str, enum.Enum):
@@ -108,6 +120,9 @@ class TrustVerdict:
         unpinned: parameters whose interval is wider than ±:data:`PINNED_TO` of their
             value ("the hip's Kd"), of :data:`PINNED_FIELDS`, and classes the network is
             unsure of ("the hip's class (P(com) 0.62)").
+        classes_doubted: why the network's classes are more likely wrong than
+            :data:`CLASSES_RIGHT_AT_LEAST` allows (one sentence, :func:`class_doubts`),
+            or "".
     """
 
     noise: NoiseCheck | None
@@ -117,6 +132,7 @@ class TrustVerdict:
     suggestion: str = ""
     mistakes: tuple[str, ...] = ()
     unpinned: tuple[str, ...] = ()
+    classes_doubted: str = ""
 
     @property
     def beyond_noise(self) -> bool:
@@ -139,6 +155,8 @@ class TrustVerdict:
             out.append(f"the model leaves a {self.noise.sentence()}")
         if self.bounds_that_matter:
             out.append("on a search bound: " + ", ".join(self.bounds_that_matter))
+        if self.classes_doubted:
+            out.append(self.classes_doubted)
         return (*out, *self.outside, *self.mistakes)
 
     @property
@@ -219,6 +237,7 @@ class TrustVerdict:
                 "reasons": list(self.reasons), "imprecise": list(self.imprecision),
                 "suggestion": self.suggestion or None, "mistakes": list(self.mistakes),
                 "unpinned": list(self.unpinned),
+                "classes_doubted": self.classes_doubted or None,
                 "noise_check": None if self.noise is None else self.noise.to_dict(),
                 "on_bounds": list(self.on_bounds), "outside": list(self.outside),
                 "locked_share": self.locked_share}
@@ -288,6 +307,24 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
             return "--method hybrid"
         return "--locked --max-offset-s 1" + ("" if prior else " --prior-sd 0.5")
     return ""
+
+
+def class_doubts(joints: tuple[str, ...], probability_com) -> tuple[tuple[str, ...], str]:
+    """What the network's class probabilities ``probability_com`` (N,) P(C = +1, COM) of
+    ``joints`` say of its answer: the classes it is unsure of (:data:`UNSURE_CLASS`),
+    named as unpinned ("the hip's class (P(com) 0.62)"), and, when the chance that every
+    chosen class is right is below :data:`CLASSES_RIGHT_AT_LEAST`, the sentence that
+    makes the answer doubtful ("" otherwise)."""
+    p = np.asarray(probability_com, dtype=float)
+    low, high = UNSURE_CLASS
+    unsure = tuple(f"the {j}'s class (P(com) {q:.2f})" for j, q in zip(joints, p, strict=True)
+                   if low < q < high)
+    right = float(np.prod(np.maximum(p, 1 - p)))
+    if right >= CLASSES_RIGHT_AT_LEAST:
+        return unsure, ""
+    return unsure, (f"the network cannot tell {_listed(unsure)}: by its own probabilities "
+                    f"its classes are all right only {100 * right:.0f} % of the time "
+                    f"(a recording that decides them: more cycles or a larger tilt)")
 
 
 def _listed(names: tuple[str, ...]) -> str:

@@ -26,7 +26,7 @@ from posture_id.simulation.noise_families import DRIFTING_COLOUR_SLOPE, NoiseFam
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
            "make_samples", "module_inputs", "inputs_and_noise", "rotate_motor_noise",
-           "without_families", "require_trials"]
+           "tilt_motor_noise", "TILT_PIVOT_HZ", "without_families", "require_trials"]
 
 
 @dataclass(frozen=True)
@@ -135,6 +135,45 @@ def rotate_motor_noise(y: np.ndarray, y_locked: np.ndarray, rng: np.random.Gener
     return y_locked + noise * turn
 
 
+#: The motor noise's spectral tilt (:func:`tilt_motor_noise`) pivots about a frequency
+#: drawn log-uniformly in this range, Hz: where people's sway is excited and measured.
+TILT_PIVOT_HZ = (0.1, 1.0)
+
+
+def tilt_motor_noise(y: np.ndarray, y_locked: np.ndarray, frequencies_hz: np.ndarray,
+                     max_tilt: float, rng: np.random.Generator) -> np.ndarray:
+    """Harmonics (K, T, N) of the same trials with their motor noise of another spectral
+    shape: each trial's noise ``y − y_locked`` (harmonics at ``frequencies_hz`` (K,), Hz)
+    multiplied by ``(f / f₀)^(−s/2)``, the slope ``s`` uniform in ``[−max_tilt,
+    max_tilt]`` and the pivot ``f₀`` log-uniform in :data:`TILT_PIVOT_HZ`, both drawn
+    per trial, then scaled so that the trial keeps the noise power it had (summed over
+    harmonics and segments: the same locked share).
+
+    Through the (nearly linear) closed loop, torque noise whose PSD is multiplied by
+    ``G(f)`` moves each harmonic of the sway's noise by ``√G(f)``, at every segment
+    alike when the joints' torque noises share their shape: this is the sway of the
+    same trial under torque noise whose PSD slope is steeper (``s > 0``) or shallower
+    by ``s``, which no simulation made. The network then cannot read the controller
+    from the noise's own spectrum (which is the closed loop's shape times the torque
+    noise's, so a network that saw only one torque-noise shape learns to), only from
+    what is locked to the stimulus. ``tests/test_universal.py`` checks the premise
+    against simulations of two torque-noise slopes. A trial without motor noise is
+    left as it is."""
+    if max_tilt <= 0:
+        return y
+    k, t = y.shape[:2]
+    noise = y - y_locked
+    slope = rng.uniform(-max_tilt, max_tilt, t)
+    pivot = np.exp(rng.uniform(*np.log(TILT_PIVOT_HZ), t))
+    gain = (np.asarray(frequencies_hz, dtype=float)[:, None] / pivot[None, :]) ** (
+        -slope[None, :] / 2)  # (K, T)
+    before = np.sum(np.abs(noise) ** 2, axis=(0, 2))
+    after = np.sum(np.abs(noise) ** 2 * gain[:, :, None] ** 2, axis=(0, 2))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        keep = np.where(after > 0, np.sqrt(before / after), 1.0)
+    return y_locked + noise * (gain * keep[None, :])[:, :, None]
+
+
 def _sensor_parts(arrays: dict, layout, scope: UniversalScope, sd_rad: np.ndarray,
                   rng: np.random.Generator) -> np.ndarray:
     """(K, T) SD of each part of each harmonic for the sensor noise of a shard's trials:
@@ -157,19 +196,24 @@ def _sensor_parts(arrays: dict, layout, scope: UniversalScope, sd_rad: np.ndarra
 
 
 def make_samples(shards: list[LoadedShard], scope: UniversalScope,
-                 rng: np.random.Generator, fresh_motor_noise: bool = False) -> Samples:
+                 rng: np.random.Generator, fresh_motor_noise: bool = False,
+                 motor_noise_tilt: float = 0.0) -> Samples:
     """The module samples of ``shards`` with sensor noise (SD uniform in the scope's range,
     per trial) and drift (level uniform in the scope's range, for trials with motor
     noise) drawn from ``rng``; with ``fresh_motor_noise``, each trial's motor noise
-    as well (:func:`rotate_motor_noise`)."""
+    as well (:func:`rotate_motor_noise`); with ``motor_noise_tilt`` > 0, its spectral
+    shape too (:func:`tilt_motor_noise`, slopes up to that far from the simulated)."""
     parts: dict[str, list] = {k: [] for k in Samples.__dataclass_fields__}
     first = 0
     for shard in shards:
         a, layout = shard.arrays, shard.layout
         y = np.moveaxis(a["y"], 0, 1).astype(np.complex128)  # (K, T, N)
         k, t, n = y.shape
-        if fresh_motor_noise:
-            y = rotate_motor_noise(y, np.moveaxis(a["y_locked"], 0, 1), rng)
+        if fresh_motor_noise or motor_noise_tilt > 0:
+            y_locked = np.moveaxis(a["y_locked"], 0, 1)
+            if fresh_motor_noise:
+                y = rotate_motor_noise(y, y_locked, rng)
+            y = tilt_motor_noise(y, y_locked, layout.frequencies_hz, motor_noise_tilt, rng)
         sensor = rng.uniform(*scope.sensor_noise_deg, t)
         drift = np.where(a["motor_noise_deg"] > 0, rng.uniform(*scope.drift_deg, t), 0.0)
         sd = np.sqrt(_sensor_parts(a, layout, scope, np.radians(sensor), rng) ** 2

@@ -62,7 +62,10 @@ class UniversalTrainingConfig:
     posterior median), in training and in the validation loss that picks the epoch.
     ``fresh_motor_noise``: every epoch turns each training trial's motor noise to a new
     draw (:func:`.samples.rotate_motor_noise`), as it draws its sensor noise and drift
-    afresh; the validation split keeps the simulated noise. ``init``: a universal model's
+    afresh; the validation split keeps the simulated noise. ``motor_noise_tilt``: every
+    epoch (the first included) also tilts each training trial's motor-noise spectrum by a
+    slope drawn in ±this (:func:`.samples.tilt_motor_noise`; 0: the simulated shape).
+    ``init``: a universal model's
     folder to start from (its weights and its standardisation: fine-tuning; the network
     settings are then its own). ``exclude_families``: noise families
     (:mod:`posture_id.simulation.noise_families`) whose trials are left out of the
@@ -77,6 +80,7 @@ class UniversalTrainingConfig:
     threads: int | None = None
     point_loss: PointLoss = "squared"
     fresh_motor_noise: bool = False
+    motor_noise_tilt: float = 0.0
     init: str | None = None
     exclude_families: tuple[str, ...] = ()
 
@@ -136,7 +140,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
                        data, "validation", left_out),
         scope, np.random.default_rng(VALIDATION_SEED))
     first = make_samples(train_shards, scope, np.random.default_rng([config.seed, 0]),
-                         config.fresh_motor_noise)
+                         config.fresh_motor_noise, config.motor_noise_tilt)
     log(f"loaded {len(train_shards)} training shards ({len(first)} module samples), "
         f"{len(validation)} validation samples in {time.perf_counter() - t0:.0f} s")
     torch.manual_seed(config.seed)
@@ -171,7 +175,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
         started = time.perf_counter()
         samples = first if epoch == 0 else make_samples(
             train_shards, scope, np.random.default_rng([config.seed, epoch]),
-            config.fresh_motor_noise)
+            config.fresh_motor_noise, config.motor_noise_tilt)
         x = model.standardise(samples.inputs)
         t = _targets(samples, target_mean, target_std)
         order = torch.from_numpy(np.random.default_rng([config.seed, 1, epoch]).permutation(len(x)))

@@ -221,9 +221,12 @@ honest-verdict: $(STAMP)
 
 noise-lofo: noise-families
 	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
+	  --base data/models/universal --epochs 20 --learning-rate 5e-4 --subjects 24 \
+	  --models data/models/noise_lofo_long --out docs/results/noise_lofo
+	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
 	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
-	  --motor-noise-tilt $(NOISE_TILT) --subjects 24 --models data/models/noise_lofo_tilt \
-	  --out docs/results/noise_lofo
+	  --motor-noise-tilt $(NOISE_TILT) --held-out shallow changing --subjects 24 \
+	  --models data/models/noise_lofo_tilt --out docs/results/noise_lofo_tilt
 
 # The simulator's throughput, then its kernel beside the kernel before issue 44's work
 # (BENCH_BEFORE, a temporary worktree), child processes taking turns (docs/performance.md).

@@ -2,20 +2,24 @@
 report on the one left out.
 
 Run:  .venv/bin/python benchmarks/noise_lofo.py [--set data/universal_families]
-          [--epochs 6] [--subjects 24] [--out docs/results/noise_lofo]
+          [--base data/models/universal] [--epochs 6] [--motor-noise-tilt 0]
+          [--held-out F ...] [--subjects 24] [--out docs/results/noise_lofo]
 
-The set: ``posture-id universal data --out data/universal_families --shards 900 --seed 11
---clean-share 0.1 --locked-share 0.1 0.6 --noise-families low_pass two_corners shallow
-correlated drifting changing`` (``make noise-lofo`` makes it). For each family the bundled
-network was not trained on (every one but ``low_pass``), a model is fine-tuned from the
-bundled one on the set's trials of the *other* families (``posture-id universal train
-SET --init BUNDLED --exclude-families F --fresh-motor-noise``), calibrated on them
-(``posture-id universal check``: the calibration leaves F out too), and judged on 24
-people-like subjects of F made outside any set (``benchmarks/honest_verdict.py --model
-... --groups people-like --families F``). A last model is fine-tuned on every family and
-judged on all of them and on clean sway. Writes ``report.md`` (the leave-one-family-out
-table beside the bundled network's) and each run's folder; every stage is skipped when
-its output is there (resumable).
+The set: ``make noise-families`` (``posture-id universal data --out
+data/universal_families --shards 900 --seed 11 --clean-share 0.1 --locked-share 0.1 0.6
+--noise-families low_pass two_corners shallow correlated drifting changing``). The base:
+the universal network trained under the low-pass motor noise alone (``make
+universal-model``'s first stage, ``data/models/universal``; the bundled network is its
+fine-tune on every family, so it cannot be the start here). For each family but
+``low_pass``, a model is fine-tuned from the base on the set's trials of the *other*
+families (``posture-id universal train SET --init BASE --exclude-families F
+--fresh-motor-noise [--motor-noise-tilt T]``), calibrated on them (``posture-id universal
+check``: the calibration leaves F out too), and judged on 24 people-like subjects of F
+made outside any set (``benchmarks/honest_verdict.py --model ... --groups people-like
+--families F``). With all five held out in turn, the bundled network (the base fine-tuned
+on every family) is judged on all six beside them. Writes ``report.md`` (the
+leave-one-family-out table beside the base network's) and each run's folder; every stage
+is skipped when its output is there (resumable; a family judged already needs no model).
 """
 
 from __future__ import annotations
@@ -104,23 +108,22 @@ def main() -> None:
              "|---|---|---|---|---|---|"]
     for family in args.held_out:
         model = args.models / f"without_{family}"
-        print(f"{family}: fine-tuning without it", flush=True)
-        _fine_tune(args.set, model, (family,), args.epochs, args.learning_rate, args.base,
-                   args.motor_noise_tilt)
+        if not (args.out / family / "rows.json").exists():  # judged already: no model needed
+            print(f"{family}: fine-tuning without it", flush=True)
+            _fine_tune(args.set, model, (family,), args.epochs, args.learning_rate, args.base,
+                       args.motor_noise_tilt)
         rows = _judge(model, [family], ["people-like"], args.subjects, args.out / family)
         lines.append(f"| {family} | base | {family_cells(base, family)} |")
         lines.append(f"| {family} | fine-tuned without it | {family_cells(rows, family)} |")
-    if list(args.held_out) == HELD_OUT:
-        everything = args.models / "all_families"
-        print("all families: fine-tuning", flush=True)
-        _fine_tune(args.set, everything, (), args.epochs, args.learning_rate, args.base,
-                   args.motor_noise_tilt)
-        rows = _judge(everything, [f.value for f in NoiseFamily], ["clean", "people-like"],
-                      args.subjects, args.out / "all_families")
-        lines += ["", "Fine-tuned on every family (each row's family seen):", "",
+    if list(args.held_out) == HELD_OUT:  # the bundled network: every family seen
+        bundled = _judge(None, [f.value for f in NoiseFamily], ["people-like"],
+                         args.subjects, args.out / "bundled")
+        lines += ["", "The bundled network (`make universal-noise-model`: the base fine-tuned on "
+                  "every family, beside the first tenth of its own five sets; each row's "
+                  "family seen):", "",
                   "| family | modules: every class right | median \\|Kp error\\| | 90 % "
                   "intervals holding the true Kp | all parameters |", "|---|---|---|---|---|"]
-        lines += [f"| {f.value} | {family_cells(rows, f.value)} |" for f in NoiseFamily]
+        lines += [f"| {f.value} | {family_cells(bundled, f.value)} |" for f in NoiseFamily]
     atomic_write_text(args.out / "report.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -107,7 +107,7 @@ def test_a_recording_cleaner_than_the_networks_own_error_reads_no_alternative(
     guard switched off it is named, with it nothing is."""
     from posture_id.identify.alternatives import MIN_NOISE_SHARE
 
-    stimulus = prts(2.0, 3, 80)
+    stimulus = prts(2.0, 2, 242)
     recording = simulate(tip, stimulus=stimulus).to_recording()
     result = identify(recording, tip, Method.CNN, stimulus=stimulus)
     noise = result.verdict.noise
@@ -116,3 +116,30 @@ def test_a_recording_cleaner_than_the_networks_own_error_reads_no_alternative(
     monkeypatch.setattr(alternatives, "MIN_NOISE_SHARE", 0.0)
     unguarded = identify(recording, tip, Method.CNN, stimulus=stimulus)
     assert any("a body 20 % shorter" in m for m in unguarded.verdict.mistakes)
+
+
+@pytest.mark.slow
+def test_a_body_a_tenth_off_is_not_called_another_persons(tmp_path, monkeypatch):
+    """The cohort tutorial's first subject (a 1.62 m, 58 kg 2-segment Winter body, MODEL
+    §5's draw of seed 0, 0.01° of sensor noise) on the right body: the network's answer
+    leaves about 3.6× the noise, and read with the body a tenth shorter 2.2×, a chance of
+    its own error on clean sway (the readings form a valley about the right size). Only
+    the far sizes (a fifth or more off) are read, so nothing is named; with the near
+    sizes read too, the right body is called another person's."""
+    from posture_id.dec.prior import sample_parameters
+
+    body = _winter(tmp_path, 1.62, 58.0, 2)
+    seed = 0
+    while True:  # as docs/tutorials/cohort.py draws it
+        truth = sample_parameters(body, 1, np.random.default_rng(seed)).trial(
+            0, body.joint_names)
+        trial = simulate(body, truth)
+        seed += 10
+        if trial.stable:
+            break
+    recording = trial.to_recording().with_sensor_noise(0.01, seed)
+    result = identify(recording, body)
+    assert not any("URDF" in m for m in result.verdict.mistakes)
+    monkeypatch.setattr(alternatives, "SIZES", (0.8, 0.9, 1.1, 1.25))
+    near = identify(recording, body)
+    assert any("a body 10 % shorter" in m for m in near.verdict.mistakes)

@@ -1004,3 +1004,27 @@ def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it(
     assert main([*argv, str(tmp_path / "m3"), "--motor-noise-tilt", "1"]) == 0
     assert [c.fresh_motor_noise for c in seen] == [False, True, False]
     assert [c.motor_noise_tilt for c in seen] == [0.0, 0.0, 1.0]
+
+
+def test_a_table_draws_its_own_sway_whatever_noise_the_model_was_trained_under():
+    """The bundled network was fine-tuned over noise families; its table's cells are the
+    same trials as a low-pass network's (the table's people-like sway is the low-pass
+    motor noise): the cell's draws under the table scope of a model trained over the
+    families equal those of one trained without them, and differ from the families' own."""
+    from dataclasses import replace
+
+    from posture_id.learning.universal.table import _cell, _cells, table_scope
+
+    families = replace(UniversalScope(), noise_families=("low_pass", "shallow"))
+    assert table_scope(families) == UniversalScope()
+    index = next(i for i, (family, stim, sway) in enumerate(list(_cells()))
+                 if family == "TIP" and stim == (80, 6, 1.0) and sway == "people-like")
+    plain = _cell(index, 4, UniversalScope().to_dict())
+    tabled = _cell(index, 4, table_scope(families).to_dict())
+    drawn = _cell(index, 4, families.to_dict())
+    assert np.array_equal(plain[0]["y"], tabled[0]["y"])
+    assert "noise_family" not in tabled[0]
+    assert not np.array_equal(plain[0]["y"], drawn[0]["y"])
+    # a cell drawn over noise families (a scope of the user's own) keeps one family per
+    # trial kept, however many batches it took
+    assert all(len(g["noise_family"]) == len(g["targets"]) for g in drawn)

@@ -42,8 +42,8 @@ from posture_id.learning.universal.scope import BodyDraw, StimulusDraw, Universa
 from posture_id.plotting import plot_score_grid
 from posture_id.progress import Progress, report
 
-__all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "TABLE_SEED",
-           "BODIES_PER_CELL"]
+__all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "table_scope",
+           "TABLE_SEED", "BODIES_PER_CELL"]
 
 TABLE_SEED = 0x544142
 #: Winter bodies drawn per cell (the TIP and TALOS are one body each).
@@ -83,7 +83,7 @@ def _group(body: BodyDraw, stimulus: StimulusDraw, trials: int, scope: Universal
     while sum(int(b["kept"]) for b in batches) < trials and len(batches) < _MAX_BATCHES:
         batches.append(simulate_trials(body, stimulus, trials, scope, rng))
     out = dict(batches[0])
-    for key in _PER_TRIAL:
+    for key in (*_PER_TRIAL, *(("noise_family",) if "noise_family" in out else ())):
         out[key] = np.concatenate([b[key] for b in batches])[:trials]
     out["simulated"] = np.array(trials * len(batches))
     out["kept"] = np.array(len(out["targets"]))
@@ -102,6 +102,15 @@ def _cell(index: int, trials: int, scope_dict: dict, seed: int = TABLE_SEED,
     sizes = np.diff(np.linspace(0, trials, bodies + 1).round().astype(int))
     return [_group(_body(family, rng, scope), stimulus, int(size), scope, rng)
             for size in sizes]
+
+
+def table_scope(model_scope: UniversalScope) -> UniversalScope:
+    """The scope a table's cells are drawn from: the model's, without its noise families.
+    A table's sway is its own (:data:`SWAY`: clean, and people-like under the low-pass
+    motor noise), whatever noise the model was trained under, so that two models are
+    tabled on the very same trials (and a model trained over noise families is not
+    judged on sway it alone was trained for)."""
+    return replace(model_scope, noise_families=())
 
 
 def _cache_key(trials: int, scope: UniversalScope, seed: int = TABLE_SEED,
@@ -232,7 +241,7 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
     other trials. ``bodies_per_cell``: the Winter bodies a cell's trials are spread over."""
     model = UniversalModel.load(model_dir)
     calibration = UniversalCalibration.load(model_dir)
-    scope = model.scope
+    scope = table_scope(model.scope)
     cells = list(_cells())
     made_with = _cache_key(trials, scope, seed, bodies_per_cell)
     files = [_cell_file(cache, i) if cache else None for i in range(len(cells))]

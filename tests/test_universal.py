@@ -656,12 +656,13 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
         _cells,
         _load_cell,
         _save_cell,
+        table_scope,
     )
 
     cells = list(_cells())
     missing = next(i for i, (family, stim, sway) in enumerate(cells)
                    if family == "Winter 1-seg" and stim == (242, 2, 3.0) and sway == "clean")
-    scope = UniversalModel.load(BUNDLED_DIR).scope
+    scope = table_scope(UniversalModel.load(BUNDLED_DIR).scope)
     key = _cache_key(2, scope)
     stand_in = _cell(0, 2, scope.to_dict())
     cache = tmp_path / "cells"

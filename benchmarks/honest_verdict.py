@@ -222,14 +222,18 @@ def report(rows: list[dict], subjects: int, model: str | None = None) -> str:
              "are: the script's docstring.",
              "", "## People-like sway, by noise family", "",
              "| family | recordings | modules: every class right | median \\|Kp error\\| | "
-             "90 % intervals holding the truth (Kp) | (all parameters) | doubtful |",
-             "|---|---|---|---|---|---|---|"]
+             "90 % intervals holding the truth (Kp) | (all parameters) | doubtful | "
+             "locked share measured (median) |",
+             "|---|---|---|---|---|---|---|---|"]
     for family in NoiseFamily:
         group = [r for r in rows if r["group"] == "people-like" and r["kind"] == family.value]
         if group:
             doubtful = sum(r["level"] == "doubtful" for r in group)
+            shares = [r["locked_share_measured"] for r in group
+                      if r.get("locked_share_measured") is not None]
+            share = f"{100 * np.median(shares):.0f} %" if shares else ""
             lines.append(f"| {family.value} | {len(group)} | {family_cells(rows, family.value)}"
-                         f" | {doubtful} |")
+                         f" | {doubtful} | {share} |")
     lines += ["", "## The verdict against the truth", "",
               "| group | level | right | neither | wrong |", "|---|---|---|---|---|"]
     for group in ("clean", "people-like"):

@@ -121,9 +121,9 @@ def test_a_recording_cleaner_than_the_networks_own_error_reads_no_alternative(
 @pytest.mark.slow
 def test_a_body_a_tenth_off_is_not_called_another_persons(tmp_path, monkeypatch):
     """The cohort tutorial's first subject (a 1.62 m, 58 kg 2-segment Winter body, MODEL
-    §5's draw of seed 0, 0.01° of sensor noise) on the right body: the network's answer
-    leaves about 3.6× the noise, and read with the body a tenth shorter 2.2×, a chance of
-    its own error on clean sway (the readings form a valley about the right size). Only
+    §5's draw of seed 0, 0.01° of sensor noise) on the right body: read with the body a
+    tenth shorter, the network's answer leaves less of the noise by more than 1.3×, a
+    chance of its own error on clean sway. Only
     the far sizes (a fifth or more off) are read, so nothing is named; with the near
     sizes read too, the right body is called another person's."""
     from posture_id.dec.prior import sample_parameters

@@ -161,7 +161,7 @@ def tilt_motor_noise(y: np.ndarray, y_locked: np.ndarray, frequencies_hz: np.nda
     left as it is."""
     if max_tilt <= 0:
         return y
-    k, t = y.shape[:2]
+    t = y.shape[1]
     noise = y - y_locked
     slope = rng.uniform(-max_tilt, max_tilt, t)
     pivot = np.exp(rng.uniform(*np.log(TILT_PIVOT_HZ), t))

@@ -281,6 +281,58 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
         UniversalModel.load(tmp_path / "whole")
 
 
+@pytest.mark.slow
+def test_keep_clean_holds_the_clean_outputs_of_the_model_fine_tuned_from(tiny_set, tmp_path):
+    """A fine-tune at a high learning rate moves every output; with ``keep_clean`` the
+    outputs on clean trials (no motor noise) stay nearer the starting model's, by half or
+    more, than without it, while those on noisy trials move about as much; without
+    ``init`` it is refused. The gap reads the class as a probability: two saturated logits
+    agree."""
+    import torch
+
+    from posture_id.learning.universal.data import merged_scope, open_sets
+    from posture_id.learning.universal.network import UniversalNetworkConfig
+    from posture_id.learning.universal.samples import load_split, make_samples
+    from posture_id.learning.universal.training import (
+        CLEAN_LOCKED_SHARE,
+        UniversalTrainingConfig,
+        _gap,
+        train_universal,
+    )
+
+    quiet = {"log": lambda m: None}
+    net = UniversalNetworkConfig(hidden=(32, 32), dropout=0.0)
+    start = train_universal(tiny_set.path, tmp_path / "start", UniversalTrainingConfig(
+        epochs=2, batch_size=64, threads=1), net, **quiet)
+    tuned = {}
+    for weight in (0.0, 300.0):
+        config = UniversalTrainingConfig(epochs=3, batch_size=64, threads=1, seed=1,
+                                         max_learning_rate=5e-3, keep_clean=weight,
+                                         init=str(tmp_path / "start"))
+        tuned[weight] = train_universal(tiny_set.path, tmp_path / f"k{weight:g}", config,
+                                        **quiet)
+    data = open_sets(tiny_set.path)
+    samples = make_samples(load_split(data, "train"), merged_scope(data),
+                           np.random.default_rng(9))
+    clean = samples.locked_share >= CLEAN_LOCKED_SHARE
+    assert 0 < clean.sum() < len(clean)
+
+    def moved(model, rows):
+        x = start.standardise(samples.inputs[rows])
+        with torch.no_grad():
+            return float(_gap(model.network.eval()(x), start.network.eval()(x).mean(0)))
+
+    assert moved(tuned[300.0], clean) < 0.5 * moved(tuned[0.0], clean)
+    assert moved(tuned[300.0], ~clean) > 0.5 * moved(tuned[0.0], ~clean)
+    with pytest.raises(ValueError, match="needs init"):
+        UniversalTrainingConfig(keep_clean=1.0)
+    logits = torch.zeros(1, 2, 9)
+    logits[..., 8] = 12.0
+    teacher = torch.zeros(2, 9)
+    teacher[:, 8] = 9.0
+    assert float(_gap(logits, teacher)) < 1e-7
+
+
 def test_sets_trained_together_agree_but_on_motor_noise_body_mix_and_tilt_range(tmp_path):
     from dataclasses import replace
 
@@ -794,6 +846,59 @@ def test_an_ensemble_s_members_combine_into_their_mixture_and_round_trip(tmp_pat
     train_abs, _ = _loss(outputs[:, None, :], target, "absolute")
     err = target[:, :4] - outputs[:, None, :4]
     assert torch.isclose(train_sq - train_abs, (err**2).mean() - err.abs().mean())
+
+
+def test_models_trained_apart_make_one_ensemble_and_mismatches_are_refused(tmp_path):
+    """``ensemble_of`` (and ``posture-id universal ensemble``): the ensemble of two saved
+    one-member models predicts what a two-member network of their very weights predicts
+    (the mean of their means, the mixture's SD), keeps the last one's scope and names
+    both; another width or another standardisation is refused by path."""
+    import torch
+
+    from posture_id.cli import main
+    from posture_id.learning.universal.model import ModelError, UniversalModel, ensemble_of
+    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+
+    torch.manual_seed(3)
+    config = UniversalNetworkConfig(inputs=6, hidden=(4,))
+    std = (np.zeros(6), np.full(6, 2.0), np.zeros(4), np.array([2.0, 1.0, 1.0, 1.0]))
+    models = []
+    for name, families in (("a", None), ("b", ["low_pass", "shallow"])):
+        sidecar = {"scope": {"segments": [1, 2, 3]}}
+        if families:
+            sidecar["scope"]["noise_families"] = families
+        model = UniversalModel(UniversalNetwork(config).eval(), *std, sidecar)
+        model.save(tmp_path / name)
+        models.append(UniversalModel.load(tmp_path / name))
+    assert main(["universal", "ensemble", str(tmp_path / "a"), str(tmp_path / "b"),
+                 "--out", str(tmp_path / "ens")]) == 0
+    ens = UniversalModel.load(tmp_path / "ens")
+    assert ens.network.config.members == 2
+    assert ens.sidecar["scope"]["noise_families"] == ["low_pass", "shallow"]
+    assert [m["path"] for m in ens.sidecar["ensemble_of"]] == [str(tmp_path / "a"),
+                                                               str(tmp_path / "b")]
+    x = np.random.default_rng(0).normal(size=(5, 6))
+    both = UniversalNetwork(UniversalNetworkConfig(inputs=6, hidden=(4,), members=2))
+    for mine, model in zip(both.members, models, strict=True):
+        mine.load_state_dict(model.network.members[0].state_dict())
+    direct = UniversalModel(both.eval(), *std).predict(x)
+    got = ens.predict(x)
+    assert np.allclose(got.mean, direct.mean) and np.allclose(got.sd, direct.sd)
+    parts = [m.predict(x) for m in models]
+    assert np.allclose(got.mean, (parts[0].mean + parts[1].mean) / 2)
+    assert np.allclose(got.logit, (parts[0].logit + parts[1].logit) / 2)
+    wider = UniversalModel(UniversalNetwork(UniversalNetworkConfig(inputs=6, hidden=(5,))),
+                           *std, path=tmp_path / "wide")
+    with pytest.raises(ModelError, match="wide: another architecture"):
+        ensemble_of([models[0], wider])
+    other = UniversalModel(UniversalNetwork(config), np.ones(6), *std[1:],
+                           path=tmp_path / "other")
+    with pytest.raises(ModelError, match="other: standardised otherwise.*input_mean"):
+        ensemble_of([models[0], other])
+    with pytest.raises(ModelError, match="two or more"):
+        ensemble_of(models[:1])
+    assert main(["universal", "ensemble", str(tmp_path / "a"), "--out",
+                 str(tmp_path / "one")]) != 0
 
 
 def test_the_scope_s_bodies_are_inside_and_a_small_robot_is_not(tmp_path):

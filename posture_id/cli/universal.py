@@ -1,6 +1,7 @@
-"""``posture-id universal data | train | check | typicality | table``: the universal
-identifier's training set, training, calibration and check, its typicality reference, and
-its table over body families and stimuli (docs/universal.md)."""
+"""``posture-id universal data | train | check | ensemble | typicality | table``: the
+universal identifier's training set, training, calibration and check, ensembles of models
+trained apart, its typicality reference, and its table over body families and stimuli
+(docs/universal.md)."""
 
 from __future__ import annotations
 
@@ -98,6 +99,10 @@ def add_parser(sub) -> None:
                    choices=[f.value for f in NoiseFamily],
                    help="leave the trials of these noise families out (to report on them "
                         "as noise the network never saw)")
+    t.add_argument("--keep-clean", type=non_negative_float, default=0.0, metavar="WEIGHT",
+                   help="with --init: keep the outputs on clean trials (no motor noise) those "
+                        "of the model started from, with this weight against the truth's "
+                        "loss (learning other noise without unlearning clean sway; default 0)")
     t.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     t.add_argument("--threads", type=positive_int, help="torch threads (default: all cores)")
     t.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -109,6 +114,13 @@ def add_parser(sub) -> None:
     c.add_argument("model", type=Path, help="model directory")
     c.add_argument("data", type=Path, nargs="+", help="the sets it was trained on")
     c.set_defaults(func=run_check)
+
+    e = u.add_parser("ensemble", help="one model of several trained apart (their members "
+                     "averaged); calibrate it with check, give it a typicality reference")
+    e.add_argument("models", type=Path, nargs="+", help="model directories (two or more; "
+                   "the last one's scope and sets are the ensemble's: list the widest last)")
+    e.add_argument("--out", type=Path, required=True, help="model directory to write")
+    e.set_defaults(func=run_ensemble)
 
     y = u.add_parser("typicality", help="the typicality reference of a model (its inputs "
                      "on the calibration and validation splits of the sets it was trained "
@@ -178,6 +190,9 @@ def run_train(args: argparse.Namespace) -> int:
     if args.init is not None and (args.hidden or args.dropout is not None or args.members != 1):
         raise PostureIdError("--init keeps its model's network: --hidden, --dropout and "
                              "--members go with a network trained from the start")
+    if args.keep_clean and args.init is None:
+        raise PostureIdError("--keep-clean keeps the outputs of the model fine-tuned from: "
+                             "give it with --init MODEL_DIR")
     if args.init is not None and not (args.init / "model.json").is_file():
         raise PostureIdError(f"{args.init}: --init is not a universal model (no model.json)")
     given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
@@ -188,7 +203,8 @@ def run_train(args: argparse.Namespace) -> int:
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads,
                                      fresh_motor_noise=args.fresh_motor_noise,
                                      motor_noise_tilt=args.motor_noise_tilt,
-                                     exclude_families=tuple(args.exclude_families), **given)
+                                     exclude_families=tuple(args.exclude_families),
+                                     keep_clean=args.keep_clean, **given)
     shape = {k: v for k, v in (("dropout", args.dropout),
                                ("hidden", tuple(args.hidden) if args.hidden else None))
              if v is not None}
@@ -206,6 +222,20 @@ def run_check(args: argparse.Namespace) -> int:
     report = calibrate_model(args.model, args.data)
     print(report.markdown())
     say(f"wrote {args.model / 'calibration.json'}, check.json and check.md")
+    return 0
+
+
+def run_ensemble(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, "--out", inputs=tuple(args.models))
+    from posture_id.learning.universal.model import UniversalModel, ensemble_of
+
+    if len(args.models) < 2:
+        raise PostureIdError("universal ensemble: give two or more model directories")
+    model = ensemble_of([UniversalModel.load(folder) for folder in args.models])
+    model.save(args.out)
+    say(f"wrote {args.out / 'model.safetensors'} and model.json "
+        f"({model.network.config.members} members); calibrate it: posture-id universal "
+        f"check {args.out} DATA_DIR...")
     return 0
 
 

@@ -5,7 +5,7 @@ Nothing is unpickled; a directory whose parts do not match is refused in one lin
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +25,7 @@ from posture_id.learning.universal.network import (
 from posture_id.learning.universal.scope import UniversalScope
 
 __all__ = ["UniversalModel", "UniversalPrediction", "ModelError", "FORMAT", "WEIGHTS",
-           "SIDECAR"]
+           "SIDECAR", "ensemble_of"]
 
 FORMAT = "posture_id-universal-model"
 WEIGHTS = "model.safetensors"
@@ -153,3 +153,46 @@ class UniversalModel:
                if k.startswith("standardiser.")}
         return cls(network, std["input_mean"], std["input_std"], std["target_mean"],
                    std["target_std"], sidecar, folder)
+
+
+def ensemble_of(models: list[UniversalModel]) -> UniversalModel:
+    """One model whose members are all of ``models``' members (a deep ensemble of networks
+    trained apart: :meth:`UniversalModel.predict` averages their means and logits and
+    widens the SD by their disagreement). They must read the same inputs the same way: one
+    architecture but for the members, one standardisation. The sidecar is the last model's
+    (its scope, sets and training; list the widest last) with ``ensemble_of`` naming each
+    model (path, weights' SHA-256, training); calibrate the result anew
+    (``posture-id universal check``): its spread is not any member's.
+
+    Raises:
+        ModelError: fewer than two models, or two that differ in architecture (but for
+            the members) or standardisation (named by path).
+    """
+    if len(models) < 2:
+        raise ModelError("an ensemble needs two or more models")
+    first = models[0]
+    shape = replace(first.network.config, members=1)
+    for other in models[1:]:
+        name = other.path or "a model"
+        if replace(other.network.config, members=1) != shape:
+            raise ModelError(f"{name}: another architecture than {first.path} "
+                             f"({other.network.config} against {first.network.config})")
+        for attr in ("input_mean", "input_std", "target_mean", "target_std"):
+            if not np.array_equal(getattr(other, attr), getattr(first, attr)):
+                raise ModelError(f"{name}: standardised otherwise than {first.path} "
+                                 f"({attr} differs): its members read other inputs")
+    members = [member for model in models for member in model.network.members]
+    network = UniversalNetwork(replace(shape, members=len(members)))
+    for mine, theirs in zip(network.members, members, strict=True):
+        mine.load_state_dict(theirs.state_dict())
+    network.eval()
+    last = models[-1].sidecar
+    sidecar = {k: v for k, v in last.items() if k not in ("weights_sha256", "ensemble_of")}
+    sidecar["ensemble_of"] = [
+        {"path": str(m.path), "weights_sha256": m.sidecar.get("weights_sha256"),
+         "members": m.network.config.members, "training": m.sidecar.get("training"),
+         "fine_tuned_from": {k: v for k, v in (m.sidecar.get("fine_tuned_from") or {}).items()
+                             if k in ("path", "weights_sha256")} or None}
+        for m in models]
+    return UniversalModel(network, first.input_mean.copy(), first.input_std.copy(),
+                          first.target_mean.copy(), first.target_std.copy(), sidecar)

@@ -34,7 +34,11 @@ from safetensors.torch import load_file, save_file
 from posture_id.fileio import atomic_write, atomic_write_text, json_text
 from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+from posture_id.learning.universal.network import (
+    OUTPUTS,
+    UniversalNetwork,
+    UniversalNetworkConfig,
+)
 from posture_id.learning.universal.samples import (
     Samples,
     load_split,
@@ -69,7 +73,12 @@ class UniversalTrainingConfig:
     folder to start from (its weights and its standardisation: fine-tuning; the network
     settings are then its own). ``exclude_families``: noise families
     (:mod:`posture_id.simulation.noise_families`) whose trials are left out of the
-    training and validation splits (to report on them as noise never seen)."""
+    training and validation splits (to report on them as noise never seen).
+    ``keep_clean``: with ``init``, the weight of a term that keeps the fine-tuned network's
+    outputs on clean training trials (no motor noise) those of the model it starts from
+    (:func:`_gap`, per training sample, clean or not): learning other noise
+    without unlearning clean sway, which the model started from learnt on more trials
+    (learning without forgetting; 0: the truth alone)."""
 
     epochs: int = 60
     batch_size: int = 512
@@ -83,8 +92,14 @@ class UniversalTrainingConfig:
     motor_noise_tilt: float = 0.0
     init: str | None = None
     exclude_families: tuple[str, ...] = ()
+    keep_clean: float = 0.0
 
     def __post_init__(self) -> None:
+        if not (self.keep_clean >= 0 and math.isfinite(self.keep_clean)):
+            raise ValueError(f"keep_clean must be a finite weight ≥ 0, got {self.keep_clean!r}")
+        if self.keep_clean and self.init is None:
+            raise ValueError("keep_clean keeps the outputs of the model fine-tuned from: it "
+                             "needs init")
         if self.point_loss not in POINT_LOSSES:
             raise ValueError(f"point_loss must be one of {', '.join(POINT_LOSSES)}, "
                              f"got {self.point_loss!r}")
@@ -110,6 +125,36 @@ def _loss(out: torch.Tensor, target: torch.Tensor, point_loss: PointLoss = "squa
     deployed = point(target[:, :4] - mean.mean(0)).mean() \
         + torch.nn.functional.binary_cross_entropy_with_logits(logit.mean(0), label)
     return point(err).mean() + 0.5 * nll + bce, deployed
+
+
+#: Realised locked share from which a trial counts as clean (no motor noise), as
+#: :mod:`.checking` groups them.
+CLEAN_LOCKED_SHARE = 0.995
+
+
+def _kept_outputs(teacher: torch.nn.Module | None, samples: Samples, x: torch.Tensor
+                  ) -> tuple[torch.Tensor, torch.Tensor] | None:
+    """What ``keep_clean`` holds: (the clean samples' mask (M,), the teacher's outputs
+    (M, 9), its members averaged, on the clean samples; zeros elsewhere); None without a
+    teacher."""
+    if teacher is None:
+        return None
+    clean = torch.from_numpy(samples.locked_share >= CLEAN_LOCKED_SHARE)
+    rows = torch.nonzero(clean).ravel()
+    out = torch.zeros(len(x), OUTPUTS)
+    with torch.no_grad():
+        for i in range(0, len(rows), 8192):
+            out[rows[i:i + 8192]] = teacher(x[rows[i:i + 8192]]).mean(0)
+    return clean, out
+
+
+def _gap(out: torch.Tensor, teacher: torch.Tensor) -> torch.Tensor:
+    """The mean squared difference of ``out`` (K, B, 9) from the teacher's (B, 9): the
+    eight estimates and log SDs as they are, the class as a probability (a logit of 12
+    and one of 9 say the same)."""
+    probability = torch.sigmoid(out[..., 8]) - torch.sigmoid(teacher[:, 8])
+    return (((out[..., :8] - teacher[:, :8]).square().sum(-1) + probability.square())
+            / OUTPUTS).mean()
 
 
 def _targets(samples: Samples, mean: np.ndarray, std: np.ndarray) -> torch.Tensor:
@@ -146,12 +191,14 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     torch.manual_seed(config.seed)
     if config.init is not None:  # fine-tuning: its network and standardisation
         base = UniversalModel.load(config.init)
+        teacher = UniversalModel.load(config.init).network.eval() if config.keep_clean else None
         net = base.network.to(device)
         net.train()
         network_config = net.config
         input_mean, input_std = base.input_mean, base.input_std
         target_mean, target_std = base.target_mean, base.target_std
     else:
+        teacher = None
         input_mean = first.inputs.mean(axis=0, dtype=np.float64)
         input_std = np.maximum(first.inputs.std(axis=0, dtype=np.float64), 1e-6)
         target_mean = first.targets[:, :4].mean(axis=0)
@@ -178,6 +225,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
             config.fresh_motor_noise, config.motor_noise_tilt)
         x = model.standardise(samples.inputs)
         t = _targets(samples, target_mean, target_std)
+        kept = _kept_outputs(teacher, samples, x)
         order = torch.from_numpy(np.random.default_rng([config.seed, 1, epoch]).permutation(len(x)))
         torch.manual_seed(config.seed * 100003 + epoch)  # dropout: the same on a resumed run
         net.train()
@@ -186,7 +234,13 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
             pick = order[i * config.batch_size : (i + 1) * config.batch_size]
             if not len(pick):
                 continue
-            loss, _ = _loss(net(x[pick].to(device)), t[pick].to(device), config.point_loss)
+            outputs = net(x[pick].to(device))
+            loss, _ = _loss(outputs, t[pick].to(device), config.point_loss)
+            if kept is not None:
+                clean, teacher_out = kept[0][pick].to(device), kept[1][pick].to(device)
+                if clean.any():
+                    loss = loss + config.keep_clean * clean.float().mean() * _gap(
+                        outputs[:, clean], teacher_out[clean])
             optimiser.zero_grad(set_to_none=True)
             loss.backward()
             optimiser.step()

@@ -139,3 +139,33 @@ def test_a_stage_with_a_centred_prior_finds_the_weighted_mean():
     stage = run_stage("toy", Toy(), np.zeros(1), [0], np.array([-10.0]), np.array([10.0]),
                       1e-14, 50, prior_sd=np.array([s]), prior_centre=np.array([c]))
     assert stage.q[0] == pytest.approx((2.0 + c / s**2) / (1 + 1 / s**2), abs=1e-8)
+
+
+@pytest.mark.slow
+def test_a_fit_from_the_network_s_prior_claims_no_more_than_the_network(tip, subject,
+                                                                       monkeypatch):
+    """The locked fit from the network's answer with its spread as the prior (what ``auto``
+    refines people-like sway with) has intervals no narrower than the network's
+    calibrated ones, each centred on the fit's answer. Without that floor its own
+    Gauss-Newton intervals are narrower than the network's here (they assume a white
+    residual, which the noise of people-like sway is not); a fit without the network's
+    prior keeps its own."""
+    import posture_id.identify.core as core
+
+    answer = identify(subject.recording, tip, Method.CNN)
+    network_half = (answer.intervals.upper - answer.intervals.lower) / 2
+    locked = FitOptions(locked=LockedOptions())
+    own = identify(subject.recording, tip, Method.HYBRID, fit_options=locked)
+    assert "no narrower" not in own.intervals.method
+    prior = replace(locked, **network_prior(answer, 0.9))
+    refined = identify(subject.recording, tip, Method.HYBRID, fit_options=prior)
+    assert "no narrower than the network's calibrated intervals" in refined.intervals.method
+    half = (refined.intervals.upper - refined.intervals.lower) / 2
+    assert np.all(half >= network_half - 1e-12)
+    estimate = refined.normalised[:, :4]
+    np.testing.assert_allclose(refined.intervals.upper[:, 0] - estimate[:, 0], half[:, 0],
+                               rtol=1e-9, err_msg="Kp's centred on the fit's answer")
+    monkeypatch.setattr(core, "_network_floor", lambda *args: {})
+    unfloored = identify(subject.recording, tip, Method.HYBRID, fit_options=prior)
+    unfloored_half = (unfloored.intervals.upper - unfloored.intervals.lower) / 2
+    assert np.any(unfloored_half[:, 0] < 0.5 * network_half[:, 0])

@@ -172,13 +172,16 @@ class FitResult(Result):
         or calibrated scales)."""
         return self.intervals_at(0.9)
 
-    def intervals_at(self, level: float = 0.9, scales: ConformalCalibration | None = None
+    def intervals_at(self, level: float = 0.9, scales: ConformalCalibration | None = None,
+                     least: np.ndarray | None = None, least_from: str = ""
                      ) -> ParameterIntervals:
         """Intervals of Kp, Ki, Kd, Δ at ``level``: ±z·SE (Gauss-Newton) or, with the
         ``scales`` of a calibration (:mod:`posture_id.studies.calibration`), ±scale·SE,
         where scale is the conformal one at the recording's estimated sensor noise and
         never below :func:`noise_allows`: a calibrated interval is never narrower than the
-        Gauss-Newton interval of the fit's own residual noise."""
+        Gauss-Newton interval of the fit's own residual noise. ``least``: (N, 4)
+        normalised half-widths no interval is narrower than (``least_from`` says whose,
+        for the intervals' method line)."""
         if self.defaults is None:
             raise ValueError("intervals need the body's defaults (FitResult.defaults)")
         defaults = self.defaults
@@ -190,8 +193,11 @@ class FitResult(Result):
             factor = np.maximum(scales.scale(level, noise), least)
             method = "Gauss-Newton SE × calibrated scale"
         si = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
-        return ParameterIntervals.around(self.normalised[:, :4],
-                                         factor * self.standard_errors_normalised, si,
+        half_width = factor * self.standard_errors_normalised
+        if least is not None:
+            half_width = np.maximum(half_width, least)
+            method += f", no narrower than {least_from or 'given'}"
+        return ParameterIntervals.around(self.normalised[:, :4], half_width, si,
                                          level, method, noise, self.joints,
                                          self.poorly_determined, self.precision_rel)
 

@@ -169,7 +169,8 @@ class Identifier:
             calibration = (self.cnn.calibration if method is Method.HYBRID
                            and self.cnn.trained_on_this_body else None)
             scales = None if calibration is None else calibration.least_squares
-            intervals = fit.intervals_at(self.level, scales)
+            intervals = fit.intervals_at(self.level, scales, **_network_floor(
+                options, scales, cnn))
             if scales is not None and scales.beyond(intervals.noise_deg):
                 notices.append(f"{trial.name}: its sensor noise (about "
                                f"{intervals.noise_deg:.3f}°) is above the "
@@ -408,6 +409,22 @@ def network_prior(answer: IdentificationResult, level: float) -> dict:
     centre = np.asarray(answer.normalised, dtype=float)[:, :4]
     return {"prior_sd": tuple(float(v) for v in sd.T.ravel()),
             "prior_centre": tuple(float(v) for v in centre.T.ravel())}
+
+
+def _network_floor(options: FitOptions, scales, cnn) -> dict:
+    """``intervals_at`` keywords for a fit whose prior is the network's answer
+    (:func:`network_prior`) and whose standard errors have no calibrated scale: its
+    intervals are no narrower than the network's calibrated ones. Two cycles of
+    people-like sway pin the fit less than its Gauss-Newton errors say (they assume the
+    residual is white; on people-like sway it is the noise's, coloured), and a prior
+    narrows a posterior only as far as the data inform it: the network's calibrated spread
+    is the checked statement of what the recording pins (``docs/identify.md``)."""
+    if (options.prior_centre is None or scales is not None or cnn is None
+            or cnn.intervals is None):
+        return {}
+    network = cnn.intervals
+    return {"least": (network.upper - network.lower) / 2,
+            "least_from": "the network's calibrated intervals"}
 
 
 #: The least SD of the network's prior on a normalised parameter (its intervals can be

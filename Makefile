@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: design-results universal-model universal-tenth noise-families universal-noise-model demo test test-fast lint bench bodies models model calibration examples real-like \
+.PHONY: design-results universal-model universal-fifth noise-families universal-noise-model demo test test-fast lint bench bodies models model calibration examples real-like \
         honest-verdict noise-lofo \
         real-like-models real-like-model clean
 
@@ -112,19 +112,19 @@ universal-model: $(STAMP)
 	  data/universal_robots > /dev/null
 	$(MAKE) universal-noise-model
 
-# The first tenth of each of universal-model's five sets (the same seeds and flags, so
-# the same shards; 4 min here): beside the noise-family set, what the noise stage is
-# fine-tuned, calibrated and given its typicality reference on.
-TENTH_DIR := data/universal_tenth
-universal-tenth: $(STAMP)
-	$(BIN)/posture-id universal data --out $(TENTH_DIR)/universal --shards 300 --quiet
-	$(BIN)/posture-id universal data --out $(TENTH_DIR)/universal_people --shards 450 \
+# The first fifth of each of universal-model's five sets (the same seeds and flags, so
+# the same shards; about 20 min here): beside the noise-family set, what the noise stage
+# is fine-tuned, calibrated and given its typicality reference on.
+FIFTH_DIR := data/universal_fifth
+universal-fifth: $(STAMP)
+	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal --shards 600 --quiet
+	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal_people --shards 900 \
 	  --seed 1 --clean-share 0 --locked-share 0.1 0.4 --quiet
-	$(BIN)/posture-id universal data --out $(TENTH_DIR)/universal_presets --shards 120 \
+	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal_presets --shards 240 \
 	  --seed 2 --tip-share 0 --preset-share 1 --quiet
-	$(BIN)/posture-id universal data --out $(TENTH_DIR)/universal_small --shards 150 \
+	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal_small --shards 300 \
 	  --seed 3 --amplitude-deg 0.35 1 --tip-share 0.1 --preset-share 0.4 --quiet
-	$(BIN)/posture-id universal data --out $(TENTH_DIR)/universal_robots --shards 90 \
+	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal_robots --shards 180 \
 	  --seed 4 --amplitude-deg 0.35 1.5 --tip-share 0.05 --preset-share 0.9 \
 	  --preset-jitter 0.15 --quiet
 
@@ -137,17 +137,17 @@ noise-families: $(STAMP)
 	  two_corners shallow correlated drifting changing --quiet
 
 # The bundled universal network (docs/universal.md, "Noise of other shapes"): the base
-# (data/models/universal) fine-tuned on the tenth sets and the noise-family set, each
+# (data/models/universal) fine-tuned on the fifth sets and the noise-family set, each
 # trial's motor noise turned to a new draw and its spectrum tilted by a PSD slope in
 # ±NOISE_TILT every epoch; calibrated and checked on them, its typicality reference made
 # on them; weights and sidecars into the package; the table over body families and
 # stimuli (docs/results/universal) remade. Resumable.
-NOISE_SETS   = $(TENTH_DIR)/universal $(TENTH_DIR)/universal_people \
-               $(TENTH_DIR)/universal_presets $(TENTH_DIR)/universal_small \
-               $(TENTH_DIR)/universal_robots data/universal_families
+NOISE_SETS   = $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
+               $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small \
+               $(FIFTH_DIR)/universal_robots data/universal_families
 NOISE_EPOCHS ?= 20
 NOISE_TILT   ?= 1
-universal-noise-model: universal-tenth noise-families
+universal-noise-model: universal-fifth noise-families
 	$(BIN)/posture-id universal train $(NOISE_SETS) --init data/models/universal \
 	  --out data/models/universal_noise --epochs $(NOISE_EPOCHS) --learning-rate 5e-4 \
 	  --fresh-motor-noise --motor-noise-tilt $(NOISE_TILT) --quiet
@@ -161,7 +161,9 @@ universal-noise-model: universal-tenth noise-families
 	  data/models/universal_noise/check.json data/models/universal_noise/typicality.md \
 	  data/models/universal_noise/typicality.json docs/models/universal/
 	$(BIN)/posture-id universal table --trials 2048 --cache data/table_cells --quiet \
-	  --out docs/results/universal > /dev/null
+	  --out data/models/universal_noise/table > /dev/null
+	cp data/models/universal_noise/table/table.json data/models/universal_noise/table/table.md \
+	  data/models/universal_noise/table/table.png docs/results/universal/
 
 model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(MODEL_TRIALS) --body $(URDF) \
@@ -227,6 +229,13 @@ noise-lofo: noise-families
 	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
 	  --motor-noise-tilt $(NOISE_TILT) --held-out shallow changing --subjects 24 \
 	  --models data/models/noise_lofo_tilt --out docs/results/noise_lofo_tilt
+	$(MAKE) universal-fifth
+	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
+	  --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
+	  $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small $(FIFTH_DIR)/universal_robots \
+	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
+	  --motor-noise-tilt $(NOISE_TILT) --held-out shallow changing --subjects 24 \
+	  --models data/models/noise_lofo_recipe --out docs/results/noise_lofo_recipe
 
 # The simulator's throughput, then its kernel beside the kernel before issue 44's work
 # (BENCH_BEFORE, a temporary worktree), child processes taking turns (docs/performance.md).

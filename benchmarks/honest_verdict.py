@@ -166,7 +166,8 @@ def _one(task: tuple) -> dict:
                 "p_com": None if result.class_probability is None
                 else [float(x) for x in result.class_probability],
                 "notices": [n for n in result.notices if "refined" in n or "stimulus" in n],
-                "noise_ratio": result.verdict.benchmark_fields()["noise_ratio"],
+                **{k: result.verdict.benchmark_fields()[k]
+                   for k in ("noise_ratio", "relative_residual", "noise_relative")},
                 "locked_share_measured": result.verdict.locked_share,
                 "typicality_p": None if result.cnn is None or result.cnn.typicality is None
                 else float(result.cnn.typicality.p)})

@@ -2,7 +2,8 @@
 report on the one left out.
 
 Run:  .venv/bin/python benchmarks/noise_lofo.py [--set data/universal_families]
-          [--base data/models/universal] [--epochs 6] [--motor-noise-tilt 0]
+          [--beside SET ...] [--base data/models/universal] [--epochs 6]
+          [--learning-rate 3e-4] [--motor-noise-tilt 0]
           [--held-out F ...] [--subjects 24] [--out docs/results/noise_lofo]
 
 The set: ``make noise-families`` (``posture-id universal data --out
@@ -14,7 +15,9 @@ fine-tune on every family, so it cannot be the start here). For each family but
 ``low_pass``, a model is fine-tuned from the base on the set's trials of the *other*
 families (``posture-id universal train SET --init BASE --exclude-families F
 --fresh-motor-noise [--motor-noise-tilt T]``), calibrated on them (``posture-id universal
-check``: the calibration leaves F out too), and judged on 24 people-like subjects of F
+check``: the calibration leaves F out too; ``--beside``: other sets trained and calibrated
+on beside it, as the bundled network's recipe has the fifth of the five sets, ``make
+universal-fifth``), and judged on 24 people-like subjects of F
 made outside any set (``benchmarks/honest_verdict.py --model ... --groups people-like
 --families F``). With all five held out in turn, the bundled network (the base fine-tuned
 on every family) is judged on all six beside them. Writes ``report.md`` (the
@@ -42,7 +45,7 @@ HERE = Path(__file__).resolve().parent
 BASE = Path("data/models/universal")
 
 
-def _fine_tune(data: Path, out: Path, exclude: tuple[str, ...], epochs: int,
+def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: int,
                learning_rate: float, base: Path, tilt: float) -> None:
     from posture_id.learning.universal.checking import calibrate_model
     from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
@@ -72,6 +75,9 @@ def _judge(model: Path | None, families: list[str], groups: list[str], subjects:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", type=Path, default=Path("data/universal_families"))
+    parser.add_argument("--beside", type=Path, nargs="+", default=[],
+                        help="sets fine-tuned and calibrated on beside --set (their trials "
+                             "of the held-out family left out too; default none)")
     parser.add_argument("--base", type=Path, default=BASE,
                         help="the network to fine-tune from, trained on the low-pass noise "
                              f"alone (default {BASE}: make universal-model's first stage)")
@@ -94,8 +100,10 @@ def main() -> None:
     tilt = (f" --motor-noise-tilt {args.motor_noise_tilt:g}" if args.motor_noise_tilt
             else "")
     held = "" if list(args.held_out) == HELD_OUT else " --held-out " + " ".join(args.held_out)
+    beside = "".join(f" {p}" for p in args.beside)
+    beside = f" --beside{beside}" if beside else ""
     lines = ["# Noise the network never saw: leave one family out", "",
-             f"Made by `.venv/bin/python benchmarks/noise_lofo.py --set {args.set} --base "
+             f"Made by `.venv/bin/python benchmarks/noise_lofo.py --set {args.set}{beside} --base "
              f"{args.base} --epochs {args.epochs} --learning-rate {args.learning_rate:g}{tilt}"
              f"{held} --subjects {args.subjects} --models {args.models} --out {args.out}` "
              "(the set and the stages: its docstring). Each row: "
@@ -110,8 +118,8 @@ def main() -> None:
         model = args.models / f"without_{family}"
         if not (args.out / family / "rows.json").exists():  # judged already: no model needed
             print(f"{family}: fine-tuning without it", flush=True)
-            _fine_tune(args.set, model, (family,), args.epochs, args.learning_rate, args.base,
-                       args.motor_noise_tilt)
+            _fine_tune([*args.beside, args.set], model, (family,), args.epochs,
+                       args.learning_rate, args.base, args.motor_noise_tilt)
         rows = _judge(model, [family], ["people-like"], args.subjects, args.out / family)
         lines.append(f"| {family} | base | {family_cells(base, family)} |")
         lines.append(f"| {family} | fine-tuned without it | {family_cells(rows, family)} |")
@@ -119,7 +127,7 @@ def main() -> None:
         bundled = _judge(None, [f.value for f in NoiseFamily], ["people-like"],
                          args.subjects, args.out / "bundled")
         lines += ["", "The bundled network (`make universal-noise-model`: the base fine-tuned on "
-                  "every family, beside the first tenth of its own five sets; each row's "
+                  "every family, beside the first fifth of its own five sets; each row's "
                   "family seen):", "",
                   "| family | modules: every class right | median \\|Kp error\\| | 90 % "
                   "intervals holding the true Kp | all parameters |", "|---|---|---|---|---|"]

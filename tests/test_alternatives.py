@@ -101,20 +101,24 @@ def test_another_persons_body_is_named(tmp_path, monkeypatch):
 
 
 def test_a_recording_cleaner_than_the_networks_own_error_reads_no_alternative(
-        tip, monkeypatch):
-    """No sensor noise at all: the network's ~1 % error is tens of noise units, and a body
-    20 % shorter happens to read fewer (a chance of the network, not evidence): with the
-    guard switched off it is named, with it nothing is."""
+        tmp_path, monkeypatch):
+    """No sensor noise at all (a 1.75 m, 70 kg 2-segment Winter body, MODEL §5's draw of
+    seed 100, the 80-state PRTS at 3°): the network's own error is tens of noise units,
+    and a body 20 % shorter happens to read fewer (a chance of the network, not
+    evidence): with the guard switched off it is named, with it nothing is."""
+    from posture_id.dec.prior import sample_parameters
     from posture_id.identify.alternatives import MIN_NOISE_SHARE
 
-    stimulus = prts(2.0, 2, 242)
-    recording = simulate(tip, stimulus=stimulus).to_recording()
-    result = identify(recording, tip, Method.CNN, stimulus=stimulus)
+    body = _winter(tmp_path, 1.75, 70.0, 2)
+    truth = sample_parameters(body, 1, np.random.default_rng(100)).trial(0, body.joint_names)
+    stimulus = prts(3.0, 6, 80)
+    recording = simulate(body, truth, stimulus).to_recording()
+    result = identify(recording, body, Method.CNN, stimulus=stimulus)
     noise = result.verdict.noise
     assert noise.ratio > 10 and noise.relative / noise.ratio < MIN_NOISE_SHARE
     assert not result.verdict.mistakes
     monkeypatch.setattr(alternatives, "MIN_NOISE_SHARE", 0.0)
-    unguarded = identify(recording, tip, Method.CNN, stimulus=stimulus)
+    unguarded = identify(recording, body, Method.CNN, stimulus=stimulus)
     assert any("a body 20 % shorter" in m for m in unguarded.verdict.mistakes)
 
 

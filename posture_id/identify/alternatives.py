@@ -51,10 +51,10 @@ SWAP_GAIN = 3.0
 SIZE_GAIN = 1.3
 
 #: The least noise, as a share of the recorded locked sway, at which alternatives are
-#: read: the network's own error is about 1 % of the sway on right recordings, so on a
-#: cleaner recording (a robot's sensors, a simulation without noise) it reads as tens of
-#: noise units and two readings differ by chance (tests/test_alternatives.py: a noise-free
-#: TIP recording read with a body 20 % shorter).
+#: read: the network's own error is a per cent of the sway or more on right recordings,
+#: so on a cleaner recording (a robot's sensors, a simulation without noise) it reads as
+#: tens of noise units and two readings differ by chance (tests/test_alternatives.py: a
+#: noise-free 2-segment Winter recording at 3° read with a body 20 % shorter).
 MIN_NOISE_SHARE = 0.003
 
 #: (trial, body) → the network's answer's residual in units of the noise (inf: it falls).

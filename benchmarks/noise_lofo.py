@@ -51,7 +51,10 @@ def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: in
     from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
 
     if not (out / "model.json").exists():
-        config = UniversalTrainingConfig(epochs=epochs, init=str(base),
+        # patience = epochs: the one-cycle schedule runs to its end, as the bundled
+        # network's fine-tune did (its validation loss was best at the last epochs; a
+        # held-out family's run stopped at epoch 13 on its first epoch's weights)
+        config = UniversalTrainingConfig(epochs=epochs, init=str(base), patience=epochs,
                                          max_learning_rate=learning_rate,
                                          exclude_families=exclude, fresh_motor_noise=True,
                                          motor_noise_tilt=tilt)

@@ -229,8 +229,6 @@ def run_ensemble(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=tuple(args.models))
     from posture_id.learning.universal.model import UniversalModel, ensemble_of
 
-    if len(args.models) < 2:
-        raise PostureIdError("universal ensemble: give two or more model directories")
     model = ensemble_of([UniversalModel.load(folder) for folder in args.models])
     model.save(args.out)
     say(f"wrote {args.out / 'model.safetensors'} and model.json "

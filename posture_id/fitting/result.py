@@ -173,15 +173,15 @@ class FitResult(Result):
         return self.intervals_at(0.9)
 
     def intervals_at(self, level: float = 0.9, scales: ConformalCalibration | None = None,
-                     least: np.ndarray | None = None, least_from: str = ""
+                     at_least: np.ndarray | None = None, at_least_from: str = ""
                      ) -> ParameterIntervals:
         """Intervals of Kp, Ki, Kd, Δ at ``level``: ±z·SE (Gauss-Newton) or, with the
         ``scales`` of a calibration (:mod:`posture_id.studies.calibration`), ±scale·SE,
         where scale is the conformal one at the recording's estimated sensor noise and
         never below :func:`noise_allows`: a calibrated interval is never narrower than the
-        Gauss-Newton interval of the fit's own residual noise. ``least``: (N, 4)
-        normalised half-widths no interval is narrower than (``least_from`` says whose,
-        for the intervals' method line)."""
+        Gauss-Newton interval of the fit's own residual noise. ``at_least``: (N, 4)
+        normalised half-widths no interval is narrower than (``at_least_from`` says
+        whose, for the intervals' method line)."""
         if self.defaults is None:
             raise ValueError("intervals need the body's defaults (FitResult.defaults)")
         defaults = self.defaults
@@ -194,9 +194,9 @@ class FitResult(Result):
             method = "Gauss-Newton SE × calibrated scale"
         si = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
         half_width = factor * self.standard_errors_normalised
-        if least is not None:
-            half_width = np.maximum(half_width, least)
-            method += f", no narrower than {least_from or 'given'}"
+        if at_least is not None:
+            half_width = np.maximum(half_width, at_least)
+            method += f", no narrower than {at_least_from or 'given'}"
         return ParameterIntervals.around(self.normalised[:, :4], half_width, si,
                                          level, method, noise, self.joints,
                                          self.poorly_determined, self.precision_rel)

@@ -423,8 +423,8 @@ def _network_floor(options: FitOptions, scales, cnn) -> dict:
             or cnn.intervals is None):
         return {}
     network = cnn.intervals
-    return {"least": (network.upper - network.lower) / 2,
-            "least_from": "the network's calibrated intervals"}
+    return {"at_least": (network.upper - network.lower) / 2,
+            "at_least_from": "the network's calibrated intervals"}
 
 
 #: The least SD of the network's prior on a normalised parameter (its intervals can be

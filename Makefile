@@ -236,6 +236,12 @@ noise-lofo: noise-families
 	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
 	  --motor-noise-tilt $(NOISE_TILT) --held-out shallow changing --subjects 24 \
 	  --models data/models/noise_lofo_recipe --out docs/results/noise_lofo_recipe
+	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
+	  --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
+	  $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small $(FIFTH_DIR)/universal_robots \
+	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
+	  --motor-noise-tilt $(NOISE_TILT) --held-out shallow changing --subjects 48 \
+	  --models data/models/noise_lofo_recipe --out docs/results/noise_lofo_recipe48
 
 # The simulator's throughput, then its kernel beside the kernel before issue 44's work
 # (BENCH_BEFORE, a temporary worktree), child processes taking turns (docs/performance.md).

@@ -234,7 +234,7 @@ noise-lofo: noise-families
 	  --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
 	  $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small $(FIFTH_DIR)/universal_robots \
 	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
-	  --motor-noise-tilt $(NOISE_TILT) --held-out shallow changing --subjects 24 \
+	  --motor-noise-tilt $(NOISE_TILT) --subjects 24 \
 	  --models data/models/noise_lofo_recipe --out docs/results/noise_lofo_recipe
 	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
 	  --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \

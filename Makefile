@@ -240,7 +240,7 @@ noise-lofo: noise-families
 	  --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
 	  $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small $(FIFTH_DIR)/universal_robots \
 	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
-	  --motor-noise-tilt $(NOISE_TILT) --held-out shallow changing --subjects 48 \
+	  --motor-noise-tilt $(NOISE_TILT) --subjects 48 \
 	  --models data/models/noise_lofo_recipe --out docs/results/noise_lofo_recipe48
 
 # The simulator's throughput, then its kernel beside the kernel before issue 44's work

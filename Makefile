@@ -113,7 +113,7 @@ universal-model: $(STAMP)
 	$(MAKE) universal-noise-model
 
 # The first fifth of each of universal-model's five sets (the same seeds and flags, so
-# the same shards; about 20 min here): beside the noise-family set, what the noise stage
+# the same shards): beside the noise-family set, what the noise stage
 # is fine-tuned, calibrated and given its typicality reference on.
 FIFTH_DIR := data/universal_fifth
 universal-fifth: $(STAMP)
@@ -221,6 +221,13 @@ real-like: real-like-models
 honest-verdict: $(STAMP)
 	$(BIN)/python benchmarks/honest_verdict.py --subjects 24 --out docs/results/honest_verdict
 
+# The bundled recipe held out family by family (the fifth beside the family set, the tilt):
+# fine-tuned once, judged on 24 subjects a family and again on 48.
+LOFO_RECIPE = $(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
+  --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
+  $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small $(FIFTH_DIR)/universal_robots \
+  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
+  --motor-noise-tilt $(NOISE_TILT) --models data/models/noise_lofo_recipe
 noise-lofo: noise-families
 	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
 	  --base data/models/universal --epochs 20 --learning-rate 5e-4 --subjects 24 \
@@ -230,18 +237,8 @@ noise-lofo: noise-families
 	  --motor-noise-tilt $(NOISE_TILT) --held-out shallow changing --subjects 24 \
 	  --models data/models/noise_lofo_tilt --out docs/results/noise_lofo_tilt
 	$(MAKE) universal-fifth
-	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
-	  --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
-	  $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small $(FIFTH_DIR)/universal_robots \
-	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
-	  --motor-noise-tilt $(NOISE_TILT) --subjects 24 \
-	  --models data/models/noise_lofo_recipe --out docs/results/noise_lofo_recipe
-	$(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
-	  --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
-	  $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small $(FIFTH_DIR)/universal_robots \
-	  --base data/models/universal --epochs 20 --learning-rate 5e-4 \
-	  --motor-noise-tilt $(NOISE_TILT) --subjects 48 \
-	  --models data/models/noise_lofo_recipe --out docs/results/noise_lofo_recipe48
+	$(LOFO_RECIPE) --subjects 24 --out docs/results/noise_lofo_recipe
+	$(LOFO_RECIPE) --subjects 48 --out docs/results/noise_lofo_recipe48
 
 # The simulator's throughput, then its kernel beside the kernel before issue 44's work
 # (BENCH_BEFORE, a temporary worktree), child processes taking turns (docs/performance.md).

@@ -159,6 +159,7 @@ def _one(task: tuple) -> dict:
     began = time.perf_counter()
     result = Identifier(body, model=model).identify(recording, stimulus)
     row.update(extra)
+    fields = result.verdict.benchmark_fields()
     row.update({"body": BODIES[index % len(BODIES)], "segments": body.n_segments,
                 "seconds": time.perf_counter() - began, "level": result.verdict.level.value,
                 "reasons": list(result.verdict.reasons), "fell": bool(result.fell),
@@ -166,8 +167,8 @@ def _one(task: tuple) -> dict:
                 "p_com": None if result.class_probability is None
                 else [float(x) for x in result.class_probability],
                 "notices": [n for n in result.notices if "refined" in n or "stimulus" in n],
-                **{k: result.verdict.benchmark_fields()[k]
-                   for k in ("noise_ratio", "relative_residual", "noise_relative")},
+                **{k: fields[k] for k in ("noise_ratio", "relative_residual",
+                                          "noise_relative")},
                 "locked_share_measured": result.verdict.locked_share,
                 "typicality_p": None if result.cnn is None or result.cnn.typicality is None
                 else float(result.cnn.typicality.p)})

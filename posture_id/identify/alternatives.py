@@ -40,7 +40,8 @@ from posture_id.identify.mistakes import Mistake
 from posture_id.identify.noise_check import NOISE_RATIO_LIMIT
 from posture_id.trials import PreparedTrial
 
-__all__ = ["better_explanations", "SIZES", "SWAP_GAIN", "SIZE_GAIN", "MIN_NOISE_SHARE"]
+__all__ = ["better_explanations", "columns_exchanged", "SIZES", "SWAP_GAIN", "SIZE_GAIN",
+           "MIN_NOISE_SHARE"]
 
 #: Body sizes tried, as factors on every length: another person's body, a fifth or more
 #: smaller or larger (module docstring).
@@ -51,9 +52,10 @@ SWAP_GAIN = 3.0
 SIZE_GAIN = 1.3
 
 #: The least noise, as a share of the recorded locked sway, at which other body sizes are
-#: read: the network's own error is a per cent of the sway or more on right recordings,
-#: so on a cleaner recording (a robot's sensors, a simulation without noise) it reads as
-#: tens of noise units and two sizes' readings differ by chance (tests/test_alternatives.py:
+#: read: the network's own error on right clean recordings is 0.5–16 % of the locked body
+#: sway (benchmarks/columns_on_clean.py), so on a cleaner recording (a robot's sensors, a
+#: simulation without noise) it reads as tens of noise units and two sizes' readings
+#: differ by chance (tests/test_alternatives.py:
 #: a noise-free 2-segment Winter recording at 3° read with a body 20 % shorter). Columns
 #: put back are read on any recording: on right ones, noise-free or not, the best reading
 #: of two columns exchanged divided the residual by at most 1.5, never the 3 of
@@ -86,10 +88,7 @@ def better_explanations(trial: PreparedTrial, body: Body, ratio: float, relative
     names = trial.recording.segments
     best = None
     for k in range(len(names) - 1):
-        theta = trial.recording.theta.copy()
-        theta[:, [k, k + 1]] = theta[:, [k + 1, k]]
-        swapped = replace(trial, recording=replace(trial.recording, theta=theta))
-        other = ratio_of(swapped, body)
+        other = ratio_of(columns_exchanged(trial, k), body)
         if other * SWAP_GAIN <= ratio and (best is None or other < best[1]):
             best = (k, other)
     if best is not None:
@@ -111,6 +110,13 @@ def better_explanations(trial: PreparedTrial, body: Body, ratio: float, relative
                 f"{_times(ratio)}): is the URDF this subject's? (the sway shows a body's "
                 "size, not its mass)")))
     return tuple(found)
+
+
+def columns_exchanged(trial: PreparedTrial, k: int) -> PreparedTrial:
+    """``trial`` with its segment columns k and k + 1 the other way round."""
+    theta = trial.recording.theta.copy()
+    theta[:, [k, k + 1]] = theta[:, [k + 1, k]]
+    return replace(trial, recording=replace(trial.recording, theta=theta))
 
 
 def _times(ratio: float) -> str:

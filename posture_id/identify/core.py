@@ -40,7 +40,7 @@ from posture_id.identify.alternatives import better_explanations
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.mistakes import find_mistakes
 from posture_id.identify.networks import Network, network_for
-from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, noise_check
+from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, NoiseCheck, noise_check
 from posture_id.identify.result import NOTHING_BALANCES, IdentificationResult, SegmentFit
 from posture_id.identify.verdict import (
     PEOPLE_LIKE_SHARE,
@@ -225,16 +225,24 @@ class Identifier:
 
     def _network_ratio(self, trial: PreparedTrial, body: Body,
                        locked: LockedProjection | None = None) -> float:
-        """The network's answer on ``trial`` read with ``body``, re-simulated: its
-        stimulus-locked residual in units of the recording's noise (inf: it falls).
-        ``locked``: the trial's unweighted locked projection (default: made here)."""
+        """:meth:`_network_check`'s ratio: the stimulus-locked residual in units of the
+        recording's noise (inf: it falls)."""
+        return self._network_check(trial, body, locked).ratio
+
+    def _network_check(self, trial: PreparedTrial, body: Body,
+                       locked: LockedProjection | None = None) -> NoiseCheck:
+        """The network's answer on ``trial`` read with ``body``, re-simulated and judged
+        against the recording (:func:`noise_check`). ``locked``: the trial's unweighted
+        locked projection (default: made here)."""
         network = self.cnn if body is self.body else self.cnn.for_body(body)
         answer = network.identify(trial, self.level)
         if locked is None:
             locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
         sway = simulate(body, answer.parameters, trial.stimulus,
                         replace(self.fit_options.simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG))
-        return noise_check(trial, sway.theta, projection=locked).ratio
+        recorded = trial.recording.theta
+        return noise_check(trial, sway.theta, projection=locked, body_sway=(
+            body.com_angles(recorded)[:, 0], sway.alpha[: len(recorded), 0]))
 
     def _as(self, method: Method) -> Identifier:
         """This identifier with another method, sharing its network (none for least

@@ -18,6 +18,7 @@ in the output folder; the same command continues from there.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import os
@@ -191,7 +192,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     torch.manual_seed(config.seed)
     if config.init is not None:  # fine-tuning: its network and standardisation
         base = UniversalModel.load(config.init)
-        teacher = UniversalModel.load(config.init).network.eval() if config.keep_clean else None
+        teacher = copy.deepcopy(base.network).eval() if config.keep_clean else None
         net = base.network.to(device)
         net.train()
         network_config = net.config

@@ -136,34 +136,38 @@ noise-families: $(STAMP)
 	  --seed 11 --clean-share 0.1 --locked-share 0.1 0.6 --noise-families low_pass \
 	  two_corners shallow correlated drifting changing --quiet
 
-# The bundled universal network (docs/universal.md, "Noise of other shapes"): the base
-# (data/models/universal) fine-tuned on the fifth sets and the noise-family set, each
-# trial's motor noise turned to a new draw and its spectrum tilted by a PSD slope in
-# ±NOISE_TILT every epoch; calibrated and checked on them, its typicality reference made
-# on them; weights and sidecars into the package; the table over body families and
-# stimuli (docs/results/universal) remade. Resumable.
+# The bundled universal model (docs/universal.md, "Noise of other shapes" and "One model,
+# two networks, chosen by the noise"): the base (data/models/universal) fine-tuned on the
+# fifth sets and the noise-family set, each trial's motor noise turned to a new draw and
+# its spectrum tilted by a PSD slope in ±NOISE_TILT every epoch (the noise stage,
+# data/models/universal_noise); the base and the stage in one model, gated by the
+# recording's noise (the base for white noise or nearly none, the stage for noise shaped
+# by the body); calibrated and checked on the same sets, its typicality reference made on
+# them; weights and sidecars into the package; the table over body families and stimuli
+# (docs/results/universal) remade. Resumable.
 NOISE_SETS   = $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
                $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small \
                $(FIFTH_DIR)/universal_robots data/universal_families
 NOISE_EPOCHS ?= 20
 NOISE_TILT   ?= 1
+GATED_DIR    := data/models/universal_gated
 universal-noise-model: universal-fifth noise-families
 	$(BIN)/posture-id universal train $(NOISE_SETS) --init data/models/universal \
 	  --out data/models/universal_noise --epochs $(NOISE_EPOCHS) --learning-rate 5e-4 \
 	  --fresh-motor-noise --motor-noise-tilt $(NOISE_TILT) --quiet
-	$(BIN)/posture-id universal check data/models/universal_noise $(NOISE_SETS) > /dev/null
-	$(BIN)/posture-id universal typicality data/models/universal_noise $(NOISE_SETS) > /dev/null
+	$(BIN)/posture-id universal ensemble data/models/universal data/models/universal_noise \
+	  --by-noise --out $(GATED_DIR)
+	$(BIN)/posture-id universal check $(GATED_DIR) $(NOISE_SETS) > /dev/null
+	$(BIN)/posture-id universal typicality $(GATED_DIR) $(NOISE_SETS) > /dev/null
 	mkdir -p $(UNIVERSAL_DIR) docs/models/universal
-	cp data/models/universal_noise/model.safetensors data/models/universal_noise/model.json \
-	  data/models/universal_noise/calibration.json \
-	  data/models/universal_noise/typicality.safetensors $(UNIVERSAL_DIR)/
-	cp data/models/universal_noise/model.json data/models/universal_noise/check.md \
-	  data/models/universal_noise/check.json data/models/universal_noise/typicality.md \
-	  data/models/universal_noise/typicality.json docs/models/universal/
+	cp $(GATED_DIR)/model.safetensors $(GATED_DIR)/model.json $(GATED_DIR)/calibration.json \
+	  $(GATED_DIR)/typicality.safetensors $(UNIVERSAL_DIR)/
+	cp $(GATED_DIR)/model.json $(GATED_DIR)/check.md $(GATED_DIR)/check.json \
+	  $(GATED_DIR)/typicality.md $(GATED_DIR)/typicality.json docs/models/universal/
 	$(BIN)/posture-id universal table --trials 2048 --cache data/table_cells --quiet \
-	  --out data/models/universal_noise/table > /dev/null
-	cp data/models/universal_noise/table/table.json data/models/universal_noise/table/table.md \
-	  data/models/universal_noise/table/table.png docs/results/universal/
+	  --out $(GATED_DIR)/table > /dev/null
+	cp $(GATED_DIR)/table/table.json $(GATED_DIR)/table/table.md $(GATED_DIR)/table/table.png \
+	  docs/results/universal/
 
 model: $(STAMP)
 	$(BIN)/posture-id dataset generate --trials $(MODEL_TRIALS) --body $(URDF) \
@@ -222,7 +226,8 @@ honest-verdict: $(STAMP)
 	$(BIN)/python benchmarks/honest_verdict.py --subjects 24 --out docs/results/honest_verdict
 
 # The bundled recipe held out family by family (the fifth beside the family set, the tilt):
-# fine-tuned once, judged on 24 subjects a family and again on 48.
+# fine-tuned once, judged on 24 subjects a family and again on 48; the stage alone, then
+# gated with the base by the noise as the bundled model is.
 LOFO_RECIPE = $(BIN)/python benchmarks/noise_lofo.py --set data/universal_families \
   --beside $(FIFTH_DIR)/universal $(FIFTH_DIR)/universal_people \
   $(FIFTH_DIR)/universal_presets $(FIFTH_DIR)/universal_small $(FIFTH_DIR)/universal_robots \
@@ -239,6 +244,8 @@ noise-lofo: noise-families
 	$(MAKE) universal-fifth
 	$(LOFO_RECIPE) --subjects 24 --out docs/results/noise_lofo_recipe
 	$(LOFO_RECIPE) --subjects 48 --out docs/results/noise_lofo_recipe48
+	$(LOFO_RECIPE) --subjects 24 --gated --out docs/results/noise_lofo_gated
+	$(LOFO_RECIPE) --subjects 48 --gated --out docs/results/noise_lofo_gated48
 
 # The simulator's throughput, then its kernel beside the kernel before issue 44's work
 # (BENCH_BEFORE, a temporary worktree), child processes taking turns (docs/performance.md).

@@ -4,7 +4,7 @@ report on the one left out.
 Run:  .venv/bin/python benchmarks/noise_lofo.py [--set data/universal_families]
           [--beside SET ...] [--base data/models/universal] [--epochs 6]
           [--learning-rate 3e-4] [--motor-noise-tilt 0]
-          [--held-out F ...] [--subjects 24] [--out docs/results/noise_lofo]
+          [--held-out F ...] [--subjects 24] [--gated] [--out docs/results/noise_lofo]
 
 The set: ``make noise-families`` (``posture-id universal data --out
 data/universal_families --shards 900 --seed 11 --clean-share 0.1 --locked-share 0.1 0.6
@@ -19,8 +19,10 @@ check``: the calibration leaves F out too; ``--beside``: other sets trained and 
 on beside it, as the bundled network's recipe has the fifth of the five sets, ``make
 universal-fifth``), and judged on 24 people-like subjects of F
 made outside any set (``benchmarks/honest_verdict.py --model ... --groups people-like
---families F``). With all five held out in turn, the bundled network (the base fine-tuned
-on every family) is judged on all six beside them. Writes ``report.md`` (the
+--families F``; ``--gated``: each fine-tune first put in one model with the base, gated
+by the noise, as the bundled model is: ``posture-id universal ensemble BASE FINE
+--by-noise``, then calibrated). With all five held out in turn, the bundled model (the
+base fine-tuned on every family) is judged on all six beside them. Writes ``report.md`` (the
 leave-one-family-out table beside the base network's) and each run's folder; every stage
 is skipped when its output is there (resumable; a family judged already needs no model).
 """
@@ -64,6 +66,20 @@ def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: in
         calibrate_model(out, data)
 
 
+def _gated(data: list[Path], fine: Path, base: Path) -> Path:
+    """The base and the fine-tune ``fine`` in one model gated by the noise (the bundled
+    recipe's last step), calibrated on ``data``: ``fine`` + ``_gated``."""
+    from posture_id.learning.universal.checking import calibrate_model
+    from posture_id.learning.universal.model import UniversalModel, ensemble_of
+
+    out = fine.with_name(fine.name + "_gated")
+    if not (out / "calibration.json").exists():
+        ensemble_of([UniversalModel.load(base), UniversalModel.load(fine)],
+                    by_noise=True).save(out)
+        calibrate_model(out, data)
+    return out
+
+
 def _judge(model: Path | None, families: list[str], groups: list[str], subjects: int,
            out: Path) -> list[dict]:
     if not (out / "report.md").exists():
@@ -93,6 +109,9 @@ def main() -> None:
     parser.add_argument("--held-out", nargs="+", default=HELD_OUT, choices=HELD_OUT,
                         help="the families to hold out, one at a time (default: all five)")
     parser.add_argument("--subjects", type=int, default=24)
+    parser.add_argument("--gated", action="store_true",
+                        help="judge each fine-tune in one model with the base, gated by the "
+                             "noise (the bundled recipe)")
     parser.add_argument("--out", type=Path, default=Path("docs/results/noise_lofo"))
     args = parser.parse_args()
     if not (args.base / "model.json").is_file():
@@ -105,15 +124,19 @@ def main() -> None:
     held = "" if list(args.held_out) == HELD_OUT else " --held-out " + " ".join(args.held_out)
     beside = "".join(f" {p}" for p in args.beside)
     beside = f" --beside{beside}" if beside else ""
+    gated = " --gated" if args.gated else ""
+    fine = "fine-tuned without it" + (", gated with the base" if args.gated else "")
     lines = ["# Noise the network never saw: leave one family out", "",
              f"Made by `.venv/bin/python benchmarks/noise_lofo.py --set {args.set}{beside} --base "
              f"{args.base} --epochs {args.epochs} --learning-rate {args.learning_rate:g}{tilt}"
-             f"{held} --subjects {args.subjects} --models {args.models} --out {args.out}` "
+             f"{held} --subjects {args.subjects}{gated} --models {args.models} --out {args.out}` "
              "(the set and the stages: its docstring). Each row: "
              f"{args.subjects} people-like subjects (15–40 % locked) of one noise family, "
              "identified by the default method with the base network (trained on the "
              "low-pass noise alone), and with it fine-tuned on the set's other families "
-             "(the family never simulated for it).", "",
+             "(the family never simulated for it)"
+             + ("; that fine-tune in one model with the base, gated by the recording's "
+                "noise, as the bundled model is" if args.gated else "") + ".", "",
              "| held-out family | network | modules: every class right | median \\|Kp error\\| "
              "| 90 % intervals holding the true Kp | all parameters |",
              "|---|---|---|---|---|---|"]
@@ -123,15 +146,17 @@ def main() -> None:
             print(f"{family}: fine-tuning without it", flush=True)
             _fine_tune([*args.beside, args.set], model, (family,), args.epochs,
                        args.learning_rate, args.base, args.motor_noise_tilt)
+            if args.gated:
+                model = _gated([*args.beside, args.set], model, args.base)
         rows = _judge(model, [family], ["people-like"], args.subjects, args.out / family)
         lines.append(f"| {family} | base | {family_cells(base, family)} |")
-        lines.append(f"| {family} | fine-tuned without it | {family_cells(rows, family)} |")
+        lines.append(f"| {family} | {fine} | {family_cells(rows, family)} |")
     if list(args.held_out) == HELD_OUT:  # the bundled network: every family seen
         bundled = _judge(None, [f.value for f in NoiseFamily], ["people-like"],
                          args.subjects, args.out / "bundled")
-        lines += ["", "The bundled network (`make universal-noise-model`: the base fine-tuned on "
-                  "every family, beside the first fifth of its own five sets; each row's "
-                  "family seen):", "",
+        lines += ["", "The bundled model (`make universal-noise-model`: the base fine-tuned on "
+                  "every family, beside the first fifth of its own five sets, gated with the "
+                  "base by the noise; each row's family seen):", "",
                   "| family | modules: every class right | median \\|Kp error\\| | 90 % "
                   "intervals holding the true Kp | all parameters |", "|---|---|---|---|---|"]
         lines += [f"| {f.value} | {family_cells(bundled, f.value)} |" for f in NoiseFamily]

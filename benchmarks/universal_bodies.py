@@ -44,7 +44,7 @@ def main() -> None:
     people = test.locked_share < PEOPLE_LIKE_BELOW
     truth_kp = test.targets[:, 0] + 1
     for name, model in models.items():
-        pred = model.predict(test.inputs)
+        pred = model.predict(test.inputs, test.noise_ratio, test.noise_colour)
         kp_error = 100 * np.abs((pred.mean[:, 0] + 1) / truth_kp - 1)
         right = (pred.logit > 0) == (test.targets[:, 4] > 0)
         print(name)

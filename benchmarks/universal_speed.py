@@ -63,13 +63,13 @@ def main() -> None:
         trials = [prepare_trial(batch.trial(b).to_recording(), stimulus)
                   for b in np.flatnonzero(batch.stable)[: args.recordings]]
         identifier.identify(trials[0])  # warm up (first call allocates)
-        inputs = identifier.features(trials[0])
+        features = identifier.features(trials[0])
         rows = {}
         for threads in sorted({1, os.cpu_count() or 1}):
             torch.set_num_threads(threads)
             whole = [t for trial in trials
                      for t in timed(lambda x=trial, i=identifier: i.identify(x), 3)]
-            network = timed(lambda x=inputs, i=identifier: i.model.predict(x), 50)
+            network = timed(lambda x=features, i=identifier: i.model.predict(*x), 50)
             rows[str(threads)] = {"identify_ms_median": 1e3 * statistics.median(whole),
                                   "identify_ms_p90": 1e3 * float(np.percentile(whole, 90)),
                                   "network_ms_median": 1e3 * statistics.median(network)}

@@ -513,7 +513,7 @@ class _ScaledErrorsModel:
     def __init__(self, slope: float):
         self.slope = slope
 
-    def predict(self, inputs):
+    def predict(self, inputs, noise_ratio=None, noise_colour=None):
         from posture_id.learning.universal.model import UniversalPrediction
         from posture_id.learning.universal.samples import STIMULUS_COLUMNS
 
@@ -899,6 +899,55 @@ def test_models_trained_apart_make_one_ensemble_and_mismatches_are_refused(tmp_p
         ensemble_of(models[:1])
     assert main(["universal", "ensemble", str(tmp_path / "a"), "--out",
                  str(tmp_path / "one")]) != 0
+
+
+def test_a_model_gated_by_the_noise_answers_white_noise_by_its_first_network(tmp_path):
+    """``posture-id universal ensemble A B --by-noise``: a recording whose noise is white
+    or nearly none gets A's answer, one whose noise is shaped by the body B's, between
+    them the mixture of the two (its mean, the SD of the mixture, the logit of its
+    probability); the gate is kept through save and load, a gated model refuses to
+    answer without the noise, and is not itself a member of another."""
+    import torch
+
+    from posture_id.cli import main
+    from posture_id.learning.universal.gate import NoiseGate
+    from posture_id.learning.universal.model import ModelError, UniversalModel, ensemble_of
+    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+
+    torch.manual_seed(4)
+    config = UniversalNetworkConfig(inputs=6, hidden=(4,))
+    std = (np.zeros(6), np.full(6, 2.0), np.zeros(4), np.array([2.0, 1.0, 1.0, 1.0]))
+    for name in ("white", "coloured"):
+        UniversalModel(UniversalNetwork(config).eval(), *std,
+                       {"scope": {"segments": [1, 2, 3]}}).save(tmp_path / name)
+    assert main(["universal", "ensemble", str(tmp_path / "white"), str(tmp_path / "coloured"),
+                 "--by-noise", "--out", str(tmp_path / "gated")]) == 0
+    gated = UniversalModel.load(tmp_path / "gated")
+    white, coloured = (UniversalModel.load(tmp_path / n) for n in ("white", "coloured"))
+    gate = gated.gate
+    assert gate == NoiseGate(1)
+    x = np.random.default_rng(1).normal(size=(4, 6))
+    # white sensor noise; a dead band's "noise" (tiny ratio) however coloured; noise shaped
+    # by the body; halfway up both ramps
+    ratio = np.array([0.05, 1e-4, 0.3, np.sqrt(gate.ratio_from * gate.ratio_to)])
+    colour = np.array([0.0, 2.0, 1.5, (gate.colour_from + gate.colour_to) / 2])
+    w = gate.coloured_share(ratio, colour)
+    assert np.allclose(w, [0.0, 0.0, 1.0, 0.25])
+    got, a, b = (m.predict(x, ratio, colour) for m in (gated, white, coloured))
+    for i in (0, 1):
+        assert np.allclose(got.mean[i], a.mean[i]) and np.allclose(got.sd[i], a.sd[i])
+        assert np.isclose(got.logit[i], a.logit[i])
+    assert np.allclose(got.mean[2], b.mean[2]) and np.allclose(got.sd[2], b.sd[2])
+    assert np.isclose(got.logit[2], b.logit[2])
+    mean = 0.75 * a.mean[3] + 0.25 * b.mean[3]
+    var = 0.75 * (a.sd[3] ** 2 + a.mean[3] ** 2) + 0.25 * (b.sd[3] ** 2 + b.mean[3] ** 2) - mean**2
+    assert np.allclose(got.mean[3], mean) and np.allclose(got.sd[3], np.sqrt(var))
+    p = 0.75 / (1 + np.exp(-a.logit[3])) + 0.25 / (1 + np.exp(-b.logit[3]))
+    assert np.isclose(got.logit[3], np.log(p / (1 - p)))
+    with pytest.raises(ModelError, match="noise ratio and colour"):
+        gated.predict(x)
+    with pytest.raises(ModelError, match="gated by the noise already"):
+        ensemble_of([gated, white])
 
 
 def test_the_scope_s_bodies_are_inside_and_a_small_robot_is_not(tmp_path):

@@ -217,8 +217,8 @@ def test_the_default_command_doubts_an_answer_whose_class_the_network_cannot_tel
     assert not plain.verdict.classes_doubted
     predict = UniversalModel.predict
 
-    def unsure_hip(self, inputs, batch_size=8192):
-        out = predict(self, inputs, batch_size)
+    def unsure_hip(self, inputs, *noise, **options):
+        out = predict(self, inputs, *noise, **options)
         logit = out.logit.copy()
         logit[2::3] = 0.4  # the hip of each 3-segment trial
         return replace(out, logit=logit)
@@ -230,3 +230,51 @@ def test_the_default_command_doubts_an_answer_whose_class_the_network_cannot_tel
     named = f"the network cannot tell the hip's class (P(com) {result.class_probability[2]:.2f})"
     assert named in result.verdict.classes_doubted
     assert result.verdict.classes_doubted in result.verdict.reasons
+
+
+def test_least_squares_that_stops_far_above_the_noise_is_doubtful_however_close():
+    """A least-squares answer leaving more than FITTED_NOISE_LIMIT times the noise is
+    doubtful though close to the sway; the network's answer keeps the closeness
+    allowance, and a fit within the limit is not doubted for it."""
+    from posture_id.identify.noise_check import NoiseCheck
+    from posture_id.identify.verdict import FITTED_NOISE_LIMIT, TrustLevel, TrustVerdict
+
+    close_far = NoiseCheck(FITTED_NOISE_LIMIT + 0.5, "locked", 0.001, relative=0.04,
+                           noise_relative=0.01)
+    assert TrustVerdict(close_far).level is TrustLevel.GOOD  # the network's answer
+    fitted = TrustVerdict(close_far, fitted=True)
+    assert fitted.level is TrustLevel.DOUBTFUL
+    assert fitted.reasons[0].startswith("least squares leaves a stimulus-locked residual")
+    assert "a fit of the right model reaches it" in fitted.reasons[0]
+    near = NoiseCheck(FITTED_NOISE_LIMIT - 0.5, "locked", 0.001, relative=0.04,
+                      noise_relative=0.01)
+    assert not TrustVerdict(near, fitted=True).doubtful
+
+
+@pytest.mark.slow
+def test_the_hybrid_on_exchanged_columns_is_doubted_for_the_noise_it_leaves(monkeypatch):
+    """A 2-segment Winter recording at 0.02° with its two columns exchanged, through the
+    hybrid: least squares ends close to the sway (4 % of it) but many times its noise,
+    and is doubtful for it even with the exchanged-columns reading switched off; with the
+    limit put back to the closeness allowance alone it passes. The same recording in
+    order is not doubted."""
+    import posture_id.identify.core as core
+    import posture_id.identify.verdict as verdict_module
+    from posture_id.dec.prior import sample_parameters
+    from posture_id.learning.universal.bodies import build_body
+    from posture_id.learning.universal.scope import BodyDraw
+
+    body = build_body(BodyDraw("winter", 2, 1.75, 70.0, ((1.0, 1.0),) * 2))
+    truth = sample_parameters(body, 1, np.random.default_rng(5)).trial(0, body.joint_names)
+    right = simulate(body, truth, prts(1.5, 6, 80)).to_recording().with_sensor_noise(0.02, 5)
+    theta = right.theta.copy()
+    theta[:, [0, 1]] = theta[:, [1, 0]]
+    exchanged = replace(right, theta=theta)
+    monkeypatch.setattr(core, "better_explanations", lambda *a, **k: [])
+    hybrid = Identifier(body, method=Method.HYBRID)
+    found = hybrid.identify(exchanged).verdict
+    assert found.noise.acceptable and found.fit_beyond_noise
+    assert found.doubtful and any(r.startswith("least squares leaves") for r in found.reasons)
+    assert not hybrid.identify(right).verdict.doubtful
+    monkeypatch.setattr(verdict_module, "FITTED_NOISE_LIMIT", np.inf)
+    assert not hybrid.identify(exchanged).verdict.doubtful

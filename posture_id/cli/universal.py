@@ -120,6 +120,11 @@ def add_parser(sub) -> None:
     e.add_argument("models", type=Path, nargs="+", help="model directories (two or more; "
                    "the last one's scope and sets are the ensemble's: list the widest last)")
     e.add_argument("--out", type=Path, required=True, help="model directory to write")
+    e.add_argument("--by-noise", action="store_true",
+                   help="gate the models by the recording's noise instead of averaging "
+                   "them: the first answers white noise (a sensor's) or nearly none, the "
+                   "others noise shaped by the body (motor noise, drift), mixed between "
+                   "(docs/universal.md, 'One model, two networks, chosen by the noise')")
     e.set_defaults(func=run_ensemble)
 
     y = u.add_parser("typicality", help="the typicality reference of a model (its inputs "
@@ -229,10 +234,13 @@ def run_ensemble(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=tuple(args.models))
     from posture_id.learning.universal.model import UniversalModel, ensemble_of
 
-    model = ensemble_of([UniversalModel.load(folder) for folder in args.models])
+    model = ensemble_of([UniversalModel.load(folder) for folder in args.models],
+                        by_noise=args.by_noise)
     model.save(args.out)
+    gated = (f", {model.gate.white_members} of them for white noise"
+             if model.gate is not None else "")
     say(f"wrote {args.out / 'model.safetensors'} and model.json "
-        f"({model.network.config.members} members); calibrate it: posture-id universal "
+        f"({model.network.config.members} members{gated}); calibrate it: posture-id universal "
         f"check {args.out} DATA_DIR...")
     return 0
 

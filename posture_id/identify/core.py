@@ -581,7 +581,8 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
     if typicality is not None and typicality.atypical:  # not a recording the model made
         sentences += (typicality.sentence(),)
     verdict = TrustVerdict(noise, on_bounds, tuple(outside), share, mistakes=sentences,
-                           unpinned=unpinned, classes_doubted=classes_doubted)
+                           unpinned=unpinned, classes_doubted=classes_doubted,
+                           fitted=fit is not None)
     if not verdict.doubtful or verdict.mistakes:  # a mistake: the recording to mend first
         return verdict
     if verdict.reasons == (classes_doubted,):  # its sentence says what decides them

@@ -29,7 +29,8 @@ Three levels (:class:`TrustLevel`), because "wrong" and "imprecise" are differen
 
 - ``doubtful``: evidence that the answer is wrong: a residual beyond the recording's noise
   (and more than :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of its locked
-  sway), Kp or Kd on a search bound, a recording outside what the method was trained on,
+  sway; for least squares' answer, more than :data:`FITTED_NOISE_LIMIT` times the noise
+  however close: a fit of the right model reaches the noise), Kp or Kd on a search bound, a recording outside what the method was trained on,
   a mistake found in the recording, or classes the network itself gives less than
   :data:`CLASSES_RIGHT_AT_LEAST` of being right together (the product over modules of
   its probability of the class it chose: a coin flip of a class is not imprecision, it
@@ -60,8 +61,8 @@ from posture_id.identify.noise_check import CLOSE_ENOUGH, NoiseCheck
 from posture_id.uncertainty.intervals import LABELS
 
 __all__ = ["TrustVerdict", "TrustLevel", "PEOPLE_LIKE_SHARE", "PINNED_FIELDS", "PINNED_TO",
-           "CLASSES_RIGHT_AT_LEAST", "UNSURE_CLASS", "suggestion", "unpinned_parameters",
-           "class_doubts"]
+           "CLASSES_RIGHT_AT_LEAST", "UNSURE_CLASS", "FITTED_NOISE_LIMIT", "suggestion",
+           "unpinned_parameters", "class_doubts"]
 
 #: Body sway whose noise-corrected stimulus-locked share is below this is people-like:
 #: the subject's own sway dominates (docs/real_recordings.md: 10–40 % in people).
@@ -87,6 +88,15 @@ UNSURE_CLASS = (0.05, 0.95)
 #: max(P, 1 − P) over the modules), the answer is doubtful: more than one chance in five
 #: that a controlled variable is wrong (docs/identify.md, "Trust", measured there).
 CLASSES_RIGHT_AT_LEAST = 0.8
+#: An answer of least squares (the fit, or ``auto``'s and the hybrid's refinement) that
+#: leaves more than this many times the recording's noise is doubtful even when it is
+#: within :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of the sway: least squares
+#: with the right model reaches the noise (the hybrid's right answers at 0.01° and 0.05°
+#: of sensor noise: at most 1.26× it, docs/results/hybrid_rule), where the network's
+#: answer on clean sway stays several times above it (its 3–6 % errors), so the network's
+#: answer keeps the closeness allowance and least squares' does not
+#: (docs/identify.md, "Trust").
+FITTED_NOISE_LIMIT = 3.0
 
 
 class TrustLevel(str, enum.Enum):
@@ -123,6 +133,7 @@ class TrustVerdict:
         classes_doubted: why the network's classes are more likely wrong than
             :data:`CLASSES_RIGHT_AT_LEAST` allows (one sentence, :func:`class_doubts`),
             or "".
+        fitted: the answer is least squares' (:data:`FITTED_NOISE_LIMIT`).
     """
 
     noise: NoiseCheck | None
@@ -133,13 +144,22 @@ class TrustVerdict:
     mistakes: tuple[str, ...] = ()
     unpinned: tuple[str, ...] = ()
     classes_doubted: str = ""
+    fitted: bool = False
 
     @property
     def beyond_noise(self) -> bool:
         """The residual is larger than the recording's noise allows and more than
-        :data:`CLOSE_ENOUGH` of the recorded sway (a model that falls included)."""
+        :data:`CLOSE_ENOUGH` of the recorded sway (a model that falls included), or, for
+        least squares' answer, more than :data:`FITTED_NOISE_LIMIT` times the noise."""
         noise = self.noise
-        return noise is not None and not noise.consistent and not noise.acceptable
+        return noise is not None and not noise.consistent and (
+            not noise.acceptable or self.fit_beyond_noise)
+
+    @property
+    def fit_beyond_noise(self) -> bool:
+        """Least squares' answer leaves more than :data:`FITTED_NOISE_LIMIT` times the
+        recording's noise (close to the sway or not)."""
+        return self.fitted and self.noise is not None and self.noise.ratio > FITTED_NOISE_LIMIT
 
     @property
     def not_close(self) -> bool:
@@ -151,7 +171,12 @@ class TrustVerdict:
     def reasons(self) -> tuple[str, ...]:
         """Why the answer is doubtful (empty when it is not)."""
         out = []
-        if self.beyond_noise:
+        if self.beyond_noise and self.noise.acceptable:  # close, but least squares' answer
+            out.append(f"least squares leaves a {self.noise.sentence()}: more than "
+                       f"{FITTED_NOISE_LIMIT:g}× the noise, where a fit of the right model "
+                       "reaches it (is the body the subject's, the columns in order, or is the "
+                       "fit in a local minimum?)")
+        elif self.beyond_noise:
             out.append(f"the model leaves a {self.noise.sentence()}")
         if self.bounds_that_matter:
             out.append("on a search bound: " + ", ".join(self.bounds_that_matter))
@@ -240,7 +265,7 @@ class TrustVerdict:
                 "classes_doubted": self.classes_doubted or None,
                 "noise_check": None if self.noise is None else self.noise.to_dict(),
                 "on_bounds": list(self.on_bounds), "outside": list(self.outside),
-                "locked_share": self.locked_share}
+                "locked_share": self.locked_share, "fitted": self.fitted}
 
 
 def suggestion(method: Method, locked: bool, locked_share: float | None,

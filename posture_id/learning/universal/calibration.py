@@ -217,7 +217,8 @@ class UniversalCalibration:
 
 def _scores(model: UniversalModel, samples: Samples) -> tuple[UniversalPrediction, np.ndarray]:
     """The prediction and (M, 4) scores |t − μ| / σ̂ of module samples."""
-    pred: UniversalPrediction = model.predict(samples.inputs)
+    pred: UniversalPrediction = model.predict(samples.inputs, samples.noise_ratio,
+                                              samples.noise_colour)
     return pred, np.abs(samples.targets[:, :4] - pred.mean) / pred.sd
 
 

@@ -14,7 +14,7 @@ from posture_id.learning.universal.evaluation import relative_errors
 from posture_id.learning.universal.features import body_descriptors, com_weights
 from posture_id.learning.universal.harmonics import harmonic_layout, sway_harmonics
 from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import module_inputs
+from posture_id.learning.universal.samples import inputs_and_noise
 
 __all__ = ["universal_on_dataset", "NOISE_STREAM"]
 
@@ -51,7 +51,9 @@ def universal_on_dataset(universal_dir: str | Path, dataset_dir: str | Path,
             tilt = stimulus.angle(np.arange(theta.shape[1]) / rate)
             layout = harmonic_layout(tilt, rate, stimulus.period_s, stimulus.periodic_from_s)
         y = sway_harmonics(layout, np.moveaxis(theta, 0, 1))  # (K, T, N)
-        pred = model.predict(module_inputs(layout, y, desc, com))
+        inputs, ratios, colours = inputs_and_noise(layout, y, desc, com)
+        n = desc.shape[0]
+        pred = model.predict(inputs, np.repeat(ratios, n), np.repeat(colours, n))
         truth = arrays["targets"][idx].reshape(-1, 5).astype(float)
         errors.append(((pred.mean - truth[:, :4]) / std).reshape(len(idx), -1, 4))
         rel.append(relative_errors(pred.mean, truth[:, :4]))

@@ -76,7 +76,7 @@ def score_samples(model: UniversalModel, samples: Samples,
                   calibration: UniversalCalibration | None, level: float = 0.9,
                   groups: np.ndarray | None = None) -> dict[str, GroupScore]:
     """Scores per group label (``groups`` (M,) strings; default one group 'all')."""
-    pred = model.predict(samples.inputs)
+    pred = model.predict(samples.inputs, samples.noise_ratio, samples.noise_colour)
     right = (pred.logit > 0) == (samples.targets[:, 4] > 0)
     errors = relative_errors(pred.mean, samples.targets[:, :4])
     inside = np.full(errors.shape, np.nan)

@@ -44,7 +44,7 @@ from posture_id.learning.universal.harmonics import (
     sway_harmonics,
 )
 from posture_id.learning.universal.model import SIDECAR, ModelError, UniversalModel
-from posture_id.learning.universal.samples import inputs_and_noise, module_inputs
+from posture_id.learning.universal.samples import inputs_and_noise
 from posture_id.learning.universal.scope import UniversalScope
 from posture_id.learning.universal.typicality import TypicalityReference
 from posture_id.provenance import body_identity, provenance
@@ -189,12 +189,15 @@ class UniversalIdentifier:
             self._layouts[key] = layout
         return self._layouts[key]
 
-    def features(self, trial: PreparedTrial) -> np.ndarray:
-        """(N, N_INPUTS) the network's inputs for a prepared trial."""
+    def features(self, trial: PreparedTrial) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The network's inputs for a prepared trial, (N, N_INPUTS), and each module's
+        noise ratio and colour (N,) (what a gated model weighs its networks by)."""
         trial.require_segments(self.body.segment_names)
         layout = self._layout(trial)
         y = sway_harmonics(layout, trial.recording.theta)[:, None, :]
-        return module_inputs(layout, y, self.descriptors, self.com)
+        inputs, ratios, colours = inputs_and_noise(layout, y, self.descriptors, self.com)
+        n = self.body.n_segments
+        return inputs, np.repeat(ratios, n), np.repeat(colours, n)
 
     def identify(self, trial: PreparedTrial, level: float = DEFAULT_LEVEL
                  ) -> CnnIdentification:
@@ -202,12 +205,11 @@ class UniversalIdentifier:
         trial.require_segments(self.body.segment_names)
         layout = self._layout(trial)
         theta = trial.recording.theta
-        y = sway_harmonics(layout, theta)[:, None, :]
-        inputs, ratios, colours = inputs_and_noise(layout, y, self.descriptors, self.com)
-        prediction = self.model.predict(inputs)
+        inputs, ratios, colours = self.features(trial)
+        n = self.body.n_segments
+        prediction = self.model.predict(inputs, ratios, colours)
         typicality = (None if self.typicality is None
                       else self.typicality.of(self.model.standardised(inputs)))
-        n = self.body.n_segments
         ratio, colour = float(ratios[0]), float(colours[0])
         regime = str(regime_of(n, ratio, colour))
         outside = list(self.body_outside) + stimulus_outside(

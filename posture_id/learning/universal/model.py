@@ -17,6 +17,7 @@ from posture_id._version import __version__
 from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
 from posture_id.learning.universal.features import UNIVERSAL_FEATURE_DEFINITION
+from posture_id.learning.universal.gate import NoiseGate
 from posture_id.learning.universal.network import (
     OUTPUTS,
     UniversalNetwork,
@@ -44,6 +45,13 @@ class UniversalPrediction:
     mean: np.ndarray
     sd: np.ndarray
     logit: np.ndarray
+
+
+def _averaged(means: np.ndarray, sds: np.ndarray, logits: np.ndarray) -> UniversalPrediction:
+    """Members' (K, M, 4) means and SDs and (K, M) logits as one answer: the mean of their
+    means and logits, the SD of their mixture."""
+    sd = np.sqrt(np.mean(sds**2, axis=0) + np.var(means, axis=0))
+    return UniversalPrediction(means.mean(axis=0), sd, logits.mean(axis=0))
 
 
 @dataclass
@@ -75,12 +83,27 @@ class UniversalModel:
         """:meth:`standardised` as a float32 tensor."""
         return torch.from_numpy(self.standardised(inputs).astype(np.float32))
 
+    @property
+    def gate(self) -> NoiseGate | None:
+        """Which members answer which recording (:mod:`.gate`), or None: all, averaged."""
+        data = self.sidecar.get("gate")
+        return None if data is None else NoiseGate.from_dict(data)
+
     @torch.inference_mode()
-    def predict(self, inputs: np.ndarray, batch_size: int = 8192) -> UniversalPrediction:
+    def predict(self, inputs: np.ndarray, noise_ratio: np.ndarray | None = None,
+                noise_colour: np.ndarray | None = None, batch_size: int = 8192
+                ) -> UniversalPrediction:
         """Predictions for (M, N_INPUTS) unstandardised inputs (the network in evaluation
         mode: no dropout). An ensemble's members are combined: the mean of their means and
         logits, and the SD of their mixture, √(mean of their variances + the variance of
-        their means)."""
+        their means). A gated model (:attr:`gate`) mixes its white-noise and its
+        coloured-noise members' answers by each sample's ``noise_ratio`` and
+        ``noise_colour`` (M,) (:meth:`~.gate.NoiseGate.coloured_share`; required then,
+        ignored otherwise): the mixture's mean and SD, and the logit of its probability.
+
+        Raises:
+            ModelError: a gated model without the samples' noise ratio and colour.
+        """
         if self.network.training:
             self.network.eval()
         members = self.network.config.members
@@ -90,8 +113,28 @@ class UniversalModel:
                else np.zeros((members, 0, OUTPUTS), np.float32)).astype(np.float64)
         means = out[..., :4] * self.target_std + self.target_mean
         sds = np.exp(np.clip(out[..., 4:8], -12, 6)) * self.target_std
-        sd = np.sqrt(np.mean(sds**2, axis=0) + np.var(means, axis=0))
-        return UniversalPrediction(means.mean(axis=0), sd, out[..., 8].mean(axis=0))
+        gate = self.gate
+        if gate is None:
+            return _averaged(means, sds, out[..., 8])
+        if noise_ratio is None or noise_colour is None:
+            raise ModelError(f"{self.path or 'this model'}: a gated model answers by each "
+                             "recording's noise ratio and colour; none were given")
+        k = gate.white_members
+        white, coloured = (_averaged(means[:k], sds[:k], out[:k, :, 8]),
+                           _averaged(means[k:], sds[k:], out[k:, :, 8]))
+        w = gate.coloured_share(noise_ratio, noise_colour)[:, None]
+        mean = (1 - w) * white.mean + w * coloured.mean
+        second = ((1 - w) * (white.sd**2 + white.mean**2)
+                  + w * (coloured.sd**2 + coloured.mean**2))
+        sd = np.sqrt(np.maximum(second - mean**2, 0.0))
+        # the mixture's P(C = +1) and P(C = −1), as logs, then its logit
+        with np.errstate(divide="ignore"):
+            lw, lc = np.log(1 - w[:, 0]), np.log(w[:, 0])
+        log_p = np.logaddexp(lw - np.logaddexp(0, -white.logit),
+                             lc - np.logaddexp(0, -coloured.logit))
+        log_q = np.logaddexp(lw - np.logaddexp(0, white.logit),
+                             lc - np.logaddexp(0, coloured.logit))
+        return UniversalPrediction(mean, sd, log_p - log_q)
 
     def tensors(self) -> dict[str, torch.Tensor]:
         out = {f"network.{k}": v.detach().contiguous()
@@ -144,6 +187,14 @@ class UniversalModel:
             tensors = load_file(str(weights))
         except SafetensorError as exc:
             raise ModelError(f"{weights}: cannot be read ({exc})") from None
+        if "gate" in sidecar:
+            try:
+                gate = NoiseGate.from_dict(sidecar["gate"])
+            except (KeyError, TypeError, ValueError) as exc:
+                raise ModelError(f"{sidecar_file}: its gate cannot be read ({exc})") from None
+            if gate.white_members >= config.members:
+                raise ModelError(f"{sidecar_file}: its gate gives {gate.white_members} of "
+                                 f"{config.members} members to white noise, none to the rest")
         network = UniversalNetwork(config)
         network.load_state_dict(UniversalNetwork.upgrade_state(
             {k.removeprefix("network."): v for k, v in tensors.items()
@@ -155,7 +206,7 @@ class UniversalModel:
                    std["target_std"], sidecar, folder)
 
 
-def ensemble_of(models: list[UniversalModel]) -> UniversalModel:
+def ensemble_of(models: list[UniversalModel], by_noise: bool = False) -> UniversalModel:
     """One model whose members are all of ``models``' members (a deep ensemble of networks
     trained apart: :meth:`UniversalModel.predict` averages their means and logits and
     widens the SD by their disagreement). They must read the same inputs the same way: one
@@ -164,12 +215,20 @@ def ensemble_of(models: list[UniversalModel]) -> UniversalModel:
     model (path, weights' SHA-256, training); calibrate the result anew
     (``posture-id universal check``): its spread is not any member's.
 
+    With ``by_noise``, the members are not averaged but gated (:mod:`.gate`): the first
+    model's answer recordings whose noise is white or nearly none, the others' those
+    whose noise is shaped by the body.
+
     Raises:
-        ModelError: fewer than two models, or two that differ in architecture (but for
-            the members) or standardisation (named by path).
+        ModelError: fewer than two models, a gated one among them, or two that differ in
+            architecture (but for the members) or standardisation (named by path).
     """
     if len(models) < 2:
         raise ModelError("an ensemble needs two or more models")
+    for model in models:
+        if model.gate is not None:
+            raise ModelError(f"{model.path or 'a model'}: gated by the noise already; "
+                             "give the models it was made of")
     first = models[0]
     shape = replace(first.network.config, members=1)
     for other in models[1:]:
@@ -187,7 +246,10 @@ def ensemble_of(models: list[UniversalModel]) -> UniversalModel:
         mine.load_state_dict(theirs.state_dict())
     network.eval()
     last = models[-1].sidecar
-    sidecar = {k: v for k, v in last.items() if k not in ("weights_sha256", "ensemble_of")}
+    sidecar = {k: v for k, v in last.items()
+               if k not in ("weights_sha256", "ensemble_of", "gate")}
+    if by_noise:
+        sidecar["gate"] = NoiseGate(first.network.config.members).to_dict()
     sidecar["ensemble_of"] = [
         {"path": str(m.path), "weights_sha256": m.sidecar.get("weights_sha256"),
          "members": m.network.config.members, "training": m.sidecar.get("training"),

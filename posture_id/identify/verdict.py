@@ -30,8 +30,9 @@ Three levels (:class:`TrustLevel`), because "wrong" and "imprecise" are differen
 - ``doubtful``: evidence that the answer is wrong: a residual beyond the recording's noise
   (and more than :data:`~posture_id.identify.noise_check.CLOSE_ENOUGH` of its locked
   sway; for least squares' answer, more than :data:`FITTED_NOISE_LIMIT` times the noise
-  however close: a fit of the right model reaches the noise), Kp or Kd on a search bound, a recording outside what the method was trained on,
-  a mistake found in the recording, or classes the network itself gives less than
+  however close: a fit of the right model reaches the noise), Kp or Kd on a search
+  bound, a recording outside what the method was trained on, a mistake found in the
+  recording, or classes the network itself gives less than
   :data:`CLASSES_RIGHT_AT_LEAST` of being right together (the product over modules of
   its probability of the class it chose: a coin flip of a class is not imprecision, it
   is an even chance of a wrong answer). The verdict names the method or flags that suit

@@ -24,7 +24,10 @@ falls, any reading that does not would win) and the alternative leaves at most
 recording is named: docs/identify.md, "Mistakes"); on people-like sway, whose noise hides
 both, they are rarely called. On a recording whose noise is below :data:`MIN_NOISE_SHARE`
 of its locked sway no other size is read: the network's own error is larger than such
-noise.
+noise. The identifier confirms a size named here before it reports it
+(``Identifier._fits_within_noise``): when least squares on the given body explains the
+recording within its noise, the size reading was the network's own error, and nothing
+is named.
 """
 
 from __future__ import annotations

@@ -34,6 +34,7 @@ import numpy as np
 
 from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import TARGET_FIELDS
+from posture_id.errors import PostureIdError
 from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.alternatives import better_explanations
@@ -235,7 +236,10 @@ class Identifier:
         leaves least squares above it."""
         hybrid = self._as(Method.HYBRID)
         hybrid.fit_options = replace(self.fit_options, locked=LockedOptions())
-        noise = hybrid.identify_trial(trial).verdict.noise
+        try:
+            noise = hybrid.identify_trial(trial).verdict.noise
+        except PostureIdError:  # no fit: nothing confirms the given body, the reading stands
+            return False
         return noise is not None and noise.consistent
 
     def _network_ratio(self, trial: PreparedTrial, body: Body,

@@ -948,6 +948,14 @@ def test_a_model_gated_by_the_noise_answers_white_noise_by_its_first_network(tmp
         gated.predict(x)
     with pytest.raises(ModelError, match="gated by the noise already"):
         ensemble_of([gated, white])
+    sidecar = tmp_path / "gated" / "model.json"
+    data = json.loads(sidecar.read_text())
+    for gate, message in (({**data["gate"], "white_members": 2}, "gives 2 of 2 members"),
+                          ({"white_members": 1}, "its gate cannot be read"),
+                          ({**data["gate"], "colour_to": 0.0}, "its gate cannot be read")):
+        sidecar.write_text(json.dumps({**data, "gate": gate}))
+        with pytest.raises(ModelError, match=message):
+            UniversalModel.load(tmp_path / "gated")
 
 
 def test_the_scope_s_bodies_are_inside_and_a_small_robot_is_not(tmp_path):

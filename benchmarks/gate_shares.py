@@ -9,7 +9,8 @@ For each module sample, the coloured-noise network's share w of the answer
 gate) from the sample's noise ratio and colour, as the identifier measures them. Prints,
 per kind of sway, how many samples go to the white-noise network alone (w = 0), to the
 coloured-noise one alone (w = 1) and between, the mean w, and the noise colour's and
-ratio's quantiles. The table's cells: ``posture-id universal table --trials 2048 --cache
+ratio's quantiles (on the table, also the ratio of the samples whose noise reads
+coloured). The table's cells: ``posture-id universal table --trials 2048 --cache
 data/table_cells`` (its clean and low-pass people-like sway); the family set: ``make
 noise-families`` (its test split, per family, clean and noisy trials apart).
 """
@@ -23,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.learning.universal import table
+from posture_id.learning.universal.calibration import COLOUR_EDGE
 from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.samples import LoadedShard, load_split, make_samples
@@ -61,6 +63,10 @@ def _table(gate, scope: UniversalScope, cache: Path, trials: int) -> None:
         both = np.concatenate(parts)
         w = gate.coloured_share(both[:, 1], both[:, 0])
         print(_line(f"table, {sway}", w, both[:, 0], both[:, 1]))
+        coloured = both[both[:, 0] > COLOUR_EDGE, 1]
+        if len(coloured):
+            print(f"{'':28s} {len(coloured):7d} of them coloured (above {COLOUR_EDGE:g}): "
+                  f"their ratio 50/90 % {np.round(np.quantile(coloured, [0.5, 0.9]), 4).tolist()}")
 
 
 def _families(gate, path: Path) -> None:

@@ -18,18 +18,16 @@ noise-families`` (its test split, per family, clean and noisy trials apart).
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from posture_id.learning.universal import table
 from posture_id.learning.universal.calibration import COLOUR_EDGE
 from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import LoadedShard, load_split, make_samples
+from posture_id.learning.universal.samples import load_split, make_samples
 from posture_id.learning.universal.scope import UniversalScope
-from posture_id.learning.universal.table import TABLE_SEED
+from posture_id.learning.universal.table import cached_samples
 
 BUNDLED = Path("posture_id/learning/universal/models/universal")
 
@@ -43,20 +41,8 @@ def _line(name: str, w: np.ndarray, colour: np.ndarray, ratio: np.ndarray) -> st
 
 
 def _table(gate, scope: UniversalScope, cache: Path, trials: int) -> None:
-    cells = list(table._cells())
-    key = table._cache_key(trials, table.table_scope(scope))
     found: dict[str, list[np.ndarray]] = {}
-    for index, (_family, _stimulus, sway) in enumerate(cells):
-        groups = table._load_cell(table._cell_file(cache, index), key)
-        if groups is None:
-            raise SystemExit(f"{cache}: cell {index} is missing; make the table with "
-                             f"posture-id universal table --trials {trials} --cache {cache}")
-        shards = []
-        for j, arrays in enumerate(groups):
-            arrays["index"] = index * table.BODIES_PER_CELL + j
-            shards.append(LoadedShard.of(arrays))
-        samples = make_samples(shards, replace(table.table_scope(scope), **table.SWAY[sway]),
-                               np.random.default_rng([TABLE_SEED, index]))
+    for (_family, _stimulus, sway), samples in cached_samples(cache, trials, scope):
         found.setdefault(sway, []).append(np.column_stack([samples.noise_colour,
                                                            samples.noise_ratio]))
     for sway, parts in found.items():

@@ -123,7 +123,7 @@ def test_a_recording_cleaner_than_the_networks_own_error_reads_no_alternative(
     assert noise.ratio > 10 and noise.relative / noise.ratio < MIN_NOISE_SHARE
     assert not result.verdict.mistakes
     monkeypatch.setattr(alternatives, "MIN_NOISE_SHARE", 0.0)
-    monkeypatch.setattr(Identifier, "_fits_within_noise", lambda self, trial: False)
+    monkeypatch.setattr(Identifier, "_fits_within_noise", lambda self, *args: False)
     unguarded = identify(recording, body, Method.CNN, stimulus=stimulus)
     assert any("a body 20 % shorter" in m for m in unguarded.verdict.mistakes)
 
@@ -187,7 +187,7 @@ def test_a_body_a_tenth_off_is_not_called_another_persons(tmp_path, monkeypatch)
     result = identify(recording, body)
     assert not any("URDF" in m for m in result.verdict.mistakes)
     monkeypatch.setattr(alternatives, "SIZES", (0.8, 0.9, 1.1, 1.25))
-    monkeypatch.setattr(Identifier, "_fits_within_noise", lambda self, trial: False)
+    monkeypatch.setattr(Identifier, "_fits_within_noise", lambda self, *args: False)
     near = identify(recording, body)
     assert any("a body 10 % shorter" in m for m in near.verdict.mistakes)
 
@@ -209,6 +209,6 @@ def test_a_size_the_network_reads_by_chance_is_not_named_when_least_squares_fits
     recording = simulate(body, truth).to_recording().with_sensor_noise(0.01, 30)
     result = identify(recording, body)
     assert not any("URDF" in m for m in result.verdict.mistakes)
-    monkeypatch.setattr(Identifier, "_fits_within_noise", lambda self, trial: False)
+    monkeypatch.setattr(Identifier, "_fits_within_noise", lambda self, *args: False)
     unconfirmed = identify(recording, body)
     assert any("a body 20 % shorter" in m for m in unconfirmed.verdict.mistakes)

@@ -220,27 +220,27 @@ class Identifier:
         found = better_explanations(trial, self.body, base, noise.relative, ratio_of,
                                     sizes=isinstance(self.cnn, UniversalIdentifier))
         if any(m.check == "another body" for m in found) and not verdict.fitted \
-                and self._fits_within_noise(trial):
+                and self._fits_within_noise(trial, cnn):
             found = tuple(m for m in found if m.check != "another body")
         if not found:
             return verdict
         return replace(verdict, mistakes=verdict.mistakes + tuple(m.sentence for m in found),
                        suggestion="")
 
-    def _fits_within_noise(self, trial: PreparedTrial) -> bool:
-        """Least squares from the network's answer on the stimulus-locked sway (the locked
-        hybrid) explains ``trial`` on this identifier's body within its noise. The size
-        check's confirmation: on clean sway the network's own error can read a body a
-        fifth off better by chance, where least squares on the given body reaches the
-        noise (docs/identify.md, "Mistakes"); a body that cannot have made the recording
-        leaves least squares above it."""
-        hybrid = self._as(Method.HYBRID)
-        hybrid.fit_options = replace(self.fit_options, locked=LockedOptions())
+    def _fits_within_noise(self, trial: PreparedTrial, cnn) -> bool:
+        """Least squares from the network's answer ``cnn`` on the stimulus-locked sway (the
+        locked hybrid's fit) explains ``trial`` on this identifier's body within its noise.
+        The size check's confirmation: on clean sway the network's own error can read a
+        body a fifth off better by chance, where least squares on the given body reaches
+        the noise (docs/identify.md, "Mistakes"); a body that cannot have made the
+        recording leaves least squares above it. Only the fit and its check: nothing of
+        the hybrid's verdict is needed here."""
+        options = replace(self.fit_options, locked=LockedOptions())
         try:
-            noise = hybrid.identify_trial(trial).verdict.noise
+            fit, _ = _refine(trial, self.body, cnn, options, None, [])
         except PostureIdError:  # no fit: nothing confirms the given body, the reading stands
             return False
-        return noise is not None and noise.consistent
+        return self._judged(fit.trial, self.body, fit.parameters).consistent
 
     def _network_ratio(self, trial: PreparedTrial, body: Body,
                        locked: LockedProjection | None = None) -> float:
@@ -254,10 +254,18 @@ class Identifier:
         against the recording (:func:`noise_check`). ``locked``: the trial's unweighted
         locked projection (default: made here)."""
         network = self.cnn if body is self.body else self.cnn.for_body(body)
-        answer = network.identify(trial, self.level)
+        return self._judged(trial, body, network.identify(trial, self.level).parameters,
+                            locked)
+
+    def _judged(self, trial: PreparedTrial, body: Body, parameters,
+                locked: LockedProjection | None = None) -> NoiseCheck:
+        """``parameters`` on ``body`` re-simulated on ``trial``'s stimulus and judged
+        against the recording (:func:`noise_check`, on the body COM sway as an answer's
+        verdict is). ``locked``: the trial's unweighted locked projection (default: made
+        here)."""
         if locked is None:
             locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
-        sway = simulate(body, answer.parameters, trial.stimulus,
+        sway = simulate(body, parameters, trial.stimulus,
                         replace(self.fit_options.simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG))
         recorded = trial.recording.theta
         return noise_check(trial, sway.theta, projection=locked, body_sway=(

@@ -51,9 +51,7 @@ def universal_on_dataset(universal_dir: str | Path, dataset_dir: str | Path,
             tilt = stimulus.angle(np.arange(theta.shape[1]) / rate)
             layout = harmonic_layout(tilt, rate, stimulus.period_s, stimulus.periodic_from_s)
         y = sway_harmonics(layout, np.moveaxis(theta, 0, 1))  # (K, T, N)
-        inputs, ratios, colours = inputs_and_noise(layout, y, desc, com)
-        n = desc.shape[0]
-        pred = model.predict(inputs, np.repeat(ratios, n), np.repeat(colours, n))
+        pred = model.predict(*inputs_and_noise(layout, y, desc, com))
         truth = arrays["targets"][idx].reshape(-1, 5).astype(float)
         errors.append(((pred.mean - truth[:, :4]) / std).reshape(len(idx), -1, 4))
         rel.append(relative_errors(pred.mean, truth[:, :4]))

@@ -195,17 +195,14 @@ class UniversalIdentifier:
         trial.require_segments(self.body.segment_names)
         layout = self._layout(trial)
         y = sway_harmonics(layout, trial.recording.theta)[:, None, :]
-        inputs, ratios, colours = inputs_and_noise(layout, y, self.descriptors, self.com)
-        n = self.body.n_segments
-        return inputs, np.repeat(ratios, n), np.repeat(colours, n)
+        return inputs_and_noise(layout, y, self.descriptors, self.com)
 
     def identify(self, trial: PreparedTrial, level: float = DEFAULT_LEVEL
                  ) -> CnnIdentification:
         """Every module's parameters for one prepared trial, with intervals at ``level``."""
-        trial.require_segments(self.body.segment_names)
+        inputs, ratios, colours = self.features(trial)  # (the segments checked there)
         layout = self._layout(trial)
         theta = trial.recording.theta
-        inputs, ratios, colours = self.features(trial)
         n = self.body.n_segments
         prediction = self.model.predict(inputs, ratios, colours)
         typicality = (None if self.typicality is None

@@ -25,7 +25,7 @@ from posture_id.learning.universal.scope import UniversalScope
 from posture_id.simulation.noise_families import DRIFTING_COLOUR_SLOPE, NoiseFamily
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
-           "make_samples", "module_inputs", "inputs_and_noise", "rotate_motor_noise",
+           "make_samples", "inputs_and_noise", "rotate_motor_noise",
            "tilt_motor_noise", "TILT_PIVOT_HZ", "without_families", "require_trials"]
 
 
@@ -90,29 +90,25 @@ def load_split(data: UniversalSet | Sequence[UniversalSet], split: str) -> list[
     return out
 
 
-#: The columns of :func:`module_inputs` holding :func:`~.features.stimulus_descriptors`
+#: The columns of :func:`inputs_and_noise`'s inputs holding
+#: :func:`~.features.stimulus_descriptors`
 #: (the last four).
 STIMULUS_COLUMNS = slice(N_INPUTS - 4, N_INPUTS)
 
 
-def module_inputs(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarray
-                  ) -> np.ndarray:
-    """(B·N, N_INPUTS) float32 inputs of B sways' harmonics (K, B, N) on a body whose
-    descriptors are ``body`` (N, 11) and COM weights ``com`` (N, N), module after module
-    within each trial."""
-    return inputs_and_noise(layout, harmonics, body, com)[0]
-
-
 def inputs_and_noise(layout, harmonics: np.ndarray, body: np.ndarray, com: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(:func:`module_inputs`, (B,) :func:`~.features.noise_ratio`, (B,)
-    :func:`~.features.noise_colour`), noise estimated once."""
+    """The network's inputs of B sways' harmonics (K, B, N) on a body whose descriptors
+    are ``body`` (N, 11) and COM weights ``com`` (N, N): (B·N, N_INPUTS) float32, module
+    after module within each trial; and each module's trial's
+    :func:`~.features.noise_ratio` and :func:`~.features.noise_colour`, (B·N,) (what the
+    calibration's regimes and a gated model read), the noise estimated once."""
     feats, ratio, colour = features_and_noise(layout, harmonics, com)  # (B, N, C, G)
     b, n = feats.shape[:2]
     stim = np.broadcast_to(stimulus_descriptors(layout), (b, n, 4))
     desc = np.broadcast_to(body, (b, n, body.shape[1]))
     return np.concatenate([feats.reshape(b, n, -1), desc, stim], axis=2).reshape(
-        b * n, -1).astype(np.float32), ratio, colour
+        b * n, -1).astype(np.float32), np.repeat(ratio, n), np.repeat(colour, n)
 
 
 def rotate_motor_noise(y: np.ndarray, y_locked: np.ndarray, rng: np.random.Generator
@@ -222,10 +218,11 @@ def make_samples(shards: list[LoadedShard], scope: UniversalScope,
         y = y + sd[:, :, None] * (rng.standard_normal(y.shape) + 1j * rng.standard_normal(y.shape))
         inputs, rho, colour = inputs_and_noise(layout, y, a["body"], shard.com)
         parts["inputs"].append(inputs)
+        parts["noise_ratio"].append(rho)
+        parts["noise_colour"].append(colour)
         parts["targets"].append(a["targets"].reshape(t * n, 5))
-        per_module = {"trial": first + np.arange(t), "noise_ratio": rho, "noise_colour": colour,
-                      "locked_share": a["locked_share"], "sensor_noise_deg": sensor,
-                      "drift_deg": drift}
+        per_module = {"trial": first + np.arange(t), "locked_share": a["locked_share"],
+                      "sensor_noise_deg": sensor, "drift_deg": drift}
         for key, value in per_module.items():
             parts[key].append(np.repeat(value, n))
         parts["module"].append(np.tile(np.arange(n), t))

@@ -37,13 +37,13 @@ from posture_id.learning.universal.calibration import UniversalCalibration
 from posture_id.learning.universal.data import simulate_trials
 from posture_id.learning.universal.evaluation import GroupScore, score_samples
 from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import LoadedShard, make_samples
+from posture_id.learning.universal.samples import LoadedShard, Samples, make_samples
 from posture_id.learning.universal.scope import BodyDraw, StimulusDraw, UniversalScope
 from posture_id.plotting import plot_score_grid
 from posture_id.progress import Progress, report
 
 __all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "table_scope",
-           "TABLE_SEED", "BODIES_PER_CELL"]
+           "TABLE_SEED", "BODIES_PER_CELL", "cell_samples", "cached_samples"]
 
 TABLE_SEED = 0x544142
 #: Winter bodies drawn per cell (the TIP and TALOS are one body each).
@@ -231,6 +231,39 @@ class FamilyTable:
             "90 % interval coverage (mean of 4), %": (coverage, (75, 100), ".0f")}, path, ax)
 
 
+def cell_samples(index: int, groups: list[dict], scope: UniversalScope,
+                 seed: int = TABLE_SEED, bodies_per_cell: int = BODIES_PER_CELL) -> Samples:
+    """The module samples of cell ``index`` from its simulated ``groups`` (one per body):
+    the sensor noise and drift of its sway drawn as the table draws them. ``scope``: the
+    table's (:func:`table_scope`)."""
+    sway = list(_cells())[index][2]
+    shards = []
+    for j, arrays in enumerate(groups):
+        arrays["index"] = index * bodies_per_cell + j
+        shards.append(LoadedShard.of(arrays))
+    return make_samples(shards, replace(scope, **SWAY[sway]),
+                        np.random.default_rng([seed, index]))
+
+
+def cached_samples(cache: str | Path, trials: int, scope: UniversalScope,
+                   seed: int = TABLE_SEED, bodies_per_cell: int = BODIES_PER_CELL):
+    """((family, stimulus, sway), module samples) of every cell kept in ``cache`` by a
+    table of ``trials`` per cell (:func:`family_table` with ``cache``), without a model.
+
+    Raises:
+        TableCacheError: a cell missing, or made with other arguments."""
+    table = table_scope(scope)
+    made_with = _cache_key(trials, table, seed, bodies_per_cell)
+    for index, (family, stim, sway) in enumerate(_cells()):
+        groups = _load_cell(_cell_file(cache, index), made_with)
+        if groups is None:
+            raise TableCacheError(f"{_cell_file(cache, index)}: no table cell there; make "
+                                  f"them with posture-id universal table --trials {trials} "
+                                  f"--cache {cache}")
+        yield ((family, _stimulus_label(*stim), sway),
+               cell_samples(index, groups, table, seed, bodies_per_cell))
+
+
 def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
                  workers: int | None = None, cache: str | Path | None = None,
                  progress: Progress | None = None, seed: int = TABLE_SEED,
@@ -265,12 +298,7 @@ def family_table(model_dir: str | Path, out: str | Path, trials: int = 64,
     scores: dict[tuple[str, str, str], GroupScore] = {}
     bodies: dict[str, list[dict]] = {}
     for index, (family, stim, sway) in enumerate(cells):
-        shards = []
-        for j, arrays in enumerate(results[index]):
-            arrays["index"] = index * bodies_per_cell + j
-            shards.append(LoadedShard.of(arrays))
-        sway_scope = replace(scope, **SWAY[sway])
-        samples = make_samples(shards, sway_scope, np.random.default_rng([seed, index]))
+        samples = cell_samples(index, results[index], scope, seed, bodies_per_cell)
         key = (family, _stimulus_label(*stim), sway)
         scores[key] = score_samples(model, samples, calibration)["all"]
         bodies[" | ".join(key)] = [json.loads(str(g["draw"]))["body"] for g in results[index]]

@@ -133,3 +133,21 @@ def test_one_cycle_s_noise_is_not_the_body_s_transient(tip):
     assert recording_alone > 1.5 * actual
     assert 0.8 < check.noise_relative / actual < 1.2
     assert 0.8 < check.ratio < 1.2 and not check.unchecked
+
+
+def test_an_identifier_judges_parameters_by_re_simulating_them(tip):
+    """Identifier.judge: the parameters re-simulated on the trial's stimulus, their residual
+    against the recording's noise and their relative residual on the body COM sway."""
+    from posture_id.identify import Identifier, Method
+
+    truth = default_parameters(tip)
+    clean = simulate(tip, truth)
+    trial = prepare_trial(clean.to_recording().with_sensor_noise(0.02, 5))
+    judge = Identifier(tip, Method.FIT).judge
+    right = judge(trial, tip, truth)
+    by_hand = noise_check(trial, clean.theta, body_sway=(
+        tip.com_angles(trial.recording.theta)[:, 0], clean.alpha[:, 0]))
+    assert right.ratio == pytest.approx(by_hand.ratio) and right.consistent
+    assert right.relative == pytest.approx(by_hand.relative)
+    wrong = judge(trial, tip, _flipped(truth, tip.joint_names[2]))
+    assert wrong.ratio > 3 * NOISE_RATIO_LIMIT and wrong.relative > right.relative

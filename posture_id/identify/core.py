@@ -240,7 +240,7 @@ class Identifier:
             fit, _ = _refine(trial, self.body, cnn, options, None, [])
         except PostureIdError:  # no fit: nothing confirms the given body, the reading stands
             return False
-        return self._judged(fit.trial, self.body, fit.parameters).consistent
+        return self.judge(fit.trial, self.body, fit.parameters).consistent
 
     def _network_ratio(self, trial: PreparedTrial, body: Body,
                        locked: LockedProjection | None = None) -> float:
@@ -254,11 +254,11 @@ class Identifier:
         against the recording (:func:`noise_check`). ``locked``: the trial's unweighted
         locked projection (default: made here)."""
         network = self.cnn if body is self.body else self.cnn.for_body(body)
-        return self._judged(trial, body, network.identify(trial, self.level).parameters,
+        return self.judge(trial, body, network.identify(trial, self.level).parameters,
                             locked)
 
-    def _judged(self, trial: PreparedTrial, body: Body, parameters,
-                locked: LockedProjection | None = None) -> NoiseCheck:
+    def judge(self, trial: PreparedTrial, body: Body, parameters,
+              locked: LockedProjection | None = None) -> NoiseCheck:
         """``parameters`` on ``body`` re-simulated on ``trial``'s stimulus and judged
         against the recording (:func:`noise_check`, on the body COM sway as an answer's
         verdict is). ``locked``: the trial's unweighted locked projection (default: made

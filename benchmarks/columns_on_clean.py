@@ -61,9 +61,9 @@ def main() -> None:
                     check = identifier._network_check(trial, body)
                     given = check.ratio
                     shares.append(check.relative)
-                    best = min(identifier._network_ratio(columns_exchanged(trial, k), body)
+                    best = min(identifier._network_check(columns_exchanged(trial, k), body).ratio
                                for k in range(body.n_segments - 1))
-                    swapped = identifier._network_ratio(columns_exchanged(trial, 0), body)
+                    swapped = identifier._network_check(columns_exchanged(trial, 0), body).ratio
                     right_gains.append(given / best)
                     back_gains.append(swapped / given)
                     print(f"| {name} | {states}×{cycles}, {amplitude:g}° | {seed} | {noise:g}° "

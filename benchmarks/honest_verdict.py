@@ -52,7 +52,6 @@ from posture_id.simulation.noise_families import NoiseFamily, draw_noise
 from posture_id.simulation.stimulus import prts
 from posture_id.simulation.subjects import people_like
 from posture_id.studies.journal import Journal
-from posture_id.trials import prepare_trial
 
 SEED = 4141
 BODIES = ("TIP", "Winter 1-seg", "Winter 2-seg", "Winter 3-seg")
@@ -194,7 +193,7 @@ def _one(task: tuple) -> dict:
             "relative_half_width": (half / np.abs(found)).tolist()})
         # how well the truth itself explains the recording, judged as the answer is: an
         # answer that leaves no more than the truth does cannot be told wrong by its fit
-        truth_check = identifier.judge(prepare_trial(recording, stimulus), body, truth)
+        truth_check = identifier.judge(identifier.prepare(recording, stimulus), body, truth)
         row.update({"truth_noise_ratio": truth_check.ratio,
                     "truth_relative_residual": truth_check.relative})
     return row

@@ -214,7 +214,7 @@ class Identifier:
                 or not NOISE_RATIO_LIMIT < noise.ratio < math.inf):
             return verdict  # nothing to read, or an answer within the noise
         def ratio_of(other: PreparedTrial, body: Body) -> float:
-            return self._network_ratio(other, body, locked)
+            return self._network_check(other, body, locked).ratio
 
         base = noise.ratio if self.method is Method.CNN else ratio_of(trial, self.body)
         found = better_explanations(trial, self.body, base, noise.relative, ratio_of,
@@ -242,16 +242,11 @@ class Identifier:
             return False
         return self.judge(fit.trial, self.body, fit.parameters).consistent
 
-    def _network_ratio(self, trial: PreparedTrial, body: Body,
-                       locked: LockedProjection | None = None) -> float:
-        """:meth:`_network_check`'s ratio: the stimulus-locked residual in units of the
-        recording's noise (inf: it falls)."""
-        return self._network_check(trial, body, locked).ratio
-
     def _network_check(self, trial: PreparedTrial, body: Body,
                        locked: LockedProjection | None = None) -> NoiseCheck:
         """The network's answer on ``trial`` read with ``body``, re-simulated and judged
-        against the recording (:func:`noise_check`). ``locked``: the trial's unweighted
+        against the recording (:meth:`judge`; its ``ratio``: the stimulus-locked residual
+        in units of the recording's noise, inf where it falls). ``locked``: the trial's unweighted
         locked projection (default: made here)."""
         network = self.cnn if body is self.body else self.cnn.for_body(body)
         return self.judge(trial, body, network.identify(trial, self.level).parameters,
@@ -371,7 +366,8 @@ class Identifier:
         candidates = [shifted for offset in offsets if abs(offset) >= 0.02
                       and (shifted := _shifted_whole(trial, offset)) is not None]
         # each candidate judged by the network's residual alone; the best identified once
-        judged = [(self._network_ratio(shifted, self.body), shifted) for shifted in candidates]
+        judged = [(self._network_check(shifted, self.body).ratio, shifted)
+                  for shifted in candidates]
         better = [(r, shifted) for r, shifted in judged if r < answer.verdict.noise.ratio]
         if not better:
             return replace(answer, notices=(*answer.notices, (

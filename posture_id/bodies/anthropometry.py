@@ -77,6 +77,12 @@ def _merge(parts: list[SegmentSpec], link: str, joint: str) -> SegmentSpec:
     return SegmentSpec(link, joint, base, mass, com, inertia)
 
 
+#: m, the heights Winter's tables are used for (a person's, in metres).
+HEIGHT_RANGE_M = (0.5, 2.5)
+#: kg, the masses likewise.
+MASS_RANGE_KG = (10.0, 300.0)
+
+
 def winter_segments(height_m: float, mass_kg: float, n_segments: int = 3) -> list[SegmentSpec]:
     """Segments of a person from Winter's tables, feet excluded (they are the support).
 
@@ -84,9 +90,9 @@ def winter_segments(height_m: float, mass_kg: float, n_segments: int = 3) -> lis
         height_m: body height, m (0.5 to 2.5). mass_kg: body mass, kg (10 to 300).
         n_segments: 3 (shank, thigh, trunk), 2 (leg, trunk) or 1 (body).
     """
-    if not 0.5 <= height_m <= 2.5:
+    if not HEIGHT_RANGE_M[0] <= height_m <= HEIGHT_RANGE_M[1]:
         raise BodyError(f"height {height_m} m is outside 0.5–2.5 m")
-    if not 10.0 <= mass_kg <= 300.0:
+    if not MASS_RANGE_KG[0] <= mass_kg <= MASS_RANGE_KG[1]:
         raise BodyError(f"mass {mass_kg} kg is outside 10–300 kg")
     parts = []
     for link, joint in (("shank", "ankle"), ("thigh", "knee"), ("trunk", "hip")):

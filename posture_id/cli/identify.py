@@ -169,10 +169,10 @@ def run_cohort(args: argparse.Namespace) -> int:
             result = identify_cohort(recordings, args.out, identifier, args.scheduler,
                                      progress, stimulus, args.model, columns_from_args(args),
                                      args.bodies, trial_bodies=args.body is None)
-        if args.frf_preset or norm is not None:
-            _cohort_frfs(args, recordings, body, norm)
+        no_frf = (_cohort_frfs(args, recordings, body, norm)
+                  if args.frf_preset or norm is not None else {})
     say(result.summary())
-    return answered(bool(result.failed or result.doubtful))
+    return answered(bool(result.failed or result.doubtful or no_frf))
 
 
 def _cohort_norm(args: argparse.Namespace):
@@ -185,11 +185,25 @@ def _cohort_norm(args: argparse.Namespace):
     if norm.lab_bands is None and args.frf_preset is None:
         raise PostureIdError(f"{args.norm}: the norm does not say at which points its FRFs "
                              "were computed; give --frf-preset")
+    per_trial = args.bodies is not None or (
+        args.body is None and isinstance(columns_from_args(args), MarkerMapping))
+    if not per_trial:  # every recording is read for one body: its channels are known
+        body = load_body(args.body or DEFAULT_URDF)
+        given = (*body.segment_names, "body COM")
+        missing = [c for c in norm.channels if c not in given]
+        if missing:
+            raise PostureIdError(
+                f"{args.norm}: the norm's channels {', '.join(norm.channels)} are not all "
+                f"the recordings' ({', '.join(given)} for {Path(body.urdf_path).name}): "
+                "test against a norm of the same segments, or of the body COM alone "
+                "(norm build --channel 'body COM')")
     return norm
 
 
-def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm) -> None:
-    """Each recording's FRF at the lab's points, and the norm's columns in summary.csv."""
+def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm
+                 ) -> dict[str, str]:
+    """Each recording's FRF at the lab's points, and the norm's columns in summary.csv;
+    returns the recordings that got none, with why (each said)."""
     from posture_id.frf.bands import BAND_PRESETS, FrequencyBands
     from posture_id.norms.cohort import cohort_frfs
     from posture_id.trials import prepare_trial
@@ -214,3 +228,4 @@ def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm) -
     failed = cohort_frfs(recordings, args.out, read, body_of, bands, norm)
     for name, why in failed.items():
         say(f"{name}: no FRF ({why})")
+    return failed

@@ -79,6 +79,16 @@ def mapping_from_args(args: argparse.Namespace) -> MarkerMapping | None:
     given = marker_flags_given(args)
     if not given:
         return None
+    columns = [flag for flag, on in (
+        ("--angle-columns", getattr(args, "angle_columns", None)),
+        ("--time-column", getattr(args, "time_column", "time_s") != "time_s"),
+        ("--tilt-column", getattr(args, "tilt_column", "tilt_deg") != "tilt_deg"),
+        ("--units", getattr(args, "units", "deg") != "deg"),
+        ("--sample-rate-hz", getattr(args, "sample_rate_hz", None) is not None)) if on]
+    if columns:
+        raise PostureIdError(f"{', '.join(columns)} read a CSV file's columns, and the "
+                             f"marker flags ({', '.join(given)}) a C3D trial: give the ones "
+                             "for the file (a C3D's tilt: --tilt-markers or --tilt-channel)")
     if args.tilt_markers and args.tilt_channel:
         raise PostureIdError("--tilt-markers and --tilt-channel are two sources of the "
                              "platform's tilt: give one")
@@ -137,7 +147,7 @@ def recording_body(args: argparse.Namespace, default: Path | None):
     whose metadata give the subject's height and mass, their Winter body with as many
     segments as the markers name (said on stderr); else ``default`` (None: no body)."""
     from posture_id.bodies.body import load_body
-    from posture_id.motion_capture import is_c3d, read_c3d
+    from posture_id.motion_capture import is_c3d, marker_angles, read_c3d
     from posture_id.trials.subjects import subject_urdf
 
     if args.body is not None:
@@ -148,6 +158,7 @@ def recording_body(args: argparse.Namespace, default: Path | None):
                                                      mapping)
     if urdf is not None:  # the file gives the subject's height and mass
         trial = read_c3d(args.recording)  # kept from subject_urdf's read
+        marker_angles(trial, mapping)  # a trial its markers cannot be read from: refused first
         say(f"{args.recording}: the subject's body from the file's metadata: Winter's "
             f"tables for {trial.height_m:.3g} m and {trial.mass_kg:.4g} kg, "
             f"{mapping.n_segments} segment(s) (--body URDF gives another)")

@@ -54,8 +54,9 @@ def add_parser(sub) -> None:
     _sources(b)
     b.set_defaults(func=run_build)
     t = n.add_parser("test", help="a recording or an FRF JSON against a norm")
-    t.add_argument("input", type=Path, help="recording CSV (its FRF is computed at the "
-                                            "norm's points) or FRF JSON")
+    t.add_argument("recording", type=Path, metavar="INPUT",
+                   help="recording (CSV or C3D: its FRF is computed at the norm's points) "
+                        "or FRF JSON")
     t.add_argument("--norm", type=Path, required=True, help="norm JSON (built or published)")
     t.add_argument("--out", type=Path, help="result JSON")
     t.add_argument("--plot", type=Path, help="Bode with the norm, PIR in its band (PNG)")
@@ -97,18 +98,18 @@ def run_build(args: argparse.Namespace) -> int:
 
 
 def run_test(args: argparse.Namespace) -> int:
-    inputs = (args.input, args.norm, args.body, args.tilt)
+    inputs = (args.recording, args.norm, args.body, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     from posture_id.norms.norm import Norm, against_norm
     from posture_id.norms.readers import frf_from_json
 
     norm = Norm.from_json(args.norm)
-    if args.input.suffix.lower() == ".json":
-        f, h, _, _ = frf_from_json(args.input, norm.channels)
+    if args.recording.suffix.lower() == ".json":
+        f, h, _, _ = frf_from_json(args.recording, norm.channels)
     else:
         f, h = _recording_frf(args, norm)
-    result = against_norm(norm, f, h, args.input.name)
+    result = against_norm(norm, f, h, args.recording.name)
     write_result(result, args.out, args.plot)
     return answered(result.inside_prediction_band is False)
 
@@ -129,7 +130,7 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
     frf = frequency_response(prepare_trial(recording, stimulus, rate_hz=None), body, options)
     missing = [c for c in norm.channels if c not in frf.channels]
     if missing:
-        raise PostureIdError(f"{args.input}: no channel {', '.join(missing)} for the norm "
+        raise PostureIdError(f"{args.recording}: no channel {', '.join(missing)} for the norm "
                              f"(the recording gives {', '.join(frf.channels)}; --body adds "
                              "the body COM)")
     columns = [frf.channels.index(c) for c in norm.channels]
@@ -139,6 +140,11 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
 def run_compare(args: argparse.Namespace) -> int:
     if len(args.group) != 2:
         raise PostureIdError(f"--group: give two groups (got {len(args.group)})")
+    first = {p.resolve() for p in args.group[0]}
+    shared = [p for p in args.group[1] if p.resolve() in first]
+    if shared:
+        raise PostureIdError(f"{shared[0]}: in both groups (--group ... --group ...); a "
+                             "member belongs to one group")
     inputs = tuple(p for g in args.group for p in g)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
@@ -150,10 +156,29 @@ def run_compare(args: argparse.Namespace) -> int:
     channels = tuple(args.channel) if args.channel else None
     a, _ = read_frfs(args.group[0], channels, args.variable, args.frequencies)
     b, _ = read_frfs(args.group[1], channels, args.variable, args.frequencies)
+    _no_member_twice(a, b, args.group)
     result = compare_groups(a, b, tuple(args.names), args.permutations, args.bootstrap,
                             args.level, args.rate_hz, args.seed)
     write_result(result, args.out, args.plot)
     return 0
+
+
+def _no_member_twice(a, b, groups: list[list[Path]]) -> None:
+    """Refuse a member of the second group whose FRF is one of the first's (a copy under
+    another name: the groups would share members, and the test assumes they do not)."""
+    import numpy as np
+
+    def label(frfs, k: int, files: list[Path]) -> str:
+        return str(files[k]) if len(files) == len(frfs) else f"{frfs.names[k]} ({files[0]})"
+
+    if a.response.shape[1:] != b.response.shape[1:]:
+        return  # compare_groups says how they differ
+    for j, hb in enumerate(b.response):
+        for i, ha in enumerate(a.response):
+            if np.array_equal(ha, hb):
+                raise PostureIdError(
+                    f"{label(b, j, groups[1])}: the same FRF as {label(a, i, groups[0])} "
+                    "of the first group (a copy?); a member belongs to one group")
 
 
 def _is_identified(path: Path) -> bool:

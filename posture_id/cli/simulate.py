@@ -120,13 +120,9 @@ def _write_recording(args: argparse.Namespace, recording, body) -> None:
         return
     from posture_id.motion_capture import C3dWriteOptions, LabAxes, write_c3d
 
-    gaps = []
-    for marker, start, duration in args.marker_gap or ():
-        try:
-            gaps.append((marker, float(start), float(duration)))
-        except ValueError:
-            raise PostureIdError(f"--marker-gap {marker} {start} {duration}: START_S and "
-                                 "DURATION_S must be numbers of seconds") from None
+    _check_subject(args)
+    gaps = [_marker_gap(marker, start, duration, float(recording.time[-1]))
+            for marker, start, duration in args.marker_gap or ()]
     defaults = C3dWriteOptions()
     options = C3dWriteOptions(
         axes=LabAxes(args.c3d_forward_axis or "x"), unit=args.c3d_unit or defaults.unit,
@@ -136,6 +132,36 @@ def _write_recording(args: argparse.Namespace, recording, body) -> None:
                           else args.analog_per_frame),
         height_m=args.subject_height_m, mass_kg=args.subject_mass_kg, seed=args.seed)
     write_c3d(args.out, recording, tuple(s.length for s in body.segments), options)
+
+
+def _check_subject(args: argparse.Namespace) -> None:
+    """Refuse a height or mass in other units than the flags' (175 for 1.75 m)."""
+    from posture_id.bodies.anthropometry import HEIGHT_RANGE_M, MASS_RANGE_KG
+
+    for flag, value, (low, high), unit in (
+            ("--subject-height-m", args.subject_height_m, HEIGHT_RANGE_M, "metres"),
+            ("--subject-mass-kg", args.subject_mass_kg, MASS_RANGE_KG, "kg")):
+        if value is not None and not low <= value <= high:
+            raise PostureIdError(f"{flag} {value:g}: a person's is {low:g}–{high:g} "
+                                 f"{unit}; is it in other units?")
+
+
+def _marker_gap(marker: str, start: str, duration: str, end_s: float
+                ) -> tuple[str, float, float]:
+    """One --marker-gap's (marker, start s, duration s), refused unless it lies within
+    the trial's 0..``end_s`` and lasts some time."""
+    where = f"--marker-gap {marker} {start} {duration}"
+    try:
+        start_s, duration_s = float(start), float(duration)
+    except ValueError:
+        raise PostureIdError(f"{where}: START_S and DURATION_S must be numbers of "
+                             "seconds") from None
+    if not (np.isfinite(duration_s) and duration_s > 0):
+        raise PostureIdError(f"{where}: DURATION_S must be > 0 s (a gap lasts some time)")
+    if not (np.isfinite(start_s) and 0 <= start_s < end_s):
+        raise PostureIdError(f"{where}: START_S must be within the trial, 0 to {end_s:g} s "
+                             f"({'after it ends' if start_s >= end_s else 'before it starts'})")
+    return marker, start_s, duration_s
 
 
 def run(args: argparse.Namespace) -> int:

@@ -142,14 +142,6 @@ def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
     None for the standard header."""
     mapping = mapping_from_args(args)
     if mapping is not None:
-        columns = [f for f, given in (("--angle-columns", getattr(args, "angle_columns", None)),
-                                      ("--units", getattr(args, "units", "deg") != "deg"),
-                                      ("--sample-rate-hz",
-                                       getattr(args, "sample_rate_hz", None) is not None))
-                   if given]
-        if columns:
-            raise PostureIdError(f"{', '.join(columns)} read a CSV file's columns, and the "
-                                 "marker flags a C3D trial: give the ones for the file")
         return mapping
     if not getattr(args, "angle_columns", None):
         if getattr(args, "sample_rate_hz", None) is not None or \

@@ -31,7 +31,7 @@ from posture_id.motion_capture.mapping import (
 from posture_id.recording import Recording
 
 __all__ = ["MarkerAngles", "marker_angles", "LEVEL_S", "UPRIGHT_LIMIT_DEG",
-           "PLATFORM_HEADING_LIMIT_DEG", "SAGITTAL_SHARE"]
+           "PLATFORM_HEADING_LIMIT_DEG", "SAGITTAL_SHARE", "SWAY_ACROSS_RATIO"]
 
 #: s, the start of the trial over which the platform markers' level is taken.
 LEVEL_S = 0.1
@@ -42,6 +42,15 @@ UPRIGHT_LIMIT_DEG = 45.0
 #: are wrong (a body sways a few degrees out of it; a lateral axis named forward or up
 #: leaves a fraction).
 SAGITTAL_SHARE = 0.7
+#: The segments' sway about the lateral axis (in the plane of the horizontal axis not
+#: named and the vertical; each angle averaged over 1 s, which keeps the sway and not the
+#: markers' noise) over their sway in the sagittal plane the axes name, above which the
+#: forward axis named is across the subject: a body on a platform tilting forward and back
+#: sways forward and back (the example C3D trial: under 0.1; its lateral axis named forward:
+#: 18).
+SWAY_ACROSS_RATIO = 3.0
+#: Degrees (SD) of sway about the lateral axis below which it is too small to tell.
+SWAY_ACROSS_MIN_DEG = 0.05
 #: The platform markers' back-to-front line must point within this of the forward axis,
 #: degrees (in the horizontal plane): else the forward axis named is not the subject's.
 PLATFORM_HEADING_LIMIT_DEG = 45.0
@@ -187,6 +196,33 @@ def _check_upright(trial: MotionCaptureTrial, label: str, vector: np.ndarray,
             "each lower point first")
 
 
+def _check_facing(trial: MotionCaptureTrial, vectors: list[np.ndarray],
+                  mapping: MarkerMapping) -> None:
+    """Refuse a forward axis across the subject: the segments (``vectors``, each (F, 3))
+    sway more about the lateral axis than in the sagittal plane by SWAY_ACROSS_RATIO."""
+    axes = mapping.axes
+    forward, vertical = axes.forward_vector, axes.vertical_vector
+    lateral = np.cross(vertical, forward)
+    window = max(1, int(round(trial.rate_hz)))  # 1 s: sway kept, the markers' noise not
+
+    def sway(axis: np.ndarray) -> float:
+        return sum(float(np.var(np.convolve(_sagittal_angle(v, axis, vertical),
+                                            np.ones(window) / window, mode="valid")))
+                   for v in vectors)
+
+    sagittal, across = sway(forward), sway(lateral)
+    if math.degrees(math.sqrt(across / len(vectors))) < SWAY_ACROSS_MIN_DEG:
+        return
+    ratio = math.sqrt(across / sagittal) if sagittal > 0 else math.inf
+    if ratio > SWAY_ACROSS_RATIO:
+        other = "xyz"[int(np.argmax(np.abs(lateral)))]
+        raise RecordingError(
+            f"{trial.path}: the segments sway {ratio:.0f}× more along {other} than along "
+            f"--forward-axis {axes.forward}; a body on a platform tilting forward and back "
+            f"sways forward and back: is the subject facing {other} (--forward-axis {other}, "
+            f"or --forward-axis=-{other})?")
+
+
 def _tilt_from_markers(trial: MotionCaptureTrial, tilt: TiltMarkers,
                        tracks: dict[str, np.ndarray], mapping: MarkerMapping
                        ) -> tuple[np.ndarray, float]:
@@ -236,7 +272,7 @@ def marker_angles(trial: MotionCaptureTrial, mapping: MarkerMapping) -> MarkerAn
     _check_three_d(trial, tracks, mapping)
     forward, vertical = mapping.axes.forward_vector, mapping.axes.vertical_vector
     points: dict[str, np.ndarray] = {}
-    angles = []
+    angles, vectors = [], []
     if mapping.com is not None:
         com = mapping.com
         support = _point(com.support, tracks)
@@ -244,6 +280,7 @@ def marker_angles(trial: MotionCaptureTrial, mapping: MarkerMapping) -> MarkerAn
                                                             strict=True))
         points[str(com.support)] = support
         points["COM"] = centre
+        vectors.append(centre - support)
         theta = _sagittal_angle(centre - support, forward, vertical)
         _check_upright(trial, "the body COM", centre - support, theta, mapping,
                        "--com-markers")
@@ -251,10 +288,12 @@ def marker_angles(trial: MotionCaptureTrial, mapping: MarkerMapping) -> MarkerAn
     for segment in mapping.segments:
         lower, upper = _point(segment.lower, tracks), _point(segment.upper, tracks)
         points[str(segment.lower)], points[str(segment.upper)] = lower, upper
+        vectors.append(upper - lower)
         theta = _sagittal_angle(upper - lower, forward, vertical)
         _check_upright(trial, f"segment {segment.segment!r} ({segment})", upper - lower,
                        theta, mapping, "--segment-markers")
         angles.append(theta)
+    _check_facing(trial, vectors, mapping)
     tilt, level = None, None
     if isinstance(mapping.tilt, TiltMarkers):
         tilt, level = _tilt_from_markers(trial, mapping.tilt, tracks, mapping)

@@ -185,17 +185,23 @@ class Norm(JsonFile):
     def from_json(cls, path: str | Path) -> Norm:
         """A norm file: one ``build_norm`` wrote, or summary statistics as labs publish
         them (``frequencies_hz``, ``mean_re_im``, ``covariance`` or
-        ``inverse_covariance``, optional ``weights`` and ``channels``)."""
+        ``inverse_covariance``, optional ``weights`` and ``channels``).
+
+        Raises:
+            PostureIdError: naming the file and the field: a field missing, of another
+                type or shape, or holding numbers that are not finite.
+        """
         data = read_json(path, "a norm file")
         if not isinstance(data, dict):
             raise PostureIdError(f"{path}: a norm is a JSON object")
-        try:
-            f = np.asarray(data["frequencies_hz"], dtype=float)
-            mean = np.asarray(data["mean_re_im"], dtype=float)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise PostureIdError(f"{path}: a norm needs frequencies_hz and mean_re_im "
-                                 f"({exc})") from None
-        channels = tuple(data.get("channels") or ["COM"])
+        if "frequencies_hz" not in data or "mean_re_im" not in data:
+            missing = [k for k in ("frequencies_hz", "mean_re_im") if k not in data]
+            raise PostureIdError(f"{path}: a norm needs frequencies_hz and mean_re_im (no "
+                                 f"{', '.join(missing)}; posture-id norm build writes one)")
+        field_of = _NormFields(Path(path), data)
+        f = field_of.array("frequencies_hz", 1)
+        channels = field_of.names("channels", default=("COM",))
+        mean = field_of.array("mean_re_im", 1)
         if mean.shape != (2 * len(f) * len(channels),):
             raise PostureIdError(f"{path}: mean_re_im holds {mean.size} numbers; "
                                  f"{len(f)} frequencies × {len(channels)} channel(s) need "
@@ -204,27 +210,102 @@ class Norm(JsonFile):
         matrices = {}
         for key in ("covariance", "inverse_covariance"):
             if data.get(key) is not None:
-                m = np.asarray(data[key], dtype=float)
+                m = field_of.array(key, 2)
                 if m.shape != (size, size):
                     raise PostureIdError(f"{path}: {key} must be {size} × {size}, got "
                                          f"{m.shape}")
                 matrices[key] = m
         if not matrices:
             raise PostureIdError(f"{path}: a norm needs a covariance or inverse_covariance")
-        weights = np.asarray(data.get("weights") or np.ones(len(f)), dtype=float)
+        weights = (field_of.array("weights", 1) if data.get("weights") is not None
+                   else np.ones(len(f)))
         if weights.shape != f.shape:
             raise PostureIdError(f"{path}: weights must be one per frequency ({len(f)})")
-        pir = data.get("pir") or {}
-        bands = data.get("prediction_band") or {}
+        members = field_of.names("members", default=())
+        rate_hz = field_of.number("rate_hz", data.get("rate_hz", 22.0))
+        bands = field_of.object("prediction_band")
+        confidence = field_of.object("confidence_band")
+        pir = field_of.pir(f, len(channels), len(members), rate_hz)
+        level = field_of.number("prediction_band.level", bands.get("level", 0.95))
+        constants = [None if band.get("constant") is None
+                     else field_of.number(f"{key}.constant", band["constant"])
+                     for key, band in (("prediction_band", bands),
+                                       ("confidence_band", confidence))]
         return cls(f, channels, weights, mean, matrices.get("covariance"),
-                   matrices.get("inverse_covariance"), tuple(data.get("members") or ()),
-                   float(data.get("rate_hz", 22.0)),
-                   *(np.asarray(pir[k]) if pir.get(k) is not None else None
-                     for k in ("t", "mean", "sd", "members")),
-                   bands.get("constant"), (data.get("confidence_band") or {}).get("constant"),
-                   float(bands.get("level", 0.95)), int(bands.get("bootstrap", 0)),
-                   int(data.get("seed", 0)), data.get("lab_bands"),
+                   matrices.get("inverse_covariance"), members, rate_hz, *pir,
+                   *constants, level,
+                   int(field_of.number("prediction_band.bootstrap", bands.get("bootstrap", 0))),
+                   int(field_of.number("seed", data.get("seed", 0))), data.get("lab_bands"),
                    data.get("covariance_shrinkage"))
+
+
+class _NormFields:
+    """A norm file's fields read with their checks, each refusal naming the file and the
+    field."""
+
+    def __init__(self, path: Path, data: dict) -> None:
+        self.path, self.data = path, data
+
+    def array(self, key: str, ndim: int, value=None) -> np.ndarray:
+        value = self.data[key] if value is None else value
+        try:
+            a = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise PostureIdError(f"{self.path}: {key} must be "
+                                 f"{'a list' if ndim == 1 else 'a matrix'} of numbers") from None
+        if a.ndim != ndim:
+            raise PostureIdError(f"{self.path}: {key} must be "
+                                 f"{'a list' if ndim == 1 else 'a matrix'} of numbers")
+        if not np.all(np.isfinite(a)):
+            where = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
+            raise PostureIdError(f"{self.path}: {key} holds values that are not finite (at "
+                                 f"{where[0] if ndim == 1 else where}): the norm cannot score")
+        return a
+
+    def names(self, key: str, default: tuple) -> tuple[str, ...]:
+        value = self.data.get(key)
+        if value is None or value == []:
+            return default
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise PostureIdError(f"{self.path}: {key} must be a list of names, got "
+                                 f"{value!r:.60}")
+        return tuple(value)
+
+    def number(self, key: str, value) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float) or \
+                not math.isfinite(value):
+            raise PostureIdError(f"{self.path}: {key} must be a finite number, got "
+                                 f"{value!r:.60}")
+        return float(value)
+
+    def object(self, key: str) -> dict:
+        value = self.data.get(key) or {}
+        if not isinstance(value, dict):
+            raise PostureIdError(f"{self.path}: {key} must be an object")
+        return value
+
+    def pir(self, f: np.ndarray, channels: int, members: int, rate_hz: float) -> list:
+        """[t, mean, sd, members] of the norm's PIRs (None each when it has none), their
+        lengths those of PIRs at its points and rate."""
+        pir = self.object("pir")
+        if all(pir.get(k) is None for k in ("t", "mean", "sd", "members")):
+            return [None] * 4
+        t, _ = pseudo_impulse_response(f, np.zeros(len(f), complex), rate_hz)
+        expected = {"t": (len(t),), "mean": (len(t) * channels,),
+                    "sd": (len(t) * channels,), "members": (members, len(t) * channels)}
+        out = []
+        for key, shape in expected.items():
+            if pir.get(key) is None:
+                raise PostureIdError(f"{self.path}: pir.{key} is missing (the norm has the "
+                                     "other PIR fields)")
+            a = self.array(f"pir.{key}", len(shape), pir[key])
+            if a.shape != shape:
+                raise PostureIdError(f"{self.path}: pir.{key} is {a.shape}; PIRs of "
+                                     f"{len(f)} frequencies at {rate_hz:g} Hz, "
+                                     f"{channels} channel(s) and {members} member(s) make "
+                                     f"{shape}: the file was edited or cut")
+            out.append(a)
+        return out
 
 
 def build_norm(frfs: FrfSet, bootstrap: int = 1000, level: float = 0.95,

@@ -20,75 +20,140 @@ __all__ = ["read_frfs", "frf_from_json"]
 
 def frf_from_json(path: Path, channels: tuple[str, ...] | None = None
                   ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], dict | None]:
-    """(frequencies (F,), H (F, M), channels, its lab bands or None) of one FRF JSON."""
+    """(frequencies (F,), H (F, M), channels, its lab bands or None) of one FRF JSON.
+
+    Raises:
+        PostureIdError: naming the file (and the channel): not an FRF file, a channel it
+            lacks, a channel without ``re`` and ``im`` (or ``gain`` and ``phase_deg``), a
+            length other than the frequencies', values that are not finite numbers.
+    """
     data = read_json(path, "an FRF file")
-    if not isinstance(data, dict) or "frequencies_hz" not in data or "channels" not in data:
+    if not isinstance(data, dict) or "frequencies_hz" not in data or \
+            not isinstance(data.get("channels"), dict):
         raise PostureIdError(f"{path}: not an FRF file (posture-id frf writes "
                              "frequencies_hz and channels)")
-    f = np.asarray(data["frequencies_hz"], dtype=float)
+    f = _finite_vector(data["frequencies_hz"], f"{path}: frequencies_hz")
     names = tuple(channels or data["channels"])
     columns = []
     for name in names:
         if name not in data["channels"]:
             raise PostureIdError(f"{path}: no channel {name!r} (it has "
                                  f"{', '.join(data['channels'])})")
-        c = data["channels"][name]
-        if "re" in c:
-            columns.append(np.asarray(c["re"], float) + 1j * np.asarray(c["im"], float))
-        else:
-            columns.append(np.asarray(c["gain"], float)
-                           * np.exp(1j * np.radians(np.asarray(c["phase_deg"], float))))
+        columns.append(_channel_response(data["channels"][name], len(f),
+                                         f"{path}: channel {name!r}"))
     return f, np.stack(columns, axis=1), names, data.get("lab_bands")
 
 
+def _finite_vector(values, where: str, length: int | None = None) -> np.ndarray:
+    """``values`` as a (length,) float array, or a refusal naming ``where``."""
+    try:
+        v = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise PostureIdError(f"{where}: not a list of numbers") from None
+    if v.ndim != 1:
+        raise PostureIdError(f"{where}: not a list of numbers")
+    if length is not None and len(v) != length:
+        raise PostureIdError(f"{where}: {len(v)} values for {length} frequencies")
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size:
+        raise PostureIdError(f"{where}: value {bad[0] + 1} is not finite ({v[bad[0]]})")
+    return v
+
+
+def _channel_response(channel, length: int, where: str) -> np.ndarray:
+    """One FRF JSON channel's (F,) complex response: from ``re`` and ``im``, else from
+    ``gain`` and ``phase_deg``."""
+    if not isinstance(channel, dict):
+        raise PostureIdError(f"{where}: not an object of re and im (or gain and phase_deg)")
+    for real, other in (("re", "im"), ("gain", "phase_deg")):
+        if real in channel or other in channel:
+            if real not in channel or other not in channel:
+                missing = other if real in channel else real
+                raise PostureIdError(f"{where}: has {real if real in channel else other} "
+                                     f"but no {missing}: give re and im, or gain and "
+                                     "phase_deg")
+            a = _finite_vector(channel[real], f"{where}: {real}", length)
+            b = _finite_vector(channel[other], f"{where}: {other}", length)
+            return a + 1j * b if real == "re" else a * np.exp(1j * np.radians(b))
+    raise PostureIdError(f"{where}: no re and im (nor gain and phase_deg)")
+
+
 def _read_table(path: Path) -> FrfSet:
+    """A CSV table: one row per subject (``subject`` or ``name`` its name), the FRF in
+    ``<f>_re`` and ``<f>_im`` or ``<f>_gain`` and ``<f>_phase_deg`` columns; a row whose
+    number of fields is not the header's, or a value that is not a finite number, is
+    refused by line."""
     with Path(path).open(encoding="utf-8-sig", newline="") as handle:
-        rows = list(csv.DictReader(handle))
-    if not rows:
+        rows = list(csv.reader(handle))
+    while rows and not any(cell.strip() for cell in rows[-1]):
+        rows.pop()
+    if len(rows) < 2:
         raise PostureIdError(f"{path}: a header and no subjects")
-    header = list(rows[0])
+    header = [c.strip() for c in rows[0]]
     pattern = re.compile(r"^([0-9.]+)_(re|im|gain|phase_deg)$")
-    found: dict[float, dict[str, str]] = {}
-    for column in header:
-        match = pattern.match(column.strip())
+    found: dict[float, dict[str, int]] = {}
+    for index, column in enumerate(header):
+        match = pattern.match(column)
         if match:
-            found.setdefault(float(match.group(1)), {})[match.group(2)] = column
+            found.setdefault(float(match.group(1)), {})[match.group(2)] = index
     if not found:
         raise PostureIdError(f"{path}: no FRF columns (<f>_re and <f>_im, or <f>_gain and "
                              f"<f>_phase_deg; the header is {','.join(header)})")
     f = np.array(sorted(found))
+    for freq in f:
+        if not ({"re", "im"} <= found[freq].keys() or
+                {"gain", "phase_deg"} <= found[freq].keys()):
+            raise PostureIdError(f"{path}: {freq:g} Hz has {sorted(found[freq])}: give re "
+                                 "and im, or gain and phase_deg")
+    name_column = next((header.index(n) for n in ("subject", "name") if n in header), None)
     names, response = [], []
-    for k, row in enumerate(rows, 2):
+    for k, row in enumerate(rows[1:], 2):
+        if len(row) != len(header):
+            raise PostureIdError(f"{path}: line {k} has {len(row)} fields, the header "
+                                 f"{len(header)}: a value missing or one too many shifts "
+                                 "every column after it")
         values = []
         for freq in f:
             cols = found[freq]
-            try:
-                if {"re", "im"} <= cols.keys():
-                    values.append(float(row[cols["re"]]) + 1j * float(row[cols["im"]]))
-                elif {"gain", "phase_deg"} <= cols.keys():
-                    values.append(float(row[cols["gain"]]) * np.exp(
-                        1j * np.radians(float(row[cols["phase_deg"]]))))
-                else:
-                    raise PostureIdError(f"{path}: {freq:g} Hz has {sorted(cols)}: give re "
-                                         "and im, or gain and phase_deg")
-            except (TypeError, ValueError):
-                raise PostureIdError(f"{path}: line {k}: a value at {freq:g} Hz is not a "
-                                     "number") from None
-        names.append(row.get("subject") or row.get("name") or f"row {k}")
+            pair = ("re", "im") if "re" in cols else ("gain", "phase_deg")
+            a, b = (_table_number(row[cols[key]], path, k, header[cols[key]]) for key in pair)
+            values.append(a + 1j * b if pair[0] == "re" else a * np.exp(1j * np.radians(b)))
+        names.append(row[name_column] if name_column is not None and row[name_column]
+                     else f"row {k}")
         response.append(values)
     return FrfSet(f, np.asarray(response)[:, :, None], ("COM",), tuple(names))
 
 
+def _table_number(cell: str, path: Path, line: int, column: str) -> float:
+    try:
+        value = float(cell)
+    except ValueError:
+        raise PostureIdError(f"{path}: line {line}, column {column}: {cell!r} is not a "
+                             "number") from None
+    if not np.isfinite(value):
+        raise PostureIdError(f"{path}: line {line}, column {column}: {cell!r} is not finite")
+    return value
+
+
 def _read_mat(path: Path, variable: str | None, frequencies: list[float] | None) -> FrfSet:
+    """An N × F complex matrix of a MATLAB file (v4 to v7, what scipy reads)."""
     from scipy.io import loadmat
 
     if variable is None or not frequencies:
         raise PostureIdError(f"{path}: a .mat file needs --variable NAME and --frequencies "
                              "F ... (its N × F complex matrix and the frequencies)")
+    if path.is_dir():
+        raise PostureIdError(f"{path}: is a folder, not a MATLAB file")
+    with path.open("rb") as handle:
+        head = handle.read(128)
+    if head.startswith(b"MATLAB 7.3"):
+        raise PostureIdError(f"{path}: a MATLAB v7.3 file (HDF5), which posture-id does not "
+                             "read: save it as v7 in MATLAB (save(file, 'H', '-v7'))")
     try:
         data = loadmat(path)
-    except (ValueError, OSError) as exc:
-        raise PostureIdError(f"{path}: not a MATLAB file scipy reads ({exc})") from None
+    except Exception as exc:  # noqa: BLE001 - scipy raises many kinds for a bad file
+        raise PostureIdError(f"{path}: not a MATLAB file that can be read (truncated or "
+                             f"corrupt, or another format: {exc})") from None
     if variable not in data:
         raise PostureIdError(f"{path}: no variable {variable!r} (it has "
                              f"{', '.join(k for k in data if not k.startswith('__'))})")
@@ -96,6 +161,16 @@ def _read_mat(path: Path, variable: str | None, frequencies: list[float] | None)
     if h.ndim != 2 or h.shape[1] != len(frequencies):
         raise PostureIdError(f"{path}: {variable} is {h.shape}; expected subjects × "
                              f"{len(frequencies)} frequencies")
+    if not np.issubdtype(h.dtype, np.number):
+        raise PostureIdError(f"{path}: {variable} holds {h.dtype}, not numbers")
+    if not np.iscomplexobj(h):
+        raise PostureIdError(f"{path}: {variable} holds real numbers; an FRF is complex "
+                             "(gain·e^(i·phase)): give the complex matrix (gains alone have "
+                             "no phase, and would be read with every phase 0)")
+    bad = np.argwhere(~np.isfinite(h))
+    if len(bad):
+        raise PostureIdError(f"{path}: {variable}[{bad[0][0] + 1}, {bad[0][1] + 1}] (subject "
+                             f"{bad[0][0] + 1}, {frequencies[bad[0][1]]:g} Hz) is not finite")
     return FrfSet(np.asarray(frequencies, float), h.astype(complex)[:, :, None], ("COM",),
                   tuple(f"{variable}[{i}]" for i in range(len(h))))
 
@@ -106,9 +181,13 @@ def read_frfs(paths: list[Path], channels: tuple[str, ...] | None = None,
     """The FRFs of ``paths``: FRF JSONs (one subject each), one CSV table, or one .mat;
     with the lab bands the JSONs were computed at (or None)."""
     paths = [Path(p) for p in paths]
+    seen: set[Path] = set()
     for p in paths:
         if not p.exists():
             raise PostureIdError(f"{p}: no such file")
+        if p.resolve() in seen:
+            raise PostureIdError(f"{p}: given twice; each member counts once")
+        seen.add(p.resolve())
     suffixes = {p.suffix.lower() for p in paths}
     if suffixes <= {".csv"} and len(paths) == 1:
         return _read_table(paths[0]), None

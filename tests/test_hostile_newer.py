@@ -1,9 +1,10 @@
-"""Hostile input for the newer commands (issue 46): every case of
-``benchmarks/hostile_input.py`` (protocol files, design, stimulus, a lab's columns,
-cohorts, the universal tools, evaluate, frf, fit, body) must be *clear* (exit 2, one line
-naming the file or flag and the problem, no file of the user's changed, nothing new left)
-or, where an answer is right, *handled* (an answer with the notice that says what was done).
-The report of the same cases with their counts is docs/results/hostile_input/report.md.
+"""Hostile input for the newer commands: every case of ``benchmarks/hostile_input.py``
+(protocol files, design, stimulus, a lab's columns, cohorts, the universal tools, evaluate,
+frf, fit, body) and of ``benchmarks/hostile_newest.py`` (C3D trials, the IC model, compare,
+norm build, test and compare, a cohort's norm) must be *clear* (exit 2, one line naming the
+file or flag and the problem, no file of the user's changed, nothing new left) or, where an
+answer is right, *handled* (an answer with the notice that says what was done). The report
+of the same cases with their counts is docs/results/hostile_input/report.md.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from hostile_input import all_cases, make_material, run_case  # noqa: E402
+from hostile_newest import newest_cases  # noqa: E402
 
 CASES = all_cases()
 #: Cases that run a whole command before their outcome (over 5 s here).
@@ -34,6 +36,15 @@ def test_the_suite_is_at_least_80_cases_over_every_newer_surface():
     assert len(CASES) >= 80
     assert {"protocol", "design", "stimulus", "columns", "cohort", "universal data",
             "universal train", "evaluate", "frf", "fit", "body"} <= surfaces
+
+
+def test_the_newest_commands_have_at_least_80_cases_over_each_of_their_surfaces():
+    newest = newest_cases()
+    assert len(newest) >= 80
+    assert {c.surface for c in newest} == {"norm build", "norm test", "norm compare",
+                                           "cohort norm", "c3d", "simulate c3d", "ic",
+                                           "compare"}
+    assert {c.name for c in newest} <= {c.name for c in CASES}
 
 
 @pytest.mark.parametrize("case", [pytest.param(c, id=c.name, marks=[pytest.mark.slow]

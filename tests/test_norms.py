@@ -5,6 +5,7 @@ computation and against a norm given as summary statistics only."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from posture_id.norms.groups import compare_groups
 from posture_id.norms.norm import FrfSet, Norm, against_norm, build_norm
 
 F = np.asarray(PETERKA_11.centres_hz)
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _population(rng: np.random.Generator, n: int, delay_s: float = 0.15,
@@ -240,3 +242,42 @@ def test_identified_groups_differ_where_their_parameters_do(tmp_path):
     assert all(r["difference"] < 0 for r in delays)
     assert sum(r["p_value"] < 0.05 for r in delays) >= 2
     assert rows["ankle kp"]["p_value"] > 0.01
+
+
+def test_norm_test_reads_a_csv_and_a_c3d_recording_as_their_frf_jsons(tmp_path, capsys):
+    """``norm test REC --norm N`` (issue 56: it failed on every recording): four simulated
+    subjects' body COM FRFs at Peterka's points make a norm; the example CSV recording and
+    the example C3D trial, tested from the command line, score exactly as their FRF JSONs
+    (posture-id frf at the norm's points) do."""
+    from posture_id.cli import main
+
+    examples = ROOT / "posture_id" / "studies" / "examples"
+    tip = str(ROOT / "urdf" / "tip_default.urdf")
+    lab = ["--band-preset", "peterka11", "--lab-convention"]
+    frfs = []
+    for k in range(4):
+        rec, frf = tmp_path / f"s{k}.csv", tmp_path / f"s{k}.frf.json"
+        assert main(["simulate", "--motor-noise", "0.3", "--noise-deg", "0.05", "--seed",
+                     str(k), "--out", str(rec)]) == 0
+        assert main(["frf", str(rec), "--body", tip, *lab, "--out", str(frf)]) == 0
+        frfs.append(str(frf))
+    norm = tmp_path / "norm.json"
+    assert main(["norm", "build", *frfs, "--channel", "body COM", "--bootstrap", "50",
+                 "--out", str(norm)]) == 0
+    c3d = ["--segment-markers", "leg=LANK+RANK,LHIP+RHIP", "trunk=LHIP+RHIP,LSHO+RSHO",
+           "--tilt-channel", "platform_angle", "--tilt-scale", "2", "--forward-axis=-y"]
+    for name, recording, flags in (("csv", examples / "tip_subject.csv", ["--body", tip]),
+                                   ("c3d", examples / "straight_leg_subject.c3d", c3d)):
+        direct, via = tmp_path / f"{name}.json", tmp_path / f"{name}.via.json"
+        frf = tmp_path / f"{name}.frf.json"
+        assert main(["norm", "test", str(recording), "--norm", str(norm), *flags,
+                     "--out", str(direct)]) in (0, 1), name
+        assert main(["frf", str(recording), *flags, *lab, "--out", str(frf)]) == 0, name
+        assert main(["norm", "test", str(frf), "--norm", str(norm), "--out", str(via)]) \
+            in (0, 1), name
+        a, b = json.loads(direct.read_text()), json.loads(via.read_text())
+        assert len(a["frf"]["re"]) == len(F), name
+        assert np.isfinite(a["human_likeness"]) and a["human_likeness"] > 0, name
+        np.testing.assert_allclose(a["human_likeness"], b["human_likeness"], rtol=1e-9)
+        np.testing.assert_allclose(a["frf"]["re"], b["frf"]["re"], rtol=1e-9, atol=1e-12)
+        assert a["inside_prediction_band"] == b["inside_prediction_band"], name

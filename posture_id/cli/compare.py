@@ -14,7 +14,9 @@ from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
+    columns_from_args,
     recording_and_stimulus,
+    stimulus_from_args,
 )
 from posture_id.errors import PostureIdError
 
@@ -85,7 +87,7 @@ def run_cohort(args: argparse.Namespace) -> int:
     from posture_id.cli.output_folder import OutputFolder
     from posture_id.ic import IcFitOptions
     from posture_id.ic.cohort import compare_cohort
-    from posture_id.identify.cohort import find_recordings
+    from posture_id.identify.cohort import find_recordings, stimulus_record
     from posture_id.trials import prepare_trial
 
     if args.plot:
@@ -111,9 +113,11 @@ def run_cohort(args: argparse.Namespace) -> int:
 
         options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
                                starts=args.starts, seed=args.seed)
+        recorded = {"stimulus": stimulus_record(stimulus_from_args(args, default=None)),
+                    "columns": columns_from_args(args), "body_sha256": body.sha256}
         with TerminalProgress("recordings", prefix="posture-id compare") as progress:
             result = compare_cohort(recordings, args.out, body, read, options,
-                                    not args.no_held_out, progress)
+                                    not args.no_held_out, progress, recorded)
     print(result.summary())
     return answered(bool(result.failed or result.doubtful))
 
@@ -127,6 +131,9 @@ def _run_amplitudes(args: argparse.Namespace) -> int:
     if args.part is not None:
         raise PostureIdError("--part: with --second each recording is its own part (the "
                              "first 1, the second 2)")
+    if args.second.resolve() == args.recording.resolve():
+        raise PostureIdError(f"--second {args.second}: the recording itself; give the same "
+                             "subject's recording at the protocol's other amplitude")
     body = load_body(args.body or DEFAULT_URDF)
     trials = []
     for part, path in enumerate((args.recording, args.second), 1):
@@ -134,9 +141,31 @@ def _run_amplitudes(args: argparse.Namespace) -> int:
         recording, stimulus = recording_and_stimulus(args, body)
         recording.check_segments(body.segment_names)
         trials.append(prepare_trial(recording, stimulus))
+    _two_amplitudes(*(t.recording for t in trials))
     options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
                            starts=args.starts, seed=args.seed)
     with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
         result = compare_amplitudes(trials, body, options, progress)
     write_result(result, args.out, args.plot)
     return answered(result.doubtful)
+
+
+#: The larger tilt's RMS over the smaller's below which two recordings are one amplitude.
+SAME_AMPLITUDE_RATIO = 1.1
+
+
+def _two_amplitudes(first, second) -> None:
+    """Refuse a --second that is the first recording again (the same samples) or was made
+    at the same amplitude: re-weighting shows between two amplitudes only."""
+    import numpy as np
+
+    if first.theta.shape == second.theta.shape and np.array_equal(first.theta, second.theta) \
+            and np.array_equal(first.tilt, second.tilt):
+        raise PostureIdError(f"--second {second.name}: the same samples as {first.name} (a "
+                             "copy?); give the same subject's recording at the other amplitude")
+    rms = [float(np.degrees(np.std(r.tilt))) for r in (first, second)]
+    if max(rms) < SAME_AMPLITUDE_RATIO * min(rms):
+        raise PostureIdError(
+            f"--second {second.name}: its tilt has the amplitude of {first.name}'s "
+            f"({rms[1]:.3g}° and {rms[0]:.3g}° RMS): a two-amplitude comparison needs the "
+            "protocol's two amplitudes (sensory re-weighting shows between them)")

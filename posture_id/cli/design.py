@@ -86,6 +86,11 @@ def _design_ic(args: argparse.Namespace) -> int:
         raise PostureIdError(f"{', '.join(given)}: DEC's design only; --model ic ranks every "
                              "candidate by Kp, Kd, delay and W (with --sensor-noise-deg and "
                              "--locked-share)")
+    if args.sensor_noise_deg == 0 and args.locked_share is None:
+        raise PostureIdError("--sensor-noise-deg 0 and no motor noise (--locked-share): a "
+                             "recording without noise pins every parameter exactly, and no "
+                             "protocol is better than another; give the noise the recordings "
+                             "will have")
     body = load_body(args.body or DEFAULT_URDF)
     protocols = ([read_protocol(f) for f in args.protocol] if args.protocol
                  else default_candidates())

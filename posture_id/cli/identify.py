@@ -106,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
         raise PostureIdError("--scheduler, --bodies, --frf-preset and --norm go with a folder "
                              "or pattern of recordings (one recording: posture-id frf, "
                              "posture-id norm test)")
+    _no_model_name(args.model)
     fit_options = FitOptions(**search_keywords(args))
     inputs = (args.recording, args.body, args.model, args.tilt)
     check_output_file(args.out, "--out", inputs)
@@ -131,6 +132,19 @@ def _folders_of(recordings: list[Path]) -> set[Path]:
     return {p.parent for p in recordings}
 
 
+def _no_model_name(model: Path | None) -> None:
+    """Refuse ``--model ic`` or ``--model dec`` (the other commands' model names): here
+    --model is a network's folder."""
+    if model is None or model.exists() or str(model).lower() not in ("ic", "dec"):
+        return
+    if str(model).lower() == "ic":
+        raise PostureIdError("--model ic: identify's --model is a network's folder; the "
+                             "independent-channel model is fitted by posture-id fit --model "
+                             "ic REC, and set beside DEC by posture-id compare REC")
+    raise PostureIdError("--model dec: identify's --model is a network's folder, and DEC is "
+                         "what it identifies: leave --model out for the bundled network")
+
+
 def run_cohort(args: argparse.Namespace) -> int:
     from posture_id.identify import Identifier, Method
     from posture_id.identify.cohort import (
@@ -144,6 +158,7 @@ def run_cohort(args: argparse.Namespace) -> int:
     if args.out is None:
         raise PostureIdError(f"{args.recording}: a cohort's results need a folder: --out "
                              "FOLDER (one JSON per recording and summary.csv)")
+    _no_model_name(args.model)
     fit_options = FitOptions(**search_keywords(args))
     recordings = find_recordings(args.recording)
     writes = (*(f"{glob.escape(p.stem)}.json" for p in recordings), "summary.csv",

@@ -185,6 +185,12 @@ class DecParameters(JsonFile):
         """
         if not isinstance(data, Mapping):
             raise ParameterError(f"{name}: expected a JSON object keyed by joint name")
+        if data.get("model") == "ic" or (isinstance(data.get("parameters"), Mapping)
+                                         and data["parameters"].get("model") == "ic"):
+            raise ParameterError(
+                f"{name}: the independent-channel model's parameters (\"model\": \"ic\"), "
+                "not DEC's modules keyed by joint: give --model ic (simulate, fit), or a DEC "
+                "parameter file")
         defaults = default_parameters(body)
         expected = body.joint_names
         for joint in expected:

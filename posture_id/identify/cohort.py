@@ -45,7 +45,7 @@ from posture_id.trials.reading import RECORDING_SUFFIXES, RecordingLayout, read_
 from posture_id.trials.subjects import subject_urdf
 
 __all__ = ["CohortResult", "SubjectIdentifiers", "find_recordings", "identify_cohort",
-           "cohort_options"]
+           "cohort_options", "option_differences", "stimulus_record"]
 
 #: The statuses of a recording with a result.
 _FINISHED = ("done", "skipped", "redone")
@@ -64,16 +64,22 @@ def cohort_options(identifier: Identifier, stimulus: TiltProfile | None,
         "fit_options": identifier.fit_options if identifier.method is not Method.CNN
         else None,
         "level": identifier.level,
-        "stimulus": None if stimulus is None else {
-            "description": stimulus.description, "period_s": stimulus.period_s,
-            "sha256": hashlib.sha256(stimulus.times.tobytes()
-                                     + stimulus.angles.tobytes()).hexdigest()},
+        "stimulus": stimulus_record(stimulus),
         "columns": columns,
         "body_sha256": identifier.body.sha256,
     })
 
 
-def _differences(old: dict, new: dict) -> tuple[str, ...]:
+def stimulus_record(stimulus: TiltProfile | None) -> dict | None:
+    """The stimulus a cohort's recordings were read with, as its results record it: its
+    description, period and a digest of its samples (None: each recording's own tilt)."""
+    return None if stimulus is None else {
+        "description": stimulus.description, "period_s": stimulus.period_s,
+        "sha256": hashlib.sha256(stimulus.times.tobytes()
+                                 + stimulus.angles.tobytes()).hexdigest()}
+
+
+def option_differences(old: dict, new: dict) -> tuple[str, ...]:
     """The top-level options that differ, as "name (old → new)" for short values."""
     out = []
     for key in sorted(set(old) | set(new)):
@@ -279,7 +285,7 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
         if earlier == wanted:
             status[path.name] = "skipped"
         else:
-            changed[path.name] = _differences(earlier, wanted) or ("cohort_options",)
+            changed[path.name] = option_differences(earlier, wanted) or ("cohort_options",)
             todo.append(path)
     out.mkdir(parents=True, exist_ok=True)
     done = len(status)

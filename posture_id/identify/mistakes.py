@@ -119,10 +119,15 @@ def tilt_sign(trial: PreparedTrial, body, projection: LockedProjection | None
     z = cross / sd if sd > 0 else (-math.inf if cross < 0 else math.inf)
     if not z < -TILT_SIGN_Z:
         return None
+    source = rec.source or {}
+    suspects = ("is --forward-axis the other way round (now "
+                f"{source.get('forward_axis')}), or the tilt's sign reversed?"
+                if source.get("format") == "c3d"
+                else "is the tilt column's or the stimulus's sign reversed?")
     return Mistake("tilt sign", z, -TILT_SIGN_Z, (
         f"the body sways against the tilt at low frequencies (real FRF {gain:.2f} below "
         f"{LOW_FREQUENCY_HZ:g} Hz, {abs(z):.1f} noise SDs below zero; every body balanced "
-        "by DEC follows it): is the tilt column's or the stimulus's sign reversed?"))
+        f"by DEC follows it): {suspects}"))
 
 
 def angle_steps(trial: PreparedTrial) -> list[Mistake]:

@@ -61,10 +61,11 @@ def _finite_vector(values, where: str, length: int | None = None) -> np.ndarray:
 
 
 def _channel_response(channel, length: int, where: str) -> np.ndarray:
-    """One FRF JSON channel's (F,) complex response: from ``re`` and ``im``, else from
-    ``gain`` and ``phase_deg``."""
+    """One FRF JSON channel's (F,) complex response: from ``re`` and ``im``, or from
+    ``gain`` and ``phase_deg``; a channel with both pairs must have them agree."""
     if not isinstance(channel, dict):
         raise PostureIdError(f"{where}: not an object of re and im (or gain and phase_deg)")
+    found = []
     for real, other in (("re", "im"), ("gain", "phase_deg")):
         if real in channel or other in channel:
             if real not in channel or other not in channel:
@@ -74,8 +75,16 @@ def _channel_response(channel, length: int, where: str) -> np.ndarray:
                                      "phase_deg")
             a = _finite_vector(channel[real], f"{where}: {real}", length)
             b = _finite_vector(channel[other], f"{where}: {other}", length)
-            return a + 1j * b if real == "re" else a * np.exp(1j * np.radians(b))
-    raise PostureIdError(f"{where}: no re and im (nor gain and phase_deg)")
+            found.append(a + 1j * b if real == "re" else a * np.exp(1j * np.radians(b)))
+    if not found:
+        raise PostureIdError(f"{where}: no re and im (nor gain and phase_deg)")
+    if len(found) == 2:
+        apart = np.abs(found[0] - found[1]) > 1e-6 * np.maximum(np.abs(found[0]), 1e-9)
+        if apart.any():
+            raise PostureIdError(f"{where}: gain and phase_deg disagree with re and im (value "
+                                 f"{np.flatnonzero(apart)[0] + 1}): the file was edited; keep "
+                                 "one pair")
+    return found[0]
 
 
 def _read_table(path: Path) -> FrfSet:

@@ -1,6 +1,7 @@
-"""Hostile input for the newer commands (issue 46): protocol files, a lab's columns,
-cohorts, design, stimulus, frf, the universal tools and evaluate, each tried as a new user
-tries them, and each outcome sorted into one of
+"""Hostile input for the newer commands: protocol files, a lab's columns, cohorts,
+design, stimulus, frf, the universal tools and evaluate, and (``hostile_newest.py``) C3D
+trials, the IC model, compare and norms, each tried as a new user tries them, and each
+outcome sorted into one of
 
 - **clear**: exit status 2 and one line that names the file or flag and the problem;
 - **handled**: an answer (exit 0 or 1) with a notice that says what was done about it;
@@ -12,7 +13,7 @@ tries them, and each outcome sorted into one of
 - **hang**: still running after the case's time limit.
 
 Run:  .venv/bin/python benchmarks/hostile_input.py [--out docs/results/hostile_input]
-                                                   [--only SUBSTRING]
+                                                   [--only SUBSTRING] [--before ROWS_JSON]
 
 Writes ``report.md`` (the counts per surface and every case's line) and ``rows.json``; a
 journal there makes an interrupted run resumable, and records a case that never finished
@@ -677,10 +678,29 @@ def _report(rows: list[Outcome], seconds: float, command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def before_after(before: list[dict], after: list[Outcome]) -> str:
+    """A markdown table, per surface of the cases in ``before`` (rows.json of a run on
+    an earlier tree) and ``after``: the outcomes' counts, clear / handled / unclear /
+    traceback / silent / data loss / hang, before and after."""
+    was = {r["name"]: r["outcome"] for r in before}
+    rows = [r for r in after if r.name in was]
+    lines = ["| surface | cases | before | after |", "|---|---|---|---|"]
+    for surface in [*sorted({r.surface for r in rows}), "all"]:
+        mine = [r for r in rows if surface in ("all", r.surface)]
+        cells = [" / ".join(str(sum(o == k for o in outcomes)) for k in OUTCOMES)
+                 for outcomes in ([was[r.name] for r in mine], [r.outcome for r in mine])]
+        label = f"**{surface}**" if surface == "all" else surface
+        lines.append(f"| {label} | {len(mine)} | {cells[0]} | {cells[1]} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, default=ROOT / "docs/results/hostile_input")
     parser.add_argument("--only", help="run the cases whose name holds this")
+    parser.add_argument("--before", type=Path,
+                        help="rows.json of the same cases run on an earlier tree: the "
+                             "report adds the counts before and after, per surface")
     args = parser.parse_args(argv)
     from posture_id.fileio import atomic_write_text, json_text
 
@@ -708,7 +728,12 @@ def main(argv: list[str] | None = None) -> int:
     journal.unlink()
     command = ".venv/bin/python benchmarks/hostile_input.py"
     if args.only is None:
-        atomic_write_text(args.out / "report.md", _report(rows, seconds, command))
+        report = _report(rows, seconds, command)
+        if args.before is not None:
+            before = json.loads(args.before.read_text(encoding="utf-8"))
+            report += (f"\n## Before and after\n\nThe cases also in `{args.before}`; each "
+                       "cell: " + " / ".join(OUTCOMES) + ".\n\n" + before_after(before, rows))
+        atomic_write_text(args.out / "report.md", report)
         atomic_write_text(args.out / "rows.json", json_text([r.to_dict() for r in rows]))
         print(f"wrote {args.out / 'report.md'}", file=sys.stderr)
     counts = {o: sum(r.outcome == o for r in rows) for o in OUTCOMES}

@@ -1,4 +1,4 @@
-"""Hostile input for the newest commands (issue 56): C3D trials, the IC model's fit,
+"""Hostile input for the newest commands: C3D trials, the IC model's fit,
 simulation and design, ``compare`` (one recording, two amplitudes, a cohort), ``norm build``
 (FRF JSONs, a CSV table, MATLAB files), ``norm test`` (FRF JSONs and recordings), ``norm
 compare``, a cohort's norm columns, and a DEC command given the IC model's files or names.
@@ -84,6 +84,12 @@ def make_newest_material(root: Path, paths: dict[str, str]) -> None:
         one.mkdir(exist_ok=True)
         _quiet_main(["simulate", "--body", str(ONE_SEGMENT), "--noise-deg", "0.02",
                      "--cycles", "2", "--out", str(one / "s1.csv")])
+    other = root / "one_segment_again.csv"
+    if not other.exists():
+        _quiet_main(["simulate", "--body", str(ONE_SEGMENT), "--noise-deg", "0.02",
+                     "--cycles", "2", "--seed", "7", "--motor-noise", "0.2", "--out",
+                     str(other)])
+    paths["one_rec_again"] = str(other)
     paths["one_rec"] = str(one / "s1.csv")
     paths["one_dir"] = str(one)
     compared = root / "compared"
@@ -293,6 +299,9 @@ def _norm_file_cases() -> list[Case]:
                                                               "bootstrap": 50}))}),
         Case("a norm whose PIRs are shorter than its members'", "norm test", test,
              ("n.json", "pir"), {"n.json": _edited("norm", _short_pir)}),
+        Case("a norm whose lab bands are a word", "norm test",
+             ("norm", "test", "{rec}", "--norm", "n.json"), ("n.json", "lab_bands"),
+             {"n.json": _edited("norm", _set(lab_bands="peterka"))}),
         Case("a norm without a covariance", "norm test", test, ("n.json", "covariance"),
              {"n.json": _edited("norm", _set(covariance=None))}),
         Case("a norm whose weights are too few", "norm test", test, ("n.json", "weights"),
@@ -529,8 +538,8 @@ def _compare_cases() -> list[Case]:
              ("compare", "{one_rec}", "--second", "copy.csv", *one, "--out", "c.json"),
              ("copy.csv", "same samples"), {"copy.csv": "@one_rec"}),
         Case("--second at the same amplitude", "compare",
-             ("compare", "{rec}", "--second", "{recording2}", "--out", "c.json"),
-             ("subject2.csv", "amplitude")),
+             ("compare", "{one_rec}", "--second", "{one_rec_again}", *one, "--out",
+              "c.json"), ("one_segment_again.csv", "amplitude")),
         Case("--second missing", "compare",
              ("compare", "{one_rec}", "--second", "nothing.csv", *one, "--out", "c.json"),
              ("nothing.csv",)),

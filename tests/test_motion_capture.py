@@ -229,6 +229,12 @@ def test_a_two_d_file_and_wrong_axes_are_refused(sway, tip, tmp_path, capsys):
     assert _identify(path, "--segment-markers", *TIP_MARKERS, "--forward-axis", "y",
                      "--tilt-markers", "PLATB,PLATF") == 2
     assert "points 90° away from --forward-axis y" in capsys.readouterr().err
+    # ... and without platform markers: the segments sway across it, not along it
+    assert _identify(path, "--segment-markers", *TIP_MARKERS, "--forward-axis=-y",
+                     "--tilt-channel", TILT_CHANNEL) == 2
+    err = capsys.readouterr().err
+    assert "sway along x, and not at all along --forward-axis -y" in err
+    assert "--forward-axis x" in err and err.count("\n") == 1
 
 
 @pytest.mark.slow

@@ -245,7 +245,7 @@ def test_identified_groups_differ_where_their_parameters_do(tmp_path):
 
 
 def test_norm_test_reads_a_csv_and_a_c3d_recording_as_their_frf_jsons(tmp_path, capsys):
-    """``norm test REC --norm N`` (issue 56: it failed on every recording): four simulated
+    """``norm test REC --norm N`` (it once failed on every recording): four simulated
     subjects' body COM FRFs at Peterka's points make a norm; the example CSV recording and
     the example C3D trial, tested from the command line, score exactly as their FRF JSONs
     (posture-id frf at the norm's points) do."""

@@ -216,9 +216,11 @@ def _check_facing(trial: MotionCaptureTrial, vectors: list[np.ndarray],
     ratio = math.sqrt(across / sagittal) if sagittal > 0 else math.inf
     if ratio > SWAY_ACROSS_RATIO:
         other = "xyz"[int(np.argmax(np.abs(lateral)))]
+        how = (f"{ratio:.0f}× more along {other} than along --forward-axis {axes.forward}"
+               if math.isfinite(ratio) else
+               f"along {other}, and not at all along --forward-axis {axes.forward}")
         raise RecordingError(
-            f"{trial.path}: the segments sway {ratio:.0f}× more along {other} than along "
-            f"--forward-axis {axes.forward}; a body on a platform tilting forward and back "
+            f"{trial.path}: the segments sway {how}; a body on a platform tilting forward and back "
             f"sways forward and back: is the subject facing {other} (--forward-axis {other}, "
             f"or --forward-axis=-{other})?")
 
@@ -293,7 +295,6 @@ def marker_angles(trial: MotionCaptureTrial, mapping: MarkerMapping) -> MarkerAn
         _check_upright(trial, f"segment {segment.segment!r} ({segment})", upper - lower,
                        theta, mapping, "--segment-markers")
         angles.append(theta)
-    _check_facing(trial, vectors, mapping)
     tilt, level = None, None
     if isinstance(mapping.tilt, TiltMarkers):
         tilt, level = _tilt_from_markers(trial, mapping.tilt, tracks, mapping)
@@ -301,5 +302,6 @@ def marker_angles(trial: MotionCaptureTrial, mapping: MarkerMapping) -> MarkerAn
         points[str(mapping.tilt.front)] = _point(mapping.tilt.front, tracks)
     elif isinstance(mapping.tilt, TiltChannel):
         tilt = _tilt_from_channel(trial, mapping.tilt)
+    _check_facing(trial, vectors, mapping)  # after the platform markers' own heading check
     return MarkerAngles(trial, mapping, np.column_stack(angles), tilt, level, tuple(gaps),
                         points)

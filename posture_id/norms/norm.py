@@ -235,7 +235,7 @@ class Norm(JsonFile):
                    matrices.get("inverse_covariance"), members, rate_hz, *pir,
                    *constants, level,
                    int(field_of.number("prediction_band.bootstrap", bands.get("bootstrap", 0))),
-                   int(field_of.number("seed", data.get("seed", 0))), data.get("lab_bands"),
+                   int(field_of.number("seed", data.get("seed", 0))), field_of.lab_bands(),
                    data.get("covariance_shrinkage"))
 
 
@@ -282,6 +282,20 @@ class _NormFields:
         value = self.data.get(key) or {}
         if not isinstance(value, dict):
             raise PostureIdError(f"{self.path}: {key} must be an object")
+        return value
+
+    def lab_bands(self) -> dict | None:
+        """The bands the members' FRFs were computed at (None: not said), readable."""
+        from posture_id.frf.bands import FrequencyBands
+
+        value = self.data.get("lab_bands")
+        if value is None:
+            return None
+        try:
+            FrequencyBands.from_dict(value)
+        except (AttributeError, TypeError, ValueError, PostureIdError) as exc:
+            raise PostureIdError(f"{self.path}: lab_bands is not a band set posture-id frf "
+                                 f"writes ({exc})") from None
         return value
 
     def pir(self, f: np.ndarray, channels: int, members: int, rate_hz: float) -> list:

@@ -726,13 +726,15 @@ def main(argv: list[str] | None = None) -> int:
                   file=sys.stderr, flush=True)
     seconds = time.perf_counter() - start
     journal.unlink()
-    command = ".venv/bin/python benchmarks/hostile_input.py"
+    command = ".venv/bin/python benchmarks/hostile_input.py" + (
+        f" --before {args.before}" if args.before is not None else "")
     if args.only is None:
         report = _report(rows, seconds, command)
         if args.before is not None:
             before = json.loads(args.before.read_text(encoding="utf-8"))
-            report += (f"\n## Before and after\n\nThe cases also in `{args.before}`; each "
-                       "cell: " + " / ".join(OUTCOMES) + ".\n\n" + before_after(before, rows))
+            report += (f"\n## Before and after\n\nThe cases also in `{args.before}` (the "
+                       "same cases run on an earlier tree); each cell: "
+                       + " / ".join(OUTCOMES) + ".\n\n" + before_after(before, rows))
         atomic_write_text(args.out / "report.md", report)
         atomic_write_text(args.out / "rows.json", json_text([r.to_dict() for r in rows]))
         print(f"wrote {args.out / 'report.md'}", file=sys.stderr)

@@ -34,16 +34,16 @@ demo: $(STAMP)
 EXAMPLES := posture_id/studies/examples
 examples: $(STAMP)
 	$(BIN)/posture-id simulate --params $(EXAMPLES)/tip_subject.truth.json \
-	  --noise-deg 0.01 --seed 1 --out $(EXAMPLES)/tip_subject.csv
+	  --sensor-noise-deg 0.01 --seed 1 --out $(EXAMPLES)/tip_subject.csv
 	$(BIN)/posture-id simulate --body urdf/winter_1.75m_70kg_2seg.urdf \
 	  --params $(EXAMPLES)/straight_leg_subject.truth.json \
-	  --noise-deg 0.01 --seed 2 --out $(EXAMPLES)/straight_leg_subject.csv
+	  --sensor-noise-deg 0.01 --seed 2 --out $(EXAMPLES)/straight_leg_subject.csv
 	$(BIN)/python -m posture_id.studies.lab_example $(EXAMPLES)
 	$(BIN)/posture-id simulate --body urdf/winter_1.75m_70kg_2seg.urdf \
 	  --params $(EXAMPLES)/straight_leg_subject.truth.json --motor-noise 0.02 --seed 3 \
 	  --out $(EXAMPLES)/straight_leg_subject.c3d --c3d-forward-axis=-y --frame-rate-hz 50 \
 	  --analog-per-frame 2 --marker-noise-mm 0.3 --marker-gap LHIP 40 0.12 \
-	  --subject-height-m 1.75 --subject-mass-kg 70
+	  --height-m 1.75 --mass-kg 70
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
@@ -58,9 +58,9 @@ lint: $(STAMP)
 bodies: $(STAMP)
 	for r in talos g1 human; do $(BIN)/posture-id body --from-robot $$r --out urdf/$${r}_tip.urdf > /dev/null; done
 	$(BIN)/posture-id body --default-tip --out posture_id/bodies/data/tip_default.urdf > /dev/null
-	$(BIN)/posture-id body --height 1.75 --mass 70 --segments 2 \
+	$(BIN)/posture-id body --height-m 1.75 --mass-kg 70 --segments 2 \
 	  --out posture_id/bodies/data/winter_1.75m_70kg_2seg.urdf > /dev/null
-	for n in 1 3; do $(BIN)/posture-id body --height 1.75 --mass 70 --segments $$n \
+	for n in 1 3; do $(BIN)/posture-id body --height-m 1.75 --mass-kg 70 --segments $$n \
 	  --out urdf/winter_1.75m_70kg_$${n}seg.urdf > /dev/null; done
 
 # The bundled CNN models (docs/learning.md): a data set, training (under 30 min each on

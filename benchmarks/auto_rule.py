@@ -5,7 +5,7 @@ Run:  .venv/bin/python benchmarks/auto_rule.py [--subjects 40] [--workers 2]
 
 Subjects whose body COM sway is 60–95 % stimulus-locked (motor noise, not people-like:
 the sway the old rule refined whenever the network's verdict was doubtful), parameters
-from MODEL §5's prior, 0.05° sensor noise, the 242-state PRTS ×2 at 1°, on the TIP and
+from docs/model.md §5's prior, 0.05° sensor noise, the 242-state PRTS ×2 at 1°, on the TIP and
 Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg), the subjects' own seeds. Each is
 identified by the network alone, by the hybrid (least squares from the network's answer)
 on the raw sway and on the stimulus-locked sway, by ``auto`` as it is now

@@ -2,7 +2,7 @@
 
 Run:  .venv/bin/python benchmarks/cnn_noise.py [--model DIR] [--trials 40]
 
-Simulates ``--trials`` 121 s TIP recordings (MODEL §5 parameters from
+Simulates ``--trials`` 121 s TIP recordings (docs/model.md §5 parameters from
 ``default_rng(5)``; the stable ones are used), adds white noise of 0, 0.01° and 0.05° to
 the segment angles (``Recording.with_sensor_noise``), and counts the recordings whose
 three classes the CNN calls right, and the modules. Writes

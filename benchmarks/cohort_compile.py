@@ -59,12 +59,12 @@ def make_cohort(cli: list[str], folder: Path, subjects: int) -> None:
         height, mass = 1.50 + 0.45 * share, 50.0 + 50.0 * ((i * 7) % subjects) / subjects
         name = f"subject_{i:02d}"
         body = folder / "bodies" / f"{name}.urdf"
-        run([*cli, "body", "--height", f"{height:.3f}", "--mass", f"{mass:.1f}",
+        run([*cli, "body", "--height-m", f"{height:.3f}", "--mass-kg", f"{mass:.1f}",
              "--segments", "3", "--out", str(body)], env)
         run([*cli, "simulate", "--body", str(body), "--states", "80", "--cycles", "2",
-             "--noise-deg", "0.02", "--seed", str(i),
+             "--sensor-noise-deg", "0.02", "--seed", str(i),
              "--out", str(folder / "recordings" / f"{name}.csv")], env)
-    run([*cli, "simulate", "--noise-deg", "0.02", "--seed", "99",
+    run([*cli, "simulate", "--sensor-noise-deg", "0.02", "--seed", "99",
          "--out", str(folder / "tip.csv")], env)
 
 

@@ -4,7 +4,7 @@ columns the other way round ever explain a *right* recording three times better?
 Run:  .venv/bin/python benchmarks/columns_on_clean.py
 
 For the TIP and the 2- and 3-segment Winter bodies (1.75 m, 70 kg), four PRTSs (242
-states ×2 at 0.5° and 2°, 80 states ×6 at 1° and 3°), the first two of MODEL §5's draws
+states ×2 at 0.5° and 2°, 80 states ×6 at 1° and 3°), the first two of docs/model.md §5's draws
 from seed 100 on that keep their balance, with no sensor noise and with 0.005°: the
 bundled network's answer re-simulated, in units of the recording's noise (what
 :func:`posture_id.identify.alternatives.better_explanations` compares), as recorded and

@@ -5,7 +5,7 @@ Run:  .venv/bin/python benchmarks/design_check.py [--subjects 50] [--workers 2]
 
 For each of 4 protocols × 2 noise regimes (sensor noise 0.05° only; people-like: motor
 noise leaving 30 % of the body COM sway locked, plus 0.05° sensor noise), ``--subjects``
-subjects drawn from MODEL §5's prior (a seed no other run uses; subjects who fall are
+subjects drawn from docs/model.md §5's prior (a seed no other run uses; subjects who fall are
 drawn again) are simulated and identified by the locked least-squares fit
 (``FitOptions.locked``), started at their true parameters with their classes known (the
 design predicts the noise's effect on the estimate, not the search's failures, which

@@ -3,7 +3,7 @@ says a parameter is determined, and does motor noise bias the locked response?
 
 Run:  .venv/bin/python benchmarks/design_linearity.py [--draws 300] [--fits 2]
 
-On the 2-segment Winter body, for 3 subjects drawn from MODEL §5's prior (seed 5) and the
+On the 2-segment Winter body, for 3 subjects drawn from docs/model.md §5's prior (seed 5) and the
 242-state PRTS ×2 and the 80-state PRTS ×6 at 1°:
 
 1. *scatter*: the linearised estimate A⁻¹J̄ᵀz of ``--draws`` white sensor-noise draws

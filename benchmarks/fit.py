@@ -2,7 +2,7 @@
 
 Run:  .venv/bin/python benchmarks/fit.py [--recordings 10] [--exhaustive 3]
 
-Simulates ``--recordings`` 121 s TIP recordings with MODEL §5 random parameters (stable
+Simulates ``--recordings`` 121 s TIP recordings with docs/model.md §5 random parameters (stable
 ones), and fits each
   1. from the defaults,
   2. from the true values perturbed by 30 % (each continuous parameter × (1 ± 0.3), the

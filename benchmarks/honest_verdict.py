@@ -21,7 +21,7 @@ Bodies: the TIP and Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg), in tur
 3-segment Winter body in the TIP's turn for another person's body, a 2-segment one in the
 1-segment's turn for exchanged columns);
 stimuli: the 242-state PRTS ×2 and the 80-state PRTS ×6, 0.5–2° peak to peak; parameters
-from MODEL §5's prior (a seed no data set uses). A recording is **right** when every
+from docs/model.md §5's prior (a seed no data set uses). A recording is **right** when every
 class is right and every truth lies inside its 90 % interval, **wrong** when a class is
 wrong or a Kp lies farther from the truth than twice its interval's half-width. Writes
 ``report.md`` and ``rows.json``; a journal makes an interrupted run resumable (removed

@@ -48,7 +48,7 @@ def make_newest_material(root: Path, paths: dict[str, str]) -> None:
         rec = root / f"subject{k}.csv"
         frf = root / f"subject{k}.frf.json"
         if not frf.exists():
-            _quiet_main(["simulate", "--motor-noise", "0.3", "--noise-deg", "0.05", "--seed",
+            _quiet_main(["simulate", "--motor-noise", "0.3", "--sensor-noise-deg", "0.05", "--seed",
                          str(k), "--out", str(rec)])
             _quiet_main(["frf", str(rec), "--body", paths["tip_urdf"], "--band-preset",
                          "peterka11", "--lab-convention", "--out", str(frf)])
@@ -82,11 +82,11 @@ def make_newest_material(root: Path, paths: dict[str, str]) -> None:
     one = root / "one_segment"
     if not (one / "s1.csv").exists():
         one.mkdir(exist_ok=True)
-        _quiet_main(["simulate", "--body", str(ONE_SEGMENT), "--noise-deg", "0.02",
+        _quiet_main(["simulate", "--body", str(ONE_SEGMENT), "--sensor-noise-deg", "0.02",
                      "--cycles", "2", "--out", str(one / "s1.csv")])
     other = root / "one_segment_again.csv"
     if not other.exists():
-        _quiet_main(["simulate", "--body", str(ONE_SEGMENT), "--noise-deg", "0.02",
+        _quiet_main(["simulate", "--body", str(ONE_SEGMENT), "--sensor-noise-deg", "0.02",
                      "--cycles", "2", "--seed", "7", "--motor-noise", "0.2", "--out",
                      str(other)])
     paths["one_rec_again"] = str(other)
@@ -388,9 +388,9 @@ def _cohort_norm_cases() -> list[Case]:
         Case("no such norm (cohort)", "cohort norm",
              ("identify", "recs", "--out", "o", "--method", "cnn", "--norm", "n.json"),
              ("n.json", "no such"), recs),
-        Case("a norm of no lab points without --frf-preset", "cohort norm",
+        Case("a norm of no lab points without --band-preset", "cohort norm",
              ("identify", "recs", "--out", "o", "--method", "cnn", "--norm", "n.json"),
-             ("n.json", "--frf-preset"),
+             ("n.json", "--band-preset"),
              {**recs, "n.json": _edited("norm", _set(lab_bands=None))}),
         Case("--norm with one recording", "cohort norm",
              ("identify", "{rec}", "--method", "cnn", "--norm", "{norm}"), ("--norm",)),
@@ -458,11 +458,11 @@ def _simulate_c3d_cases() -> list[Case]:
     sim = ("simulate", "--out", "t.c3d")
     return [
         Case("height in centimetres", "simulate c3d",
-             (*sim, "--subject-height-m", "175", "--subject-mass-kg", "70"),
-             ("--subject-height-m 175", "metres")),
+             (*sim, "--height-m", "175", "--mass-kg", "70"),
+             ("--height-m 175", "metres")),
         Case("mass in grams", "simulate c3d",
-             (*sim, "--subject-height-m", "1.75", "--subject-mass-kg", "70000"),
-             ("--subject-mass-kg 70000", "kg")),
+             (*sim, "--height-m", "1.75", "--mass-kg", "70000"),
+             ("--mass-kg 70000", "kg")),
         Case("a gap of negative length", "simulate c3d",
              (*sim, "--marker-gap", "LHIP", "40", "-1"), ("--marker-gap", "LHIP", "-1")),
         Case("a gap of no length", "simulate c3d", (*sim, "--marker-gap", "LHIP", "40", "0"),
@@ -495,8 +495,15 @@ def _ic_cases() -> list[Case]:
         Case("an IC parameter file as fit's --init", "ic",
              ("fit", "{rec}", "--init", "{ic_params}", "--out", "f.json"),
              ("ic_params.json", "--model ic")),
-        Case("identify --model ic", "ic", ("identify", "{rec}", "--model", "ic"),
-             ("--model ic", "fit --model ic", "compare")),
+        Case("identify --model ic with --method", "ic",
+             ("identify", "{rec}", "--model", "ic", "--method", "cnn"),
+             ("--method", "--model ic")),
+        Case("identify --model ic on a cohort", "ic",
+             ("identify", "recs", "--model", "ic", "--out", "o"), ("recs", "compare DIR"),
+             {"recs/a.csv": "@rec"}),
+        Case("identify --model with a network's folder", "ic",
+             ("identify", "{rec}", "--model", "nonet", "--method", "cnn"),
+             ("nonet", "no such")),
         Case("a DEC parameter file with --model ic", "ic",
              ("simulate", "--model", "ic", "--params", "{dec_params}", "--out", "s.csv"),
              ("tip_subject.truth.json", "\"ic\"")),

@@ -2,7 +2,7 @@
 
 Run:  .venv/bin/python benchmarks/identify_speed.py [--model DIR] [--recordings 50]
 
-Simulates ``--recordings`` 121 s TIP recordings (MODEL §5 random parameters, stable
+Simulates ``--recordings`` 121 s TIP recordings (docs/model.md §5 random parameters, stable
 ones), loads the model once (default: the bundled TIP model), then times, per recording,
 ``CnnIdentifier.identify``: the checks of the recording and its stimulus, the STFT
 features, the network, the parameters and, for a calibrated model, the intervals (the

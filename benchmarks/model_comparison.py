@@ -3,7 +3,7 @@
 Run:  .venv/bin/python benchmarks/model_comparison.py [--per-model 30] [--workers 2]
                                                       [--out docs/results/model_comparison]
 
-``--per-model`` recordings of each model (MODEL §8), made by the project's simulators,
+``--per-model`` recordings of each model (docs/model.md §8), made by the project's simulators,
 each compared as ``posture-id compare REC --body URDF`` compares it
 (:func:`~posture_id.ic.compare.compare_models`, the held-out cycle included where there
 are three or more cycles):
@@ -13,7 +13,7 @@ are three or more cycles):
   the comparison needs; ``benchmarks/ic_recovery.py`` covers 3 segments);
 - stimuli: the 242-state PRTS ×2 and the 80-state PRTS ×6 in turn, 0.5–2° peak to peak
   (one amplitude);
-- DEC parameters from MODEL §5's prior; IC parameters drawn around the literature's
+- DEC parameters from docs/model.md §5's prior; IC parameters drawn around the literature's
   (Kp 1.3–2.5·m·g·h, Kd 0.25–0.6·m·g·h·s, Δ 0.08–0.22 s, W 0.2–0.9, G 0–0.5, τ_f 5–40 s),
   redrawn until the closed loop is stable and the body stays up;
 - sway: half clean (0.02° sensor noise), half people-like (motor noise leaving 15–40 % of

@@ -86,7 +86,7 @@ def _judge(model: Path | None, families: list[str], groups: list[str], subjects:
         command = [sys.executable, str(HERE / "honest_verdict.py"), "--subjects", str(subjects),
                    "--groups", *groups, "--families", *families, "--out", str(out)]
         if model is not None:
-            command += ["--model", str(model)]
+            command += ["--network", str(model)]
         subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
     return json.loads((out / "rows.json").read_text(encoding="utf-8"))["rows"]
 

@@ -5,7 +5,7 @@ Run:  .venv/bin/python benchmarks/real_like.py [--subjects 30] [--workers 2]
 
 ``--subjects`` simulated subjects of the TIP (or of ``--body``), each recorded with the
 242-state PRTS (2 cycles, 121 s) and with the 80-state PRTS (6 cycles, 120 s), both 1°
-peak-to-peak: MODEL §5 parameters (from a seed no data set uses; subjects that fall
+peak-to-peak: docs/model.md §5 parameters (from a seed no data set uses; subjects that fall
 under either stimulus are drawn again), motor noise scaled so that a share drawn
 uniformly from [10 %, 30 %] of their body COM sway's variance is stimulus-locked
 (:func:`posture_id.simulation.subjects.people_like`), 0.05° sensor noise. Every recording
@@ -192,7 +192,7 @@ def markdown(stats: dict, joints, n_subjects: int, workers: int, models: dict,
              "",
              f"{n_subjects} simulated subjects of {body_name} (drawn so that they stay up "
              "under both "
-             "stimuli; MODEL §5 "
+             "stimuli; docs/model.md §5 "
              "parameters; motor noise scaled so that "
              f"{100 * SHARE_RANGE[0]:g}–{100 * SHARE_RANGE[1]:g} % of "
              "the body COM sway's variance is stimulus-locked, drawn per subject; 0.05° "

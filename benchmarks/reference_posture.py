@@ -5,7 +5,7 @@ For each lumped preset (TALOS, G1, the example-robot-data human; 3 segments, the
 default parameters): the largest |θ| over 30 s without any tilt, the segment angles at the
 end of those 30 s, and how far the sway to a 3° PRTS (80 states of 0.25 s, one cycle, no
 dead-band) is from six times the sway to a 0.5° one, relative to the latter's peak. Then
-with 12 gain sets drawn from MODEL §5's prior (seeded; Kp ≠ m·g·h, so the servo must hold
+with 12 gain sets drawn from docs/model.md §5's prior (seeded; Kp ≠ m·g·h, so the servo must hold
 the stance): the largest |θ| over 30 s without any tilt (the stable draws), and the
 median stimulus-locked share of the noise-free body COM sway to the 242-state PRTS ×2 at
 0.5° (dead-band on; drift-free cycle average, as the universal features read it), with

@@ -5,7 +5,7 @@ Run:  .venv/bin/python benchmarks/simulation.py [--trials 2048] [--workers 2]
       .venv/bin/python benchmarks/simulation.py --before REV [--rounds 6]
 
 Measures, in one run on this machine (medians of --repeats runs):
-  1. compiled batch: 121 s TIP trials per second (default parameters, and MODEL §5
+  1. compiled batch: 121 s TIP trials per second (default parameters, and docs/model.md §5
      random parameters, about a fifth of which fall and are aborted);
   2. the Pinocchio reference path (``pinocchio.aba`` every 2 ms step) on one such trial;
 and prints their ratio. Compilation is done (or loaded from cache) before timing.
@@ -15,7 +15,7 @@ same interpreter) measured in child processes that take turns, ``--rounds`` roun
 order now, REV, REV, now, ...: a shared machine's drift falls on both alike. Each child
 compiles (or loads) its kernel first, then times its batches (the best of
 ``--repeats``); reported: each side's median over the rounds and the median of the
-rounds' ratios, and how far the two kernels' sway of the same 96 MODEL §5 random trials
+rounds' ratios, and how far the two kernels' sway of the same 96 docs/model.md §5 random trials
 (TIP and the bent TALOS) lies apart.
 
 Writes the figures to benchmarks/results/simulation.json (``--before``:
@@ -69,7 +69,7 @@ print(json.dumps(rates))
 """
 
 
-#: A child's sway of 96 MODEL §5 random trials of 121 s on the TIP and the bent TALOS,
+#: A child's sway of 96 docs/model.md §5 random trials of 121 s on the TIP and the bent TALOS,
 #: saved to the .npz named by its argument (the two kernels' answers compared).
 SWAY = """
 import sys
@@ -221,7 +221,7 @@ def main() -> None:
     }
     print(f"compiled batch, {args.trials} × 121 s TIP trials, {args.workers} threads:")
     print(f"  default parameters : {rate_default:8.1f} trials/s ({t_default:.2f} s)")
-    print(f"  MODEL §5 random    : {rate_random:8.1f} trials/s ({t_random:.2f} s, "
+    print(f"  docs/model.md §5 random    : {rate_random:8.1f} trials/s ({t_random:.2f} s, "
           f"{results['random_rejected_fraction']:.0%} aborted)")
     print(f"Pinocchio reference, one 121 s trial: {t_reference:.2f} s")
     print(f"ratio compiled/reference: {results['speedup_default_vs_reference']:.0f}× (default), "

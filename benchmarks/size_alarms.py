@@ -3,7 +3,7 @@
 Run:  .venv/bin/python benchmarks/size_alarms.py [--recordings 40] [--unconfirmed]
                                                  [--model DIR]
 
-Clean recordings of Winter bodies of 1–3 segments (1.5–1.95 m, 50–95 kg), MODEL §5's
+Clean recordings of Winter bodies of 1–3 segments (1.5–1.95 m, 50–95 kg), docs/model.md §5's
 draws, the 242-state PRTS ×2 or the 80-state PRTS ×6 at 0.5–3° peak to peak, 0.005,
 0.01 or 0.02° of white sensor noise, each identified by the default command on its *own*
 body (``Identifier(body).identify``). Prints each recording's verdict and the mistakes

@@ -1,7 +1,7 @@
 """Sway recordings as CSV: ``time_s,tilt_deg,<segment>_deg,...`` (degrees at the edge).
 
 Segments are named by their URDF links (``shank,thigh,trunk`` for the default body);
-angles are segment angles in space, positive = forward lean (MODEL §1).
+angles are segment angles in space, positive = forward lean (docs/model.md §1).
 """
 
 from __future__ import annotations

@@ -105,7 +105,7 @@ def test_another_persons_body_is_named(tmp_path, monkeypatch):
 
 def test_a_recording_cleaner_than_the_networks_own_error_reads_no_alternative(
         tmp_path, monkeypatch):
-    """No sensor noise at all (a 1.75 m, 70 kg 2-segment Winter body, MODEL §5's draw of
+    """No sensor noise at all (a 1.75 m, 70 kg 2-segment Winter body, docs/model.md §5's draw of
     seed 109, the 80-state PRTS at 3°): the network's own error is hundreds of noise units,
     and a body 20 % shorter happens to read fewer (a chance of the network, not
     evidence): with the guard switched off it is named (least squares' confirmation
@@ -130,7 +130,7 @@ def test_a_recording_cleaner_than_the_networks_own_error_reads_no_alternative(
 
 def test_exchanged_columns_are_named_on_a_recording_cleaner_than_the_networks_error(
         monkeypatch):
-    """A 3-segment Winter body (1.75 m, 70 kg, MODEL §5's draw of seed 1) under the
+    """A 3-segment Winter body (1.75 m, 70 kg, docs/model.md §5's draw of seed 1) under the
     80-state PRTS at 2°, 0.02° of sensor noise (under 0.3 % of its locked sway), its shank
     and thigh columns exchanged: the answer leaves 7 % of the locked sway, close enough to
     pass on its own; the columns put back leave a third or less of it, so they are named
@@ -170,7 +170,7 @@ def test_exchanged_columns_are_named_on_a_recording_cleaner_than_the_networks_er
 
 @pytest.mark.slow
 def test_a_body_a_tenth_off_is_not_called_another_persons(tmp_path, monkeypatch):
-    """A 1.75 m, 70 kg 2-segment Winter subject (MODEL §5's draw of seed 0, the default
+    """A 1.75 m, 70 kg 2-segment Winter subject (docs/model.md §5's draw of seed 0, the default
     PRTS, 0.01° of sensor noise) on the right body: read with the body a tenth shorter,
     the network's answer leaves less of the noise by more than 1.3×, a chance of its own
     error on clean sway (the cohort tutorial's first subject did so with the network
@@ -195,7 +195,7 @@ def test_a_body_a_tenth_off_is_not_called_another_persons(tmp_path, monkeypatch)
 @pytest.mark.slow
 def test_a_size_the_network_reads_by_chance_is_not_named_when_least_squares_fits(
         tmp_path, monkeypatch):
-    """A 1.85 m, 85 kg 1-segment Winter subject (MODEL §5's draw of seed 20, the default
+    """A 1.85 m, 85 kg 1-segment Winter subject (docs/model.md §5's draw of seed 20, the default
     PRTS, 0.01° of sensor noise) on the right body: the network's answer, read with the
     body a fifth shorter, leaves less of the noise by more than 1.3× (its own error on
     clean sway), but least squares from its answer on the given body explains the sway

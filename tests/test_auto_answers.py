@@ -47,7 +47,7 @@ def test_a_fallen_network_answer_on_people_like_sway_still_gets_an_answer(
         tip, subject, network_that_falls):
     """Refined on the locked sway with the network's spread as the prior; that starts
     from an answer so far off that it falls too, so least squares from the defaults with
-    MODEL §5's prior answers."""
+    docs/model.md §5's prior answers."""
     alone = identify(subject.recording, tip, Method.CNN)
     assert alone.fell and alone.verdict.doubtful
     result = identify(subject.recording, tip)  # auto

@@ -28,7 +28,7 @@ def test_shipped_default_urdf_is_the_generator_output():
 
 
 def test_winter_body_mgh(winter):
-    # MODEL §1: 1.80 m, 80 kg gives m·g·h ≈ 770, 447, 173 N·m/rad
+    # docs/model.md §1: 1.80 m, 80 kg gives m·g·h ≈ 770, 447, 173 N·m/rad
     np.testing.assert_allclose(winter.mgh, [770, 447, 173], atol=1.0)
 
 

@@ -129,7 +129,7 @@ def test_an_unreadable_calibration_is_made_anew(calibrated, tmp_path):
     shutil.copytree(calibrated / "model", model)
     (model / CALIBRATION).write_text("{not json")
     assert main(["calibration", str(model), str(calibrated / "set"), "--out",
-                 str(tmp_path / "report"), "--noise-deg", "0.05"]) == 0
+                 str(tmp_path / "report"), "--sensor-noise-deg", "0.05"]) == 0
     assert (model / CALIBRATION).read_text() == "{not json"  # told to write elsewhere only
     assert CnnCalibration.load(tmp_path / "report").weights_sha256 == CnnCalibration.load(
         calibrated / "model").weights_sha256

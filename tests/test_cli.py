@@ -27,7 +27,7 @@ def test_body_table_and_json(capsys):
 
 def test_body_writes_winter_urdf(tmp_path, capsys):
     out = tmp_path / "subject.urdf"
-    assert main(["body", "--height", "1.8", "--mass", "80", "--segments", "2",
+    assert main(["body", "--height-m", "1.8", "--mass-kg", "80", "--segments", "2",
                  "--out", str(out)]) == 0
     body = load_body(out)
     assert body.segment_names == ("leg", "trunk")
@@ -39,7 +39,7 @@ def test_body_from_robot(tmp_path, capsys):
     assert main(["body", "--from-robot", "talos", "--segments", "2", "--out", str(out)]) == 0
     assert "half_sitting" in capsys.readouterr().err
     assert load_body(out).segment_names == ("leg", "trunk")
-    assert main(["body", "--from-robot", "g1", "--height", "1.8", "--out", str(out)]) == 2
+    assert main(["body", "--from-robot", "g1", "--height-m", "1.8", "--out", str(out)]) == 2
     assert "not allowed with argument" in capsys.readouterr().err
 
 
@@ -125,3 +125,66 @@ def test_search_ranges_of_the_fit(tmp_path, capsys):
         assert main([command, "rec.csv", "--out", str(tmp_path / "o.json"), "--gain-range",
                      "3", "2"]) == 2
         assert "--gain-range: MIN must be below MAX, got 3 2" in capsys.readouterr().err
+
+
+def test_a_negative_axis_is_taken_as_typed(tmp_path, capsys):
+    """``--forward-axis -y`` (as anyone types it) reads the example C3D trial exactly as
+    ``--forward-axis=-y`` does."""
+    from pathlib import Path
+
+    from posture_id.cli.renamed import normalised
+
+    assert normalised(["frf", "t.c3d", "--forward-axis", "-y", "--vertical-axis", "z"]) == \
+        ["frf", "t.c3d", "--forward-axis=-y", "--vertical-axis", "z"]
+    c3d = Path(__file__).resolve().parents[1] / "posture_id/studies/examples/" \
+        "straight_leg_subject.c3d"
+    markers = ["--segment-markers", "leg=LANK+RANK,LHIP+RHIP", "trunk=LHIP+RHIP,LSHO+RSHO",
+               "--tilt-channel", "platform_angle", "--tilt-scale", "2"]
+    outs = []
+    for k, axis in enumerate((["--forward-axis", "-y"], ["--forward-axis=-y"])):
+        out = tmp_path / f"f{k}.json"
+        assert main(["frf", str(c3d), *markers, *axis, "--out", str(out)]) == 0
+        outs.append(json.loads(out.read_text())["channels"])
+    assert outs[0] == outs[1]
+
+
+def test_old_spellings_work_with_a_notice_of_their_new_name(tmp_path, capsys):
+    """A renamed flag's old spelling gives the same answer and says the new name once."""
+    from posture_id.cli.renamed import RENAMED
+
+    assert RENAMED[("simulate", "--noise-deg")] == "--sensor-noise-deg"
+    texts = []
+    for k, flag in enumerate(("--sensor-noise-deg", "--noise-deg", "--noise-deg=0.05")):
+        out = tmp_path / f"s{k}.csv"
+        value = [] if "=" in flag else ["0.05"]
+        assert main(["simulate", "--cycles", "1", "--seed", "3", flag, *value,
+                     "--out", str(out)]) == 0
+        err = capsys.readouterr().err
+        assert ("--noise-deg is now --sensor-noise-deg" in err) == (k > 0)
+        texts.append(out.read_text())
+    assert texts[0] == texts[1] == texts[2]
+    # identify's network folder: --network now, --model DIR still read as it
+    from posture_id.cli.renamed import normalised
+
+    assert normalised(["identify", "r.csv", "--model", "nets/mine"]) == \
+        ["identify", "r.csv", "--network", "nets/mine"]
+    assert "--model DIR is now --network DIR" in capsys.readouterr().err
+    assert normalised(["identify", "r.csv", "--model", "ic"]) == \
+        ["identify", "r.csv", "--model", "ic"]
+    assert normalised(["body", "--height", "1.8", "--mass=80"]) == \
+        ["body", "--height-m", "1.8", "--mass-kg=80"]
+
+
+def test_the_top_level_help_lists_every_command_once_by_task(capsys):
+    from posture_id.cli import COMMAND_GROUPS, build_parser
+
+    parser = build_parser()
+    text = parser.format_help()
+    names = [n for _, group in COMMAND_GROUPS for n in group]
+    sub = next(a for a in parser._actions if a.dest == "command")
+    assert sorted(names) == sorted(sub.choices) and len(set(names)) == len(names)
+    for title, group in COMMAND_GROUPS:
+        assert f"\n{title}:\n" in text
+        for name in group:
+            assert text.count(f"\n  {name} ") == 1, name
+    assert "examples:" in text

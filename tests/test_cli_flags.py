@@ -62,8 +62,8 @@ def _argv(prefix, parser, action, value: str) -> list[str]:
 def test_the_flags_are_found():
     names = {a.option_strings[0] for _, _, a in FLAGS}
     assert {"--amplitude-deg", "--cycles", "--states", "--sway-limit-deg", "--deadband-rad-s",
-            "--starts", "--seed", "--workers", "--shard-size", "--trials", "--height",
-            "--mass", "--segments", "--level", "--fits"} <= names
+            "--starts", "--seed", "--workers", "--shard-size", "--trials", "--height-m",
+            "--mass-kg", "--segments", "--level", "--fits"} <= names
 
 
 @pytest.mark.parametrize(("prefix", "parser", "action"), FLAGS,

@@ -88,7 +88,7 @@ def test_a_cohort_of_subjects_with_bodies_of_their_own(tmp_path, capsys):
     bodies.mkdir()
     for name, height, mass in (("ann", 1.62, 58.0), ("bob", 1.85, 90.0)):
         urdf = bodies / f"{name}.urdf"
-        assert main(["body", "--height", str(height), "--mass", str(mass), "--segments", "2",
+        assert main(["body", "--height-m", str(height), "--mass-kg", str(mass), "--segments", "2",
                      "--out", str(urdf)]) == 0
         simulate(load_body(urdf)).to_recording().with_sensor_noise(0.01, 3).to_csv(
             recordings / f"{name}.csv")

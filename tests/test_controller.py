@@ -1,10 +1,10 @@
-"""The compiled DEC controller against MODEL §2 written out again in plain numpy.
+"""The compiled DEC controller against docs/model.md §2 written out again in plain numpy.
 
 The reference simulation reuses the compiled controller, so a sign error shared by both
 would pass every other test. Here the oracle knows nothing of the kernel: it computes the
 COM-above angles from the segments' geometry (joint positions and COMs in the plane, the
 rates by central differences along θ̇), keeps its own integrals, tilt estimate and
-history of servo commands, and applies MODEL §2 line by line. Each step gets a fresh
+history of servo commands, and applies docs/model.md §2 line by line. Each step gets a fresh
 random state (θ, θ̇, α_FS, α̇_FS); the controller's memory carries over, so the delay
 buffer, the interpolation of fractional delays, the integral and the dead-band estimator
 are all exercised.
@@ -28,7 +28,7 @@ DT = 0.002
 
 def com_above_angles(body, theta: np.ndarray) -> np.ndarray:
     """(N,) α_i,S from the segments' geometry: angle from the vertical of the line from
-    joint i to the COM of segments i..N, positive forward (MODEL §1)."""
+    joint i to the COM of segments i..N, positive forward (docs/model.md §1)."""
     n = body.n_segments
     joint = np.zeros(2)  # (forward, up) of joint i
     joints, coms = [], []
@@ -62,7 +62,7 @@ def deadband(v: float, threshold: float) -> float:
 
 
 class Oracle:
-    """MODEL §2 for one trial: memory (∫ε, α̂_FS, servo history) and one step."""
+    """docs/model.md §2 for one trial: memory (∫ε, α̂_FS, servo history) and one step."""
 
     def __init__(self, body, p: dict, deadband_rad_s: float) -> None:
         self.body = body

@@ -82,7 +82,7 @@ def test_a_labs_columns_are_each_their_own_and_go_together(flags, named, tmp_pat
     (["--default-tip", "--segments", "2", "--out", "x.urdf"], "--default-tip writes the 3"),
     (["urdf/tip_default.urdf", "--out", "copy.urdf"], "--out writes a body"),
     (["--segments", "2"], "--segments goes with a body to write"),
-    (["--height", "1.8", "--mass", "80", "--hip-joints", "a", "b", "--out", "x.urdf"],
+    (["--height-m", "1.8", "--mass-kg", "80", "--hip-joints", "a", "b", "--out", "x.urdf"],
      "--hip-joints go with --lump"),
 ])
 def test_body_flags_that_would_do_nothing_are_refused(flags, named, tmp_path, capsys,

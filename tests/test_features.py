@@ -1,4 +1,4 @@
-"""Spectrogram features (MODEL §6) against a direct numpy implementation."""
+"""Spectrogram features (docs/model.md §6) against a direct numpy implementation."""
 
 from __future__ import annotations
 

@@ -23,9 +23,9 @@ def ic_files(tmp_path_factory, winter1):
                          torque_feedback_gain=0.2, torque_feedback_time_s=12.0)
     truth.to_json(folder / "truth.json")
     assert main(["simulate", "--model", "ic", "--params", str(folder / "truth.json"),
-                 "--body", WINTER1, "--noise-deg", "0.02", "--seed", "2",
+                 "--body", WINTER1, "--sensor-noise-deg", "0.02", "--seed", "2",
                  "--out", str(folder / "ic.csv")]) == 0
-    assert main(["simulate", "--body", WINTER1, "--noise-deg", "0.02", "--seed", "2",
+    assert main(["simulate", "--body", WINTER1, "--sensor-noise-deg", "0.02", "--seed", "2",
                  "--out", str(folder / "dec.csv")]) == 0
     return folder, truth
 
@@ -118,7 +118,7 @@ def test_two_amplitudes_one_dec_or_an_ic_that_reweights(tmp_path, winter1, capsy
                                     prts(amplitude, cycles=3, states=80), None, part)
         recording.to_csv(tmp_path / f"ic{part}.csv")
         assert main(["simulate", "--body", WINTER1, "--amplitude-deg", str(amplitude),
-                     "--states", "80", "--cycles", "3", "--noise-deg", "0.02", "--seed",
+                     "--states", "80", "--cycles", "3", "--sensor-noise-deg", "0.02", "--seed",
                      str(part), "--out", str(tmp_path / f"dec{part}.csv")]) == 0
     protocol = tmp_path / "two.json"
     protocol.write_text(json.dumps({"kind": "two_amplitudes",

@@ -1,4 +1,4 @@
-"""The IC model (MODEL §8): its body against Pinocchio, its closed-loop response against a
+"""The IC model (docs/model.md §8): its body against Pinocchio, its closed-loop response against a
 hand-derived special case and against its own time-domain simulation, exact derivatives,
 stability, parameter files, and the fit recovering the parameters of IC recordings."""
 

@@ -61,7 +61,7 @@ def test_hybrid_on_a_noisy_recording_recovers_classes_and_kp(tip, tmp_path):
     from posture_id.learning.bundled import bundled_model_dir
 
     specialist = str(bundled_model_dir(tip)[0])
-    assert main(["identify", str(csv), "--method", "hybrid", "--model", specialist,
+    assert main(["identify", str(csv), "--method", "hybrid", "--network", specialist,
                  "--out", str(out), "--plot", str(tmp_path / "hybrid.png")]) == 0
     data = json.loads(out.read_text())
     for joint in tip.joint_names:

@@ -90,7 +90,7 @@ def test_recordings_of_another_stimulus_are_refused_by_a_specialist(tip, tmp_pat
     csv = tmp_path / "other.csv"
     trial.to_csv(csv)
     specialist = str(bundled_model_dir(tip)[0])
-    assert main(["identify", str(csv), "--model", specialist,
+    assert main(["identify", str(csv), "--network", specialist,
                  "--out", str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "posture-id fit" in err

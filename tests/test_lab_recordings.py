@@ -175,7 +175,7 @@ def lab_subject(tmp_path_factory):
 
     folder = tmp_path_factory.mktemp("lab")
     urdf = folder / "subject.urdf"
-    assert main(["body", "--height", "1.75", "--mass", "70", "--segments", "1", "--out",
+    assert main(["body", "--height-m", "1.75", "--mass-kg", "70", "--segments", "1", "--out",
                  str(urdf)]) == 0
     body = load_body(urdf)
     truth = default_parameters(body)

@@ -134,7 +134,7 @@ def test_a_specialist_refuses_a_lab_stimulus_the_universal_model_reads_it(tip, t
     csv = tmp_path / "lab.csv"
     recording.to_csv(csv)
     specialist = str(MODELS_DIR / "tip_default")
-    assert main(["identify", str(csv), *LAB_FLAGS, "--model", specialist,
+    assert main(["identify", str(csv), *LAB_FLAGS, "--network", specialist,
                  "--out", str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
     assert "the CNN was trained on" in err and "use posture-id fit" in err

@@ -149,7 +149,7 @@ def test_a_checkpoint_that_does_not_fit_is_refused_in_one_line(trained, tmp_path
     damage(folder)
     with pytest.raises(LearningError, match=message):
         load_model(folder)
-    assert main(["identify", "rec.csv", "--model", str(folder), "--out",
+    assert main(["identify", "rec.csv", "--network", str(folder), "--out",
                  str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message.split()[0] in err

@@ -138,7 +138,7 @@ def test_the_default_command_doubts_each_mistake_and_only_because_of_its_check(
 @pytest.mark.parametrize("states, cycles", [(242, 2), (80, 6)])
 def test_every_body_of_the_prior_follows_its_tilt_at_low_frequency(request, body_name, states,
                                                                     cycles):
-    """The tilt-sign check's premise: over 400 draws of MODEL §5's prior, the body COM's
+    """The tilt-sign check's premise: over 400 draws of docs/model.md §5's prior, the body COM's
     FRF relative to the tilt has a positive real part at every stimulated harmonic below
     LOW_FREQUENCY_HZ (its 1st percentile 0.14–0.20 where it was measured: docs/identify.md,
     "Mistakes"), so a negated tilt cannot pass for one."""

@@ -1,4 +1,4 @@
-"""C3D trials: markers to the angles of MODEL §1, checked on trials the project writes from
+"""C3D trials: markers to the angles of docs/model.md §1, checked on trials the project writes from
 simulated sway (known segment lengths, marker noise, gaps, both forward axes, mm and m, an
 analog tilt channel); the refusals; the same answer as the trial's CSV."""
 
@@ -88,7 +88,7 @@ def test_the_analog_tilt_channel_is_the_tilt(sway, tip, tmp_path):
 
 def test_forward_lean_is_positive_and_front_down_tilt_is_positive(tip, tmp_path):
     """Signs checked on a made-up posture: every segment leaning 2° forward, the platform
-    tilted 1° front-down (MODEL §1)."""
+    tilted 1° front-down (docs/model.md §1)."""
     from posture_id.recording import Recording
 
     t = np.arange(50) / 100.0
@@ -316,8 +316,8 @@ def test_plot_shows_the_markers_beside_the_angles(sway, tip, tmp_path):
 def test_simulate_writes_a_c3d_trial_and_its_flags_need_one(tmp_path, capsys):
     out = tmp_path / "sim.c3d"
     assert main(["simulate", "--out", str(out), "--cycles", "1", "--marker-noise-mm", "0.3",
-                 "--c3d-forward-axis=-y", "--c3d-unit", "m", "--subject-height-m", "1.8",
-                 "--subject-mass-kg", "75", "--marker-gap", "LHIP", "3", "0.1"]) == 0
+                 "--c3d-forward-axis=-y", "--c3d-unit", "m", "--height-m", "1.8",
+                 "--mass-kg", "75", "--marker-gap", "LHIP", "3", "0.1"]) == 0
     trial = read_c3d(out)
     assert is_c3d(out) and trial.unit == "m" and trial.height_m == pytest.approx(1.8)
     assert np.isnan(trial.marker("LHIP")[300:310]).all()

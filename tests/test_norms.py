@@ -176,7 +176,7 @@ def test_the_command_line_builds_tests_and_compares(tmp_path, capsys):
 
 
 def test_a_cohort_writes_its_frfs_and_the_norms_columns(tmp_path):
-    """identify DIR --frf-preset peterka11: one <recording>.frf.json each, a norm in one
+    """identify DIR --band-preset peterka11: one <recording>.frf.json each, a norm in one
     more command; identify DIR --norm: summary.csv gains the norm test's columns."""
     import csv
 
@@ -194,7 +194,7 @@ def test_a_cohort_writes_its_frfs_and_the_norms_columns(tmp_path):
     for b in range(5):
         batch.trial(b).to_recording().with_sensor_noise(0.05, b).to_csv(recs / f"s{b}.csv")
     out = tmp_path / "out"
-    assert main(["identify", str(recs), "--method", "cnn", "--frf-preset", "peterka11",
+    assert main(["identify", str(recs), "--method", "cnn", "--band-preset", "peterka11",
                  "--out", str(out)]) in (0, 1)
     frfs = sorted(out.glob("*.frf.json"))
     assert [p.name for p in frfs] == [f"s{b}.frf.json" for b in range(5)]
@@ -257,7 +257,7 @@ def test_norm_test_reads_a_csv_and_a_c3d_recording_as_their_frf_jsons(tmp_path, 
     frfs = []
     for k in range(4):
         rec, frf = tmp_path / f"s{k}.csv", tmp_path / f"s{k}.frf.json"
-        assert main(["simulate", "--motor-noise", "0.3", "--noise-deg", "0.05", "--seed",
+        assert main(["simulate", "--motor-noise", "0.3", "--sensor-noise-deg", "0.05", "--seed",
                      str(k), "--out", str(rec)]) == 0
         assert main(["frf", str(rec), "--body", tip, *lab, "--out", str(frf)]) == 0
         frfs.append(str(frf))
@@ -281,3 +281,159 @@ def test_norm_test_reads_a_csv_and_a_c3d_recording_as_their_frf_jsons(tmp_path, 
         np.testing.assert_allclose(a["human_likeness"], b["human_likeness"], rtol=1e-9)
         np.testing.assert_allclose(a["frf"]["re"], b["frf"]["re"], rtol=1e-9, atol=1e-12)
         assert a["inside_prediction_band"] == b["inside_prediction_band"], name
+
+
+def _published(path: Path, members: FrfSet, weights: np.ndarray, frequencies=F,
+               **extra) -> Path:
+    """``members``' norm as labs publish it: mean, inverse covariance and weights only."""
+    from posture_id.norms.norm import shrunk_covariance
+
+    x = members.re_im()
+    covariance, _ = shrunk_covariance(x)
+    path.write_text(json.dumps({
+        "frequencies_hz": list(map(float, frequencies)), "channels": list(members.channels),
+        "mean_re_im": x.mean(axis=0).tolist(), "weights": weights.tolist(),
+        "inverse_covariance": np.linalg.pinv(covariance, rcond=1e-10,
+                                             hermitian=True).tolist(), **extra}))
+    return path
+
+
+def test_a_published_norm_tests_a_lab_recording_in_one_command(tmp_path, capsys):
+    """A norm published as summary statistics (mean, inverse covariance and weights at
+    Peterka's 11 frequencies; no lab bands; its channel "COM") and the lab's COM-only
+    recording (its own column names, an 80-state PRTS started part-way into its cycle):
+    ``norm test`` gives the human-likeness in one command, equal to the two-step route's
+    (``frf --band-preset peterka11 --lab-convention``, then the FRF JSON with --channel)
+    and to the hand computation; a norm at frequencies no preset has needs --band-preset;
+    a --band-preset other than a norm's own bands, and an ambiguous or absent channel,
+    are refused in one line."""
+    from posture_id.cli import main
+    from posture_id.norms.readers import frf_from_json
+
+    examples = ROOT / "posture_id" / "studies" / "examples"
+    lab = str(examples / "lab_subject.csv")
+    columns = ["--time-column", "time", "--tilt-column", "platform", "--angle-columns",
+               "COM_x"]
+    rng = np.random.default_rng(9)
+    members = _population(rng, 15)
+    members = FrfSet(F, 0.35 * members.response, ("COM",), members.names)
+    weights = np.linspace(1.0, 0.5, len(F))
+    published = _published(tmp_path / "published.json", members, weights)
+    assert Norm.from_json(published).lab_bands is None
+
+    direct = tmp_path / "direct.json"
+    assert main(["norm", "test", lab, "--norm", str(published), *columns,
+                 "--out", str(direct)]) == 0
+    assert "'COM_x' tested against the norm's 'COM'" in capsys.readouterr().err
+    frf, via = tmp_path / "lab.frf.json", tmp_path / "via.json"
+    assert main(["frf", lab, *columns, "--band-preset", "peterka11", "--lab-convention",
+                 "--out", str(frf)]) == 0
+    assert main(["norm", "test", str(frf), "--norm", str(published), "--channel", "COM_x",
+                 "--out", str(via)]) == 0
+    a, b = json.loads(direct.read_text()), json.loads(via.read_text())
+    assert np.isfinite(a["human_likeness"]) and a["human_likeness"] > 0
+    np.testing.assert_allclose(a["human_likeness"], b["human_likeness"], rtol=1e-9)
+    np.testing.assert_allclose(a["frf"]["re"], b["frf"]["re"], rtol=1e-9, atol=1e-12)
+    assert a["tested_channels"] == b["tested_channels"] == ["COM_x"]
+    assert a["inside_prediction_band"] is None  # summary statistics: no bands
+    # by hand: sqrt(dᵀ·S·Σ⁻¹·S·d)
+    _, h, _, _ = frf_from_json(frf, ("COM_x",))
+    d = np.concatenate([h[:, 0].real, h[:, 0].imag]) - members.re_im().mean(axis=0)
+    s = np.concatenate([weights, weights]) * d
+    precision = np.asarray(json.loads(published.read_text())["inverse_covariance"])
+    np.testing.assert_allclose(a["human_likeness"], np.sqrt(s @ precision @ s), rtol=1e-9)
+
+    # with the lab's 1-segment body: its segment and the body COM; the segment is tested
+    with_body = tmp_path / "body.json"
+    assert main(["norm", "test", lab, "--norm", str(published), *columns, "--body",
+                 str(examples / "lab_subject.urdf"), "--out", str(with_body)]) == 0
+    np.testing.assert_allclose(json.loads(with_body.read_text())["human_likeness"],
+                               a["human_likeness"], rtol=1e-9)
+
+    # frequencies that are no preset's points: --band-preset names the bands they average
+    shifted = _published(tmp_path / "shifted.json", members, weights,
+                         frequencies=F * 1.01)
+    capsys.readouterr()
+    assert main(["norm", "test", lab, "--norm", str(shifted), *columns]) == 2
+    err = capsys.readouterr().err
+    assert "--band-preset" in err and len(err.strip().splitlines()) == 1
+    at_shifted = tmp_path / "shifted.test.json"
+    assert main(["norm", "test", lab, "--norm", str(shifted), *columns, "--band-preset",
+                 "peterka11", "--out", str(at_shifted)]) == 0
+    np.testing.assert_allclose(json.loads(at_shifted.read_text())["human_likeness"],
+                               a["human_likeness"], rtol=1e-9)
+
+    # a norm that says its bands keeps them; --band-preset may not contradict them
+    own = {"name": "custom", "harmonics": [[k, k] for k in range(1, 12)],
+           "centres_hz": (0.05 + 0.1 * np.arange(11)).tolist(), "reference_period_s": 20.0}
+    banded = _published(tmp_path / "banded.json", members, weights,
+                        frequencies=own["centres_hz"], lab_bands=own)
+    capsys.readouterr()
+    assert main(["norm", "test", lab, "--norm", str(banded), *columns, "--band-preset",
+                 "peterka11"]) == 2
+    assert "--band-preset peterka11" in capsys.readouterr().err
+    assert main(["norm", "test", lab, "--norm", str(banded), *columns]) == 0
+
+    # channels: an absent one named, several without one named, each in one line
+    two = tmp_path / "two.frf.json"
+    data = json.loads(frf.read_text())
+    data["channels"] = {"leg": data["channels"]["COM_x"], "trunk": data["channels"]["COM_x"]}
+    two.write_text(json.dumps(data))
+    for argv, named in (([str(frf), "--channel", "COM"], "no channel 'COM'"),
+                        ([str(two)], "--channel NAME"),
+                        ([str(frf), "--channel", "COM_x", "--channel", "x"], "2 given")):
+        capsys.readouterr()
+        assert main(["norm", "test", *argv, "--norm", str(published)]) == 2, argv
+        err = capsys.readouterr().err
+        assert named in err and len(err.strip().splitlines()) == 1, (argv, err)
+        assert "COM_x" in err or "leg, trunk" in err or "2 given" in err, err
+    assert main(["norm", "test", str(two), "--norm", str(published), "--channel",
+                 "trunk"]) == 0
+
+
+def test_norm_test_tests_each_subject_of_a_table_and_a_mat(tmp_path, capsys):
+    """A CSV table of FRFs and the same as a .mat: each row tested against a built norm,
+    as against_norm scores it; one subject outside the prediction band makes the exit
+    status 1 and is named in the JSON and the summary."""
+    from scipy.io import savemat
+
+    from posture_id.cli import main
+
+    rng = np.random.default_rng(10)
+    norm_file = tmp_path / "norm.json"
+    build_norm(_population(rng, 20), bootstrap=50).to_json(norm_file)
+    norm = Norm.from_json(norm_file)
+    tested = _population(rng, 3).response[:, :, 0]
+    tested = np.vstack([tested, 3 * tested[:1]])  # the last far outside
+    table = tmp_path / "tested.csv"
+    table.write_text("subject," + ",".join(f"{f:g}_re,{f:g}_im" for f in F) + "\n" + "".join(
+        f"p{i}," + ",".join(f"{float(h.real)!r},{float(h.imag)!r}" for h in row) + "\n"
+        for i, row in enumerate(tested)))
+    savemat(tmp_path / "tested.mat", {"H": tested})
+    expected = [against_norm(norm, F, row) for row in tested]
+    assert expected[-1].inside_prediction_band is False
+    for source in ([str(table)], [str(tmp_path / "tested.mat"), "--variable", "H",
+                                  "--frequencies", *map(str, F)]):
+        out = tmp_path / "t.json"
+        capsys.readouterr()
+        assert main(["norm", "test", *source, "--norm", str(norm_file), "--out", str(out),
+                     "--plot", str(tmp_path / "t.png")]) == 1, source
+        shown = capsys.readouterr().out
+        result = json.loads(out.read_text())
+        subjects = result["subjects"]
+        assert len(subjects) == len(tested)
+        assert all(f"  {s['tested']}: human-likeness" in shown for s in subjects)
+        for got, want in zip(subjects, expected, strict=True):
+            np.testing.assert_allclose(got["human_likeness"], want.human_likeness, rtol=1e-9)
+            assert got["inside_prediction_band"] == want.inside_prediction_band
+            np.testing.assert_allclose(got["distance_percentile"], want.distance_percentile)
+        assert result["outside_prediction_band"] == [subjects[-1]["tested"]]
+        assert f"{subjects[-1]['tested']} (1 of 4)" in shown
+        assert (tmp_path / "t.png").stat().st_size > 0
+    assert [s["tested"] for s in subjects] == [f"H[{i}]" for i in range(4)]
+    capsys.readouterr()
+    assert main(["norm", "test", str(table), "--norm", str(norm_file), "--channel", "COM"]) == 2
+    assert "--channel" in capsys.readouterr().err
+    # the rows from the same population alone: every one inside, exit status 0
+    table.write_text("\n".join(table.read_text().splitlines()[:-1]) + "\n")
+    assert main(["norm", "test", str(table), "--norm", str(norm_file)]) == 0

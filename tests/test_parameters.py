@@ -1,4 +1,4 @@
-"""DEC parameters: defaults (MODEL §3), JSON format and validation, normalisation."""
+"""DEC parameters: defaults (docs/model.md §3), JSON format and validation, normalisation."""
 
 from __future__ import annotations
 

@@ -58,7 +58,7 @@ def test_fit_and_identify_say_it(tip, tmp_path, capsys):
     from posture_id.learning.bundled import MODELS_DIR
 
     specialist = str(MODELS_DIR / "tip_default")
-    assert main(["identify", str(csv), "--model", specialist,
+    assert main(["identify", str(csv), "--network", specialist,
                  "--out", str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
     assert "valid for that stimulus only" in err and "sampled at 50 Hz" in err

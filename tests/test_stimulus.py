@@ -43,7 +43,7 @@ def test_prts_position_returns_to_zero_and_has_the_amplitude():
     np.testing.assert_allclose(stim.angles[cycle_knots], 0.0, atol=1e-15)
     one = stim.angles[:243]
     assert np.ptp(one) == pytest.approx(np.radians(2.0), rel=1e-12)
-    # peak-to-peak spans 17 state steps, as MODEL §4 says
+    # peak-to-peak spans 17 state steps, as docs/model.md §4 says
     steps = np.concatenate([[0], np.cumsum(prts_symbols(242))])
     assert np.ptp(steps) == 17
 

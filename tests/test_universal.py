@@ -418,11 +418,11 @@ def test_identify_by_default_reads_a_body_and_prts_no_network_was_trained_on(tmp
     from posture_id.cli import main
 
     urdf, rec, out = tmp_path / "b.urdf", tmp_path / "rec.csv", tmp_path / "r.json"
-    assert main(["body", "--height", "1.68", "--mass", "61", "--segments", "1",
+    assert main(["body", "--height-m", "1.68", "--mass-kg", "61", "--segments", "1",
                  "--out", str(urdf)]) == 0
     assert main(["simulate", "--body", str(urdf), "--states", "80", "--state-s", "0.22",
-                 "--amplitude-deg", "2", "--cycles", "3", "--noise-deg", "0.02", "--seed", "3",
-                 "--out", str(rec)]) == 0
+                 "--amplitude-deg", "2", "--cycles", "3", "--sensor-noise-deg", "0.02",
+                 "--seed", "3", "--out", str(rec)]) == 0
     assert main(["identify", str(rec), "--body", str(urdf), "--out", str(out)]) == 0
     result = json.loads(out.read_text())
     assert result["cnn"]["model"]["layout"] == "universal"
@@ -599,7 +599,7 @@ def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_
     from posture_id.cli import main
 
     rec, out = tmp_path / "rec.csv", tmp_path / "r.json"
-    assert main(["simulate", "--amplitude-deg", "0.3", "--noise-deg", "0.01", "--seed", "4",
+    assert main(["simulate", "--amplitude-deg", "0.3", "--sensor-noise-deg", "0.01", "--seed", "4",
                  "--out", str(rec)]) == 0
     # the network alone: the default (auto) refines a doubtful answer by least squares
     assert main(["identify", str(rec), "--method", "cnn", "--out", str(out)]) == 1  # doubtful

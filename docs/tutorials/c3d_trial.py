@@ -6,7 +6,7 @@
 # capture and save C3D files: marker trajectories, analog channels (the platform's angle
 # sensor) and the subject's metadata. posture_id reads the file itself: name the markers
 # at each segment's ends, the platform's tilt and the axis the subject faces; the angles
-# of MODEL §1 are derived from them (`docs/motion_capture.md`).
+# of docs/model.md §1 are derived from them (`docs/motion_capture.md`).
 #
 # The shipped example is the straight-leg subject (legs and trunk, 1.75 m, 70 kg) as a
 # 50 Hz motion-capture trial: markers on both ankles, hips and shoulders with 0.3 mm noise,

@@ -30,7 +30,7 @@ for seed, (name, (height, mass)) in enumerate(subjects.items()):
     subprocess.run([posture_id_command, "body", "--height", str(height), "--mass", str(mass),
                     "--segments", "2", "--out", str(urdf)], check=True, capture_output=True)
     body = load_body(urdf)
-    while True:  # a subject from MODEL §5's prior who keeps their balance
+    while True:  # a subject from docs/model.md §5's prior who keeps their balance
         import numpy as np
 
         truth = sample_parameters(body, 1, np.random.default_rng(seed)).trial(

@@ -4,7 +4,7 @@
 # A jupytext "percent" script (`python docs/tutorials/ic_model.py`; `make test` runs it,
 # `tests/test_tutorials.py`). Most posture-control studies report the parameters of
 # Peterka's independent-channel (IC) model; posture_id fits it to the same recordings as
-# DEC (MODEL §8, `docs/ic.md`) and says which of the two a recording supports.
+# DEC (docs/model.md §8, `docs/ic.md`) and says which of the two a recording supports.
 
 # %%
 import json

@@ -48,7 +48,7 @@ classes = default_parameters(body).array("sign")  # everyone controls as the pap
 
 
 def cohort(n: int):
-    """n subjects: gains and delays within ±15 % (MODEL §5's prior, narrowed), classes
+    """n subjects: gains and delays within ±15 % (docs/model.md §5's prior, narrowed), classes
     the default ones."""
     params = sample_parameters(body, n, rng, sigma=0.15)
     params.sign[:] = classes

@@ -15,7 +15,7 @@ from posture_id.trials import prepare_trial
 body = load_body()
 print(body.joint_names, "m·g·h", np.round(body.mgh, 1))
 
-# 2. A subject: DEC parameters drawn from MODEL §5's prior, every module's class too.
+# 2. A subject: DEC parameters drawn from docs/model.md §5's prior, every module's class too.
 truth = sample_parameters(body, 1, np.random.default_rng(3)).trial(0, body.joint_names)
 
 # 3. A trial on the tilting platform: the 242-state PRTS, 2 cycles, 1° peak to peak.

@@ -1,4 +1,4 @@
-"""Bodies written as URDF: the default TIP (MODEL §1) and Winter's anthropometric tables.
+"""Bodies written as URDF: the default TIP (docs/model.md §1) and Winter's anthropometric tables.
 
 Segments are straight, stacked upright along +z with their COMs on their axes; they are
 written by :mod:`posture_id.bodies.urdf_writer` (joints about +y, rooted at a ``foot`` link).
@@ -53,7 +53,7 @@ WINTER = {
 
 
 def default_tip_segments() -> list[SegmentSpec]:
-    """MODEL §1: shank 10 kg, thigh 10 kg, trunk 30 kg, 0.5 m each, COM mid, I = m·l²/12."""
+    """docs/model.md §1: shank 10 kg, thigh 10 kg, trunk 30 kg, 0.5 m each, COM mid, I = m·l²/12."""
     out = []
     for link, joint, mass in (("shank", "ankle", 10.0), ("thigh", "knee", 10.0),
                               ("trunk", "hip", 30.0)):

@@ -4,9 +4,9 @@ A :class:`Body` is a chain of N rigid segments standing on a support (the URDF r
 the feet), joined by revolute joints about one common horizontal axis. Pinocchio loads
 the URDF and supplies every inertial quantity; from them the body derives the constants
 of its planar equations of motion (used by the compiled simulator) and the m·g·h of the
-segments above each joint (used to scale the DEC gains, MODEL §1 and §3).
+segments above each joint (used to scale the DEC gains, docs/model.md §1 and §3).
 
-Conventions (MODEL §1): angles from the gravitational vertical, positive = forward lean,
+Conventions (docs/model.md §1): angles from the gravitational vertical, positive = forward lean,
 i.e. a positive rotation about the common joint axis ``a``; "forward" is ``a × up``.
 Points of the sagittal plane are written as complex numbers ``up + 1j * forward`` so that
 a segment at angle θ maps a local vector ``v`` to ``exp(1j * θ) * v``.
@@ -26,7 +26,7 @@ from posture_id.fileio import file_sha256
 
 __all__ = ["Segment", "Body", "load_body", "DEFAULT_URDF", "TWO_SEGMENT_URDF", "BUNDLED_URDFS"]
 
-#: The default triple inverted pendulum shipped with the package (MODEL §1).
+#: The default triple inverted pendulum shipped with the package (docs/model.md §1).
 DEFAULT_URDF = Path(__file__).resolve().parent / "data" / "tip_default.urdf"
 #: The straight-leg 2-segment body of the paper's human experiment: Winter, 1.75 m, 70 kg.
 TWO_SEGMENT_URDF = DEFAULT_URDF.with_name("winter_1.75m_70kg_2seg.urdf")

@@ -11,6 +11,7 @@ before any work starts (:func:`~.arguments.check_output_file`).
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 
@@ -34,30 +35,68 @@ from posture_id.cli import (
 )
 from posture_id.cli.arguments import Parser
 from posture_id.cli.exit_status import BUG, EPILOG, INTERRUPTED, REFUSED
+from posture_id.cli.renamed import normalised
 from posture_id.errors import PostureIdError
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "COMMAND_GROUPS"]
+
+
+#: The commands by task, as the top-level help lists them.
+COMMAND_GROUPS = (
+    ("identify and analyse a recording",
+     ("identify", "fit", "compare", "frf", "norm")),
+    ("build bodies, stimuli and studies",
+     ("body", "simulate", "stimulus", "design")),
+    ("train and evaluate networks",
+     ("universal", "dataset", "train", "evaluate", "calibration", "benchmark")),
+    ("try it", ("demo",)),
+)
+EXAMPLES = """examples:
+  posture-id demo --out demo                      the bundled example, end to end
+  posture-id identify trial.csv --out result.json --plot result.png
+  posture-id identify trial.c3d --segment-markers leg=LANK+RANK,LHIP+RHIP \\
+      trunk=LHIP+RHIP,LSHO+RSHO --tilt-channel platform_angle --forward-axis -y
+  posture-id identify recordings/ --out results/  a cohort: one JSON each, summary.csv
+  posture-id compare trial.csv --out compare.json DEC against the IC model
+  posture-id body --from-robot talos --out talos.urdf   a humanoid lumped to a chain
+
+`posture-id COMMAND --help` for a command's flags."""
 
 
 def build_parser() -> Parser:
-    parser = Parser(prog="posture-id",
-                    description="Identify DEC posture-control parameters from body sway.")
+    parser = Parser(prog="posture-id", formatter_class=argparse.RawDescriptionHelpFormatter,
+                    usage="posture-id [--debug] COMMAND ...",
+                    description="Identify how a body keeps its balance: the parameters of its "
+                                "posture controller\n(DEC, or the independent-channel model) "
+                                "from its sway on a tilting platform.",
+                    epilog=EXAMPLES)
     parser.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error (a bug)")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for command in (body, simulate, fit, frf, dataset, train, evaluate, calibration, identify,
-                    demo, benchmark, universal, design, platform_command, compare,
-                    norm):
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser,
+                                metavar="COMMAND", title="commands")
+    for command in (identify, fit, compare, frf, norm, body, simulate, platform_command,
+                    design, universal, dataset, train, evaluate, calibration, benchmark,
+                    demo):
         command.add_parser(sub)
     for command_parser in sub.choices.values():  # one meaning per exit status, said by all
         command_parser.epilog = EPILOG
+    helps = {a.dest: a.help for a in sub._choices_actions}
+    listed = [name for _, names in COMMAND_GROUPS for name in names]
+    if sorted(listed) != sorted(helps):
+        raise RuntimeError(f"COMMAND_GROUPS lists {sorted(listed)}, the parser has "
+                           f"{sorted(helps)}")
+    sub.help = argparse.SUPPRESS  # the grouped list below replaces argparse's own
+    parser.description += "\n" + "".join(
+        f"\n{title}:\n" + "".join(f"  {name:<12} {helps[name]}\n" for name in names)
+        for title, names in COMMAND_GROUPS)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run one command; returns the exit status (2 for any user error)."""
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser().parse_args(normalised(sys.argv[1:] if argv is None
+                                                    else list(argv)))
     except SystemExit as stop:  # --help (0) or an argument error (2), already printed
         return stop.code if isinstance(stop.code, int) else 0
     try:

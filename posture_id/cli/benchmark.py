@@ -1,4 +1,4 @@
-"""``posture-id benchmark``: the CNN against the optimiser (docs/results/)."""
+"""``posture-id benchmark``: the CNN against the optimiser, into a report folder."""
 
 from __future__ import annotations
 
@@ -24,15 +24,15 @@ def add_parser(sub) -> None:
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     p.add_argument("--trials", type=positive_int, default=50,
                    help="held-out simulated recordings per noise level (default %(default)d)")
-    p.add_argument("--noise-deg", type=non_negative_float, nargs="+", default=[0.0, 0.01, 0.05],
+    p.add_argument("--sensor-noise-deg", type=non_negative_float, nargs="+",
+                   default=[0.0, 0.01, 0.05],
                    help="sensor-noise levels, degrees (default %(default)s)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     p.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     p.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
                    help="methods compared (default: all: cnn fit hybrid)")
-    p.add_argument("--out", type=Path, default=Path("docs/results"),
-                   help="report folder (default %(default)s); an interrupted run goes on "
-                        "from its journal there")
+    p.add_argument("--out", type=Path, required=True,
+                   help="report folder; an interrupted run goes on from its journal there")
     p.set_defaults(func=run)
 
 
@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     body = load_body(args.body or DEFAULT_URDF)
     journal = args.out / JOURNAL
     with TerminalProgress("identifications", prefix="posture-id benchmark") as progress:
-        result = run_benchmark(body, args.trials, tuple(args.noise_deg), args.seed,
+        result = run_benchmark(body, args.trials, tuple(args.sensor_noise_deg), args.seed,
                                args.workers, tuple(Method(m) for m in args.methods),
                                progress=progress, journal=journal)
     paths = result.write(args.out)

@@ -26,10 +26,10 @@ def add_parser(sub) -> None:
     body.add_argument("urdf", nargs="?", type=Path, help="URDF file (default: the TIP)")
     body.add_argument("--json", action="store_true", help="print JSON instead of a table")
     mode = body.add_mutually_exclusive_group()
-    mode.add_argument("--height", type=positive_float,
-                      help="write a Winter body: height, m (with --mass)")
+    mode.add_argument("--height-m", type=positive_float,
+                      help="write a Winter body: height, m (with --mass-kg)")
     mode.add_argument("--default-tip", action="store_true",
-                      help="write the default triple inverted pendulum of MODEL §1")
+                      help="write the default triple inverted pendulum of docs/model.md §1")
     mode.add_argument("--from-robot", choices=sorted(PRESETS),
                       help="lump a humanoid shipped by example-robot-data")
     mode.add_argument("--lump", type=Path, metavar="URDF",
@@ -37,7 +37,7 @@ def add_parser(sub) -> None:
     mode.add_argument("--from-trial", type=Path, metavar="C3D",
                       help="write the Winter body of the subject a motion-capture trial's "
                            "metadata describe (height and mass)")
-    body.add_argument("--mass", type=positive_float, help="write a Winter body: mass, kg")
+    body.add_argument("--mass-kg", type=positive_float, help="write a Winter body: mass, kg")
     body.add_argument("--segments", type=int, default=3, choices=(1, 2, 3),
                       help="written body: 3 shank+thigh+trunk, 2 leg+trunk, 1 whole body")
     body.add_argument("--ankle-joints", nargs=2, metavar=("LEFT", "RIGHT"),
@@ -54,29 +54,29 @@ def add_parser(sub) -> None:
 
 def _write(args: argparse.Namespace) -> Path | None:
     """Write the body the flags ask for; its path, or None when only describing."""
-    if args.mass is not None and args.height is None:
-        raise PostureIdError("--mass goes with --height (a Winter body)")
+    if args.mass_kg is not None and args.height_m is None:
+        raise PostureIdError("--mass-kg goes with --height-m (a Winter body)")
     if args.from_trial is not None:
         from posture_id.cli.markers import trial_subject
 
-        args.height, args.mass = trial_subject(args.from_trial)
-        say(f"{args.from_trial}: the subject is {args.height:.3g} m and {args.mass:.4g} kg")
-    writing = args.height is not None or args.default_tip or args.from_robot or args.lump
+        args.height_m, args.mass_kg = trial_subject(args.from_trial)
+        say(f"{args.from_trial}: the subject is {args.height_m:.3g} m and {args.mass_kg:.4g} kg")
+    writing = args.height_m is not None or args.default_tip or args.from_robot or args.lump
     lump_only = [f"--{f.replace('_', '-')}" for f in ("ankle_joints", "knee_joints",
                                                       "hip_joints", "srdf", "posture")
                  if getattr(args, f) is not None]
     if lump_only and not args.lump:
         raise PostureIdError(f"{', '.join(lump_only)} go with --lump (a whole-body URDF)")
     if args.default_tip and args.segments != 3:
-        raise PostureIdError("--default-tip writes the 3-segment TIP of MODEL §1; --segments "
-                             "goes with --height, --from-robot or --lump")
+        raise PostureIdError("--default-tip writes the 3-segment TIP of docs/model.md §1; "
+                             "--segments goes with --height-m, --from-robot or --lump")
     if not writing:
         if args.out is not None:
-            raise PostureIdError("--out writes a body: give --height and --mass, "
+            raise PostureIdError("--out writes a body: give --height-m and --mass-kg, "
                                  "--default-tip, --from-robot or --lump (describing a URDF "
                                  "writes nothing)")
         if args.segments != 3:
-            raise PostureIdError("--segments goes with a body to write (--height, "
+            raise PostureIdError("--segments goes with a body to write (--height-m, "
                                  "--from-robot or --lump); a URDF has its own")
         return None
     if args.out is None:
@@ -108,16 +108,16 @@ def _write(args: argparse.Namespace) -> Path | None:
     if args.default_tip:
         segments, name = default_tip_segments(), "tip_default"
     else:
-        if args.mass is None:
-            raise PostureIdError("--height goes with --mass (a Winter body)")
-        segments = winter_segments(args.height, args.mass, args.segments)
-        name = f"winter_{args.height:g}m_{args.mass:g}kg_{args.segments}seg"
+        if args.mass_kg is None:
+            raise PostureIdError("--height-m goes with --mass-kg (a Winter body)")
+        segments = winter_segments(args.height_m, args.mass_kg, args.segments)
+        name = f"winter_{args.height_m:g}m_{args.mass_kg:g}kg_{args.segments}seg"
     path = write_chain_urdf(args.out, name, straight_links(segments))
     say(f"wrote {path}")
     if not args.default_tip:
         modelled = sum(s.mass for s in segments)
-        say(f"it models {modelled:.2f} of the {args.mass:g} kg: the feet "
-            f"({args.mass - modelled:.2f} kg, Winter's tables) are the support on the "
+        say(f"it models {modelled:.2f} of the {args.mass_kg:g} kg: the feet "
+            f"({args.mass_kg - modelled:.2f} kg, Winter's tables) are the support on the "
             "platform, not a segment that sways (docs/model.md)")
     return path
 
@@ -129,5 +129,5 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json_text({**body.to_dict(), "default_parameters": params.to_dict()}), end="")
     else:
-        print(body.summary() + "\n\ndefault parameters (MODEL §3):\n" + params.summary())
+        print(body.summary() + "\n\ndefault parameters (docs/model.md §3):\n" + params.summary())
     return 0

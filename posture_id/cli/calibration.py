@@ -31,7 +31,7 @@ def add_parser(sub) -> None:
     p.add_argument("--out", type=Path, required=True,
                    help="report folder (calibration_report.md/.json, PNGs); an interrupted "
                         "least-squares run goes on from its journal there")
-    p.add_argument("--noise-deg", type=non_negative_float, nargs="+",
+    p.add_argument("--sensor-noise-deg", type=non_negative_float, nargs="+",
                    help="sensor-noise levels checked, degrees (default: 0 and the data "
                         "set's training noise)")
     p.add_argument("--calibration-noise-deg", type=non_negative_float, nargs="+",
@@ -63,7 +63,7 @@ def _calibration(args: argparse.Namespace) -> int:
     with TerminalProgress(prefix="posture-id calibration") as progress:
         report = run_calibration(
             args.model, args.dataset, args.out,
-            tuple(args.noise_deg) if args.noise_deg else None,
+            tuple(args.sensor_noise_deg) if args.sensor_noise_deg else None,
             tuple(sorted(args.calibration_noise_deg)) if args.calibration_noise_deg else None,
             args.fits, args.workers, progress)
     print(report.to_markdown())

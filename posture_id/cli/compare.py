@@ -1,5 +1,5 @@
 """``posture-id compare``: DEC and the independent-channel model fitted to one recording,
-and which of the two its sway supports (MODEL §8; docs/ic.md)."""
+and which of the two its sway supports (docs/model.md §8; docs/ic.md)."""
 
 from __future__ import annotations
 

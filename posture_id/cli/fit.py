@@ -36,7 +36,7 @@ from posture_id.fitting.options import (
 from posture_id.frf.locked import LockedOptions
 from posture_id.trials import prepare_trial
 
-__all__ = ["add_parser", "run", "add_search_arguments", "search_keywords"]
+__all__ = ["add_parser", "run", "add_search_arguments", "search_keywords", "ic_answer"]
 
 
 def add_parser(sub) -> None:
@@ -46,7 +46,8 @@ def add_parser(sub) -> None:
     fit.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     fit.add_argument("--model", choices=("dec", "ic"), default="dec",
                      help="dec (default) or ic: the independent-channel model fitted to the "
-                          "stimulus-locked body COM sway (MODEL §8; seconds, no simulation)")
+                          "stimulus-locked body COM sway (docs/model.md §8; seconds, no "
+                          "simulation)")
     fit.add_argument("--fit-ki", action="store_true",
                      help="--model ic: also identify Ki (else 0, as the classic fits)")
     fit.add_argument("--init", type=Path, help="initial guess, parameter JSON (e.g. the CNN's)")
@@ -86,7 +87,7 @@ def add_search_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--prior-sd", type=positive_float,
                         help="--locked: maximum a posteriori with a Gaussian prior of this SD "
                              "on every normalised gain and delay, centred on the defaults "
-                             "(MODEL §5 draws have 0.5)")
+                             "(docs/model.md §5 draws have 0.5)")
     parser.add_argument("--fit-passive", action="store_true",
                         help="also fit each module's passive stiffness and damping")
     low, high = (1 + b for b in default_of(FitOptions, "gain_bounds"))
@@ -169,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 #: The DEC fit's flags that mean nothing to the IC fit (it always compares the locked
-#: harmonics and has its own bounds, MODEL §8).
+#: harmonics and has its own bounds, docs/model.md §8).
 _DEC_ONLY = ("--init", "--classes", "--no-compile", "--locked", "--max-offset-s",
              "--prior-sd", "--gain-range", "--delay-range")
 
@@ -182,17 +183,23 @@ def _fit_ic(args: argparse.Namespace) -> int:
                               ("--no-compile", args.no_compile)) if on]
     if given:
         raise PostureIdError(f"{', '.join(given)}: DEC's fit only; --model ic fits the "
-                             "stimulus-locked COM sway within MODEL §8's bounds")
-    from posture_id.ic import IcFitOptions, fit_ic
+                             "stimulus-locked COM sway within docs/model.md §8's bounds")
+    from posture_id.ic import IcFitOptions
+
+    return ic_answer(args, IcFitOptions(
+        fit_ki=args.fit_ki, fit_passive=args.fit_passive, starts=args.starts, seed=args.seed,
+        locked=LockedOptions(max_frequency_hz=args.max_frequency_hz)))
+
+
+def ic_answer(args: argparse.Namespace, options) -> int:
+    """The IC fit (``options``: :class:`~posture_id.ic.IcFitOptions`) of ``args.recording``
+    for its body, written to ``--out`` and ``--plot`` (the recording printed without)."""
+    from posture_id.ic import fit_ic
 
     body = recording_body(args, DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)
     recording.check_segments(body.segment_names)
-    trial = prepare_trial(recording, stimulus)
-    options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
-                           starts=args.starts, seed=args.seed,
-                           locked=LockedOptions(max_frequency_hz=args.max_frequency_hz))
-    result = fit_ic(trial, body, options)
+    result = fit_ic(prepare_trial(recording, stimulus), body, options)
     write_result(result, args.out, args.plot)
     return answered(result.trust_level == "doubtful")
 

@@ -39,13 +39,17 @@ DEFAULT_METHOD_NAME = "auto"
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
-        "identify", help="identify DEC parameters of a recording")
+        "identify", help="identify DEC (or IC) parameters of a recording or a cohort")
     p.add_argument("recording",
                    help="recording CSV (time_s,tilt_deg,<seg>_deg...); a folder or a glob "
                         "pattern identifies a cohort into the --out folder")
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
-    p.add_argument("--model", type=Path,
-                   help="model directory: a universal model or a per-body specialist "
+    p.add_argument("--model", choices=("dec", "ic"), default="dec",
+                   help="the model identified: dec (default) or ic, the independent-channel "
+                        "model fitted to the stimulus-locked body COM sway (as fit --model "
+                        "ic; compare sets the two side by side)")
+    p.add_argument("--network", type=Path, metavar="DIR",
+                   help="the network's folder: a universal model or a per-body specialist "
                         "(default: the bundled universal model)")
     p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD_NAME,
                    help="cnn: the network alone, milliseconds; fit: least squares "
@@ -64,14 +68,14 @@ def add_parser(sub) -> None:
     p.add_argument("--scheduler", help="cohort: Dask distributed scheduler (tcp://host:port)")
     p.add_argument("--bodies", type=Path,
                    help="cohort: a folder of the subjects' own bodies, <recording name>.urdf "
-                        "each (posture-id body --height H --mass M makes one); a subject "
+                        "each (posture-id body --height-m H --mass-kg M makes one); a subject "
                         "without one gets --body")
     p.add_argument("--plot", type=Path,
                    help="recorded versus re-simulated sway (PNG), and each parameter's "
                         "interval beside it (NAME.intervals.png)")
     p.add_argument("--level", type=interval_level, default=0.9,
                    help="the intervals' nominal coverage (default %(default)g)")
-    p.add_argument("--frf-preset", choices=("peterka11",),
+    p.add_argument("--band-preset", choices=("peterka11",),
                    help="cohort: also write each recording's FRF at these points, the labs' "
                         "way (<recording>.frf.json: a normative set in one more command, "
                         "posture-id norm build)")
@@ -102,19 +106,20 @@ def run(args: argparse.Namespace) -> int:
     if _is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)
-    if args.scheduler or args.bodies or args.frf_preset or args.norm:
-        raise PostureIdError("--scheduler, --bodies, --frf-preset and --norm go with a folder "
+    if args.scheduler or args.bodies or args.band_preset or args.norm:
+        raise PostureIdError("--scheduler, --bodies, --band-preset and --norm go with a folder "
                              "or pattern of recordings (one recording: posture-id frf, "
                              "posture-id norm test)")
-    _no_model_name(args.model)
+    if args.model == "ic":
+        return _identify_ic(args)
     fit_options = FitOptions(**search_keywords(args))
-    inputs = (args.recording, args.body, args.model, args.tilt)
+    inputs = (args.recording, args.body, args.network, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     # torch and CasADi load here, not when the parser is built: other commands start fast
     from posture_id.identify import Identifier, Method
     body = recording_body(args, DEFAULT_URDF)
-    identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
+    identifier = Identifier(body, Method(args.method), args.network, fit_options, args.level)
     recording, stimulus = recording_and_stimulus(args, body)
     with TerminalProgress(prefix="posture-id identify", quiet=True) as progress:
         result = identifier.identify(recording, stimulus, progress)
@@ -132,17 +137,26 @@ def _folders_of(recordings: list[Path]) -> set[Path]:
     return {p.parent for p in recordings}
 
 
-def _no_model_name(model: Path | None) -> None:
-    """Refuse ``--model ic`` or ``--model dec`` (the other commands' model names): here
-    --model is a network's folder."""
-    if model is None or model.exists() or str(model).lower() not in ("ic", "dec"):
-        return
-    if str(model).lower() == "ic":
-        raise PostureIdError("--model ic: identify's --model is a network's folder; the "
-                             "independent-channel model is fitted by posture-id fit --model "
-                             "ic REC, and set beside DEC by posture-id compare REC")
-    raise PostureIdError("--model dec: identify's --model is a network's folder, and DEC is "
-                         "what it identifies: leave --model out for the bundled network")
+def _identify_ic(args: argparse.Namespace) -> int:
+    """``--model ic``: the IC fit of one recording (fit --model ic's)."""
+    from posture_id.cli.fit import ic_answer
+    from posture_id.frf.locked import LockedOptions
+    from posture_id.ic import IcFitOptions
+
+    given = [flag for flag, on in (("--method", args.method != DEFAULT_METHOD_NAME),
+                                   ("--network", args.network is not None),
+                                   ("--level", args.level != 0.9)) if on]
+    given += [f for f in search_flags_given(args) if f not in ("--fit-passive",
+                                                               "--max-frequency-hz")]
+    if given:
+        raise PostureIdError(f"{', '.join(given)}: DEC's identification only; --model ic fits "
+                             "the stimulus-locked body COM sway (docs/ic.md)")
+    check_output_file(args.out, "--out", (args.recording, args.body, args.tilt))
+    check_output_file(args.plot, "--plot", (args.recording, args.body, args.tilt),
+                      outputs=(args.out,))
+    options = IcFitOptions(fit_passive=args.fit_passive,
+                           locked=LockedOptions(max_frequency_hz=args.max_frequency_hz))
+    return ic_answer(args, options)
 
 
 def run_cohort(args: argparse.Namespace) -> int:
@@ -158,12 +172,14 @@ def run_cohort(args: argparse.Namespace) -> int:
     if args.out is None:
         raise PostureIdError(f"{args.recording}: a cohort's results need a folder: --out "
                              "FOLDER (one JSON per recording and summary.csv)")
-    _no_model_name(args.model)
+    if args.model == "ic":
+        raise PostureIdError(f"{args.recording}: a cohort's IC fits come with DEC's beside "
+                             "them: posture-id compare DIR --out FOLDER")
     fit_options = FitOptions(**search_keywords(args))
     recordings = find_recordings(args.recording)
     writes = (*(f"{glob.escape(p.stem)}.json" for p in recordings), "summary.csv",
               *((f"{glob.escape(p.stem)}.frf.json" for p in recordings)
-                if args.frf_preset or args.norm else ()))
+                if args.band_preset or args.norm else ()))
     norm = _cohort_norm(args)
     if args.scheduler:
         from posture_id.executors import check_scheduler_address
@@ -179,13 +195,14 @@ def run_cohort(args: argparse.Namespace) -> int:
                       inputs=(*recordings, args.body, args.tilt, *_folders_of(recordings))):
         body = load_body(args.body or DEFAULT_URDF)
         stimulus = stimulus_from_args(args, default=None)
-        identifier = Identifier(body, Method(args.method), args.model, fit_options, args.level)
+        identifier = Identifier(body, Method(args.method), args.network, fit_options,
+                                args.level)
         with TerminalProgress("recordings", prefix="posture-id identify") as progress:
             result = identify_cohort(recordings, args.out, identifier, args.scheduler,
-                                     progress, stimulus, args.model, columns_from_args(args),
+                                     progress, stimulus, args.network, columns_from_args(args),
                                      args.bodies, trial_bodies=args.body is None)
         no_frf = (_cohort_frfs(args, recordings, body, norm)
-                  if args.frf_preset or norm is not None else {})
+                  if args.band_preset or norm is not None else {})
     say(result.summary())
     return answered(bool(result.failed or result.doubtful or no_frf))
 
@@ -197,9 +214,9 @@ def _cohort_norm(args: argparse.Namespace):
     from posture_id.norms.norm import Norm
 
     norm = Norm.from_json(args.norm)
-    if norm.lab_bands is None and args.frf_preset is None:
+    if norm.lab_bands is None and args.band_preset is None:
         raise PostureIdError(f"{args.norm}: the norm does not say at which points its FRFs "
-                             "were computed; give --frf-preset")
+                             "were computed; give --band-preset")
     per_trial = args.bodies is not None or (
         args.body is None and isinstance(columns_from_args(args), MarkerMapping))
     if not per_trial:  # every recording is read for one body: its channels are known
@@ -224,7 +241,7 @@ def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm
     from posture_id.trials import prepare_trial
     from posture_id.trials.subjects import subject_urdf
 
-    bands = (BAND_PRESETS[args.frf_preset] if args.frf_preset
+    bands = (BAND_PRESETS[args.band_preset] if args.band_preset
              else FrequencyBands.from_dict(norm.lab_bands))
 
     load = cache(load_body)  # one load per URDF, however many recordings share it

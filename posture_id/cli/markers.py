@@ -138,7 +138,7 @@ def trial_subject(path: Path) -> tuple[float, float]:
     if trial.height_m is None or trial.mass_kg is None:
         looked = ", ".join(f"{g}:{p}" for g, p in HEIGHT_PARAMETERS + MASS_PARAMETERS)
         raise PostureIdError(f"{path}: the file does not give the subject's height and mass "
-                             f"(looked for {looked}): give --height and --mass")
+                             f"(looked for {looked}): give --height-m and --mass-kg")
     return trial.height_m, trial.mass_kg
 
 

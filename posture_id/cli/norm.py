@@ -22,6 +22,7 @@ from posture_id.cli.stimulus import (
     recording_and_stimulus,
 )
 from posture_id.errors import PostureIdError
+from posture_id.frf.bands import BAND_PRESETS
 
 __all__ = ["add_parser"]
 
@@ -53,14 +54,27 @@ def add_parser(sub) -> None:
                    help="frequency weights of the human-likeness score (default 1 each)")
     _sources(b)
     b.set_defaults(func=run_build)
-    t = n.add_parser("test", help="a recording or an FRF JSON against a norm")
+    t = n.add_parser("test", help="a recording or FRFs (an FRF JSON, a CSV table or a .mat "
+                                  "of several subjects) against a norm")
     t.add_argument("recording", type=Path, metavar="INPUT",
-                   help="recording (CSV or C3D: its FRF is computed at the norm's points) "
-                        "or FRF JSON")
+                   help="recording (CSV or C3D: its FRF is computed at the norm's points), "
+                        "FRF JSON, CSV table of FRFs (one row per subject) or .mat "
+                        "(--variable, --frequencies); a table or .mat tests each subject")
     t.add_argument("--norm", type=Path, required=True, help="norm JSON (built or published)")
     t.add_argument("--out", type=Path, help="result JSON")
     t.add_argument("--plot", type=Path, help="Bode with the norm, PIR in its band (PNG)")
     t.add_argument("--body", type=Path, help="a recording's URDF (adds the body COM channel)")
+    t.add_argument("--band-preset", choices=sorted(BAND_PRESETS),
+                   help="a recording against a norm that does not say its bands (a published "
+                        "one): the named points' bands, reported at the norm's frequencies "
+                        "(default: the preset whose points are the norm's frequencies)")
+    t.add_argument("--channel", action="append", metavar="NAME",
+                   help="the input's channel tested against the norm's (once per norm "
+                        "channel, in its order; default: the norm's names, or for a "
+                        "one-channel norm the input's only channel besides the body COM)")
+    t.add_argument("--variable", help=".mat: the N × F complex matrix")
+    t.add_argument("--frequencies", type=positive_float, nargs="+", metavar="F",
+                   help=".mat: its frequencies, Hz")
     add_lab_stimulus_arguments(t, "tilt CSV (time_s,tilt_deg) the recording was made with")
     add_column_arguments(t)
     t.set_defaults(func=run_test)
@@ -101,40 +115,170 @@ def run_test(args: argparse.Namespace) -> int:
     inputs = (args.recording, args.norm, args.body, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
-    from posture_id.norms.norm import Norm, against_norm
-    from posture_id.norms.readers import frf_from_json
+    from posture_id.norms.norm import Norm, NormTests, against_norm
+    from posture_id.norms.readers import frf_from_json, frf_json_channels, read_frfs
 
     norm = Norm.from_json(args.norm)
-    if args.recording.suffix.lower() == ".json":
-        f, h, _, _ = frf_from_json(args.recording, norm.channels)
+    kind = _input_kind(args.recording)
+    if kind != "recording" and args.band_preset:
+        raise PostureIdError(f"--band-preset goes with a recording (its FRF is computed at "
+                             f"those points); {args.recording} holds FRFs already")
+    if kind == "json":
+        names = _channels(frf_json_channels(args.recording), norm, args.channel,
+                          args.recording, recording=False)
+        f, h, _, _ = frf_from_json(args.recording, names)
+        result = against_norm(norm, f, h, args.recording.name, names)
+    elif kind == "recording":
+        f, h, names = _recording_frf(args, norm)
+        result = against_norm(norm, f, h, args.recording.name, names)
     else:
-        f, h = _recording_frf(args, norm)
-    result = against_norm(norm, f, h, args.recording.name)
+        frfs, _ = read_frfs([args.recording], None, args.variable, args.frequencies)
+        if args.channel:
+            raise PostureIdError(f"--channel: {args.recording} holds one FRF per subject, "
+                                 "no named channels; leave --channel out")
+        if len(norm.channels) != 1:
+            raise PostureIdError(f"{args.recording}: one channel per subject; the norm has "
+                                 f"{len(norm.channels)} ({', '.join(norm.channels)})")
+        result = NormTests(args.recording.name, tuple(
+            against_norm(norm, frfs.frequencies_hz, frfs.response[k], frfs.names[k])
+            for k in range(len(frfs))))
     write_result(result, args.out, args.plot)
     return answered(result.inside_prediction_band is False)
 
 
+def _input_kind(path: Path) -> str:
+    """What ``norm test`` was given: "json" (an FRF JSON), "table" (a CSV table of FRFs),
+    "mat", or "recording" (a CSV or C3D recording)."""
+    from posture_id.norms.readers import is_frf_table
+
+    if not path.exists():
+        raise PostureIdError(f"{path}: no such file")
+    if path.is_dir():
+        raise PostureIdError(f"{path}: is a folder; give one recording or file of FRFs")
+    suffix = path.suffix.lower()
+    if suffix in (".json", ".mat"):
+        return suffix[1:]
+    return "table" if suffix == ".csv" and is_frf_table(path) else "recording"
+
+
+def _channels(available: tuple[str, ...], norm, given: list[str] | None, where: Path,
+              recording: bool) -> tuple[str, ...]:
+    """The input's channels tested against the norm's, one each: ``--channel``'s; else the
+    norm's names; else, for a one-channel norm, the input's only channel, or its only one
+    besides the body COM (said on stderr)."""
+    listed = ", ".join(available)
+    if given:
+        if len(given) != len(norm.channels):
+            raise PostureIdError(f"--channel: {len(given)} given for the norm's "
+                                 f"{len(norm.channels)} channel(s) "
+                                 f"({', '.join(norm.channels)}); give one per channel")
+        missing = [c for c in given if c not in available]
+        if missing:
+            raise PostureIdError(f"{where}: no channel {', '.join(map(repr, missing))} "
+                                 f"(--channel; it has {listed})")
+        return tuple(given)
+    if all(c in available for c in norm.channels):
+        return tuple(norm.channels)
+    if len(norm.channels) == 1:
+        others = [c for c in available if c != "body COM"]
+        only = available if len(available) == 1 else others if len(others) == 1 else None
+        if only:
+            say(f"{where}: its channel {only[0]!r} tested against the norm's "
+                f"{norm.channels[0]!r} (--channel names another)")
+            return (only[0],)
+        raise PostureIdError(f"{where}: no channel {norm.channels[0]!r} for the norm, and "
+                             f"{len(available)} others (it has {listed}): name the one to "
+                             "test with --channel NAME")
+    missing = [c for c in norm.channels if c not in available]
+    hint = ("; --body adds the body COM" if recording and "body COM" not in available
+            else "")
+    raise PostureIdError(f"{where}: no channel {', '.join(map(repr, missing))} for the norm "
+                         f"(it has {listed}{hint}; --channel NAME, once per norm channel, "
+                         "names the input's)")
+
+
 def _recording_frf(args: argparse.Namespace, norm) -> tuple:
-    """A recording's FRF at the norm's points, by the labs' convention."""
+    """A recording's FRF at the norm's points, by the labs' convention: (frequencies,
+    H (F, M), the recording's channels tested)."""
     from posture_id.frf.analysis import frequency_response
-    from posture_id.frf.bands import FrequencyBands
     from posture_id.frf.response import FrfOptions
     from posture_id.trials import prepare_trial
 
-    if norm.lab_bands is None:
-        raise PostureIdError(f"{args.norm}: the norm does not say at which bands its FRFs "
-                             "were computed; give the recording's FRF JSON (posture-id frf)")
+    bands = _norm_bands(args, norm)
     body = recording_body(args, None)
     recording, stimulus = recording_and_stimulus(args, body)
-    options = FrfOptions.lab_convention(FrequencyBands.from_dict(norm.lab_bands))
+    options = FrfOptions.lab_convention(bands)
     frf = frequency_response(prepare_trial(recording, stimulus, rate_hz=None), body, options)
-    missing = [c for c in norm.channels if c not in frf.channels]
-    if missing:
-        raise PostureIdError(f"{args.recording}: no channel {', '.join(missing)} for the norm "
-                             f"(the recording gives {', '.join(frf.channels)}; --body adds "
-                             "the body COM)")
-    columns = [frf.channels.index(c) for c in norm.channels]
-    return frf.frequencies_hz, frf.response[:, columns]
+    names = _channels(tuple(frf.channels), norm, args.channel, args.recording, recording=True)
+    columns = [frf.channels.index(c) for c in names]
+    return frf.frequencies_hz, frf.response[:, columns], names
+
+
+def _norm_bands(args: argparse.Namespace, norm):
+    """The bands a recording's FRF is computed at for ``norm``: a built norm's own
+    (``lab_bands``); for one that does not say them, the preset whose points are its
+    frequencies, or ``--band-preset``'s bands reported at its frequencies."""
+    import dataclasses
+
+    import numpy as np
+
+    from posture_id.frf.bands import FrequencyBands
+
+    f = np.asarray(norm.frequencies_hz, dtype=float)
+    chosen = BAND_PRESETS[args.band_preset] if args.band_preset else None
+    if norm.lab_bands is not None:
+        bands = FrequencyBands.from_dict(norm.lab_bands)
+        if chosen is not None and not _same_bands(bands, chosen):
+            raise PostureIdError(f"--band-preset {args.band_preset}: {args.norm} was built "
+                                 f"at other points ({bands.name}, "
+                                 f"{_hz(bands.centres_hz or f)} Hz); leave --band-preset out "
+                                 "(the norm's own bands are used)")
+        return bands
+    if chosen is None:
+        chosen = next((p for p in BAND_PRESETS.values() if _at(p.centres_hz, f)), None)
+        if chosen is None:
+            raise PostureIdError(f"{args.norm}: the norm does not say at which bands its FRFs "
+                                 f"were computed and its frequencies ({_hz(f)} Hz) are no "
+                                 f"preset's points: give --band-preset "
+                                 f"{'|'.join(sorted(BAND_PRESETS))} (its bands, reported at "
+                                 "the norm's frequencies), or the recording's FRF JSON")
+        return chosen
+    if _at(chosen.centres_hz, f):
+        return chosen
+    if len(chosen) != len(f):
+        raise PostureIdError(f"--band-preset {args.band_preset}: {len(chosen)} points, the "
+                             f"norm {args.norm} has {len(f)} ({_hz(f)} Hz)")
+    for k, (freq, (low, high)) in enumerate(zip(f, chosen._ranges(), strict=True)):
+        if not low <= freq <= high:
+            raise PostureIdError(f"--band-preset {args.band_preset}: the norm's point {k + 1} "
+                                 f"({freq:g} Hz) lies outside its band {k + 1} "
+                                 f"({low:g}–{high:g} Hz): {args.norm} was computed at "
+                                 "other bands")
+    return dataclasses.replace(chosen, centres_hz=tuple(float(x) for x in f),
+                               name=f"{chosen.name} at the norm's frequencies")
+
+
+def _at(centres, frequencies) -> bool:
+    """Whether a preset's centres are ``frequencies`` (within 1e-6 Hz)."""
+    import numpy as np
+
+    return (centres is not None and len(centres) == len(frequencies)
+            and bool(np.allclose(centres, frequencies, rtol=0, atol=1e-6)))
+
+
+def _same_bands(a, b) -> bool:
+    """Whether two band sets take the same harmonics (or ranges) and report them at the
+    same frequencies, whatever their names."""
+    da, db = a.to_dict(), b.to_dict()
+    ca, cb = da.pop("centres_hz"), db.pop("centres_hz")
+    da.pop("name")
+    db.pop("name")
+    return da == db and (ca is None and cb is None or (ca is not None and cb is not None
+                                                       and _at(ca, cb)))
+
+
+def _hz(values) -> str:
+    return ", ".join(f"{float(v):g}" for v in values)
 
 
 def run_compare(args: argparse.Namespace) -> int:

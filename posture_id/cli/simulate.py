@@ -61,13 +61,13 @@ def add_parser(sub) -> None:
     sim.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     sim.add_argument("--model", choices=("dec", "ic"), default="dec",
                      help="the controller: dec (default) or ic, the independent-channel model "
-                          "(MODEL §8; every segment at the body COM angle)")
+                          "(docs/model.md §8; every segment at the body COM angle)")
     sim.add_argument("--params", type=Path,
                      help="parameter JSON (default: the body's defaults; with --model ic an "
                           "IC parameter file, \"model\": \"ic\")")
     add_lab_stimulus_arguments(sim, "tilt CSV (time_s,tilt_deg) instead of the PRTS")
     add_model_arguments(sim)
-    sim.add_argument("--noise-deg", type=non_negative_float, default=0.0,
+    sim.add_argument("--sensor-noise-deg", type=non_negative_float, default=0.0,
                      help="white sensor noise added to the segment angles, degrees (SD)")
     add_motor_noise_arguments(sim, "this many degrees")
     sim.add_argument("--seed", type=non_negative_int, default=0,
@@ -98,14 +98,14 @@ def add_c3d_writing_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--marker-gap", nargs=3, action="append",
                        metavar=("MARKER", "START_S", "DURATION_S"),
                        help="frames where MARKER is not seen (may repeat)")
-    group.add_argument("--subject-height-m", type=positive_float,
+    group.add_argument("--height-m", type=positive_float,
                        help="the subject's height in the file's metadata, m")
-    group.add_argument("--subject-mass-kg", type=positive_float,
+    group.add_argument("--mass-kg", type=positive_float,
                        help="the subject's mass in the file's metadata, kg")
 
 
 _C3D_FLAGS = ("c3d_forward_axis", "c3d_unit", "frame_rate_hz", "analog_per_frame",
-              "marker_noise_mm", "marker_gap", "subject_height_m", "subject_mass_kg")
+              "marker_noise_mm", "marker_gap", "height_m", "mass_kg")
 
 
 def _write_recording(args: argparse.Namespace, recording, body) -> None:
@@ -130,7 +130,7 @@ def _write_recording(args: argparse.Namespace, recording, body) -> None:
         marker_noise_mm=args.marker_noise_mm or 0.0, gaps=tuple(gaps),
         analog_per_frame=(defaults.analog_per_frame if args.analog_per_frame is None
                           else args.analog_per_frame),
-        height_m=args.subject_height_m, mass_kg=args.subject_mass_kg, seed=args.seed)
+        height_m=args.height_m, mass_kg=args.mass_kg, seed=args.seed)
     write_c3d(args.out, recording, tuple(s.length for s in body.segments), options)
 
 
@@ -139,8 +139,8 @@ def _check_subject(args: argparse.Namespace) -> None:
     from posture_id.bodies.anthropometry import HEIGHT_RANGE_M, MASS_RANGE_KG
 
     for flag, value, (low, high), unit in (
-            ("--subject-height-m", args.subject_height_m, HEIGHT_RANGE_M, "metres"),
-            ("--subject-mass-kg", args.subject_mass_kg, MASS_RANGE_KG, "kg")):
+            ("--height-m", args.height_m, HEIGHT_RANGE_M, "metres"),
+            ("--mass-kg", args.mass_kg, MASS_RANGE_KG, "kg")):
         if value is not None and not low <= value <= high:
             raise PostureIdError(f"{flag} {value:g}: a person's is {low:g}–{high:g} "
                                  f"{unit}; is it in other units?")
@@ -178,8 +178,8 @@ def run(args: argparse.Namespace) -> int:
              if args.motor_noise > 0 else None)
     result = simulate(body, params, stimulus, options, motor_noise=motor)
     recording = result.to_recording()
-    if args.noise_deg > 0:
-        recording = recording.with_sensor_noise(args.noise_deg, args.seed)
+    if args.sensor_noise_deg > 0:
+        recording = recording.with_sensor_noise(args.sensor_noise_deg, args.seed)
     _write_recording(args, recording, body)
     say(f"wrote {args.out} ({len(result.time)} samples at {options.sample_rate_hz:g} Hz)")
     if args.plot:
@@ -192,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _simulate_ic(args: argparse.Namespace, body, stimulus, options) -> int:
-    """``--model ic``: the IC model's recording (MODEL §8)."""
+    """``--model ic``: the IC model's recording (docs/model.md §8)."""
     from posture_id.ic import IcParameters, IcPlant, default_ic_parameters, simulate_ic
 
     if args.deadband_rad_s != default_of(SimulationOptions, "deadband_rad_s"):
@@ -201,8 +201,8 @@ def _simulate_ic(args: argparse.Namespace, body, stimulus, options) -> int:
               else default_ic_parameters(IcPlant.of(body).mgh))
     recording = simulate_ic(body, params, stimulus, options, args.motor_noise,
                             args.motor_cutoff_hz, args.seed)
-    if args.noise_deg > 0:
-        recording = recording.with_sensor_noise(args.noise_deg, args.seed)
+    if args.sensor_noise_deg > 0:
+        recording = recording.with_sensor_noise(args.sensor_noise_deg, args.seed)
     _write_recording(args, recording, body)
     say(f"wrote {args.out} ({len(recording.time)} samples at {options.sample_rate_hz:g} Hz; "
         f"{params.summary()})")

@@ -1,4 +1,4 @@
-"""Stimulus flags shared by the commands: the PRTS as MODEL §4 defines it, as a lab ran
+"""Stimulus flags shared by the commands: the PRTS as docs/model.md §4 defines it, as a lab ran
 it (state duration, lead-in, starting state, sign, platform lag), or a tilt file; and the
 column flags that read a lab's recording as it is."""
 

@@ -1,5 +1,5 @@
 """Training data: sharded, seeded, resumable data sets of simulated trials and their
-spectrogram features (MODEL §5–6), made locally or on a Dask cluster.
+spectrogram features (docs/model.md §5–6), made locally or on a Dask cluster.
 
 Modules: :mod:`.config` (what a set is), :mod:`.shards` (one shard: simulate and
 featurise), :mod:`.features` (STFT and images), :mod:`.runners` (local threads, Dask),

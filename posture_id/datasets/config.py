@@ -15,7 +15,7 @@ from posture_id.simulation.stimulus import TiltProfile, prts
 
 __all__ = ["DatasetConfig", "DatasetError", "PAPER_SPLIT"]
 
-#: The paper's split of 20 730 modular samples (MODEL §5): train / validation / test.
+#: The paper's split of 20 730 modular samples (docs/model.md §5): train / validation / test.
 PAPER_SPLIT = (14000 / 20730, 3000 / 20730, 3730 / 20730)
 
 
@@ -29,7 +29,7 @@ class DatasetConfig:
 
     Attributes:
         trials: kept (stable) trials wanted. seed: root seed. shard_size: simulated trials
-        per shard. sigma: σ of the parameter perturbation (MODEL §5). split: fractions of
+        per shard. sigma: σ of the parameter perturbation (docs/model.md §5). split: fractions of
         kept trials for train / validation / test (default: the paper's).
         amplitude_deg, cycles, states: the PRTS. simulation: what is modelled (step,
         rate, sway limit, dead-band). body: URDF path (its SHA-256 is checked too).
@@ -62,7 +62,7 @@ class DatasetConfig:
             raise DatasetError(f"trials must be ≥ 3 (one per split), got {self.trials}")
         if self.simulation.sample_rate_hz != FS_HZ:
             raise DatasetError(
-                f"the spectrogram features (MODEL §6) are defined at {FS_HZ:g} Hz; the "
+                f"the spectrogram features (docs/model.md §6) are defined at {FS_HZ:g} Hz; the "
                 f"simulation samples at {self.simulation.sample_rate_hz:g} Hz"
             )
         if not (math.isfinite(self.sensor_noise_deg) and 0 <= self.sensor_noise_deg <= 1):

@@ -1,4 +1,4 @@
-"""Spectrogram images of body sway (MODEL §6).
+"""Spectrogram images of body sway (docs/model.md §6).
 
 The STFT equals MATLAB's ``spectrogram(x, 250, 135, 250, 50)``: symmetric Hamming window
 of 250 samples, hop 115 (overlap 135), FFT length 250 (0.2 Hz bins), no detrending, no
@@ -37,7 +37,7 @@ WINDOW = 250
 OVERLAP = 135
 HOP = WINDOW - OVERLAP
 NFFT = 250
-#: Sample rate the features are defined for (MODEL §6, the 5th argument of spectrogram).
+#: Sample rate the features are defined for (docs/model.md §6, the 5th argument of spectrogram).
 FS_HZ = 50.0
 N_BINS = 51
 N_WINDOWS = 51

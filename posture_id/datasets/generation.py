@@ -8,7 +8,7 @@ A data set is a directory::
     split.npz            trial indices of the train / validation / test sets
     stats.npz            standardisation statistics from the training set only
 
-Shard k simulates ``shard_size`` trials with parameters drawn (MODEL §5) from the k-th
+Shard k simulates ``shard_size`` trials with parameters drawn (docs/model.md §5) from the k-th
 child of ``SeedSequence([seed, 0])``, so a shard's bytes depend only on (arguments, k):
 never on the number of workers or on the order in which shards finish. Shards are made
 in waves until the kept trials reach ``trials``; the set is shards 0..K−1, the last one

@@ -1,5 +1,5 @@
-"""The DEC controller's parameters: defaults (MODEL §3), normalisation, the JSON format and
-the MODEL §5 prior. Depends only on :mod:`posture_id.bodies` (for m·g·h)."""
+"""The DEC controller's parameters: defaults (docs/model.md §3), normalisation, the JSON format and
+the docs/model.md §5 prior. Depends only on :mod:`posture_id.bodies` (for m·g·h)."""
 
 from posture_id.dec.parameters import (
     DecParameters,

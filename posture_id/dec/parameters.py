@@ -1,4 +1,4 @@
-"""DEC controller parameters: defaults (MODEL §3), normalisation and the JSON format.
+"""DEC controller parameters: defaults (docs/model.md §3), normalisation and the JSON format.
 
 JSON format (SI units), one object per module named by its URDF joint::
 
@@ -42,7 +42,7 @@ __all__ = [
     "denormalise_arrays",
 ]
 
-#: MODEL §3 (paper Table 1), columns ankle, knee, hip. Kp is m·g·h of the default body.
+#: docs/model.md §3 (paper Table 1), columns ankle, knee, hip. Kp is m·g·h of the default body.
 PAPER_MGH = {"ankle": 465.975, "knee": 245.25, "hip": 73.575}
 PAPER_TABLE = {
     "ankle": {"kd": 116.49, "ki": 11.649, "kpas": 232.5, "bpas": 145.0, "delay_s": 0.100},
@@ -269,7 +269,7 @@ def _validate_module(m: ModuleParameters, where: str) -> None:
 
 
 def _column(index: int, n: int) -> str:
-    """MODEL §3 column of module ``index`` of ``n``: lowest ankle, top hip, others knee."""
+    """docs/model.md §3 column of module ``index`` of ``n``: lowest ankle, top hip, others knee."""
     if index == 0:
         return "ankle"
     if index == n - 1:
@@ -278,7 +278,7 @@ def _column(index: int, n: int) -> str:
 
 
 def default_parameters(body) -> DecParameters:
-    """MODEL §3 defaults for ``body``: the paper's ratios to m·g·h times this body's m·g·h.
+    """docs/model.md §3 defaults for ``body``: the paper's ratios to m·g·h times this body's m·g·h.
 
     The ratios are taken from the table (value / default-body m·g·h) so the default body
     gets the table exactly; delays keep the column's seconds; classes per column.
@@ -301,7 +301,7 @@ def default_parameters(body) -> DecParameters:
     return DecParameters(mods)
 
 
-#: Order of a module's normalised target (MODEL §3): [K̃p, K̃i, K̃d, Δ̃, C].
+#: Order of a module's normalised target (docs/model.md §3): [K̃p, K̃i, K̃d, Δ̃, C].
 TARGET_FIELDS = ("kp", "ki", "kd", "delay_s")
 
 
@@ -337,7 +337,7 @@ def denormalise(targets: np.ndarray, defaults: DecParameters) -> DecParameters:
 
 
 def normalise_arrays(params: ParameterArrays, defaults: DecParameters) -> np.ndarray:
-    """(B, N, 5) targets [K̃p, K̃i, K̃d, Δ̃, C] of B trials (MODEL §3)."""
+    """(B, N, 5) targets [K̃p, K̃i, K̃d, Δ̃, C] of B trials (docs/model.md §3)."""
     columns = []
     for field in TARGET_FIELDS:
         base = defaults.array(field)

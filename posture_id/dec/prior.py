@@ -1,4 +1,4 @@
-"""Random DEC parameters around a body's defaults (MODEL §5).
+"""Random DEC parameters around a body's defaults (docs/model.md §5).
 
 Per trial and module: X ~ N(0, σ²) with σ = 0.5 **[decision: read as a standard
 deviation]**, p = p_default·|1 + X| for Kp, Ki, Kd and Δ independently; the class is
@@ -13,14 +13,14 @@ from posture_id.dec.parameters import ParameterArrays, default_parameters
 
 __all__ = ["sample_parameters", "relative_factors", "SIGMA"]
 
-#: Standard deviation of the relative perturbation X (MODEL §5).
+#: Standard deviation of the relative perturbation X (docs/model.md §5).
 SIGMA = 0.5
 
 
 def relative_factors(rng: np.random.Generator, shape, sigma: float = SIGMA) -> np.ndarray:
     """|1 + X|, X ~ N(0, σ²), of the given shape: p / p_default under the prior.
 
-    The normalised value p̃ of MODEL §3 is this minus one.
+    The normalised value p̃ of docs/model.md §3 is this minus one.
     """
     return np.abs(1.0 + sigma * rng.standard_normal(shape))
 

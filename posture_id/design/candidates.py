@@ -13,7 +13,7 @@ from posture_id.simulation.protocols import (
 
 __all__ = ["default_candidates", "TODAY"]
 
-#: Today's protocol (MODEL §4): the 242-state PRTS, 1° peak to peak, two cycles.
+#: Today's protocol (docs/model.md §4): the 242-state PRTS, 1° peak to peak, two cycles.
 TODAY = PrtsProtocol(242, 0.25, 1.0, 2)
 
 

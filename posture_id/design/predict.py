@@ -1,7 +1,7 @@
 """Predict, for a body, a noise model and candidate protocols, how well a locked
 least-squares fit will determine every module's Kp, Ki, Kd, delay and class.
 
-For each of ``draws`` subjects drawn from MODEL §5's prior (the same subjects for every
+For each of ``draws`` subjects drawn from docs/model.md §5's prior (the same subjects for every
 protocol, so protocols are compared on equal terms):
 
 1. the exact Jacobian of the CasADi model (:class:`~posture_id.fitting.problem.
@@ -102,7 +102,7 @@ class DesignOptions:
 
 def prior_width(level: float = 0.9, sigma: float = SIGMA) -> float:
     """The width of the prior's central ``level`` interval of a normalised gain or delay
-    p̃ = |1 + X| − 1, X ~ N(0, σ²) (MODEL §5)."""
+    p̃ = |1 + X| − 1, X ~ N(0, σ²) (docs/model.md §5)."""
 
     def cdf(y: float) -> float:  # P(|1 + X| ≤ y)
         return float(norm.cdf((y - 1) / sigma) - norm.cdf((-y - 1) / sigma))

@@ -5,7 +5,7 @@ answer. The model is :mod:`posture_id.fitting.symbolic` (the same plant, control
 integrator as the fast simulator); the recorded tilt is the stimulus; the residual is
 simulated minus recorded segment angles (degrees) at every sample.
 
-Unknowns per module, scaled to O(1) as in MODEL §3 (p̃ = p/p_default − 1): K̃p, K̃i, K̃d,
+Unknowns per module, scaled to O(1) as in docs/model.md §3 (p̃ = p/p_default − 1): K̃p, K̃i, K̃d,
 Δ̃ (continuous; the delay is interpolated in the buffer) within bounds; and the class C,
 found by the strategy in ``FitOptions.classes``:
 

@@ -56,7 +56,7 @@ class RelaxedClasses:
 
     Attributes:
         starts: relaxed fits from the initial guess and from ``starts − 1`` draws of the
-            MODEL §5 prior (classes open); the best goes on to the polish.
+            docs/model.md §5 prior (classes open); the best goes on to the polish.
         seed: seed of those draws.
     """
 
@@ -131,7 +131,7 @@ class FitOptions:
     """How to fit (see :mod:`posture_id.fitting.least_squares`).
 
     Attributes:
-        simulation: the model of the recordings: step, output rate, dead-band (MODEL §2).
+        simulation: the model of the recordings: step, output rate, dead-band (docs/model.md §2).
         classes: :class:`RelaxedClasses` (default), :class:`ExhaustiveClasses` or
             :class:`FixedClasses`.
         gain_bounds: bounds of K̃p, K̃i, K̃d (normalised: −1 = zero, 3 = 4× the default).
@@ -159,7 +159,7 @@ class FitOptions:
             (docs/real_recordings.md). Needs a periodic stimulus.
         prior_sd: None (default): least squares. A number σ_p: maximum a posteriori under
             a Gaussian prior of SD σ_p on every normalised gain and delay, centred on the
-            body's defaults (MODEL §5 draws with σ = 0.5): parameters the sway does not
+            body's defaults (docs/model.md §5 draws with σ = 0.5): parameters the sway does not
             determine stay near the defaults instead of wandering. Needs the locked fit
             (whose residuals are in units of the recording's noise). A tuple gives each
             normalised gain and delay its own SD (4N values, in the order of

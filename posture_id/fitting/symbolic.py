@@ -225,7 +225,7 @@ def step_function(model: SymbolicModel) -> ca.Function:
         alpha_ref[i] = ca.atan2(v0_im, v0_re)
         hold[i] = terms.gravity * v0_im - kp[i] * v0_im / ca.sqrt(v0_re**2 + v0_im**2)
 
-    # DEC controller (MODEL §2), as in posture_id.simulation.kernel
+    # DEC controller (docs/model.md §2), as in posture_id.simulation.kernel
     ankle_rate = omega[0] - tilt_vel
     est_rate = _deadband(omega[0] - ankle_rate, model.deadband_rad_s, model.smooth)
     beta, beta_rate = est, est_rate

@@ -1,4 +1,4 @@
-"""The fit's vector of unknowns and the (N, 5) targets of MODEL §3: one conversion.
+"""The fit's vector of unknowns and the (N, 5) targets of docs/model.md §3: one conversion.
 
 q (7N,) is field-major: K̃p of every module (support upward), then K̃i, K̃d, Δ̃, the class
 values c, and last the passive stiffness and damping K̃pas, B̃pas (normalised like the

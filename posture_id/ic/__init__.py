@@ -1,4 +1,4 @@
-"""The independent-channel (IC) model beside DEC (MODEL §8): its parameters, closed-loop
+"""The independent-channel (IC) model beside DEC (docs/model.md §8): its parameters, closed-loop
 response, time-domain simulation, fit to a recording's locked COM sway, and the comparison
 of the two models on one recording."""
 

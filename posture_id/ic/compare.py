@@ -1,4 +1,4 @@
-"""Which model does the sway support, DEC or IC? (MODEL §8, comparison.)
+"""Which model does the sway support, DEC or IC? (docs/model.md §8, comparison.)
 
 Both models are fitted to the same recording: DEC by the locked least-squares fit, IC by
 its FRF fit (:func:`~posture_id.ic.fit.fit_ic`). Then both are judged on the same numbers:
@@ -52,7 +52,7 @@ __all__ = ["ModelComparison", "compare_models", "AmplitudesComparison", "compare
 BIC_MARGIN = 10.0
 #: A held-out cycle's χ²/dof difference beyond which it favours a model.
 HELD_OUT_MARGIN = 0.25
-#: The highest harmonic compared, Hz (MODEL §8).
+#: The highest harmonic compared, Hz (docs/model.md §8).
 MAX_FREQUENCY_HZ = 2.0
 
 

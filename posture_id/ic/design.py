@@ -15,7 +15,7 @@ and each recording of a protocol (every part, every repetition):
    neighbours);
 3. the information summed over recordings, its inverse the covariance of the normalised
    parameters; the predicted 90 % interval width 2·z₀.₉₅·SE against the width of the
-   parameter's search range (MODEL §8's bounds).
+   parameter's search range (docs/model.md §8's bounds).
 
 Per protocol: the median over subjects of each width and their geometric mean (the score,
 smaller is better). It predicts the linearised fit; where the sway barely sees a parameter
@@ -92,7 +92,7 @@ class IcDesignResult(Result):
         lines = ["# Experiment design for the IC model", "",
                  f"Noise: {noise}. {self.draws} IC subjects; {self.seconds:.0f} s. Each cell: "
                  "the predicted 90 % interval width of the IC fit against the width of the "
-                 "parameter's search range (MODEL §8; median over subjects; below 0.1 well "
+                 "parameter's search range (docs/model.md §8; median over subjects; below 0.1 well "
                  "determined, near 1 not). Made by `posture-id design --model ic` "
                  "(docs/ic.md).", "",
                  "| rank | protocol | min | score | Kp | Kd | Δ | W |",

@@ -1,4 +1,4 @@
-"""Fit the IC model to a recording's stimulus-locked body COM sway (MODEL §8).
+"""Fit the IC model to a recording's stimulus-locked body COM sway (docs/model.md §8).
 
 What is compared is what the locked DEC fit compares (:mod:`posture_id.frf.locked`): the
 drift-free cycle average of the body COM sway at the harmonics the stimulus excites up to
@@ -42,7 +42,7 @@ from posture_id.trials import PreparedTrial
 __all__ = ["IcFitOptions", "IcFitResult", "fit_ic", "IcModelResponse", "com_sway_deg",
            "BOUNDS", "IcPartsFit", "fit_ic_parts"]
 
-#: MODEL §8's search bounds: (low, high) per parameter; gains in units of m·g·h (·s for
+#: docs/model.md §8's search bounds: (low, high) per parameter; gains in units of m·g·h (·s for
 #: Kd, /s for Ki), W and G as they are, times in s.
 BOUNDS = {"kp": (0.5, 4.0), "kd": (0.05, 1.0), "ki": (0.0, 0.5), "delay_s": (0.02, 0.35),
           "w": (0.0, 1.0), "torque_feedback_gain": (0.0, 0.9),
@@ -59,7 +59,7 @@ class IcFitOptions:
         fit_ki: also identify Ki (else 0). fit_passive: also Kpas and Bpas (else 0).
         starts: least-squares starts (the first at the literature's typical values, the
             others drawn within the bounds). seed: seeds those draws.
-        locked: the locked harmonics compared (MODEL §8: up to 2 Hz).
+        locked: the locked harmonics compared (docs/model.md §8: up to 2 Hz).
         level: the intervals' nominal coverage.
     """
 
@@ -393,7 +393,7 @@ def _search(parts: list[_Part], free: tuple[str, ...], plant: IcPlant,
         stable = [x0 for x0 in starts if all(is_stable(q, plant) for q in params_of(x0))]
         if not stable:
             raise PostureIdError(f"{name}: no IC model with a stable closed loop fits this "
-                                 "recording within MODEL §8's bounds")
+                                 "recording within docs/model.md §8's bounds")
         x0 = min(stable, key=lambda x: float(np.sum(residual(x) ** 2)))
         best = _StartOnly(x0, residual(x0), jacobian(x0))
     return _Search(best.x, best, tuple(params_of(best.x)), names)

@@ -1,4 +1,4 @@
-"""Parameters of the independent-channel (IC) model (MODEL §8), JSON in and out.
+"""Parameters of the independent-channel (IC) model (docs/model.md §8), JSON in and out.
 
 The keys of a parameter file: ``kp`` (N·m/rad), ``kd`` (N·m·s/rad), ``ki`` (N·m/(rad·s)),
 ``delay_s`` (s), ``w`` (the proprioceptive weight, 0–1), ``torque_feedback_gain`` (G, 0–0.9),
@@ -23,7 +23,7 @@ MODEL_NAME = "ic"
 
 @dataclass(frozen=True)
 class IcParameters(JsonFile):
-    """The IC model of one body (SI units; MODEL §8).
+    """The IC model of one body (SI units; docs/model.md §8).
 
     Attributes:
         kp: N·m/rad, proportional gain on the sensory error. kd: N·m·s/rad, derivative gain.

@@ -1,4 +1,4 @@
-"""The IC model's body and its closed-loop frequency response (MODEL §8).
+"""The IC model's body and its closed-loop frequency response (docs/model.md §8).
 
 The body is one rigid inverted pendulum about the ankle, its joints locked upright:
 J = 1ᵀ·M(0)·1 (the whole chain turning as one about the ankle; M the mass matrix in the

@@ -1,7 +1,7 @@
-"""The IC model in the time domain (MODEL §8): re-simulation and recordings to test on.
+"""The IC model in the time domain (docs/model.md §8): re-simulation and recordings to test on.
 
 The linear pendulum J·θ̈ = m·g·h·θ − τ (+ motor-noise torque), started at rest, stepped
-with the DEC simulator's 2 ms semi-implicit Euler (MODEL §2): velocity first, then angle,
+with the DEC simulator's 2 ms semi-implicit Euler (docs/model.md §2): velocity first, then angle,
 the torque-feedback low-pass and the integral with it. The delayed servo term
 [Kp·ε + Kd·ε̇ + Ki·∫ε](t − Δ) is read from a buffer of its past values, interpolated
 linearly between steps. The recording it makes has every segment at the COM angle (the

@@ -17,7 +17,7 @@
   (:func:`_refine`; docs/identify.md).
 
 Every result is checked by simulating the identified model on the recording's tilt: the
-body-sway errors E_id and E_rel (MODEL §7) and each segment's residual.
+body-sway errors E_id and E_rel (docs/model.md §7) and each segment's residual.
 """
 
 from __future__ import annotations
@@ -287,7 +287,7 @@ class Identifier:
         moved in time to where the sway says it was (:meth:`_onset`). Every recording gets
         an answer: when a refinement falls and the network's answer did not, the network's
         is kept; when both fall, least squares from the body's defaults on the locked sway
-        with MODEL §5's prior; when that falls too, the one that stays up longest is
+        with docs/model.md §5's prior; when that falls too, the one that stays up longest is
         returned, doubtful (``posture-id identify`` exits 1 then, its answer written)."""
         unread = self.network_refusal or _unreadable_by_network(trial)
         if unread is not None:
@@ -327,15 +327,15 @@ class Identifier:
                 said + "; the refined model falls in re-simulation, so the network's answer "
                 "is kept", *answer.notices))
         if refined.fell:
-            # both fall: least squares from the body's defaults on the locked sway, MODEL
-            # §5's prior holding what the sway leaves open (where the network's answer is
-            # no start at all)
+            # both fall: least squares from the body's defaults on the locked sway, the
+            # prior of docs/model.md §5 holding what the sway leaves open (where the
+            # network's answer is no start at all)
             fit = self._as(Method.FIT)
             fit.fit_options = replace(self.fit_options, locked=LockedOptions(), prior_sd=0.5,
                                       prior_centre=None)
             fitted = fit.identify_trial(trial, progress, start)
             said += ("; the refined model falls in re-simulation too: fitted again from the "
-                     "body's defaults on the stimulus-locked sway with MODEL §5's prior "
+                     "body's defaults on the stimulus-locked sway with docs/model.md §5's prior "
                      "(--method fit --locked --prior-sd 0.5)")
             if not fitted.fell:
                 return replace(fitted, notices=(said, *fitted.notices))
@@ -431,7 +431,7 @@ def network_prior(answer: IdentificationResult, level: float) -> dict:
     """The prior a refinement of the network's ``answer`` takes: ``prior_centre`` its
     normalised gains and delays, ``prior_sd`` its calibrated spread (the half-width of
     its intervals at ``level`` over the normal quantile, at least :data:`MIN_PRIOR_SD`);
-    MODEL §5's 0.5 about the defaults when it has no intervals. FitOptions keywords."""
+    docs/model.md §5's 0.5 about the defaults when it has no intervals. FitOptions keywords."""
     intervals = answer.intervals
     if intervals is None:
         return {"prior_sd": 0.5}

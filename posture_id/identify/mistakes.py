@@ -4,7 +4,7 @@ An identifier answers whatever it is given. These checks look for recordings tha
 answer can be right about, each from the recording (and, for one, the identified model's
 re-simulation) alone, each with a statistic in units of the recording's own noise:
 
-- **the tilt's sign** (:func:`tilt_sign`): in every DEC model of MODEL §5's prior the body
+- **the tilt's sign** (:func:`tilt_sign`): in every DEC model of docs/model.md §5's prior the body
   COM follows the platform at low frequencies: the real part of its FRF relative to the
   tilt, at every stimulated harmonic below :data:`LOW_FREQUENCY_HZ`, is positive (its
   1st percentile 0.14–0.20 over 400 draws each of 1-, 2- and 3-segment bodies under both

@@ -61,7 +61,7 @@ class IdentificationResult(Result):
         method: :class:`Method`. parameters: every module, SI units (the
             parameter-file format). normalised: (N, 5) [K̃p, K̃i, K̃d, Δ̃, C].
         class_probability: (N,) P(C = +1) from the CNN, or None (least squares alone).
-        e_id_deg, e_rel: MODEL §7 of the body sway α_BS, recorded against re-simulated
+        e_id_deg, e_rel: docs/model.md §7 of the body sway α_BS, recorded against re-simulated
             with the identified parameters (inf when the re-simulation falls).
         segments: per-segment fit. wall_time_s: the whole call's time, s.
         identification_time_s: s spent identifying (the CNN and/or least squares), without

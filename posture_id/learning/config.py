@@ -32,7 +32,7 @@ class LearningError(PostureIdError):
 
 
 class Layout(enum.Enum):
-    """What a network sees. MODEL §5–6: spectrograms, one sample per module (3 channels in,
+    """What a network sees. docs/model.md §5–6: spectrograms, one sample per module (3 channels in,
     5 targets out) or one per trial (2N − 1 channels in, 5N targets out). FRF: one sample
     per trial of FRF features (:mod:`posture_id.frf.features`: 3N channels, one row of F
     excited frequencies; 5N targets out)."""
@@ -66,7 +66,7 @@ class NetworkConfig:
         widths: channels of each block (the paper's figure shows 5 blocks).
         head: widths of the hidden fully connected layers of the head.
         class_output: :class:`ClassOutput`.
-        image_size: pixels of the square input image (51, MODEL §6); for frf, F, the
+        image_size: pixels of the square input image (51, docs/model.md §6); for frf, F, the
             frequencies of the one-row input.
     """
 

@@ -1,7 +1,7 @@
 """How good a trained identifier is: the paper's tables and figures, and more.
 
 On each split (training, validation, test) of a data set, in the training set's
-standardised target units (MODEL §5, §7):
+standardised target units (docs/model.md §5, §7):
 
 - total RMSE (all 5 targets of a module, the class included) and fit RMSE (the 4
   continuous ones), each in two readings, because the paper's is ambiguous:
@@ -15,7 +15,7 @@ standardised target units (MODEL §5, §7):
 
 On the test split: each normalised parameter's mean absolute error and its spread (the
 paper's Fig. 5); and, on ``resimulate`` test trials, the identification error by
-re-simulation with the predicted parameters (MODEL §7): E_id = ‖α_BS − α̃_BS‖₂ / N in
+re-simulation with the predicted parameters (docs/model.md §7): E_id = ‖α_BS − α̃_BS‖₂ / N in
 degrees and E_rel = ‖α_BS − α̃_BS‖₂ / ‖α_BS‖₂, against the parameter MSE with their
 correlation (the paper's Fig. 6). A re-simulation that falls is counted and its E_rel
 taken as infinite.
@@ -305,7 +305,7 @@ def evaluate(model_dir: str | Path, dataset_dir: str | Path, resimulate: int = 2
 
 def _identification(model, data: Dataset, samples: SplitSamples, predicted: np.ndarray,
                     error: np.ndarray, count: int, progress) -> dict:
-    """E_id and E_rel of the first ``count`` test trials, re-simulated (MODEL §7)."""
+    """E_id and E_rel of the first ``count`` test trials, re-simulated (docs/model.md §7)."""
     manifest = data.manifest
     body = load_body(manifest["body"]["urdf"])
     if body.sha256 != manifest["body"]["sha256"]:

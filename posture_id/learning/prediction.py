@@ -1,6 +1,6 @@
 """Predictions of a trained network: from images to normalised targets and classes.
 
-Output per module: [K̃p, K̃i, K̃d, Δ̃] (MODEL §3 normalised, p̃ = (p − p0)/p0) and the
+Output per module: [K̃p, K̃i, K̃d, Δ̃] (docs/model.md §3 normalised, p̃ = (p − p0)/p0) and the
 class C ∈ {−1, +1}, with the probability that C = +1 (COM in space): a logistic of the
 logit for a LOGIT network; for the paper's regression output, 1 or 0 by its sign.
 """

@@ -5,7 +5,7 @@ Monolithic: one per trial: image (2N − 1, 51, 51), targets (5N,) (module after
 FRF: one per trial: FRF features (3N, 1, F) (:mod:`posture_id.frf.features`) computed here
 from the stored sway plus the trial's sensor noise (seeded by the shard), targets (5N,).
 Images are standardised pixel by pixel and channel by channel, targets element by
-element, with the training split's statistics (MODEL §5–6; ``stats.npz`` of the set; for
+element, with the training split's statistics (docs/model.md §5–6; ``stats.npz`` of the set; for
 FRF features, computed from the training split when training starts).
 
 A split is held in memory when ``buffer_shards`` is 0; otherwise shards are read a few at

@@ -1,5 +1,5 @@
 """Motion capture: a lab's C3D trial, its markers and channels turned into sagittal segment
-angles, a body COM angle and the platform's tilt (MODEL §1's angles), and C3D trials
+angles, a body COM angle and the platform's tilt (docs/model.md §1's angles), and C3D trials
 written from simulated sway for the project's own tests and example.
 
 The names load on first use: the command line's parsers import the mapping alone.

@@ -1,5 +1,5 @@
 """Sagittal angles from markers: each segment's angle in space, the body COM's, and the
-platform's tilt, as MODEL §1 measures them.
+platform's tilt, as docs/model.md §1 measures them.
 
 A segment's angle is that of the line from its lower to its upper point, projected on the
 sagittal plane (forward, vertical): θ = atan2(d·forward, d·vertical), positive for a

@@ -5,7 +5,7 @@ lab's axes lie: the typed form of ``--segment-markers``, ``--com-markers``,
 A *point* is one marker or the mean of several (``LGTR+RGTR``: both hips averaged). A
 segment is the line from its lower point to its upper point (support upward); its angle is
 that line's angle from the vertical in the sagittal plane, positive for a forward lean
-(MODEL §1). The body COM of a 1-segment body is a weighted combination of points, its
+(docs/model.md §1). The body COM of a 1-segment body is a weighted combination of points, its
 angle that of the line from the support point to it.
 """
 

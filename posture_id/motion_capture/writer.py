@@ -7,7 +7,7 @@ sagittal plane): one per joint and one at the top of the last segment, named by
 :func:`joint_marker_names` (``ANK``, ``KNE``, ``HIP``, ``SHO`` for the TIP); a 1-segment
 body gets ``ANK``, ``HIP`` (at half its length) and ``SHO`` (its top). Two platform
 markers ``PLATB`` and ``PLATF`` on its surface, behind and in front of the ankle axis, tilt
-with it (MODEL §1: the platform rotates about the ankle axis). An analog channel
+with it (docs/model.md §1: the platform rotates about the ankle axis). An analog channel
 ``platform_angle`` carries the tilt in volts (``deg_per_volt``) at ``analog_per_frame``
 samples per frame, beside a ``force_z`` channel.
 """

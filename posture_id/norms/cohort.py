@@ -1,5 +1,5 @@
 """A cohort's FRFs at a lab's points, and each recording against a norm: the cohort of
-``posture-id identify DIR --out FOLDER --frf-preset NAME [--norm norm.json]`` then is a
+``posture-id identify DIR --out FOLDER --band-preset NAME [--norm norm.json]`` then is a
 normative set in one more command (``norm build FOLDER/*.frf.json``), and its
 ``summary.csv`` gains the norm test's columns."""
 

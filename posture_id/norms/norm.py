@@ -44,7 +44,8 @@ from posture_id.errors import PostureIdError
 from posture_id.fileio import JsonFile, Result, read_json
 from posture_id.frf.bands import pseudo_impulse_response
 
-__all__ = ["Norm", "NormTest", "build_norm", "against_norm", "FrfSet", "shrunk_covariance"]
+__all__ = ["Norm", "NormTest", "NormTests", "build_norm", "against_norm", "FrfSet",
+           "shrunk_covariance"]
 
 #: The format of a norm file.
 FORMAT = "posture_id-norm"
@@ -359,6 +360,7 @@ class NormTest(Result):
         name: what was tested. human_likeness: the score (0 at the norm's mean).
         inside_prediction_band: its whole PIR within mean ± c·SD (None: the norm has no
         bands). distance_percentile: 0–100 (None: no bands). pir: (S·M,) its PIR.
+        channels: the tested input's channels, one per norm channel (None: not said).
     """
 
     name: str
@@ -368,18 +370,29 @@ class NormTest(Result):
     inside_prediction_band: bool | None
     distance_percentile: float | None
     pir: np.ndarray | None = field(default=None, repr=False)
+    channels: tuple[str, ...] | None = None
+
+    def entry(self) -> dict:
+        """This test's own fields (to_dict without the norm and the provenance)."""
+        return {"tested": self.name, "human_likeness": self.human_likeness,
+                "inside_prediction_band": self.inside_prediction_band,
+                "distance_percentile": self.distance_percentile,
+                "tested_channels": None if self.channels is None else list(self.channels),
+                "frf": {"re": self.response.real.tolist(), "im": self.response.imag.tolist()}}
 
     def to_dict(self) -> dict:
         from posture_id.provenance import provenance
 
-        return {"tested": self.name, "human_likeness": self.human_likeness,
-                "inside_prediction_band": self.inside_prediction_band,
-                "distance_percentile": self.distance_percentile,
-                "norm": {"members": len(self.norm.members), "level": self.norm.level,
-                         "frequencies_hz": self.norm.frequencies_hz.tolist(),
-                         "channels": list(self.norm.channels)},
-                "frf": {"re": self.response.real.tolist(), "im": self.response.imag.tolist()},
-                "provenance": provenance()}
+        return {**self.entry(), "norm": _norm_summary(self.norm), "provenance": provenance()}
+
+    def line(self) -> str:
+        """The verdict in one line."""
+        text = f"{self.name}: human-likeness {self.human_likeness:.2f}"
+        if self.inside_prediction_band is not None:
+            text += (f"; inside the prediction band: "
+                     f"{'yes' if self.inside_prediction_band else 'NO'}; distance percentile "
+                     f"{self.distance_percentile:.0f}")
+        return text
 
     def summary(self) -> str:
         lines = [f"{self.name}: human-likeness {self.human_likeness:.2f} (0: the norm's mean)"]
@@ -397,9 +410,90 @@ class NormTest(Result):
         return plot_norm_test(self, path=path, ax=ax)
 
 
+def _norm_summary(norm: Norm) -> dict:
+    return {"members": len(norm.members), "level": norm.level,
+            "frequencies_hz": norm.frequencies_hz.tolist(), "channels": list(norm.channels)}
+
+
+@dataclass(frozen=True)
+class NormTests(Result):
+    """Several subjects (a table's rows, a .mat's) each tested against one norm.
+
+    Attributes:
+        name: what was tested (the file). tests: one :class:`NormTest` per subject.
+    """
+
+    name: str
+    tests: tuple[NormTest, ...]
+
+    @property
+    def norm(self) -> Norm:
+        return self.tests[0].norm
+
+    @property
+    def inside_prediction_band(self) -> bool | None:
+        """Every subject's PIR inside the prediction band (None: the norm has no bands)."""
+        if any(t.inside_prediction_band is None for t in self.tests):
+            return None
+        return all(t.inside_prediction_band for t in self.tests)
+
+    @property
+    def outside(self) -> list[str]:
+        """The subjects whose PIR leaves the prediction band."""
+        return [t.name for t in self.tests if t.inside_prediction_band is False]
+
+    def to_dict(self) -> dict:
+        from posture_id.provenance import provenance
+
+        return {"tested": self.name, "subjects": [t.entry() for t in self.tests],
+                "outside_prediction_band": (None if self.inside_prediction_band is None
+                                            else self.outside),
+                "norm": _norm_summary(self.norm), "provenance": provenance()}
+
+    def summary(self) -> str:
+        norm = self.norm
+        head = f"{self.name}: {len(self.tests)} subject(s) against the norm (human-likeness 0 "
+        head += ("at its mean; no bands: a norm of summary statistics)"
+                 if self.inside_prediction_band is None else
+                 f"at its mean; distance percentiles of {len(norm.members)} members)")
+        lines = [head, *(f"  {t.line()}" for t in self.tests)]
+        if self.inside_prediction_band is not None:
+            outside = self.outside
+            lines.append(f"outside the norm's {100 * norm.level:.0f} % prediction band: "
+                         + (f"{', '.join(outside)} ({len(outside)} of {len(self.tests)})"
+                            if outside else "none"))
+        return "\n".join(lines)
+
+    def plot(self, path=None, ax=None):
+        """Each subject's :meth:`NormTest.plot`, side by side (four subjects a row)."""
+        from posture_id.plotting import _axes, _save
+
+        m = len(self.norm.channels)
+        columns = min(4, len(self.tests))
+        rows = -(-len(self.tests) // columns)
+        fig, axes = _axes(ax, 3 * rows, columns * m, (5 * columns * m, 8 * rows))
+        for k, test in enumerate(self.tests):
+            r, c = divmod(k, columns)
+            cell = axes[3 * r : 3 * r + 3, c * m : (c + 1) * m]
+            test.plot(ax=cell)
+            for j, channel in enumerate(self.norm.channels):
+                cell[0, j].set_title(f"{test.name} ({channel}): {test.human_likeness:.2f}",
+                                     fontsize=9)
+                cell[2, j].set_visible(test.pir is not None)  # no bands: no PIR
+        for k in range(len(self.tests), rows * columns):
+            r, c = divmod(k, columns)
+            for a in axes[3 * r : 3 * r + 3, c * m : (c + 1) * m].ravel():
+                a.set_visible(False)
+        fig.suptitle(f"{self.name}: {len(self.tests)} subject(s) against the norm")
+        fig.tight_layout()
+        _save(fig, path)
+        return fig
+
+
 def against_norm(norm: Norm, frequencies_hz: np.ndarray, response: np.ndarray,
-                 name: str = "tested") -> NormTest:
-    """``response`` (F, M) at the norm's frequencies tested against ``norm``."""
+                 name: str = "tested", channels: tuple[str, ...] | None = None) -> NormTest:
+    """``response`` (F, M) at the norm's frequencies tested against ``norm`` (``channels``:
+    the tested input's, one per norm channel, kept with the result)."""
     f = np.asarray(frequencies_hz, dtype=float)
     h = np.asarray(response, dtype=complex).reshape(len(f), -1)
     if f.shape != norm.frequencies_hz.shape or not np.allclose(f, norm.frequencies_hz,
@@ -429,4 +523,5 @@ def against_norm(norm: Norm, frequencies_hz: np.ndarray, response: np.ndarray,
             mine = float(np.sum((pir - centre) ** 2))
             shares.append(np.mean(np.sum((sample - centre) ** 2, axis=1) < mine))
         percentile = float(100 * np.mean(shares))
-    return NormTest(name, norm, h, score, inside, percentile, pir)
+    return NormTest(name, norm, h, score, inside, percentile, pir,
+                    None if channels is None else tuple(channels))

@@ -15,7 +15,26 @@ from posture_id.errors import PostureIdError
 from posture_id.fileio import read_json
 from posture_id.norms.norm import FrfSet
 
-__all__ = ["read_frfs", "frf_from_json"]
+__all__ = ["read_frfs", "frf_from_json", "frf_json_channels", "is_frf_table"]
+
+#: A CSV table's FRF column: ``<f>_re``, ``<f>_im``, ``<f>_gain`` or ``<f>_phase_deg``.
+_FRF_COLUMN = re.compile(r"^([0-9.]+)_(re|im|gain|phase_deg)$")
+
+
+def _frf_json(path: Path) -> dict:
+    """An FRF JSON's object, or a refusal naming the file."""
+    data = read_json(path, "an FRF file")
+    if not isinstance(data, dict) or "frequencies_hz" not in data or \
+            not isinstance(data.get("channels"), dict):
+        raise PostureIdError(f"{path}: not an FRF file (posture-id frf writes "
+                             "frequencies_hz and channels)")
+    return data
+
+
+def frf_json_channels(path: Path) -> tuple[str, ...]:
+    """The names of an FRF JSON's channels (the file checked to be one, its channels not
+    read)."""
+    return tuple(_frf_json(path)["channels"])
 
 
 def frf_from_json(path: Path, channels: tuple[str, ...] | None = None
@@ -27,11 +46,7 @@ def frf_from_json(path: Path, channels: tuple[str, ...] | None = None
             lacks, a channel without ``re`` and ``im`` (or ``gain`` and ``phase_deg``), a
             length other than the frequencies', values that are not finite numbers.
     """
-    data = read_json(path, "an FRF file")
-    if not isinstance(data, dict) or "frequencies_hz" not in data or \
-            not isinstance(data.get("channels"), dict):
-        raise PostureIdError(f"{path}: not an FRF file (posture-id frf writes "
-                             "frequencies_hz and channels)")
+    data = _frf_json(path)
     f = _finite_vector(data["frequencies_hz"], f"{path}: frequencies_hz")
     names = tuple(channels or data["channels"])
     columns = []
@@ -87,6 +102,17 @@ def _channel_response(channel, length: int, where: str) -> np.ndarray:
     return found[0]
 
 
+def is_frf_table(path: Path) -> bool:
+    """Whether a CSV file is a table of FRFs (a header with ``<f>_re`` ... columns), not a
+    recording; False for a file that cannot be read (its reader says why)."""
+    try:
+        with Path(path).open(encoding="utf-8-sig", newline="") as handle:
+            header = next(csv.reader(handle), [])
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return False
+    return any(_FRF_COLUMN.match(c.strip()) for c in header)
+
+
 def _read_table(path: Path) -> FrfSet:
     """A CSV table: one row per subject (``subject`` or ``name`` its name), the FRF in
     ``<f>_re`` and ``<f>_im`` or ``<f>_gain`` and ``<f>_phase_deg`` columns; a row whose
@@ -99,10 +125,9 @@ def _read_table(path: Path) -> FrfSet:
     if len(rows) < 2:
         raise PostureIdError(f"{path}: a header and no subjects")
     header = [c.strip() for c in rows[0]]
-    pattern = re.compile(r"^([0-9.]+)_(re|im|gain|phase_deg)$")
     found: dict[float, dict[str, int]] = {}
     for index, column in enumerate(header):
-        match = pattern.match(column)
+        match = _FRF_COLUMN.match(column)
         if match:
             found.setdefault(float(match.group(1)), {})[match.group(2)] = index
     if not found:

@@ -9,7 +9,7 @@ Equations of motion in segment-in-space angles θ (N,) (derivation in docs/model
 with the body's constant coupling D (N, N) and gravity levers S (N,) (see
 :class:`posture_id.bodies.body.Body`). The COM above joint i is Σ_{j≥i} e^{iθ_j} S_j / m_above,i.
 
-Time stepping (MODEL §2 **[decision]**): step dt, controller from the state at the start
+Time stepping (docs/model.md §2 **[decision]**): step dt, controller from the state at the start
 of the step, semi-implicit Euler (velocities first, then angles).
 
 Layout (:mod:`.kernel_layout`): trials run in blocks of LANES; every per-trial quantity

@@ -94,7 +94,7 @@ def kinematics(w, s_re, s_im, sway_limit):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def dec_torques(n, w, par, buf, tilt, tilt_vel, dt, deadband_rad_s):
-    """DEC joint torques at step n (MODEL §2) into the τ rows; advances ∫ε, α̂_FS and
+    """DEC joint torques at step n (docs/model.md §2) into the τ rows; advances ∫ε, α̂_FS and
     the delay buffers. tilt, tilt_vel: α_FS (rad) and rate at t = n·dt.
 
     buf: (N·B·L,) ring buffers of B (a power of two) servo commands per module.

@@ -1,4 +1,4 @@
-"""The body-sway errors of MODEL §7, in one place: E_id and E_rel."""
+"""The body-sway errors of docs/model.md §7, in one place: E_id and E_rel."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""What is modelled: the simulation settings of MODEL §2 and §5, defined once.
+"""What is modelled: the simulation settings of docs/model.md §2 and §5, defined once.
 
 Every other configuration (data sets, the least-squares fit, the command line's defaults)
 embeds or reads :class:`SimulationOptions`; none repeats a value.
@@ -23,7 +23,7 @@ MAX_SWAY_LIMIT_DEG = 45.0
 
 @dataclass(frozen=True)
 class SimulationOptions:
-    """How to simulate (MODEL §2 and §5 decisions, all configurable).
+    """How to simulate (docs/model.md §2 and §5 decisions, all configurable).
 
     Attributes:
         dt: integration step, s (default 2 ms).

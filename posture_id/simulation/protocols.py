@@ -141,7 +141,7 @@ class _Single:
 
 @dataclass(frozen=True)
 class PrtsProtocol(_Single):
-    """A PRTS (MODEL §4) of ``states`` states of ``state_s`` s, ``amplitude_deg``
+    """A PRTS (docs/model.md §4) of ``states`` states of ``state_s`` s, ``amplitude_deg``
     peak to peak, ``cycles`` cycles per recording, ``repetitions`` recordings."""
 
     states: int = 242

@@ -1,4 +1,4 @@
-"""Support-surface tilt α_FS(t): the PRTS of MODEL §4 and user-given profiles.
+"""Support-surface tilt α_FS(t): the PRTS of docs/model.md §4 and user-given profiles.
 
 Every stimulus is a piecewise-linear tilt angle (a :class:`TiltProfile`): the PRTS is a
 sequence of constant tilt *velocities* held for 0.25 s each, so its position is exactly
@@ -36,7 +36,7 @@ __all__ = [
     "PRTS_REGISTERS",
 ]
 
-#: Shift-register definitions (MODEL §4): states per cycle → (feedback, start register).
+#: Shift-register definitions (docs/model.md §4): states per cycle → (feedback, start register).
 PRTS_REGISTERS = {
     242: ((0, 0, 1, -1, -1), (0, 0, 0, 0, 1)),
     80: ((0, 0, -1, 1), (0, 0, 0, 1)),
@@ -53,7 +53,7 @@ class TiltProfile:
 
     Attributes:
         times: (K,) s, strictly increasing knot times starting at 0.
-        angles: (K,) rad, tilt at the knots (positive = toes down / forward, MODEL §1).
+        angles: (K,) rad, tilt at the knots (positive = toes down / forward, docs/model.md §1).
         description: a short human-readable origin ("PRTS 242 ×2, 1° p-p", a file name).
         period_s: s, the period of a periodic stimulus (one PRTS cycle), None otherwise.
         periodic_from_s: s, when the periodic part starts (after a lead-in and the
@@ -133,13 +133,13 @@ class TiltProfile:
 
 @lru_cache(maxsize=32)
 def _unit_prts(cycles: int, states: int) -> TiltProfile:
-    """MODEL §4's PRTS of 1° peak to peak (cached: recognition tries it on every
+    """docs/model.md §4's PRTS of 1° peak to peak (cached: recognition tries it on every
     recording)."""
     return prts(1.0, cycles, states)
 
 
 def prts_symbols(states: int = 242) -> np.ndarray:
-    """One cycle of the ternary sequence, (states,) int8 in {−1, 0, +1} (MODEL §4).
+    """One cycle of the ternary sequence, (states,) int8 in {−1, 0, +1} (docs/model.md §4).
 
     Each state emits x = (feedback · register) mod 3, read as +1, 0, −1 (2 → −1), then
     shifts the register right with x entering first.
@@ -174,7 +174,7 @@ def prts(
 ) -> TiltProfile:
     """The PRTS tilt: velocity = the ternary sequence, position scaled to a peak-to-peak.
 
-    The defaults are MODEL §4's stimulus; the keyword-only arguments describe a PRTS as a
+    The defaults are docs/model.md §4's stimulus; the keyword-only arguments describe a PRTS as a
     lab ran it.
 
     Args:
@@ -249,7 +249,7 @@ def recognise_prts(times_s: np.ndarray, tilt_rad: np.ndarray,
                    tolerance: float = 1e-6) -> TiltProfile | None:
     """The PRTS a sampled tilt follows, as the lab ran it, or None.
 
-    First the plain case, exactly: a PRTS of MODEL §4 (242 or 80 states of 0.25 s from the
+    First the plain case, exactly: a PRTS of docs/model.md §4 (242 or 80 states of 0.25 s from the
     start of its cycle, at once, either sign, any amplitude: the least-squares scale of the
     unit sequence) within ``tolerance`` of its peak-to-peak; the exact profile is
     returned, extended to whole cycles covering the recording (recordings sample the tilt

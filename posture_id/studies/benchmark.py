@@ -1,6 +1,6 @@
 """The CNN against the optimiser, measured: accuracy, failures and time per recording.
 
-On ``trials`` held-out simulated recordings (MODEL §5 parameters drawn from a seed no data
+On ``trials`` held-out simulated recordings (docs/model.md §5 parameters drawn from a seed no data
 set uses; stable trials only) at each sensor-noise level (white, on the segment angles),
 three methods identify every recording:
 
@@ -11,7 +11,7 @@ three methods identify every recording:
 Each worker process loads the body and the network once. Per method and noise level: the
 mean absolute error of each normalised parameter (|p̃ − p̃_true|, medians too), class
 accuracy, E_rel of the body sway re-simulated with the identified parameters against the
-noise-free truth (MODEL §7), how many recordings end far from the truth (a wrong class or
+noise-free truth (docs/model.md §7), how many recordings end far from the truth (a wrong class or
 E_rel above :data:`FAR_E_REL`: a local minimum for the fits), and two times per
 recording: identifying (the CNN and/or least squares) and the whole ``identify`` call
 (with the checks and the re-simulation every method shares). Recordings are identified in
@@ -205,7 +205,7 @@ class BenchmarkReport(Result):
         stats = self.statistics()
         lines = ["# The CNN against the optimiser", "",
                  f"Body `{self.body}`, {self.trials} held-out simulated 121 s recordings "
-                 f"(MODEL §5 parameters, stable), sensor noise "
+                 f"(docs/model.md §5 parameters, stable), sensor noise "
                  f"{', '.join(f'{n:g}°' for n in self.noise_levels)}; "
                  f"{self.workers} recordings identified at a time. E_rel: body sway "
                  "re-simulated with the identified parameters against the noise-free truth. "

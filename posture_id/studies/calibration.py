@@ -321,7 +321,7 @@ class CalibrationReport(Result):
                          + " |")
         lines += ["", "## Identifiability: 90 % interval width against the prior's", "",
                   f"The prior's 90 % interval of p̃ = p/p_default − 1 is {prior_width:.2f} wide "
-                  f"(MODEL §5). Below {WELL:g}: well determined; below {PARTLY:g}: partly; "
+                  f"(docs/model.md §5). Below {WELL:g}: well determined; below {PARTLY:g}: partly; "
                   "otherwise not determined by the recording.", "",
                   f"| method | sensor noise | module | {names} |",
                   "|---|---|---|" + "---|" * len(TARGET_FIELDS)]

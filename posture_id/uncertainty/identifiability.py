@@ -1,6 +1,6 @@
 """How much a recording narrows a parameter: its interval's width against the prior's.
 
-The prior is MODEL §5's: p̃ = |1 + X| − 1 with X ~ N(0, σ²), σ = 0.5, the distribution the
+The prior is docs/model.md §5's: p̃ = |1 + X| − 1 with X ~ N(0, σ²), σ = 0.5, the distribution the
 identifiers were trained and calibrated on. Its central interval at a level is taken from
 the folded normal |1 + X| (its quantiles by bisection of its distribution function,
 written with the standard library's normal: scipy.stats would cost half a second of every

@@ -105,7 +105,7 @@ def make_shard(config: UniversalDataConfig, k: int) -> dict[str, np.ndarray]:
 def simulate_trials(body_draw: BodyDraw, stim: StimulusDraw, trials: int,
                     scope: UniversalScope, rng: np.random.Generator,
                     options: SimulationOptions | None = None) -> dict[str, np.ndarray]:
-    """Simulate ``trials`` parameter sets (MODEL §5's prior) of one body under one PRTS,
+    """Simulate ``trials`` parameter sets (docs/model.md §5's prior) of one body under one PRTS,
     with motor noise as the scope says. Keys: ``y`` (T, K, N) complex64 harmonics of the
     kept trials' sway (motor noise included), ``y_locked`` the same without motor noise,
     ``tilt`` (K,) complex, ``frequencies_hz`` (K,), ``excited`` (K,), ``targets`` (T, N, 5)

@@ -15,11 +15,11 @@ log-spaced, whatever the stimulus's harmonics):
   space";
 - log(1 + the excited harmonics in the band): how much each band was measured.
 
-and :data:`DESCRIPTORS` numbers: the module's place (ankle, knee, hip column of MODEL §3;
+and :data:`DESCRIPTORS` numbers: the module's place (ankle, knee, hip column of docs/model.md §3;
 segment count), the body around it (its time scale √(M_ii/mgh_i), its inertial coupling
 to the segments below and above, the ratios of m·g·h to its neighbours'), and the
 stimulus (peak to peak, RMS velocity, period, cycles). Gains are normalised by each
-module's m·g·h (MODEL §3), so these are all the body and the stimulus it needs.
+module's m·g·h (docs/model.md §3), so these are all the body and the stimulus it needs.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """What the universal identifier is trained on, and how one training trial is drawn.
 
 A shard of the training set is one body and one stimulus (drawn together), and many DEC
-parameter sets (MODEL §5's prior) simulated with motor noise that leaves a drawn share of
+parameter sets (docs/model.md §5's prior) simulated with motor noise that leaves a drawn share of
 the body's sway stimulus-locked. The scope is also what a recording is checked against:
 a body, stimulus or noise outside it gets a notice.
 """

@@ -1,0 +1,68 @@
+"""One name per idea across the commands: old spellings of renamed flags still work, each
+with a one-line notice of its new name, and a negative axis is taken as typed.
+
+The command line is read once, before parsing (:func:`normalised`): a renamed flag
+(``--noise-deg``, alone or as ``--noise-deg=0.05``) is replaced by its new name for its
+command; ``identify --model DIR`` (a network's folder) becomes ``--network DIR``, as
+``--model`` names the model (``dec`` or ``ic``) in every command; and an axis flag
+followed by ``-x``, ``-y`` or ``-z`` (which argparse would take for a flag) is joined to it
+as ``--forward-axis=-y``.
+"""
+
+from __future__ import annotations
+
+import sys
+
+__all__ = ["RENAMED", "AXIS_FLAGS", "normalised"]
+
+#: (command, old spelling): new spelling.
+RENAMED: dict[tuple[str, str], str] = {
+    ("simulate", "--noise-deg"): "--sensor-noise-deg",
+    ("benchmark", "--noise-deg"): "--sensor-noise-deg",
+    ("calibration", "--noise-deg"): "--sensor-noise-deg",
+    ("identify", "--frf-preset"): "--band-preset",
+    ("body", "--height"): "--height-m",
+    ("body", "--mass"): "--mass-kg",
+    ("simulate", "--subject-height-m"): "--height-m",
+    ("simulate", "--subject-mass-kg"): "--mass-kg",
+}
+#: The flags whose value may be a negative axis.
+AXIS_FLAGS = ("--forward-axis", "--vertical-axis", "--c3d-forward-axis")
+_NEGATIVE_AXES = ("-x", "-y", "-z")
+_MODEL_NAMES = ("dec", "ic")
+
+
+def _notice(old: str, new: str) -> None:
+    print(f"posture-id: note: {old} is now {new} (the old spelling still works)",
+          file=sys.stderr)
+
+
+def normalised(argv: list[str]) -> list[str]:
+    """``argv`` with renamed flags in their new spelling (a notice each on stderr), identify's
+    network folder under ``--network`` and negative axes joined to their flag."""
+    command = next((a for a in argv if not a.startswith("-")), None)
+    out: list[str] = []
+    k = 0
+    while k < len(argv):
+        token = argv[k]
+        flag, equals, value = token.partition("=")
+        if flag in AXIS_FLAGS and not equals and k + 1 < len(argv) \
+                and argv[k + 1] in _NEGATIVE_AXES:
+            out.append(f"{flag}={argv[k + 1]}")
+            k += 2
+            continue
+        new = RENAMED.get((command, flag))
+        if new is not None:
+            _notice(flag, new)
+            out.append(new + equals + value)
+        elif command == "identify" and flag == "--model":
+            given = value if equals else (argv[k + 1] if k + 1 < len(argv) else "")
+            if given.lower() not in _MODEL_NAMES:  # a network's folder, as it once was
+                _notice("--model DIR", "--network DIR")
+                out.append("--network" + equals + value)
+            else:
+                out.append(token)
+        else:
+            out.append(token)
+        k += 1
+    return out

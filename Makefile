@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: design-results universal-model universal-fifth noise-families universal-noise-model demo test test-fast lint bench bodies models model calibration examples real-like \
+.PHONY: docs figures design-results universal-model universal-fifth noise-families universal-noise-model demo test test-fast lint bench bodies models model calibration examples real-like \
         honest-verdict noise-lofo \
         real-like-models real-like-model clean
 
@@ -47,6 +47,17 @@ examples: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
+	$(MAKE) docs
+
+# The documentation site (MkDocs Material; the API and command-line references are made
+# from the docstrings and parsers): broken links and references fail the build.
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
+
+# The pictures the README and the docs' start page show (the shipped TIP example).
+figures: $(STAMP)
+	$(BIN)/posture-id identify $(EXAMPLES)/tip_subject.csv --out docs/images/tip_subject.json \
+	  --plot docs/images/tip_subject.png
 
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"

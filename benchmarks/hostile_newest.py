@@ -162,6 +162,14 @@ def _other_points(data):
     return data
 
 
+def _no_lab_points(data):
+    """A norm that does not say its bands, at points no preset has."""
+    data["lab_bands"] = None
+    data["frequencies_hz"] = [f * 1.5 for f in data["frequencies_hz"]]
+    data["pir"] = None  # a norm as labs publish it: summary statistics only
+    return data
+
+
 def _com_only(data):
     data["channels"] = {"body COM": data["channels"]["body COM"]}
     return data
@@ -323,8 +331,8 @@ def _norm_file_cases() -> list[Case]:
               "--time-column", "Time", "--tilt-column", "Platform", "--angle-columns",
               "Legs", "Trunk"), ("lab2.csv", "shank")),
         Case("a recording against a norm of no lab points", "norm test",
-             ("norm", "test", "{rec}", "--norm", "n.json"), ("n.json", "bands"),
-             {"n.json": _edited("norm", _set(lab_bands=None))}),
+             ("norm", "test", "{rec}", "--norm", "n.json"), ("n.json", "--band-preset"),
+             {"n.json": _edited("norm", _no_lab_points)}),
         Case("--out over the norm", "norm test",
              ("norm", "test", "{frf1}", "--norm", "n.json", "--out", "n.json"),
              ("n.json", "input"), {"n.json": "@norm"}),

@@ -1,22 +1,32 @@
-"""posture_id: identify DEC posture-control parameters from body sway on a tilting support.
+"""posture_id: identify how a body keeps its balance: the parameters of its posture
+controller (DEC, or the independent-channel model) from its sway on a tilting platform.
 
-The public API; each name lives in the package of its stage (see docs/development.md):
+The public API; each name lives in the package of its stage (docs/development.md):
 
-- :mod:`posture_id.bodies`: :func:`load_body`, :class:`Body`, :data:`DEFAULT_URDF`,
-  :func:`lump_robot`, :func:`preset_body`
-- :mod:`posture_id.dec`: :class:`DecParameters`, :class:`ModuleParameters`,
+- **Identify a recording**: :func:`read_recording` (CSV or C3D), :func:`identify`,
+  :class:`Identifier`, :class:`Method`, :class:`IdentificationResult`,
+  :func:`prepare_trial`
+- **Bodies**: :func:`load_body`, :class:`Body`, :data:`DEFAULT_URDF`, :func:`lump_robot`
+  and :func:`preset_body` (a humanoid's whole-body URDF lumped to a chain)
+- **DEC's parameters**: :class:`DecParameters`, :class:`ModuleParameters`,
   :class:`ParameterArrays`, :func:`default_parameters`, :func:`sample_parameters`
-- :mod:`posture_id.simulation`: :func:`prts`, :func:`tilt_from_array`,
-  :func:`tilt_from_csv`, :func:`simulate`, :func:`simulate_batch`,
-  :class:`SimulationOptions`, :func:`simulate_reference` (Pinocchio, slow)
-- :class:`Recording` (recordings as CSV)
-- :mod:`posture_id.datasets`: :func:`generate_dataset`, :class:`DatasetConfig`,
-  :class:`Dataset`
-- :mod:`posture_id.fitting` (CasADi): :func:`fit_recording`, :class:`FitOptions`,
+- **Simulation**: :func:`prts`, :func:`tilt_from_array`, :func:`tilt_from_csv`,
+  :func:`simulate`, :func:`simulate_batch`, :class:`SimulationOptions`,
+  :func:`simulate_reference` (Pinocchio, slow)
+- **Recordings**: :class:`Recording`, :class:`RecordingColumns` (a lab's columns),
+  :class:`MarkerMapping` and :class:`LabAxes` (a C3D trial's markers)
+- **Least squares** (CasADi): :func:`fit_recording`, :class:`FitOptions`,
   :class:`FitProblem`, :class:`FitResult`
+- **The independent-channel model**: :func:`fit_ic`, :class:`IcFitOptions`,
+  :class:`IcParameters`, :func:`simulate_ic`, :func:`compare_models` (DEC against IC),
+  :func:`compare_amplitudes`
+- **FRFs and norms**: :func:`frequency_response`, :class:`FrfOptions`,
+  :class:`FrequencyBands`, :data:`BAND_PRESETS`, :func:`read_frfs`, :class:`FrfSet`,
+  :class:`Norm`, :func:`build_norm`, :func:`against_norm`, :func:`compare_groups`
+- **Training data**: :func:`generate_dataset`, :class:`DatasetConfig`, :class:`Dataset`
 
-The last two groups, the lumping and the reference path load on first use, so that
-``import posture_id`` does not import CasADi, Dask or example-robot-data.
+Everything but the first groups loads on first use, so that ``import posture_id`` does
+not import torch, CasADi, Dask or example-robot-data.
 """
 
 from posture_id._lazy import lazy_getattr
@@ -30,7 +40,7 @@ from posture_id.dec import (
     sample_parameters,
 )
 from posture_id.errors import PostureIdError
-from posture_id.recording import Recording
+from posture_id.recording import AngleUnit, Recording, RecordingColumns
 from posture_id.simulation import (
     BatchResult,
     SimulationOptions,
@@ -54,6 +64,32 @@ __all__ = [
     "default_parameters",
     "sample_parameters",
     "Recording",
+    "RecordingColumns",
+    "AngleUnit",
+    "read_recording",
+    "prepare_trial",
+    "identify",
+    "Identifier",
+    "Method",
+    "IdentificationResult",
+    "MarkerMapping",
+    "LabAxes",
+    "fit_ic",
+    "IcFitOptions",
+    "IcParameters",
+    "simulate_ic",
+    "compare_models",
+    "compare_amplitudes",
+    "frequency_response",
+    "FrfOptions",
+    "FrequencyBands",
+    "BAND_PRESETS",
+    "read_frfs",
+    "FrfSet",
+    "Norm",
+    "build_norm",
+    "against_norm",
+    "compare_groups",
     "BatchResult",
     "SimulationOptions",
     "SimulationResult",
@@ -77,6 +113,30 @@ __all__ = [
 ]
 
 _LAZY = {
+    "read_recording": "posture_id.trials.reading",
+    "prepare_trial": "posture_id.trials",
+    "identify": "posture_id.identify",
+    "Identifier": "posture_id.identify",
+    "Method": "posture_id.identify",
+    "IdentificationResult": "posture_id.identify",
+    "MarkerMapping": "posture_id.motion_capture.mapping",
+    "LabAxes": "posture_id.motion_capture.mapping",
+    "fit_ic": "posture_id.ic",
+    "IcFitOptions": "posture_id.ic",
+    "IcParameters": "posture_id.ic",
+    "simulate_ic": "posture_id.ic",
+    "compare_models": "posture_id.ic.compare",
+    "compare_amplitudes": "posture_id.ic.compare",
+    "frequency_response": "posture_id.frf",
+    "FrfOptions": "posture_id.frf",
+    "FrequencyBands": "posture_id.frf.bands",
+    "BAND_PRESETS": "posture_id.frf.bands",
+    "read_frfs": "posture_id.norms.readers",
+    "FrfSet": "posture_id.norms.norm",
+    "Norm": "posture_id.norms.norm",
+    "build_norm": "posture_id.norms.norm",
+    "against_norm": "posture_id.norms.norm",
+    "compare_groups": "posture_id.norms.groups",
     "simulate_reference": "posture_id.simulation.reference",
     "lump_robot": "posture_id.bodies.lumping",
     "preset_body": "posture_id.bodies.lumping",

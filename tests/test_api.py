@@ -1,7 +1,9 @@
-"""The public API: every exported name resolves; the layers stay one-way on import."""
+"""The public API: every exported name resolves and is documented, argument by argument;
+the layers stay one-way on import."""
 
 from __future__ import annotations
 
+import inspect
 import re
 import subprocess
 import sys
@@ -19,6 +21,10 @@ def test_every_exported_name_is_the_object_it_names():
             assert re.fullmatch(r"\d+\.\d+\.\d+\S*", obj), obj
         elif name == "DEFAULT_URDF":
             assert Path(obj).is_file() and Path(obj).suffix == ".urdf"
+        elif name == "BAND_PRESETS":
+            assert "peterka11" in obj and len(obj["peterka11"].centres_hz) == 11
+        elif name == "identify" and obj is sys.modules["posture_id.identify"]:
+            assert obj.identify.__name__ == "identify" and callable(obj)  # the package
         else:
             assert obj.__name__ == name, (name, obj)
             assert obj.__module__.startswith("posture_id."), (name, obj.__module__)
@@ -43,3 +49,42 @@ def test_import_does_not_load_casadi_torch_or_matplotlib():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+def _public_callables():
+    """(label, function) of every exported function and of every public method, class
+    method and property of every exported class."""
+    for name in posture_id.__all__:
+        obj = getattr(posture_id, name)
+        if name == "identify":  # the package's name too, and it calls the function
+            obj = sys.modules["posture_id.identify"].identify
+        if inspect.isfunction(obj):
+            yield name, obj
+        elif inspect.isclass(obj):
+            yield name, obj
+            for member, value in vars(obj).items():
+                if member.startswith("_"):
+                    continue
+                if isinstance(value, classmethod | staticmethod):
+                    value = value.__func__
+                elif isinstance(value, property):
+                    value = value.fget
+                if inspect.isfunction(value):
+                    yield f"{name}.{member}", value
+
+
+def test_every_public_function_and_argument_is_documented():
+    """Every exported function, class and public method has a docstring, and a function's
+    docstring names each of its arguments (the API reference is made from them)."""
+    undocumented, unnamed = [], []
+    for label, obj in _public_callables():
+        doc = inspect.getdoc(obj) or ""
+        if not doc.strip():
+            undocumented.append(label)
+        elif inspect.isfunction(obj) and "." not in label:
+            for argument in inspect.signature(obj).parameters:
+                if argument not in ("self", "cls") and not re.search(
+                        rf"\b{re.escape(argument)}\b", doc):
+                    unnamed.append(f"{label}({argument})")
+    assert not undocumented, f"no docstring: {undocumented}"
+    assert not unnamed, f"arguments the docstring does not name: {unnamed}"

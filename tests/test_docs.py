@@ -131,3 +131,90 @@ def test_every_number_the_readme_claims_names_where_it_comes_from():
 def test_every_results_report_names_the_command_that_wrote_it(report):
     text = report.read_text(encoding="utf-8")
     assert re.search(r"[Mm]ade by `(posture-id|benchmarks/|\.venv/bin/python)", text), report
+
+
+#: Every page of the documentation: the README and every Markdown file under docs/.
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+#: What no page may say: the model is docs/model.md, inside the repository.
+_OUTSIDE = ("../shared", "MODEL.md", "MODEL §", "/work/")
+_LINK = re.compile(r"\[[^\]\n]*\]\(\s*<?([^)\s>]+)>?(?:\s+[\"'][^\"']*[\"'])?\s*\)")
+_EXTERNAL = re.compile(r"^(?:https?://|mailto:)", re.IGNORECASE)
+
+
+def _prose_lines(text: str) -> list[tuple[int, str]]:
+    """(line number, line) of a page's prose: fenced and indented code blocks left out,
+    inline code spans blanked."""
+    out, fence, code, blank = [], None, False, True
+    for number, line in enumerate(text.splitlines(), 1):
+        stripped = line.lstrip()
+        if fence is not None:
+            if stripped.startswith(fence):
+                fence = None
+            continue
+        if stripped.startswith(("```", "~~~")):
+            fence = stripped[:3]
+            continue
+        code = line.startswith(("    ", "\t")) and (blank or code) and bool(stripped)
+        blank = not stripped
+        if not code:
+            out.append((number, re.sub(r"`[^`]*`", "``", line)))
+    return out
+
+
+def _link_problem(page: Path, target: str) -> str | None:
+    """Why a link target of ``page`` is wrong, or None: a relative path (its #fragment
+    dropped) must name a file or folder inside the repository."""
+    if _EXTERNAL.match(target) or target.startswith("#"):
+        return None
+    path = target.split("#", 1)[0].split("?", 1)[0]
+    if not path:
+        return None
+    resolved = (page.parent / path).resolve()
+    if not resolved.is_relative_to(ROOT):
+        return f"link {target!r} leaves the repository"
+    if not resolved.exists():
+        return f"link {target!r} names no file"
+    return None
+
+
+def test_no_page_refers_outside_the_repository():
+    """No page names a file outside the repository (the model is docs/model.md), and every
+    relative link resolves to a file inside it."""
+    problems = []
+    for page in PAGES:
+        where = page.relative_to(ROOT)
+        text = page.read_text(encoding="utf-8")
+        for number, line in enumerate(text.splitlines(), 1):
+            problems += [f"{where}:{number}: {s!r}" for s in _OUTSIDE if s in line]
+        for number, line in _prose_lines(text):
+            for match in _LINK.finditer(line):
+                problem = _link_problem(page, match.group(1))
+                if problem:
+                    problems.append(f"{where}:{number}: {problem}")
+    assert not problems, "\n".join(problems)
+
+
+def test_the_code_cites_the_model_inside_the_repository():
+    """The package's docstrings, comments and messages cite docs/model.md, never a file
+    outside the repository (generated copies in _prebuilt/ are not sources)."""
+    problems = []
+    for path in sorted((ROOT / "posture_id").rglob("*.py")):
+        if "_prebuilt" in path.parts:
+            continue
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            problems += [f"{path.relative_to(ROOT)}:{number}: {s!r}"
+                         for s in ("MODEL §", "../shared") if s in line]
+    assert not problems, "\n".join(problems)
+
+
+def test_the_link_check_sees_what_it_must():
+    """The checks above catch what they are for, and leave code and external links alone."""
+    page = ROOT / "docs" / "model.md"
+    assert _link_problem(page, "../../elsewhere/MODEL.md") == (
+        "link '../../elsewhere/MODEL.md' leaves the repository")
+    assert _link_problem(page, "missing.md#x") == "link 'missing.md#x' names no file"
+    for fine in ("model.md#8-the-independent-channel-model", "#2-the-dec-controller",
+                 "https://example.org/x", "mailto:a@b.c", "../README.md", "tutorials/cohort.py"):
+        assert _link_problem(page, fine) is None, fine
+    lines = _prose_lines("a [x](a.md)\n\n    code [y](b.md)\n\n```\n[z](c.md)\n```\n`[w](d.md)`\n")
+    assert [n for n, line in lines if _LINK.search(line)] == [1]

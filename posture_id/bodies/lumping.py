@@ -336,7 +336,18 @@ def lump_robot(
 
 
 def preset_body(name: str, segments: int = 3) -> LumpedBody:
-    """Lump one of :data:`PRESETS` (``talos``, ``g1``, ``human``)."""
+    """Lump one of :data:`PRESETS` (``talos``, ``g1``, ``human``).
+
+    Args:
+        name: the preset's name; it also names the lumped body (``<name>_<segments>seg``).
+        segments: 3 (shank, thigh, trunk), 2 (leg, trunk: knee locked) or 1 (body).
+    Returns:
+        :class:`LumpedBody`, lumped at the preset's posture (its SRDF configuration, or
+        the zero configuration).
+    Raises:
+        BodyError: an unknown preset, a segment count other than 1, 2 or 3, or a robot
+            model that cannot be read.
+    """
     if name not in PRESETS:
         raise BodyError(f"unknown robot '{name}' (presets: {', '.join(PRESETS)})")
     preset = PRESETS[name]

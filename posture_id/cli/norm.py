@@ -139,6 +139,11 @@ def run_test(args: argparse.Namespace) -> int:
         if len(norm.channels) != 1:
             raise PostureIdError(f"{args.recording}: one channel per subject; the norm has "
                                  f"{len(norm.channels)} ({', '.join(norm.channels)})")
+        if not _at(frfs.frequencies_hz, norm.frequencies_hz, rtol=1e-5):  # against_norm's
+            raise PostureIdError(f"{args.recording}: its FRFs are at "
+                                 f"{_hz(frfs.frequencies_hz)} Hz, the norm's at "
+                                 f"{_hz(norm.frequencies_hz)} Hz: give them at the norm's "
+                                 "points")
         result = NormTests(args.recording.name, tuple(
             against_norm(norm, frfs.frequencies_hz, frfs.response[k], frfs.names[k])
             for k in range(len(frfs))))
@@ -258,12 +263,13 @@ def _norm_bands(args: argparse.Namespace, norm):
                                name=f"{chosen.name} at the norm's frequencies")
 
 
-def _at(centres, frequencies) -> bool:
-    """Whether a preset's centres are ``frequencies`` (within 1e-6 Hz)."""
+def _at(centres, frequencies, rtol: float = 0.0) -> bool:
+    """Whether ``centres`` (a preset's, or FRFs' frequencies) are ``frequencies`` (within
+    1e-6 Hz, and ``rtol``)."""
     import numpy as np
 
     return (centres is not None and len(centres) == len(frequencies)
-            and bool(np.allclose(centres, frequencies, rtol=0, atol=1e-6)))
+            and bool(np.allclose(centres, frequencies, rtol=rtol, atol=1e-6)))
 
 
 def _same_bands(a, b) -> bool:

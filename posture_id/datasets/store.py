@@ -64,15 +64,22 @@ class Dataset:
         return data
 
     def verify(self) -> None:
+        """Check that every shard the manifest lists exists with its SHA-256.
+
+        Raises:
+            DatasetError: naming a shard that is missing, corrupt or truncated.
+        """
         for entry in self.manifest["shards"]:
             check_shard(self.path, entry)
 
     @property
     def shards(self) -> list[dict]:
+        """The manifest's shard entries, in order (file, counts, SHA-256, trials used)."""
         return self.manifest["shards"]
 
     @property
     def n_segments(self) -> int:
+        """N, the segments of the body the set was simulated for."""
         return self.manifest["body"]["n_segments"]
 
     def load_shard(self, k: int, keys: tuple[str, ...] | None = None
@@ -112,6 +119,7 @@ class Dataset:
                 for k in range(len(used))]
 
     def iter_shards(self) -> Iterator[dict[str, np.ndarray]]:
+        """Every shard's arrays (:meth:`load_shard`), one shard at a time, in order."""
         for k in range(len(self.shards)):
             yield self.load_shard(k)
 
@@ -121,6 +129,8 @@ class Dataset:
             return {key: npz[key] for key in ("train", "validation", "test")}
 
     def stats(self) -> dict[str, np.ndarray]:
+        """The standardisation statistics (``stats.npz``): means and standard deviations of
+        the images and the targets, from the training set only."""
         with np.load(self.path / "stats.npz", allow_pickle=False) as npz:
             return {key: npz[key] for key in npz.files}
 

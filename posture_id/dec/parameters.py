@@ -132,6 +132,7 @@ class DecParameters(JsonFile):
 
     @property
     def joints(self) -> tuple[str, ...]:
+        """The modules' URDF joint names, support upward."""
         return tuple(self.modules)
 
     def __getitem__(self, joint: str) -> ModuleParameters:
@@ -400,6 +401,7 @@ class ParameterArrays:
 
     @property
     def n_trials(self) -> int:
+        """B, the number of trials (rows of each array)."""
         return self.kp.shape[0]
 
     @classmethod

@@ -27,7 +27,17 @@ def relative_factors(rng: np.random.Generator, shape, sigma: float = SIGMA) -> n
 
 def sample_parameters(body, n_trials: int, rng: np.random.Generator,
                       sigma: float = SIGMA) -> ParameterArrays:
-    """(n_trials, N) random parameters for ``body`` drawn from ``rng`` (see module doc)."""
+    """(n_trials, N) random parameters for ``body`` drawn from ``rng`` (see module doc).
+
+    Args:
+        body: the body whose defaults are perturbed (N = its segments).
+        n_trials: B, the number of parameter sets drawn.
+        rng: the random generator drawn from.
+        sigma: σ, the standard deviation of the relative perturbation X (default
+            :data:`SIGMA`).
+    Returns:
+        :class:`ParameterArrays` (n_trials, N), SI units; passive terms at the defaults.
+    """
     defaults = default_parameters(body)
     shape = (n_trials, body.n_segments)
 

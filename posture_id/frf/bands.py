@@ -132,6 +132,8 @@ class FrequencyBands:
                    name=data.get("name", "custom"))
 
     def to_dict(self) -> dict:
+        """JSON-ready: the name, the harmonic ordinals or ranges (Hz), the centres (Hz) and
+        the reference period (s); :meth:`from_dict` reads it back."""
         return {"name": self.name,
                 "harmonics": None if self.harmonics is None else [list(b) for b in
                                                                   self.harmonics],

@@ -236,7 +236,22 @@ class _Judged:
 
 def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None = None,
                    progress=None, held_out: bool = True) -> ModelComparison:
-    """Fit DEC and IC to ``trial`` and say which its sway supports (the module doc)."""
+    """Fit DEC and IC to ``trial`` and say which its sway supports (the module doc).
+
+    Args:
+        trial: the recording with its stimulus, which must be periodic (a
+            :class:`PreparedTrial`).
+        body: the recorded body (its segments are the recording's).
+        ic_options: the IC fit's options (default :class:`IcFitOptions`); the harmonics
+            compared stop at 2 Hz whatever its ``locked`` says.
+        progress: a callback told the DEC fit's stages (None: no reports).
+        held_out: also predict a held-out last cycle from fits on the others (with three
+            or more cycles; each model is then fitted twice).
+    Returns:
+        :class:`ModelComparison`: both fits, χ², BIC, the held-out χ²/dof and the verdict.
+    Raises:
+        PostureIdError: a stimulus that is not periodic.
+    """
     started = clock.perf_counter()
     ic_options = ic_options or IcFitOptions()
     locked = replace(ic_options.locked, max_frequency_hz=MAX_FREQUENCY_HZ)
@@ -327,7 +342,19 @@ def compare_amplitudes(trials: list[PreparedTrial], body,
                        progress=None) -> AmplitudesComparison:
     """Fit DEC (one set of parameters) and IC (a W per part) to the parts of a
     two-amplitude protocol, and say which the sway supports (the module doc: the same
-    rule, the held-out cycle left out)."""
+    rule, the held-out cycle left out).
+
+    Args:
+        trials: the parts, one recording per amplitude, each with its periodic stimulus.
+        body: the recorded body, the same for every part.
+        ic_options: the IC fit's options (default :class:`IcFitOptions`); the harmonics
+            compared stop at 2 Hz whatever its ``locked`` says.
+        progress: a callback told the joint DEC fit's stages (None: no reports).
+    Returns:
+        :class:`AmplitudesComparison`: both fits, χ², BIC, each part's W and the verdict.
+    Raises:
+        PostureIdError: a part whose stimulus is not periodic.
+    """
     from posture_id.fitting.joint import fit_recordings_jointly
     from posture_id.fitting.options import FitOptions
     from posture_id.ic.fit import fit_ic_parts

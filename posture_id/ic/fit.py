@@ -411,6 +411,13 @@ class _StartOnly:
 def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None) -> IcFitResult:
     """The IC parameters of ``trial``'s body COM sway (the module doc).
 
+    Args:
+        trial: the recording with its periodic stimulus (a :class:`PreparedTrial`).
+        body: the recorded body, turning as one about the ankle (:class:`IcPlant`).
+        options: what is identified, the starts, the locked harmonics and the intervals'
+            level (default :class:`IcFitOptions`: Ki and the passive terms held at 0).
+    Returns:
+        :class:`IcFitResult`: the parameters (SI units), their intervals and the fit.
     Raises:
         PostureIdError: a stimulus that is not periodic (no locked harmonics), or no start
             that gives a stable closed loop.

@@ -69,6 +69,7 @@ class IcParameters(JsonFile):
                                  f"{self.torque_feedback_time_s}")
 
     def replace(self, **changes: float) -> IcParameters:
+        """A copy with the given fields changed (SI units), validated like a new one."""
         return replace(self, **changes)
 
     def to_dict(self) -> dict:
@@ -107,6 +108,7 @@ class IcParameters(JsonFile):
         return cls.from_dict(data, str(path))
 
     def summary(self) -> str:
+        """One line: Kp, Kd, Δ, W, G and τ_f (with Ki and the passive terms when set)."""
         return (f"IC  Kp {self.kp:.1f} N·m/rad  Kd {self.kd:.1f} N·m·s/rad  Δ "
                 f"{self.delay_s:.3f} s  W {self.w:.3f}  G {self.torque_feedback_gain:.3f}  "
                 f"τ_f {self.torque_feedback_time_s:.1f} s"

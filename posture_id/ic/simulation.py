@@ -84,8 +84,18 @@ def simulate_ic(body, params: IcParameters, stimulus: TiltProfile | None = None,
     """A recording of ``body`` balanced by the IC model: every segment at the COM angle.
 
     Args:
+        body: the body simulated, turning as one about the ankle (:class:`IcPlant`).
+        params: the IC model's parameters (:class:`IcParameters`, SI units).
+        stimulus: the platform tilt (default: :func:`~posture_id.simulation.stimulus.prts`'s
+            defaults, 2 cycles of the 242-state PRTS at 1°).
+        options: step, output rate and sway limit (default :class:`SimulationOptions`).
         motor_sd_deg: motor noise σ (degrees), the torque m·g·h·σ·η with η the project's
-            low-pass unit noise (:class:`~posture_id.simulation.noise.MotorNoise`).
+            low-pass unit noise (:class:`~posture_id.simulation.noise.MotorNoise`); 0: none.
+        motor_cutoff_hz: the motor noise's low-pass corner frequency, Hz.
+        seed: seeds the motor noise.
+    Returns:
+        A :class:`Recording` at ``options.sample_rate_hz``: time (S,) s, tilt (S,) rad and
+        the segment angles (S, N) rad, NaN from where the sway leaves the sway limit.
     """
     from posture_id.simulation.noise import MotorNoise
 

@@ -1,6 +1,15 @@
 """Identification of recordings: the CNN, least squares and the hybrid behind one entry
 point (:func:`identify`). Uses :mod:`posture_id.learning` and :mod:`posture_id.fitting`;
-only the command line sits above it."""
+only the command line sits above it.
+
+``posture_id.identify`` names both this package and the function: once the package is
+imported, Python binds the name on :mod:`posture_id` to the package, so the package is
+callable and calling it is calling :func:`identify` (``posture_id.identify(recording)``
+works either way).
+"""
+
+import sys
+import types
 
 from posture_id.identify.core import Identifier, identify
 from posture_id.identify.method import DEFAULT_METHOD, Method
@@ -8,3 +17,13 @@ from posture_id.identify.result import IdentificationResult, SegmentFit
 
 __all__ = ["identify", "Identifier", "Method", "DEFAULT_METHOD", "IdentificationResult",
            "SegmentFit"]
+
+
+class _CallablePackage(types.ModuleType):
+    """This package, callable as :func:`identify`."""
+
+    def __call__(self, *args, **kwargs) -> IdentificationResult:
+        return identify(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallablePackage

@@ -111,9 +111,12 @@ class IdentificationResult(Result):
 
     @property
     def classes(self) -> tuple[Controls, ...]:
+        """The identified class C of each module (:class:`Controls`), support upward."""
         return tuple(self.parameters[j].controls for j in self.joints)
 
     def to_dict(self) -> dict:
+        """JSON-ready (no sample arrays): parameters, errors, per-segment fit, trust verdict,
+        intervals, notices, the stages' results and provenance."""
         out = {
             "method": self.method.value,
             **parameter_block(self.parameters, self.normalised, self.class_probability),
@@ -145,6 +148,8 @@ class IdentificationResult(Result):
         return (FELL_AFTER_ALL if tried else FELL).format(at=at)
 
     def summary(self) -> str:
+        """A printable report: the parameter table, the re-simulation's fit (or that it
+        falls), the time taken, the intervals, notices and the trust verdict."""
         lines = self.parameters.identified_table(self.class_probability)
         if self.fell:
             lines.append(self.fell_line())

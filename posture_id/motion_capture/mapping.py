@@ -209,6 +209,7 @@ class MarkerMapping:
 
     @property
     def n_segments(self) -> int:
+        """The number of body segments the mapping gives angles for (1 for a COM mapping)."""
         return 1 if self.com is not None else len(self.segments)
 
     @property

@@ -99,7 +99,24 @@ class GroupComparison(Result):
 def compare_groups(a: FrfSet, b: FrfSet, names: tuple[str, str] = ("A", "B"),
                    permutations: int = 2000, bootstrap: int = 1000, level: float = 0.95,
                    rate_hz: float = 22.0, seed: int = 0) -> GroupComparison:
-    """Group ``a`` against group ``b`` (the module doc)."""
+    """Group ``a`` against group ``b`` (the module doc).
+
+    Args:
+        a: group A's members' FRFs (:class:`FrfSet`, at least 2 members).
+        b: group B's, at the same frequencies and channels as ``a``'s.
+        names: the two groups' names, A's first.
+        permutations: the label shuffles of the permutation test.
+        bootstrap: the resamples of each group for the difference's confidence band.
+        level: the band's pointwise coverage (default 0.95).
+        rate_hz: the PIRs' sample rate, Hz (above twice the highest frequency).
+        seed: seeds the permutations and the resamples.
+    Returns:
+        :class:`GroupComparison`: the p-value, the mean PIR difference (M, S) with its band,
+        and where the band leaves zero.
+    Raises:
+        PostureIdError: a group of fewer than 2 members, or groups at different frequencies
+            or with different channels.
+    """
     if len(a) < 2 or len(b) < 2:
         raise PostureIdError(f"comparing groups needs at least 2 members each, got "
                              f"{len(a)} and {len(b)}")

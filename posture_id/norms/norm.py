@@ -29,7 +29,8 @@ but has no bands.
 :func:`against_norm` gives a tested FRF's PIR, whether it lies inside the prediction band,
 its distance percentile (for each resample, the share of the resampled members whose
 summed squared PIR distance to the resample's mean is below the tested one's; averaged)
-and its human-likeness.
+and its human-likeness; :class:`NormTests` holds several subjects' tests (a table's or a
+.mat's rows).
 """
 
 from __future__ import annotations
@@ -145,6 +146,8 @@ class Norm(JsonFile):
 
     @property
     def has_bands(self) -> bool:
+        """Whether the norm has PIR bands (its members' PIRs, at least 3 members); a norm of
+        summary statistics only scores human-likeness."""
         return self.pir_members is not None and len(self.members) >= 3
 
     def precision(self) -> np.ndarray:
@@ -164,6 +167,9 @@ class Norm(JsonFile):
         return float(math.sqrt(max(float(sd @ self.precision() @ sd), 0.0)))
 
     def to_dict(self) -> dict:
+        """The norm file's format (JSON-ready, SI units): points, mean, covariance, members,
+        PIRs, the bands' constants and the covariance's shrinkage; :meth:`from_json` reads
+        it."""
         def arr(a):
             return None if a is None else np.asarray(a).tolist()
 
@@ -326,7 +332,23 @@ class _NormFields:
 def build_norm(frfs: FrfSet, bootstrap: int = 1000, level: float = 0.95,
                rate_hz: float = 22.0, weights: np.ndarray | None = None,
                seed: int = 0, lab_bands: dict | None = None) -> Norm:
-    """The norm of ``frfs`` (the module doc)."""
+    """The norm of ``frfs`` (the module doc).
+
+    Args:
+        frfs: the members' FRFs at common points (:class:`FrfSet`, at least 3 members).
+        bootstrap: B, the resamples of the members for the bands' constants (≥ 10).
+        level: the bands' coverage, 0.5 ≤ level < 1 (default 0.95).
+        rate_hz: the PIRs' sample rate, Hz (above twice the highest frequency).
+        weights: (F,) the frequency weights w of the human-likeness score (default 1 each).
+        seed: seeds the bootstrap resamples (stored with the norm; a test draws its
+            distance percentile's resamples from ``seed + 1``).
+        lab_bands: the lab bands the FRFs were computed at (:meth:`FrequencyBands.to_dict`
+            form), stored with the norm, or None.
+    Returns:
+        :class:`Norm` with bands, its covariance shrunk towards its diagonal.
+    Raises:
+        PostureIdError: fewer than 3 members, a level or a bootstrap count out of range.
+    """
     if len(frfs) < 3:
         raise PostureIdError(f"a norm needs at least 3 members, got {len(frfs)}")
     if not 0.5 <= level < 1:
@@ -493,7 +515,20 @@ class NormTests(Result):
 def against_norm(norm: Norm, frequencies_hz: np.ndarray, response: np.ndarray,
                  name: str = "tested", channels: tuple[str, ...] | None = None) -> NormTest:
     """``response`` (F, M) at the norm's frequencies tested against ``norm`` (``channels``:
-    the tested input's, one per norm channel, kept with the result)."""
+    the tested input's, one per norm channel, kept with the result).
+
+    Args:
+        norm: the norm tested against.
+        frequencies_hz: (F,) the response's frequencies, Hz: the norm's points.
+        response: (F, M) complex FRF, one column per norm channel (an (F,) one for one).
+        name: names the tested FRF in the result and in errors.
+        channels: (M,) the tested input's channel names, or None (not said).
+    Returns:
+        :class:`NormTest`: human-likeness, and with the norm's bands whether the PIR lies
+        inside the prediction band and its distance percentile.
+    Raises:
+        PostureIdError: other frequencies or another number of channels than the norm's.
+    """
     f = np.asarray(frequencies_hz, dtype=float)
     h = np.asarray(response, dtype=complex).reshape(len(f), -1)
     if f.shape != norm.frequencies_hz.shape or not np.allclose(f, norm.frequencies_hz,

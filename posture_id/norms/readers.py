@@ -213,7 +213,23 @@ def read_frfs(paths: list[Path], channels: tuple[str, ...] | None = None,
               variable: str | None = None, frequencies: list[float] | None = None
               ) -> tuple[FrfSet, dict | None]:
     """The FRFs of ``paths``: FRF JSONs (one subject each), one CSV table, or one .mat;
-    with the lab bands the JSONs were computed at (or None)."""
+    with the lab bands the JSONs were computed at (or None).
+
+    Args:
+        paths: the files: FRF JSONs (each once, at the same frequencies), or a single
+            CSV table or ``.mat`` file.
+        channels: the FRF JSONs' channels read (default: every channel of each file);
+            a table or ``.mat`` file gives one channel, ``COM``.
+        variable: the ``.mat`` file's N × F complex matrix (required for a ``.mat``).
+        frequencies: the ``.mat`` matrix's F column frequencies, Hz (required for a
+            ``.mat``).
+    Returns:
+        (:class:`FrfSet` (N subjects, F frequencies, M channels), the JSONs' lab bands or
+        None).
+    Raises:
+        PostureIdError: naming the file: missing, given twice, of mixed kinds, at other
+            frequencies than the first, or not readable as an FRF.
+    """
     paths = [Path(p) for p in paths]
     seen: set[Path] = set()
     for p in paths:

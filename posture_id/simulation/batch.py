@@ -175,7 +175,23 @@ def simulate(
     motor_noise: MotorNoise | None = None,
 ) -> SimulationResult:
     """Simulate one trial (default parameters and PRTS unless given; motor noise seeded
-    by its own seed); see :func:`simulate_batch`."""
+    by its own seed); see :func:`simulate_batch`.
+
+    Args:
+        body: the chain (N segments).
+        params: every module's DEC parameters, SI units (default: the body's defaults,
+            :func:`~posture_id.dec.parameters.default_parameters`).
+        stimulus: the platform tilt (default: PRTS, 242 states, 2 cycles, 1° p-p).
+        options: what is modelled: step, sampling, sway limit, dead-band (default
+            :class:`SimulationOptions`).
+        motor_noise: low-pass torque noise at every joint (:class:`~.noise.MotorNoise`),
+            or None: none.
+    Returns:
+        :class:`SimulationResult`: time (S,) s, tilt (S,) rad, segment angles (S, N) rad
+        (NaN from an abort on) and COM-above angles (S, N) rad.
+    Raises:
+        SimulationError: parameters whose modules are not the body's joints (in order).
+    """
     params = params or default_parameters(body)
     check_joints(body, params)
     batch = simulate_batch(body, params.arrays(), stimulus, options,

@@ -72,7 +72,20 @@ def simulate_reference(
     motor_noise: MotorNoise | None = None,
 ) -> SimulationResult:
     """Simulate one trial with Pinocchio's forward dynamics (slow; for validation); the
-    motor noise, when given, is the same torque sequence the fast simulator adds."""
+    motor noise, when given, is the same torque sequence the fast simulator adds.
+
+    Args:
+        body: the chain (N segments), its Pinocchio model stepped.
+        params: every module's DEC parameters, SI units (default: the body's defaults).
+        stimulus: the platform tilt (default: PRTS, 242 states, 2 cycles, 1° p-p).
+        options: step, sampling, sway limit, dead-band (default :class:`SimulationOptions`).
+        motor_noise: low-pass torque noise at every joint (:class:`MotorNoise`), or None:
+            none.
+    Returns:
+        :class:`SimulationResult`, as :func:`~posture_id.simulation.batch.simulate` gives.
+    Raises:
+        SimulationError: parameters whose modules are not the body's joints (in order).
+    """
     import pinocchio as pin
 
     options = options or SimulationOptions()

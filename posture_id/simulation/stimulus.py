@@ -549,7 +549,16 @@ def check_recorded_tilt(times_s: np.ndarray, tilt_rad: np.ndarray, stimulus: Til
 
 
 def tilt_from_array(times_s, angles_rad, description: str = "array") -> TiltProfile:
-    """A tilt profile from samples: ``times_s`` (K,) s from 0, ``angles_rad`` (K,) rad."""
+    """A tilt profile from samples: ``times_s`` (K,) s from 0, ``angles_rad`` (K,) rad.
+
+    Args:
+        times_s: (K,) s, starting at 0 and increasing, K ≥ 2.
+        angles_rad: (K,) rad, the tilt at those times.
+        description: names the profile (its ``description``) and the samples in errors.
+    Raises:
+        StimulusError: arrays of other shapes, values that are not finite, or times that
+            do not start at 0 or do not increase.
+    """
     t = np.asarray(times_s, dtype=float)
     a = np.asarray(angles_rad, dtype=float)
     if t.ndim != 1 or a.shape != t.shape or len(t) < 2:
@@ -573,7 +582,16 @@ def tilt_from_array(times_s, angles_rad, description: str = "array") -> TiltProf
 
 def tilt_from_csv(path: str | Path) -> TiltProfile:
     """Read a tilt profile CSV with columns ``time_s`` and ``tilt_deg`` (degrees at the
-    edge; other columns, such as a recording's segments, are ignored)."""
+    edge; other columns, such as a recording's segments, are ignored).
+
+    Args:
+        path: the CSV file; it names the profile (its ``description``).
+    Returns:
+        :class:`TiltProfile` in radians.
+    Raises:
+        StimulusError: naming the file: not a numeric CSV, a column missing, times that
+            do not start at 0, do not increase or are not in seconds, or a constant tilt.
+    """
     header, values = read_numeric_csv(path, StimulusError, "tilt file")
     for col in ("time_s", "tilt_deg"):
         if col not in header:

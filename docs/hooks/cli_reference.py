@@ -1,0 +1,60 @@
+"""MkDocs hook: the references made from the program itself.
+
+A page holding the marker ``<!-- cli-reference -->`` gets, in its place, the ``--help`` of
+``posture-id`` and of every command and sub-command; one holding ``<!-- api-reference -->``
+gets an entry (rendered by mkdocstrings from the docstrings) for every name
+``posture_id`` exports. Neither can drift from the program.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+MARKER = "<!-- cli-reference -->"
+API_MARKER = "<!-- api-reference -->"
+
+
+def _parsers(parser: argparse.ArgumentParser, path: tuple[str, ...]):
+    yield path, parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, child in action.choices.items():
+                yield from _parsers(child, (*path, name))
+
+
+def reference() -> str:
+    """Every parser's help, a section each."""
+    from posture_id.cli import build_parser
+
+    os.environ["COLUMNS"] = "100"  # one width, whatever the terminal
+    parts = []
+    for path, parser in _parsers(build_parser(), ("posture-id",)):
+        level = "#" * min(len(path) + 1, 4)
+        parts.append(f"{level} `{' '.join(path)}`\n\n```text\n{parser.format_help()}```\n")
+    return "\n".join(parts)
+
+
+def api_reference() -> str:
+    """A mkdocstrings entry for every class and function ``posture_id`` exports, by the
+    module it is defined in."""
+    import inspect
+
+    import posture_id
+
+    entries = []
+    for name in posture_id.__all__:
+        obj = getattr(posture_id, name)
+        if inspect.ismodule(obj):  # posture_id.identify: the package, callable as its function
+            obj = getattr(obj, name)
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            entries.append(f"::: {obj.__module__}.{name}\n")
+    return "\n".join(entries)
+
+
+def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001 - MkDocs API
+    if MARKER in markdown:
+        markdown = markdown.replace(MARKER, reference())
+    if API_MARKER in markdown:
+        markdown = markdown.replace(API_MARKER, api_reference())
+    return markdown

@@ -32,7 +32,7 @@ def test_statistics_of_known_rows():
     rows = [_row(0.01, [True, True], 1 * ones, ones.astype(bool), 1.0),
             _row(FAR_E_REL + 0.01, [True, True], 2 * ones, ones.astype(bool), 2.0),
             _row(math.inf, [True, False], 6 * ones, zeros.astype(bool), 6.0)]
-    s = MethodStatistics.of_rows(0.05, Method.HYBRID, rows)
+    s = MethodStatistics.of_rows(0.05, "hybrid", rows)
     assert s.recordings == 3 and s.far_from_truth == 2
     assert s.class_accuracy == pytest.approx(5 / 6)
     assert s.e_rel_median == FAR_E_REL + 0.01 and s.e_rel_p90 == math.inf
@@ -55,8 +55,8 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
                            methods=(Method.CNN,))
     assert len(report.rows) == 4
     stats = report.statistics()
-    assert list(stats) == [(0.0, Method.CNN), (0.01, Method.CNN)]
-    clean = stats[(0.0, Method.CNN)]
+    assert list(stats) == [(0.0, "cnn"), (0.01, "cnn")]
+    clean = stats[(0.0, "cnn")]
     rows = [r for r in report.rows if r["noise_deg"] == 0.0]
     assert clean.recordings == 2
     assert clean.class_accuracy == np.mean([r["classes_correct"] for r in rows])
@@ -95,3 +95,29 @@ def test_an_interrupted_benchmark_goes_on_from_its_journal(tip, tmp_path):
         assert a["index"] == b["index"] and a["abs_error"] == b["abs_error"]
     with pytest.raises(PostureIdError, match="another set-up"):
         run_benchmark(tip, journal=journal, **{**args, "seed": 4})
+
+
+def test_the_command_line_names_the_benchmark_s_methods():
+    from posture_id.cli.benchmark import BENCHMARK_METHODS
+    from posture_id.studies.benchmark import METHODS
+
+    assert BENCHMARK_METHODS == METHODS
+
+
+@pytest.mark.slow
+def test_people_like_sway_and_the_paper_s_cnn_are_benchmarked(tip, tmp_path):
+    """The people-like condition's recordings are the clean ones' subjects with motor
+    noise; the paper's CNN (the TIP's specialist) answers beside the universal network."""
+    report = run_benchmark(tip, trials=2, noise_levels=(0.05,), seed=3, workers=1,
+                           methods=(Method.CNN, "paper-cnn"), people_like=True)
+    stats = report.statistics()
+    assert list(stats) == [(0.05, "cnn"), (0.05, "paper-cnn"), ("people-like", "cnn"),
+                           ("people-like", "paper-cnn")]
+    assert all(s.recordings == 2 for s in stats.values())
+    text = report.to_markdown()
+    assert "## People-like sway (15–40 % of the body COM sway locked" in text
+    assert "| paper-cnn |" in text
+    clean = [r for r in report.rows if r["noise_deg"] == 0.05 and r["method"] == "cnn"]
+    noisy = [r for r in report.rows if r["noise_deg"] == "people-like" and r["method"] == "cnn"]
+    # the same subjects: the noisy answers are worse on average than the clean ones
+    assert np.mean([r["e_rel"] for r in noisy]) > np.mean([r["e_rel"] for r in clean])

@@ -13,10 +13,12 @@ from posture_id.cli.arguments import (
     positive_int,
     say,
 )
-from posture_id.cli.identify import METHODS
 from posture_id.cli.progress import TerminalProgress
 
-__all__ = ["add_parser"]
+__all__ = ["add_parser", "BENCHMARK_METHODS"]
+
+#: studies.benchmark.METHODS, named here without importing torch (a test keeps them equal).
+BENCHMARK_METHODS = ("cnn", "paper-cnn", "fit", "hybrid", "auto")
 
 
 def add_parser(sub) -> None:
@@ -29,8 +31,14 @@ def add_parser(sub) -> None:
                    help="sensor-noise levels, degrees (default %(default)s)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     p.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
-    p.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
-                   help="methods compared (default: all: cnn fit hybrid)")
+    p.add_argument("--methods", nargs="+", choices=BENCHMARK_METHODS,
+                   default=list(BENCHMARK_METHODS),
+                   help="methods compared (default: all: the universal network alone, the "
+                        "paper's spectrogram CNN (the body's specialist), least squares from "
+                        "the defaults, the hybrid, auto)")
+    p.add_argument("--people-like", action="store_true",
+                   help="also the same subjects with motor noise leaving 15–40 %% of their "
+                        "body COM sway stimulus-locked (0.05° sensor noise)")
     p.add_argument("--out", type=Path, required=True,
                    help="report folder; an interrupted run goes on from its journal there")
     p.set_defaults(func=run)
@@ -38,15 +46,15 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
-    from posture_id.identify import Method
     from posture_id.studies.benchmark import JOURNAL, run_benchmark
 
     body = load_body(args.body or DEFAULT_URDF)
     journal = args.out / JOURNAL
     with TerminalProgress("identifications", prefix="posture-id benchmark") as progress:
         result = run_benchmark(body, args.trials, tuple(args.sensor_noise_deg), args.seed,
-                               args.workers, tuple(Method(m) for m in args.methods),
-                               progress=progress, journal=journal)
+                               args.workers, tuple(args.methods),
+                               progress=progress, journal=journal,
+                               people_like=args.people_like)
     paths = result.write(args.out)
     journal.unlink()  # its rows are in the report's JSON now
     print(result.to_markdown())

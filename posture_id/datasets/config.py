@@ -80,7 +80,7 @@ class DatasetConfig:
         object.__setattr__(self, "split", tuple(float(f) for f in self.split))
 
     def stimulus(self) -> TiltProfile:
-        """The PRTS every trial is simulated on (``amplitude_deg`` p-p, ``cycles``, ``states``)."""
+        """The PRTS every trial is simulated on: ``amplitude_deg`` p-p, ``cycles``, ``states``."""
         return prts(amplitude_deg=self.amplitude_deg, cycles=self.cycles, states=self.states)
 
     def identity(self) -> dict:

@@ -112,9 +112,13 @@ class FitResult(Result):
 
     @property
     def classes(self) -> tuple[str, ...]:
+        """The fitted class C of each module (a :class:`~posture_id.dec.parameters.Controls`),
+        support upward."""
         return tuple(self.parameters[j].controls for j in self.joints)
 
     def to_dict(self) -> dict:
+        """JSON-ready (no sample arrays): parameters, standard errors, poorly determined
+        fields, the solver's status and stages, bounds reached, notices and provenance."""
         fields = TARGET_FIELDS
         block = parameter_block(self.parameters, self.normalised)
         del block["class_probability_com"]  # least squares has no class probability

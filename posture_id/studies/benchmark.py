@@ -1,12 +1,18 @@
 """The CNN against the optimiser, measured: accuracy, failures and time per recording.
 
 On ``trials`` held-out simulated recordings (docs/model.md §5 parameters drawn from a seed no data
-set uses; stable trials only) at each sensor-noise level (white, on the segment angles),
-three methods identify every recording:
+set uses; stable trials only), in each condition: clean sway at each sensor-noise level
+(white, on the segment angles), and, with ``people_like``, the same subjects with motor
+noise that leaves a share drawn per recording from :data:`PEOPLE_LIKE_SHARE` of their
+body COM sway stimulus-locked (:func:`~posture_id.simulation.subjects.people_like`, 0.05°
+sensor noise), every method identifies every recording:
 
-- ``cnn``: the bundled network alone;
+- ``cnn``: the bundled universal network alone;
+- ``paper-cnn``: the paper's spectrogram CNN, the body's per-body specialist
+  (``posture_id/learning/models/<body>``; bodies with one only);
 - ``fit``: least squares from the body's defaults;
-- ``hybrid``: least squares started from the CNN's answer.
+- ``hybrid``: least squares started from the universal network's answer;
+- ``auto``: ``identify``'s default (docs/identify.md).
 
 Each worker process loads the body and the network once. Per method and noise level: the
 mean absolute error of each normalised parameter (|p̃ − p̃_true|, medians too), class
@@ -42,14 +48,48 @@ from posture_id.simulation.metrics import sway_errors
 from posture_id.studies.journal import Journal
 from posture_id.studies.workers import worker_identifier
 
-__all__ = ["BenchmarkReport", "MethodStatistics", "run_benchmark", "FAR_E_REL", "JOURNAL"]
+__all__ = ["BenchmarkReport", "MethodStatistics", "run_benchmark", "FAR_E_REL", "JOURNAL",
+           "METHODS", "PAPER_CNN", "PEOPLE_LIKE", "PEOPLE_LIKE_SHARE"]
 
 #: A result whose re-simulated body sway differs from the truth's by more than this
 #: (relative) is counted as ending far from the truth.
 FAR_E_REL = 0.10
 #: The file in the report folder that finished identifications are appended to.
 JOURNAL = "cnn_vs_optimizer.journal.jsonl"
-METHODS = (Method.CNN, Method.FIT, Method.HYBRID, Method.AUTO)
+#: The paper's spectrogram CNN: the body's per-body specialist, alone.
+PAPER_CNN = "paper-cnn"
+#: Every method, by its label in the report, in the report's order.
+METHODS = (Method.CNN.value, PAPER_CNN, Method.FIT.value, Method.HYBRID.value,
+           Method.AUTO.value)
+#: The people-like condition's label, and the range its locked shares are drawn from.
+PEOPLE_LIKE = "people-like"
+PEOPLE_LIKE_SHARE = (0.15, 0.40)
+#: The people-like condition's white sensor noise, degrees.
+PEOPLE_LIKE_SENSOR_DEG = 0.05
+
+
+def specialist_folder(body: Body) -> Path:
+    """The per-body specialist (the paper's spectrogram CNN) shipped for ``body``."""
+    from posture_id.errors import PostureIdError
+
+    folder = Path(__file__).resolve().parents[1] / "learning" / "models" / body.name
+    if not (folder / "model.json").is_file():
+        raise PostureIdError(f"{PAPER_CNN}: no per-body specialist is shipped for body "
+                             f"{body.name!r} (posture_id/learning/models/)")
+    return folder
+
+
+def condition_label(condition: float | str) -> str:
+    """How the report names a condition: a sensor-noise level, or people-like sway."""
+    if condition == PEOPLE_LIKE:
+        low, high = PEOPLE_LIKE_SHARE
+        return (f"People-like sway ({100 * low:g}–{100 * high:g} % of the body COM sway "
+                f"locked, {PEOPLE_LIKE_SENSOR_DEG:g}° sensor noise)")
+    return f"Sensor noise {condition:g}°"
+
+
+def _short(condition: float | str) -> str:
+    return condition if isinstance(condition, str) else f"{condition:g}°"
 
 
 def _held_out(body: Body, trials: int, seed: int) -> ParameterArrays:
@@ -60,16 +100,39 @@ def _held_out(body: Body, trials: int, seed: int) -> ParameterArrays:
     return type(params)(**{f: getattr(params, f)[keep] for f in params.FIELDS})
 
 
-def _one(task: tuple) -> dict:
-    """Identify one recording with one method (a worker process)."""
-    urdf, arrays, index, noise_deg, method, seed = task
-    identifier = worker_identifier(urdf, method)
-    body = identifier.body
-    truth = ParameterArrays(**arrays).trial(0, body.joint_names)
+def _recording(body: Body, truth, condition: float | str, seed: int):
+    """(the recording, the noise-free truth's simulation) of one condition."""
+    if condition == PEOPLE_LIKE:
+        from posture_id.simulation.stimulus import prts
+        from posture_id.simulation.subjects import people_like
+
+        share = float(np.random.default_rng([seed, 4049]).uniform(*PEOPLE_LIKE_SHARE))
+        subject = people_like(body, truth, prts(), share, seed, PEOPLE_LIKE_SENSOR_DEG)
+        return subject.recording, subject.locked
     clean = simulate(body, truth)
     recording = clean.to_recording()
-    if noise_deg > 0:
-        recording = recording.with_sensor_noise(noise_deg, seed)
+    if condition > 0:
+        recording = recording.with_sensor_noise(condition, seed)
+    return recording, clean
+
+
+def _one(task: tuple) -> dict:
+    """Identify one recording with one method (a worker process)."""
+    from posture_id.errors import SimulationError
+
+    urdf, arrays, index, condition, method, seed = task
+    if method == PAPER_CNN:
+        identifier = worker_identifier(urdf, Method.CNN.value,
+                                       str(specialist_folder(load_body(urdf))))
+    else:
+        identifier = worker_identifier(urdf, method)
+    body = identifier.body
+    truth = ParameterArrays(**arrays).trial(0, body.joint_names)
+    base = {"index": index, "noise_deg": condition, "method": method}
+    try:
+        recording, clean = _recording(body, truth, condition, seed)
+    except SimulationError as exc:  # the subject falls with its motor noise: no recording
+        return {**base, "skipped": str(exc)}
     start = time.perf_counter()
     result = identifier.identify(replace(recording, name=f"trial {index}"))
     seconds = time.perf_counter() - start
@@ -79,7 +142,7 @@ def _one(task: tuple) -> dict:
     defaults_norm = normalise(truth, default_parameters(body))
     error = np.abs(result.normalised[:, :4] - defaults_norm[:, :4])
     correct = [result.parameters[j].controls == truth[j].controls for j in body.joint_names]
-    row = {"index": index, "noise_deg": noise_deg, "method": method, "seconds": seconds,
+    row = {**base, "seconds": seconds,
            "identification_seconds": result.identification_time_s, "e_rel": e_rel,
            "abs_error": error.tolist(), "classes_correct": correct,
            "relaxed": result.relaxed_refit}
@@ -98,7 +161,8 @@ class MethodStatistics:
     """One method at one sensor-noise level over the benchmark's recordings.
 
     Attributes:
-        noise_deg: sensor noise SD, degrees. method: the method. recordings: how many.
+        noise_deg: the condition: sensor noise SD, degrees, or :data:`PEOPLE_LIKE`.
+        method: the method's label (:data:`METHODS`). recordings: how many.
         mean_abs_error, median_abs_error: (N, 4) |error| of K̃p, K̃i, K̃d, Δ̃ per module.
         class_accuracy: share of classes right. e_rel_median, e_rel_p90: E_rel (fraction).
         far_from_truth: recordings with a wrong class or E_rel above :data:`FAR_E_REL`.
@@ -111,8 +175,8 @@ class MethodStatistics:
         relaxed: recordings the hybrid fitted again with its classes relaxed.
     """
 
-    noise_deg: float
-    method: Method
+    noise_deg: float | str
+    method: str
     recordings: int
     mean_abs_error: np.ndarray
     median_abs_error: np.ndarray
@@ -132,7 +196,8 @@ class MethodStatistics:
     relaxed: int = 0
 
     @classmethod
-    def of_rows(cls, noise: float, method: Method, rows: list[dict]) -> MethodStatistics:
+    def of_rows(cls, noise: float | str, method: str, rows: list[dict]) -> MethodStatistics:
+        """The statistics of ``rows`` (one per recording) of one condition and method."""
         err = np.array([r["abs_error"] for r in rows])  # (R, N, 4)
         e_rel = np.array([r["e_rel"] for r in rows])
         correct = np.array([r["classes_correct"] for r in rows])
@@ -159,9 +224,8 @@ class MethodStatistics:
             relaxed=sum(bool(r.get("relaxed")) for r in rows))
 
     def to_dict(self) -> dict:
-        out = {f.name: getattr(self, f.name) for f in fields(self)}
-        out["method"] = self.method.value
-        return jsonable(out)
+        """JSON-ready: every field."""
+        return jsonable({f.name: getattr(self, f.name) for f in fields(self)})
 
 
 @dataclass(frozen=True)
@@ -171,15 +235,22 @@ class BenchmarkReport(Result):
     body: str
     joints: tuple[str, ...]
     trials: int
-    noise_levels: tuple[float, ...]
+    noise_levels: tuple[float | str, ...]
     rows: tuple[dict, ...]
     workers: int
 
-    def _rows(self, noise: float, method: Method) -> list[dict]:
-        return [r for r in self.rows if r["noise_deg"] == noise and r["method"] == method.value]
+    def _rows(self, noise: float | str, method: str) -> list[dict]:
+        return [r for r in self.rows if r["noise_deg"] == noise and r["method"] == method
+                and "skipped" not in r]
 
-    def statistics(self) -> dict[tuple[float, Method], MethodStatistics]:
-        """Every (noise level, method) that has rows, in the order of the report."""
+    @property
+    def skipped(self) -> int:
+        """Recordings not made: the people-like subject fell with its motor noise (each
+        counted once, not per method)."""
+        return len({(r["noise_deg"], r["index"]) for r in self.rows if "skipped" in r})
+
+    def statistics(self) -> dict[tuple[float | str, str], MethodStatistics]:
+        """Every (condition, method) that has rows, in the order of the report."""
         return {(noise, method): MethodStatistics.of_rows(noise, method, rows)
                 for noise in self.noise_levels for method in METHODS
                 if (rows := self._rows(noise, method))}
@@ -188,13 +259,14 @@ class BenchmarkReport(Result):
         """Per noise level and method: classes, median E_rel, far ones, median time."""
         lines = [f"CNN against the optimiser on {self.body}, {self.trials} recordings"]
         for (noise, method), s in self.statistics().items():
-            lines.append(f"  {noise:g}° {method.value}: classes {100 * s.class_accuracy:.1f} %, "
+            lines.append(f"  {_short(noise)} {method}: classes {100 * s.class_accuracy:.1f} %, "
                          f"E_rel median {100 * s.e_rel_median:.2f} %, far "
                          f"{s.far_from_truth}/{s.recordings}, "
                          f"{s.identification_seconds_median:.3g} s")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
+        """JSON-ready: the set-up, every statistic and every row."""
         return {"body": self.body, "joints": list(self.joints), "trials": self.trials,
                 "noise_levels": list(self.noise_levels), "workers": self.workers,
                 "far_e_rel": FAR_E_REL,
@@ -205,8 +277,8 @@ class BenchmarkReport(Result):
         stats = self.statistics()
         lines = ["# The CNN against the optimiser", "",
                  f"Body `{self.body}`, {self.trials} held-out simulated 121 s recordings "
-                 f"(docs/model.md §5 parameters, stable), sensor noise "
-                 f"{', '.join(f'{n:g}°' for n in self.noise_levels)}; "
+                 f"(docs/model.md §5 parameters, stable); "
+                 f"{'; '.join(condition_label(n).lower() for n in self.noise_levels)}; "
                  f"{self.workers} recordings identified at a time. E_rel: body sway "
                  "re-simulated with the identified parameters against the noise-free truth. "
                  f"Far: a wrong class or E_rel above {100 * FAR_E_REL:g} %. Time: identifying "
@@ -214,14 +286,17 @@ class BenchmarkReport(Result):
                  "whole `identify` call, with the checks and the re-simulation every method "
                  "shares; each worker process on one thread. Made by `posture-id benchmark` "
                  "(`benchmarks/cnn_vs_optimizer.py`).", ""]
-        far = {m.value: sum(s.far_from_truth for (_, method), s in stats.items()
-                            if method is m) for m in METHODS}
-        total = {m.value: sum(s.recordings for (_, method), s in stats.items()
-                              if method is m) for m in METHODS}
+        far = {m: sum(s.far_from_truth for (_, method), s in stats.items()
+                      if method == m) for m in METHODS}
+        total = {m: sum(s.recordings for (_, method), s in stats.items()
+                        if method == m) for m in METHODS}
         lines += ["Ending far from the truth, all noise levels: " + ", ".join(
             f"{m} {far[m]}/{total[m]}" for m in far if total[m]) + ".", ""]
+        if self.skipped:
+            lines += [f"{self.skipped} people-like subject(s) fell with their motor noise: "
+                      "no recording, left out.", ""]
         for noise in self.noise_levels:
-            lines += [f"## Sensor noise {noise:g}°", "",
+            lines += [f"## {condition_label(noise)}", "",
                       "| method | classes | E_rel median | E_rel 90 % | far | s identifying "
                       "(median) | s whole call (median) | mean \\|error\\| Kp, Ki, Kd, Δ "
                       "(per module) |",
@@ -232,13 +307,13 @@ class BenchmarkReport(Result):
                     continue
                 errors = "; ".join(", ".join(f"{e:.3f}" for e in module)
                                    for module in s.mean_abs_error)
-                lines.append(f"| {method.value} | {100 * s.class_accuracy:.1f} % | "
+                lines.append(f"| {method} | {100 * s.class_accuracy:.1f} % | "
                              f"{100 * s.e_rel_median:.2f} % | {100 * s.e_rel_p90:.1f} % | "
                              f"{s.far_from_truth}/{s.recordings} | "
                              f"{s.identification_seconds_median:.3g} | "
                              f"{s.seconds_median:.3g} | {errors} |")
-            cnn, fit, hybrid = (stats.get((noise, m)) for m in (Method.CNN, Method.FIT,
-                                                                  Method.HYBRID))
+            cnn, fit, hybrid = (stats.get((noise, m.value)) for m in (Method.CNN, Method.FIT,
+                                                                        Method.HYBRID))
             if cnn and fit and hybrid:
                 t_cnn, t_fit, t_hybrid = (x.identification_seconds_median
                                           for x in (cnn, fit, hybrid))
@@ -255,7 +330,7 @@ class BenchmarkReport(Result):
         lines += ["![E_rel per method](cnn_vs_optimizer.png)", ""]
         return "\n".join(lines)
 
-    def _verdict_markdown(self, stats: dict[tuple[float, Method], MethodStatistics]
+    def _verdict_markdown(self, stats: dict[tuple[float | str, str], MethodStatistics]
                           ) -> list[str]:
         """How often the trust verdict called far answers and right ones doubtful."""
         judged = [s for s in stats.values() if s.doubtful_far is not None]
@@ -269,9 +344,9 @@ class BenchmarkReport(Result):
                  "|---|---|---|---|---|"]
         for s in judged:
             right = s.recordings - s.far_from_truth
-            lines.append(f"| {s.noise_deg:g}° | {s.method.value} | "
+            lines.append(f"| {_short(s.noise_deg)} | {s.method} | "
                          f"{s.doubtful_far}/{s.far_from_truth} | {s.doubtful_right}/{right} | "
-                         + (f"{s.relaxed}/{s.recordings}" if s.method is Method.HYBRID
+                         + (f"{s.relaxed}/{s.recordings}" if s.method == Method.HYBRID.value
                             else "") + " |")
         far = sum(s.far_from_truth for s in judged)
         right = sum(s.recordings - s.far_from_truth for s in judged)
@@ -280,7 +355,7 @@ class BenchmarkReport(Result):
                       "ones.", ""]
         return lines
 
-    def _coverage_markdown(self, stats: dict[tuple[float, Method], MethodStatistics]
+    def _coverage_markdown(self, stats: dict[tuple[float | str, str], MethodStatistics]
                            ) -> list[str]:
         """How often each method's 90 % intervals held the truth on these recordings."""
         rows = [s for s in stats.values() if s.interval_coverage is not None]
@@ -296,12 +371,13 @@ class BenchmarkReport(Result):
                  "|---|---|---|---|---|---|---|---|---|"]
         for s in rows:
             cov = s.interval_coverage
-            lines.append(f"| {s.noise_deg:g}° | {s.method.value} | {s.interval_method} | "
+            lines.append(f"| {_short(s.noise_deg)} | {s.method} | {s.interval_method} | "
                          f"{s.interval_recordings} | {100 * cov.mean():.1f} % | "
                          + " | ".join(f"{100 * c:.1f} %" for c in cov.mean(axis=0)) + " |")
         return lines + [""]
 
     def write(self, folder: str | Path) -> list[Path]:
+        """cnn_vs_optimizer.json, .md and .png in ``folder``; their paths."""
         folder = Path(folder)
         paths = [atomic_write_text(folder / "cnn_vs_optimizer.json", json_text(self.to_dict())),
                  atomic_write_text(folder / "cnn_vs_optimizer.md", self.to_markdown()),
@@ -310,12 +386,13 @@ class BenchmarkReport(Result):
         return paths
 
     def plot(self, path=None, ax=None):
+        """E_rel and time per recording, a box per condition and method."""
         groups = {}
         for noise in self.noise_levels:
             for method in METHODS:
                 rows = self._rows(noise, method)
                 if rows:
-                    groups[f"{method.value}\n{noise:g}°"] = (
+                    groups[f"{method}\n{_short(noise)}"] = (
                         [min(r["e_rel"], 10.0) for r in rows],
                         [r["identification_seconds"] for r in rows])
         return plot_benchmark(groups, path=path, ax=ax)
@@ -325,21 +402,32 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
                   noise_levels: tuple[float, ...] = (0.0, 0.01, 0.05), seed: int = 0,
                   workers: int | None = None, methods=METHODS,
                   progress: Progress | None = None,
-                  journal: str | Path | None = None) -> BenchmarkReport:
-    """Run the benchmark (see the module doc).
+                  journal: str | Path | None = None,
+                  people_like: bool = False) -> BenchmarkReport:
+    r"""Run the benchmark (see the module doc).
 
-    ``journal``: a JSON-lines file that every finished identification is appended to; a
-    run given the journal of an interrupted one with the same body, model, trials and seed
-    redoes only what is missing (a journal of another set-up is refused).
+    Args:
+        body: default the TIP. trials: held-out recordings per condition. noise_levels:
+            the clean conditions' sensor noise, degrees. seed: of the held-out subjects.
+        workers: processes (default: every core). methods: labels of :data:`METHODS` (or
+            :class:`Method`\ s). progress: told each identification.
+        journal: a JSON-lines file that every finished identification is appended to; a
+            run given the journal of an interrupted one with the same body, model, trials
+            and seed redoes only what is missing (a journal of another set-up is refused).
+        people_like: also the people-like condition (the module doc).
     """
     body = body or load_body()
+    methods = tuple(m.value if isinstance(m, Method) else m for m in methods)
+    if PAPER_CNN in methods:
+        specialist_folder(body)  # refused before any work when there is none
+    conditions = (*noise_levels, *((PEOPLE_LIKE,) if people_like else ()))
     held_out = _held_out(body, trials, seed)
     tasks = []
-    for noise in noise_levels:
+    for noise in conditions:
         for b in range(held_out.n_trials):
             arrays = {f: getattr(held_out, f)[b : b + 1] for f in held_out.FIELDS}
             for method in methods:
-                tasks.append((str(body.urdf_path), arrays, b, noise, method.value,
+                tasks.append((str(body.urdf_path), arrays, b, noise, method,
                               int(1000 * seed + b)))
     weights = network_for(None, body).model.sidecar["weights_sha256"]
     header = {"format": "posture_id-benchmark-journal", "body_sha256": body.sha256,
@@ -356,17 +444,18 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
             if book is not None:
                 book.append(row)
             report(progress, len(rows), len(tasks), "identification")
-    rows.sort(key=lambda r: (noise_levels.index(r["noise_deg"]), r["index"],
-                             [m.value for m in methods].index(r["method"])))
-    return BenchmarkReport(body.name, body.joint_names, held_out.n_trials, tuple(noise_levels),
+    rows.sort(key=lambda r: (conditions.index(r["noise_deg"]), r["index"],
+                             methods.index(r["method"])))
+    return BenchmarkReport(body.name, body.joint_names, held_out.n_trials, tuple(conditions),
                            tuple(rows), workers)
 
 
 def _task_key(task_or_row) -> tuple:
     if isinstance(task_or_row, dict):
-        return (float(task_or_row["noise_deg"]), int(task_or_row["index"]), task_or_row["method"])
-    _, _, index, noise, method, _ = task_or_row
-    return (float(noise), int(index), method)
+        noise, index, method = (task_or_row[k] for k in ("noise_deg", "index", "method"))
+    else:
+        _, _, index, noise, method, _ = task_or_row
+    return (noise if isinstance(noise, str) else float(noise), int(index), method)
 
 
 def _ratio(a: float, b: float) -> str:

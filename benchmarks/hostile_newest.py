@@ -396,10 +396,10 @@ def _cohort_norm_cases() -> list[Case]:
         Case("no such norm (cohort)", "cohort norm",
              ("identify", "recs", "--out", "o", "--method", "cnn", "--norm", "n.json"),
              ("n.json", "no such"), recs),
-        Case("a norm of no lab points without --band-preset", "cohort norm",
+        Case("a norm at no preset's points without --band-preset", "cohort norm",
              ("identify", "recs", "--out", "o", "--method", "cnn", "--norm", "n.json"),
              ("n.json", "--band-preset"),
-             {**recs, "n.json": _edited("norm", _set(lab_bands=None))}),
+             {**recs, "n.json": _edited("norm", _no_lab_points)}),
         Case("--norm with one recording", "cohort norm",
              ("identify", "{rec}", "--method", "cnn", "--norm", "{norm}"), ("--norm",)),
     ]

@@ -218,3 +218,16 @@ def test_the_link_check_sees_what_it_must():
         assert _link_problem(page, fine) is None, fine
     lines = _prose_lines("a [x](a.md)\n\n    code [y](b.md)\n\n```\n[z](c.md)\n```\n`[w](d.md)`\n")
     assert [n for n, line in lines if _LINK.search(line)] == [1]
+
+
+def test_the_pages_describe_the_program_as_it_is():
+    """No page of the README or docs/ narrates how the work was organised (issue or stop
+    numbers, dates of changes): history is CHANGELOG.md's."""
+    narrating = re.compile(r"\bissues? \d+|\bstops? \d+|\b20\d\d-\d\d-\d\d\b", re.IGNORECASE)
+    found = [f"{path.relative_to(ROOT)}:{n}: {line.strip()[:80]}"
+             for path in [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
+             if "results" not in path.parts and "models" not in path.parts
+             and path.name != "changelog.md"
+             for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+             if narrating.search(line)]
+    assert not found, found

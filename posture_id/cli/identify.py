@@ -17,6 +17,7 @@ from posture_id.cli.arguments import (
 from posture_id.cli.exit_status import answered
 from posture_id.cli.fit import add_search_arguments, search_flags_given, search_keywords
 from posture_id.cli.markers import recording_body
+from posture_id.cli.norm import norm_bands
 from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
@@ -214,9 +215,7 @@ def _cohort_norm(args: argparse.Namespace):
     from posture_id.norms.norm import Norm
 
     norm = Norm.from_json(args.norm)
-    if norm.lab_bands is None and args.band_preset is None:
-        raise PostureIdError(f"{args.norm}: the norm does not say at which points its FRFs "
-                             "were computed; give --band-preset")
+    norm_bands(args, norm)  # its points: its own, a preset's, or --band-preset's; else refused
     per_trial = args.bodies is not None or (
         args.body is None and isinstance(columns_from_args(args), MarkerMapping))
     if not per_trial:  # every recording is read for one body: its channels are known
@@ -236,13 +235,12 @@ def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm
                  ) -> dict[str, str]:
     """Each recording's FRF at the lab's points, and the norm's columns in summary.csv;
     returns the recordings that got none, with why (each said)."""
-    from posture_id.frf.bands import BAND_PRESETS, FrequencyBands
+    from posture_id.frf.bands import BAND_PRESETS
     from posture_id.norms.cohort import cohort_frfs
     from posture_id.trials import prepare_trial
     from posture_id.trials.subjects import subject_urdf
 
-    bands = (BAND_PRESETS[args.band_preset] if args.band_preset
-             else FrequencyBands.from_dict(norm.lab_bands))
+    bands = norm_bands(args, norm) if norm is not None else BAND_PRESETS[args.band_preset]
 
     load = cache(load_body)  # one load per URDF, however many recordings share it
 

@@ -24,7 +24,7 @@ from posture_id.cli.stimulus import (
 from posture_id.errors import PostureIdError
 from posture_id.frf.bands import BAND_PRESETS
 
-__all__ = ["add_parser"]
+__all__ = ["add_parser", "norm_bands"]
 
 
 def _sources(p: argparse.ArgumentParser) -> None:
@@ -209,7 +209,7 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
     from posture_id.frf.response import FrfOptions
     from posture_id.trials import prepare_trial
 
-    bands = _norm_bands(args, norm)
+    bands = norm_bands(args, norm)
     body = recording_body(args, None)
     recording, stimulus = recording_and_stimulus(args, body)
     options = FrfOptions.lab_convention(bands)
@@ -219,7 +219,7 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
     return frf.frequencies_hz, frf.response[:, columns], names
 
 
-def _norm_bands(args: argparse.Namespace, norm):
+def norm_bands(args: argparse.Namespace, norm):
     """The bands a recording's FRF is computed at for ``norm``: a built norm's own
     (``lab_bands``); for one that does not say them, the preset whose points are its
     frequencies, or ``--band-preset``'s bands reported at its frequencies."""

@@ -3,13 +3,15 @@
 A page holding the marker ``<!-- cli-reference -->`` gets, in its place, the ``--help`` of
 ``posture-id`` and of every command and sub-command; one holding ``<!-- api-reference -->``
 gets an entry (rendered by mkdocstrings from the docstrings) for every name
-``posture_id`` exports. Neither can drift from the program.
+``posture_id`` exports. Neither can drift from the program. The docstrings' cross-reference
+roles (``:func:`~posture_id.x.name```) are shown as the code they name.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import re
 
 MARKER = "<!-- cli-reference -->"
 API_MARKER = "<!-- api-reference -->"
@@ -58,3 +60,11 @@ def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001
     if API_MARKER in markdown:
         markdown = markdown.replace(API_MARKER, api_reference())
     return markdown
+
+
+_ROLE = re.compile(r":(?:func|class|meth|data|mod|attr|exc):(<code>)~?")
+
+
+def on_page_content(html: str, page, config, files) -> str:  # noqa: ARG001 - MkDocs API
+    """Drop the docstrings' reST roles before their code spans."""
+    return _ROLE.sub(r"\1", html)

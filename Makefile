@@ -63,7 +63,7 @@ test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"
 
 lint: $(STAMP)
-	$(BIN)/ruff check posture_id tests benchmarks docs/tutorials
+	$(BIN)/ruff check posture_id tests benchmarks docs/tutorials docs/hooks
 	$(BIN)/lint-imports
 
 bodies: $(STAMP)

@@ -1,8 +1,10 @@
 """The CNN against the optimiser: ``posture-id benchmark`` as a script.
 
-Run:  .venv/bin/python benchmarks/cnn_vs_optimizer.py [--trials 50] [--noise-deg 0 0.01 0.05]
+Run:  .venv/bin/python benchmarks/cnn_vs_optimizer.py --out docs/results/benchmark
+          [--trials 24] [--sensor-noise-deg 0.05] [--people-like] [--methods ...]
 
-See :mod:`posture_id.identify.benchmark`; writes docs/results/cnn_vs_optimizer.{md,json,png}.
+See :mod:`posture_id.studies.benchmark` and docs/benchmark.md; writes
+``cnn_vs_optimizer.{md,json,png}`` into ``--out``.
 """
 
 import sys

@@ -31,6 +31,7 @@ import hashlib
 import io
 import json
 import os
+import re
 import shutil
 import signal
 import sys
@@ -276,8 +277,9 @@ def run_case(case: Case, material: dict[str, str], folder: Path) -> Outcome:
     elif status == 2:  # a renamed flag's notice is not part of the refusal
         refusal = "".join(line for line in err_text.splitlines(keepends=True)
                           if not line.startswith("posture-id: note:"))
-        one_line = refusal.count("\n") == 1 and refusal.startswith("posture-id")
-        named = all(e in err_text for e in case.expect)
+        one_line = refusal.count("\n") == 1 and re.match(r"posture-id( [a-z-]+)*: error: ",
+                                                          refusal) is not None
+        named = all(e in refusal for e in case.expect)
         kind = "clear" if one_line and named and not case.handled else "unclear"
     else:
         noticed = all(e in err_text + out_text for e in case.expect)
@@ -728,6 +730,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     from posture_id.fileio import atomic_write_text, json_text
 
+    before = (None if args.before is None
+              else json.loads(args.before.read_text(encoding="utf-8")))  # read before the run
     cases = [c for c in all_cases() if args.only is None or args.only in c.name]
     args.out.mkdir(parents=True, exist_ok=True)
     journal = args.out / JOURNAL
@@ -754,8 +758,7 @@ def main(argv: list[str] | None = None) -> int:
         f" --before {args.before}" if args.before is not None else "")
     if args.only is None:
         report = _report(rows, seconds, command)
-        if args.before is not None:
-            before = json.loads(args.before.read_text(encoding="utf-8"))
+        if before is not None:
             report += (f"\n## Before and after\n\nThe cases also in `{args.before}` (the "
                        "same cases run on an earlier tree); each cell: "
                        + " / ".join(OUTCOMES) + ".\n\n" + before_after(before, rows))

@@ -115,7 +115,6 @@ __all__ = [
 _LAZY = {
     "read_recording": "posture_id.trials.reading",
     "prepare_trial": "posture_id.trials",
-    "identify": "posture_id.identify",
     "Identifier": "posture_id.identify",
     "Method": "posture_id.identify",
     "IdentificationResult": "posture_id.identify",
@@ -150,4 +149,15 @@ _LAZY = {
 }
 
 
-__getattr__ = lazy_getattr("posture_id", _LAZY)
+_lazy = lazy_getattr("posture_id", _LAZY)
+
+
+def __getattr__(name: str) -> object:
+    """A name of the API on first use; ``identify`` is the package of that name, callable as
+    its function (Python binds the package's name here once it is imported, so the name is
+    the same object every time)."""
+    if name == "identify":
+        import importlib
+
+        return importlib.import_module("posture_id.identify")
+    return _lazy(name)

@@ -188,3 +188,11 @@ def test_the_top_level_help_lists_every_command_once_by_task(capsys):
         for name in group:
             assert text.count(f"\n  {name} ") == 1, name
     assert "examples:" in text
+
+
+def test_a_command_s_error_names_the_command(capsys):
+    """``posture-id body: error: ...``: every sub-command's one line names it."""
+    assert main(["body", "--segments", "x"]) == 2
+    assert capsys.readouterr().err.startswith("posture-id body: error: argument --segments")
+    assert main(["norm", "build", "--bootstrap", "0"]) == 2
+    assert capsys.readouterr().err.startswith("posture-id norm build: error: ")

@@ -44,7 +44,7 @@ def test_the_newest_commands_have_at_least_80_cases_over_each_of_their_surfaces(
     assert {c.surface for c in newest} == {"norm build", "norm test", "norm compare",
                                            "cohort norm", "c3d", "simulate c3d", "ic",
                                            "compare"}
-    assert {c.name for c in newest} <= {c.name for c in CASES}
+    assert len(CASES) - len(newest) >= 120  # the earlier surfaces' cases run beside them
 
 
 @pytest.mark.parametrize("case", [pytest.param(c, id=c.name, marks=[pytest.mark.slow]

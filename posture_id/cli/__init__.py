@@ -73,7 +73,7 @@ def build_parser() -> Parser:
     parser.add_argument("--debug", action="store_true",
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser,
-                                metavar="COMMAND", title="commands")
+                                metavar="COMMAND", title="commands", prog="posture-id")
     for command in (identify, fit, compare, frf, norm, body, simulate, platform_command,
                     design, universal, dataset, train, evaluate, calibration, benchmark,
                     demo):

@@ -22,7 +22,8 @@ BENCHMARK_METHODS = ("cnn", "paper-cnn", "fit", "hybrid", "auto")
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("benchmark", help="CNN versus least squares versus the hybrid")
+    p = sub.add_parser("benchmark", help="the networks against least squares, the hybrid and "
+                                         "auto, on held-out recordings")
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     p.add_argument("--trials", type=positive_int, default=50,
                    help="held-out simulated recordings per noise level (default %(default)d)")
@@ -32,10 +33,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
     p.add_argument("--workers", type=positive_int, help="processes (default: all cores)")
     p.add_argument("--methods", nargs="+", choices=BENCHMARK_METHODS,
-                   default=list(BENCHMARK_METHODS),
                    help="methods compared (default: all: the universal network alone, the "
-                        "paper's spectrogram CNN (the body's specialist), least squares from "
-                        "the defaults, the hybrid, auto)")
+                        "paper's spectrogram CNN (for a body with a shipped specialist), "
+                        "least squares from the defaults, the hybrid, auto)")
     p.add_argument("--people-like", action="store_true",
                    help="also the same subjects with motor noise leaving 15–40 %% of their "
                         "body COM sway stimulus-locked (0.05° sensor noise)")
@@ -52,7 +52,8 @@ def run(args: argparse.Namespace) -> int:
     journal = args.out / JOURNAL
     with TerminalProgress("identifications", prefix="posture-id benchmark") as progress:
         result = run_benchmark(body, args.trials, tuple(args.sensor_noise_deg), args.seed,
-                               args.workers, tuple(args.methods),
+                               args.workers,
+                               None if args.methods is None else tuple(args.methods),
                                progress=progress, journal=journal,
                                people_like=args.people_like)
     paths = result.write(args.out)

@@ -219,15 +219,18 @@ def _cohort_norm(args: argparse.Namespace):
     per_trial = args.bodies is not None or (
         args.body is None and isinstance(columns_from_args(args), MarkerMapping))
     if not per_trial:  # every recording is read for one body: its channels are known
+        from posture_id.norms.cohort import norm_columns
+
         body = load_body(args.body or DEFAULT_URDF)
         given = (*body.segment_names, "body COM")
-        missing = [c for c in norm.channels if c not in given]
-        if missing:
+        try:
+            norm_columns(norm, given, str(args.norm))
+        except PostureIdError:
             raise PostureIdError(
                 f"{args.norm}: the norm's channels {', '.join(norm.channels)} are not all "
                 f"the recordings' ({', '.join(given)} for {Path(body.urdf_path).name}): "
                 "test against a norm of the same segments, or of the body COM alone "
-                "(norm build --channel 'body COM')")
+                "(norm build --channel 'body COM')") from None
     return norm
 
 

@@ -3,7 +3,8 @@ with a one-line notice of its new name, and a negative axis is taken as typed.
 
 The command line is read once, before parsing (:func:`normalised`): a renamed flag
 (``--noise-deg``, alone or as ``--noise-deg=0.05``) is replaced by its new name for its
-command; ``identify --model DIR`` (a network's folder) becomes ``--network DIR``, as
+command; ``identify --model DIR`` (a network's folder: one that exists, or a path) becomes
+``--network DIR``, as
 ``--model`` names the model (``dec`` or ``ic``) in every command; and an axis flag
 followed by ``-x``, ``-y`` or ``-z`` (which argparse would take for a flag) is joined to it
 as ``--forward-axis=-y``.
@@ -11,6 +12,7 @@ as ``--forward-axis=-y``.
 
 from __future__ import annotations
 
+import os
 import sys
 
 __all__ = ["RENAMED", "AXIS_FLAGS", "normalised"]
@@ -30,6 +32,13 @@ RENAMED: dict[tuple[str, str], str] = {
 AXIS_FLAGS = ("--forward-axis", "--vertical-axis", "--c3d-forward-axis")
 _NEGATIVE_AXES = ("-x", "-y", "-z")
 _MODEL_NAMES = ("dec", "ic")
+
+
+def _a_folder(value: str) -> bool:
+    """Whether ``--model``'s value names a network's folder (one that exists, or a path),
+    not a model (``dec``, ``ic``, or a misspelling argparse then names)."""
+    return value not in _MODEL_NAMES and (os.path.isdir(value) or "/" in value
+                                          or os.sep in value)
 
 
 def _notice(old: str, new: str) -> None:
@@ -55,13 +64,10 @@ def normalised(argv: list[str]) -> list[str]:
         if new is not None:
             _notice(flag, new)
             out.append(new + equals + value)
-        elif command == "identify" and flag == "--model":
-            given = value if equals else (argv[k + 1] if k + 1 < len(argv) else "")
-            if given.lower() not in _MODEL_NAMES:  # a network's folder, as it once was
-                _notice("--model DIR", "--network DIR")
-                out.append("--network" + equals + value)
-            else:
-                out.append(token)
+        elif command == "identify" and flag == "--model" and _a_folder(
+                value if equals else (argv[k + 1] if k + 1 < len(argv) else "")):
+            _notice("--model DIR", "--network DIR")  # a network's folder, as it once was
+            out.append("--network" + equals + value)
         else:
             out.append(token)
         k += 1

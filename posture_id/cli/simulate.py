@@ -108,30 +108,39 @@ _C3D_FLAGS = ("c3d_forward_axis", "c3d_unit", "frame_rate_hz", "analog_per_frame
               "marker_noise_mm", "marker_gap", "height_m", "mass_kg")
 
 
-def _write_recording(args: argparse.Namespace, recording, body) -> None:
-    """``--out``: CSV, or a C3D trial with the C3D flags."""
+def _c3d_options(args: argparse.Namespace, end_s: float):
+    """The C3D trial's writing options the flags ask for (None: ``--out`` is a CSV),
+    checked before anything is simulated; ``end_s``: the trial's length, s."""
     from posture_id.motion_capture import is_c3d
 
     given = [f"--{f.replace('_', '-')}" for f in _C3D_FLAGS if getattr(args, f) is not None]
     if not is_c3d(args.out):
         if given:
             raise PostureIdError(f"{', '.join(given)} write a C3D trial: give --out NAME.c3d")
-        recording.to_csv(args.out)
-        return
-    from posture_id.motion_capture import C3dWriteOptions, LabAxes, write_c3d
+        return None
+    from posture_id.motion_capture import C3dWriteOptions, LabAxes
 
     _check_subject(args)
-    gaps = [_marker_gap(marker, start, duration, float(recording.time[-1]))
+    gaps = [_marker_gap(marker, start, duration, end_s)
             for marker, start, duration in args.marker_gap or ()]
     defaults = C3dWriteOptions()
-    options = C3dWriteOptions(
+    return C3dWriteOptions(
         axes=LabAxes(args.c3d_forward_axis or "x"), unit=args.c3d_unit or defaults.unit,
         rate_hz=args.frame_rate_hz or defaults.rate_hz,
         marker_noise_mm=args.marker_noise_mm or 0.0, gaps=tuple(gaps),
         analog_per_frame=(defaults.analog_per_frame if args.analog_per_frame is None
                           else args.analog_per_frame),
         height_m=args.height_m, mass_kg=args.mass_kg, seed=args.seed)
-    write_c3d(args.out, recording, tuple(s.length for s in body.segments), options)
+
+
+def _write_recording(args: argparse.Namespace, recording, body, c3d) -> None:
+    """``--out``: CSV, or a C3D trial written with ``c3d`` (:func:`_c3d_options`)."""
+    if c3d is None:
+        recording.to_csv(args.out)
+        return
+    from posture_id.motion_capture import write_c3d
+
+    write_c3d(args.out, recording, tuple(s.length for s in body.segments), c3d)
 
 
 def _check_subject(args: argparse.Namespace) -> None:
@@ -170,9 +179,10 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     body = load_body(args.body or DEFAULT_URDF)
     stimulus = stimulus_from_args(args, default=prts())
+    c3d = _c3d_options(args, stimulus.duration)
     options = model_options(args)
     if args.model == "ic":
-        return _simulate_ic(args, body, stimulus, options)
+        return _simulate_ic(args, body, stimulus, options, c3d)
     params = DecParameters.from_json(args.params, body) if args.params else None
     motor = (MotorNoise(args.motor_noise, args.motor_cutoff_hz, args.seed)
              if args.motor_noise > 0 else None)
@@ -180,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
     recording = result.to_recording()
     if args.sensor_noise_deg > 0:
         recording = recording.with_sensor_noise(args.sensor_noise_deg, args.seed)
-    _write_recording(args, recording, body)
+    _write_recording(args, recording, body, c3d)
     say(f"wrote {args.out} ({len(result.time)} samples at {options.sample_rate_hz:g} Hz)")
     if args.plot:
         result.plot(args.plot)
@@ -191,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
     return answered(not result.stable)
 
 
-def _simulate_ic(args: argparse.Namespace, body, stimulus, options) -> int:
+def _simulate_ic(args: argparse.Namespace, body, stimulus, options, c3d) -> int:
     """``--model ic``: the IC model's recording (docs/model.md §8)."""
     from posture_id.ic import IcParameters, IcPlant, default_ic_parameters, simulate_ic
 
@@ -203,7 +213,7 @@ def _simulate_ic(args: argparse.Namespace, body, stimulus, options) -> int:
                             args.motor_cutoff_hz, args.seed)
     if args.sensor_noise_deg > 0:
         recording = recording.with_sensor_noise(args.sensor_noise_deg, args.seed)
-    _write_recording(args, recording, body)
+    _write_recording(args, recording, body, c3d)
     say(f"wrote {args.out} ({len(recording.time)} samples at {options.sample_rate_hz:g} Hz; "
         f"{params.summary()})")
     if args.plot:

@@ -8,6 +8,7 @@ callable and calling it is calling :func:`identify` (``posture_id.identify(recor
 works either way).
 """
 
+import inspect
 import sys
 import types
 
@@ -24,6 +25,11 @@ class _CallablePackage(types.ModuleType):
 
     def __call__(self, *args, **kwargs) -> IdentificationResult:
         return identify(*args, **kwargs)
+
+    __call__.__doc__ = identify.__doc__
+    __call__.__signature__ = inspect.signature(identify).replace(parameters=[
+        inspect.Parameter("self", inspect.Parameter.POSITIONAL_ONLY),
+        *inspect.signature(identify).parameters.values()])
 
 
 sys.modules[__name__].__class__ = _CallablePackage

@@ -234,15 +234,22 @@ class Norm(JsonFile):
         confidence = field_of.object("confidence_band")
         pir = field_of.pir(f, len(channels), len(members), rate_hz)
         level = field_of.number("prediction_band.level", bands.get("level", 0.95))
+        if not 0.5 <= level < 1:
+            raise PostureIdError(f"{path}: prediction_band.level must be within 0.5–0.99 (a "
+                                 f"share, not a percentage), got {level:g}")
         constants = [None if band.get("constant") is None
                      else field_of.number(f"{key}.constant", band["constant"])
                      for key, band in (("prediction_band", bands),
                                        ("confidence_band", confidence))]
+        bootstrap = field_of.count("prediction_band.bootstrap", bands.get("bootstrap", 0))
+        if pir[0] is not None and (constants[0] is None or bootstrap < 10):
+            raise PostureIdError(f"{path}: a norm with PIRs needs its prediction band: "
+                                 "prediction_band.constant and at least 10 bootstrap "
+                                 f"resamples (prediction_band.bootstrap, got {bootstrap})")
         return cls(f, channels, weights, mean, matrices.get("covariance"),
                    matrices.get("inverse_covariance"), members, rate_hz, *pir,
-                   *constants, level,
-                   int(field_of.number("prediction_band.bootstrap", bands.get("bootstrap", 0))),
-                   int(field_of.number("seed", data.get("seed", 0))), field_of.lab_bands(),
+                   *constants, level, bootstrap,
+                   field_of.count("seed", data.get("seed", 0)), field_of.lab_bands(),
                    data.get("covariance_shrinkage"))
 
 
@@ -285,6 +292,13 @@ class _NormFields:
                                  f"{value!r:.60}")
         return float(value)
 
+    def count(self, key: str, value) -> int:
+        number = self.number(key, value)
+        if number < 0 or number != int(number):
+            raise PostureIdError(f"{self.path}: {key} must be a whole number ≥ 0, got "
+                                 f"{value!r:.60}")
+        return int(number)
+
     def object(self, key: str) -> dict:
         value = self.data.get(key) or {}
         if not isinstance(value, dict):
@@ -311,7 +325,10 @@ class _NormFields:
         pir = self.object("pir")
         if all(pir.get(k) is None for k in ("t", "mean", "sd", "members")):
             return [None] * 4
-        t, _ = pseudo_impulse_response(f, np.zeros(len(f), complex), rate_hz)
+        try:
+            t, _ = pseudo_impulse_response(f, np.zeros(len(f), complex), rate_hz)
+        except PostureIdError as exc:
+            raise PostureIdError(f"{self.path}: rate_hz: {exc}") from None
         expected = {"t": (len(t),), "mean": (len(t) * channels,),
                     "sd": (len(t) * channels,), "members": (members, len(t) * channels)}
         out = []

@@ -18,7 +18,7 @@ from posture_id.norms.norm import FrfSet
 __all__ = ["read_frfs", "frf_from_json", "frf_json_channels", "is_frf_table"]
 
 #: A CSV table's FRF column: ``<f>_re``, ``<f>_im``, ``<f>_gain`` or ``<f>_phase_deg``.
-_FRF_COLUMN = re.compile(r"^([0-9.]+)_(re|im|gain|phase_deg)$")
+_FRF_COLUMN = re.compile(r"^((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)_(re|im|gain|phase_deg)$")
 
 
 def _frf_json(path: Path) -> dict:
@@ -128,8 +128,16 @@ def _read_table(path: Path) -> FrfSet:
     found: dict[float, dict[str, int]] = {}
     for index, column in enumerate(header):
         match = _FRF_COLUMN.match(column)
+        if match is None and re.match(r"^.+_(re|im|gain|phase_deg)$", column):
+            raise PostureIdError(f"{path}: column {column!r}: "
+                                 f"{column.rsplit('_', 2 if column.endswith('_deg') else 1)[0]!r}"
+                                 " is not a frequency in Hz (<f>_re, e.g. 0.05_re)")
         if match:
-            found.setdefault(float(match.group(1)), {})[match.group(2)] = index
+            cells = found.setdefault(float(match.group(1)), {})
+            if match.group(2) in cells:
+                raise PostureIdError(f"{path}: columns {header[cells[match.group(2)]]} and "
+                                     f"{column} are one frequency's {match.group(2)} twice")
+            cells[match.group(2)] = index
     if not found:
         raise PostureIdError(f"{path}: no FRF columns (<f>_re and <f>_im, or <f>_gain and "
                              f"<f>_phase_deg; the header is {','.join(header)})")

@@ -75,8 +75,19 @@ def specialist_folder(body: Body) -> Path:
     folder = Path(__file__).resolve().parents[1] / "learning" / "models" / body.name
     if not (folder / "model.json").is_file():
         raise PostureIdError(f"{PAPER_CNN}: no per-body specialist is shipped for body "
-                             f"{body.name!r} (posture_id/learning/models/)")
+                             f"{body.name!r} (posture_id/learning/models/): leave it out "
+                             f"of --methods")
     return folder
+
+
+def _has_specialist(body: Body) -> bool:
+    from posture_id.errors import PostureIdError
+
+    try:
+        specialist_folder(body)
+    except PostureIdError:
+        return False
+    return True
 
 
 def condition_label(condition: float | str) -> str:
@@ -400,7 +411,7 @@ class BenchmarkReport(Result):
 
 def run_benchmark(body: Body | None = None, trials: int = 50,
                   noise_levels: tuple[float, ...] = (0.0, 0.01, 0.05), seed: int = 0,
-                  workers: int | None = None, methods=METHODS,
+                  workers: int | None = None, methods=None,
                   progress: Progress | None = None,
                   journal: str | Path | None = None,
                   people_like: bool = False) -> BenchmarkReport:
@@ -410,13 +421,16 @@ def run_benchmark(body: Body | None = None, trials: int = 50,
         body: default the TIP. trials: held-out recordings per condition. noise_levels:
             the clean conditions' sensor noise, degrees. seed: of the held-out subjects.
         workers: processes (default: every core). methods: labels of :data:`METHODS` (or
-            :class:`Method`\ s). progress: told each identification.
+            :class:`Method`\ s); default all of them (``paper-cnn`` only for a body with a
+            shipped specialist). progress: told each identification.
         journal: a JSON-lines file that every finished identification is appended to; a
             run given the journal of an interrupted one with the same body, model, trials
             and seed redoes only what is missing (a journal of another set-up is refused).
         people_like: also the people-like condition (the module doc).
     """
     body = body or load_body()
+    if methods is None:
+        methods = tuple(m for m in METHODS if m != PAPER_CNN or _has_specialist(body))
     methods = tuple(m.value if isinstance(m, Method) else m for m in methods)
     if PAPER_CNN in methods:
         specialist_folder(body)  # refused before any work when there is none

@@ -45,7 +45,7 @@ def test_statistics_of_known_rows():
     assert data["method"] == "hybrid" and data["e_rel_p90"] is None  # strict JSON: ∞ → null
     report = BenchmarkReport("tip", ("a", "b"), 3, (0.05,), tuple(rows), 1)
     text = report.to_markdown()
-    assert "Ending far from the truth, all noise levels: hybrid 2/3." in text
+    assert "Ending far from the truth, all conditions: hybrid 2/3." in text
     assert "| hybrid | 83.3 % | 11.00 % | inf % | 2/3 | 1 | 2 | 3.000, 3.000" in text
 
 
@@ -68,7 +68,7 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
     assert data["trials"] == 2 and len(data["rows"]) == 4
     text = paths[1].read_text()
     assert "## Sensor noise 0.01°" in text and "| cnn |" in text
-    assert "Ending far from the truth, all noise levels: cnn " in text
+    assert "Ending far from the truth, all conditions: cnn " in text
     assert paths[2].stat().st_size > 10_000
     # the bundled model is calibrated: every row says whether its intervals held the truth
     assert all(len(r["inside_interval"]) == 3 for r in report.rows)

@@ -99,6 +99,11 @@ def condition_label(condition: float | str) -> str:
     return f"Sensor noise {condition:g}°"
 
 
+def _lowered(label: str) -> str:
+    """A label inside a sentence: its first letter in lower case."""
+    return label[:1].lower() + label[1:]
+
+
 def _short(condition: float | str) -> str:
     return condition if isinstance(condition, str) else f"{condition:g}°"
 
@@ -250,6 +255,18 @@ class BenchmarkReport(Result):
     rows: tuple[dict, ...]
     workers: int
 
+    @classmethod
+    def from_json(cls, path: str | Path) -> BenchmarkReport:
+        """The report its ``cnn_vs_optimizer.json`` holds (an E_rel written as null, a
+        re-simulation that fell, read back as infinite): remade without running again."""
+        import json
+
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        rows = tuple({**r, "e_rel": math.inf} if "e_rel" in r and r["e_rel"] is None else r
+                     for r in data["rows"])
+        return cls(data["body"], tuple(data["joints"]), data["trials"],
+                   tuple(data["noise_levels"]), rows, data["workers"])
+
     def _rows(self, noise: float | str, method: str) -> list[dict]:
         return [r for r in self.rows if r["noise_deg"] == noise and r["method"] == method
                 and "skipped" not in r]
@@ -289,7 +306,7 @@ class BenchmarkReport(Result):
         lines = ["# The CNN against the optimiser", "",
                  f"Body `{self.body}`, {self.trials} held-out simulated 121 s recordings "
                  f"(docs/model.md §5 parameters, stable); "
-                 f"{'; '.join(condition_label(n).lower() for n in self.noise_levels)}; "
+                 f"{'; '.join(_lowered(condition_label(n)) for n in self.noise_levels)}; "
                  f"{self.workers} recordings identified at a time. E_rel: body sway "
                  "re-simulated with the identified parameters against the noise-free truth. "
                  f"Far: a wrong class or E_rel above {100 * FAR_E_REL:g} %. Time: identifying "
@@ -301,7 +318,7 @@ class BenchmarkReport(Result):
                       if method == m) for m in METHODS}
         total = {m: sum(s.recordings for (_, method), s in stats.items()
                         if method == m) for m in METHODS}
-        lines += ["Ending far from the truth, all noise levels: " + ", ".join(
+        lines += ["Ending far from the truth, all conditions: " + ", ".join(
             f"{m} {far[m]}/{total[m]}" for m in far if total[m]) + ".", ""]
         if self.skipped:
             lines += [f"{self.skipped} people-like subject(s) fell with their motor noise: "

@@ -80,6 +80,7 @@ def test_exchanged_columns_are_named_and_the_right_ones_are_not(clean_two_segmen
     assert not any("exchanged" in m for m in again.verdict.mistakes)
 
 
+@pytest.mark.slow
 def test_another_persons_body_is_named(tmp_path, monkeypatch):
     """A 1.90 m subject (the default controller, the 80-state PRTS at 3°, 0.02° of sensor
     noise) identified with the URDF of a 1.55 m one (the masses too differ, which the sway

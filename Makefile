@@ -52,7 +52,7 @@ test: $(STAMP)
 # The documentation site (MkDocs Material; the API and command-line references are made
 # from the docstrings and parsers): broken links and references fail the build.
 docs: $(STAMP)
-	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet -f - < docs/config/mkdocs.yml
 
 # The pictures the README and the docs' start page show (the shipped TIP example).
 figures: $(STAMP)
@@ -63,7 +63,7 @@ test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"
 
 lint: $(STAMP)
-	$(BIN)/ruff check posture_id tests benchmarks docs/tutorials docs/hooks
+	$(BIN)/ruff check posture_id tests benchmarks docs/tutorials docs/config
 	$(BIN)/lint-imports
 
 bodies: $(STAMP)

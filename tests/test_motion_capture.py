@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -348,3 +349,25 @@ def test_frf_and_fit_read_a_c3d_trial(sway, tip, tmp_path):
         assert np.median(np.abs(gain / reference - 1)) < 0.05, channel
     assert main(["fit", str(path), *flags, "--model", "ic", "--out",
                  str(tmp_path / "ic.json")]) in (0, 1)
+
+
+def test_the_example_trial_sways_along_its_forward_axis_not_across_it():
+    """The numbers docs/motion_capture.md gives for the forward-axis check: the shipped C3D
+    trial's segments sway under 0.1× as much across its forward axis (-y) as along it, and
+    over 10× as much along it as across x, the lateral axis named forward."""
+    from posture_id.motion_capture import marker_angles, read_c3d
+    from posture_id.motion_capture.angles import SWAY_ACROSS_RATIO, sway_across
+    from posture_id.motion_capture.mapping import (
+        LabAxes,
+        MarkerMapping,
+        parse_segment_markers,
+    )
+
+    trial = read_c3d(Path(__file__).resolve().parents[1]
+                     / "posture_id/studies/examples/straight_leg_subject.c3d")
+    segments = parse_segment_markers(["leg=LANK+RANK,LHIP+RHIP", "trunk=LHIP+RHIP,LSHO+RSHO"])
+    read = marker_angles(trial, MarkerMapping(axes=LabAxes("-y"), segments=segments))
+    vectors = [read.points[str(s.upper)] - read.points[str(s.lower)] for s in segments]
+    right, _ = sway_across(vectors, LabAxes("-y"), trial.rate_hz)
+    wrong, _ = sway_across(vectors, LabAxes("x"), trial.rate_hz)
+    assert right < 0.1 and wrong > 10 and wrong > SWAY_ACROSS_RATIO

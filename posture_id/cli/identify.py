@@ -219,12 +219,12 @@ def _cohort_norm(args: argparse.Namespace):
     per_trial = args.bodies is not None or (
         args.body is None and isinstance(columns_from_args(args), MarkerMapping))
     if not per_trial:  # every recording is read for one body: its channels are known
-        from posture_id.norms.cohort import norm_columns
+        from posture_id.norms.norm import tested_channels
 
         body = load_body(args.body or DEFAULT_URDF)
         given = (*body.segment_names, "body COM")
         try:
-            norm_columns(norm, given, str(args.norm))
+            tested_channels(norm, given, where=str(args.norm))
         except PostureIdError:
             raise PostureIdError(
                 f"{args.norm}: the norm's channels {', '.join(norm.channels)} are not all "

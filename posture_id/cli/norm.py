@@ -27,12 +27,16 @@ from posture_id.frf.bands import BAND_PRESETS
 __all__ = ["add_parser", "norm_bands"]
 
 
-def _sources(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--channel", nargs="+", help="FRF JSONs: the channels to use (default: "
-                                                "all of the first file's)")
+def _mat_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--variable", help=".mat: the N × F complex matrix")
     p.add_argument("--frequencies", type=positive_float, nargs="+", metavar="F",
                    help=".mat: its frequencies, Hz")
+
+
+def _sources(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--channel", nargs="+", help="FRF JSONs: the channels to use (default: "
+                                                "all of the first file's)")
+    _mat_arguments(p)
     p.add_argument("--rate-hz", type=positive_float, default=22.0,
                    help="the pseudo-impulse responses' sampling rate (default %(default)g)")
     p.add_argument("--bootstrap", type=positive_int, default=1000,
@@ -72,9 +76,7 @@ def add_parser(sub) -> None:
                    help="the input's channel tested against the norm's (once per norm "
                         "channel, in its order; default: the norm's names, or for a "
                         "one-channel norm the input's only channel besides the body COM)")
-    t.add_argument("--variable", help=".mat: the N × F complex matrix")
-    t.add_argument("--frequencies", type=positive_float, nargs="+", metavar="F",
-                   help=".mat: its frequencies, Hz")
+    _mat_arguments(t)
     add_lab_stimulus_arguments(t, "tilt CSV (time_s,tilt_deg) the recording was made with")
     add_column_arguments(t)
     t.set_defaults(func=run_test)
@@ -168,38 +170,17 @@ def _input_kind(path: Path) -> str:
 
 def _channels(available: tuple[str, ...], norm, given: list[str] | None, where: Path,
               recording: bool) -> tuple[str, ...]:
-    """The input's channels tested against the norm's, one each: ``--channel``'s; else the
-    norm's names; else, for a one-channel norm, the input's only channel, or its only one
-    besides the body COM (said on stderr)."""
-    listed = ", ".join(available)
-    if given:
-        if len(given) != len(norm.channels):
-            raise PostureIdError(f"--channel: {len(given)} given for the norm's "
-                                 f"{len(norm.channels)} channel(s) "
-                                 f"({', '.join(norm.channels)}); give one per channel")
-        missing = [c for c in given if c not in available]
-        if missing:
-            raise PostureIdError(f"{where}: no channel {', '.join(map(repr, missing))} "
-                                 f"(--channel; it has {listed})")
-        return tuple(given)
-    if all(c in available for c in norm.channels):
-        return tuple(norm.channels)
-    if len(norm.channels) == 1:
-        others = [c for c in available if c != "body COM"]
-        only = available if len(available) == 1 else others if len(others) == 1 else None
-        if only:
-            say(f"{where}: its channel {only[0]!r} tested against the norm's "
-                f"{norm.channels[0]!r} (--channel names another)")
-            return (only[0],)
-        raise PostureIdError(f"{where}: no channel {norm.channels[0]!r} for the norm, and "
-                             f"{len(available)} others (it has {listed}): name the one to "
-                             "test with --channel NAME")
-    missing = [c for c in norm.channels if c not in available]
+    """The input's channels tested against the norm's (:func:`~posture_id.norms.norm.
+    tested_channels`); one of another name than the norm's is said on stderr."""
+    from posture_id.norms.norm import tested_channels
+
     hint = ("; --body adds the body COM" if recording and "body COM" not in available
             else "")
-    raise PostureIdError(f"{where}: no channel {', '.join(map(repr, missing))} for the norm "
-                         f"(it has {listed}{hint}; --channel NAME, once per norm channel, "
-                         "names the input's)")
+    names = tested_channels(norm, available, given, str(where), hint)
+    if not given and names != tuple(norm.channels):
+        say(f"{where}: its channel {names[0]!r} tested against the norm's "
+            f"{norm.channels[0]!r} (--channel names another)")
+    return names
 
 
 def _recording_frf(args: argparse.Namespace, norm) -> tuple:

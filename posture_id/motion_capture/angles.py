@@ -31,7 +31,8 @@ from posture_id.motion_capture.mapping import (
 from posture_id.recording import Recording
 
 __all__ = ["MarkerAngles", "marker_angles", "LEVEL_S", "UPRIGHT_LIMIT_DEG",
-           "PLATFORM_HEADING_LIMIT_DEG", "SAGITTAL_SHARE", "SWAY_ACROSS_RATIO"]
+           "PLATFORM_HEADING_LIMIT_DEG", "SAGITTAL_SHARE", "SWAY_ACROSS_RATIO",
+           "sway_across"]
 
 #: s, the start of the trial over which the platform markers' level is taken.
 LEVEL_S = 0.1
@@ -196,14 +197,14 @@ def _check_upright(trial: MotionCaptureTrial, label: str, vector: np.ndarray,
             "each lower point first")
 
 
-def _check_facing(trial: MotionCaptureTrial, vectors: list[np.ndarray],
-                  mapping: MarkerMapping) -> None:
-    """Refuse a forward axis across the subject: the segments (``vectors``, each (F, 3))
-    sway more about the lateral axis than in the sagittal plane by SWAY_ACROSS_RATIO."""
-    axes = mapping.axes
+def sway_across(vectors: list[np.ndarray], axes, rate_hz: float) -> tuple[float, float]:
+    """(ratio, lateral SD in degrees) of the segments' sway (``vectors``, each (F, 3), the
+    file's coordinates) about the horizontal axis ``axes`` leave unnamed against their sway
+    in the sagittal plane ``axes`` name: each angle averaged over 1 s first (the sway kept,
+    the markers' noise not); the ratio infinite when there is no sagittal sway."""
     forward, vertical = axes.forward_vector, axes.vertical_vector
     lateral = np.cross(vertical, forward)
-    window = max(1, int(round(trial.rate_hz)))  # 1 s: sway kept, the markers' noise not
+    window = max(1, int(round(rate_hz)))
 
     def sway(axis: np.ndarray) -> float:
         return sum(float(np.var(np.convolve(_sagittal_angle(v, axis, vertical),
@@ -211,18 +212,26 @@ def _check_facing(trial: MotionCaptureTrial, vectors: list[np.ndarray],
                    for v in vectors)
 
     sagittal, across = sway(forward), sway(lateral)
-    if math.degrees(math.sqrt(across / len(vectors))) < SWAY_ACROSS_MIN_DEG:
-        return
     ratio = math.sqrt(across / sagittal) if sagittal > 0 else math.inf
-    if ratio > SWAY_ACROSS_RATIO:
-        other = "xyz"[int(np.argmax(np.abs(lateral)))]
-        how = (f"{ratio:.0f}× more along {other} than along --forward-axis {axes.forward}"
-               if math.isfinite(ratio) else
-               f"along {other}, and not at all along --forward-axis {axes.forward}")
-        raise RecordingError(
-            f"{trial.path}: the segments sway {how}; a body on a platform tilting forward and back "
-            f"sways forward and back: is the subject facing {other} (--forward-axis {other}, "
-            f"or --forward-axis=-{other})?")
+    return ratio, math.degrees(math.sqrt(across / len(vectors)))
+
+
+def _check_facing(trial: MotionCaptureTrial, vectors: list[np.ndarray],
+                  mapping: MarkerMapping) -> None:
+    """Refuse a forward axis across the subject: the segments (``vectors``, each (F, 3))
+    sway more about the lateral axis than in the sagittal plane by SWAY_ACROSS_RATIO."""
+    axes = mapping.axes
+    ratio, lateral_deg = sway_across(vectors, axes, trial.rate_hz)
+    if lateral_deg < SWAY_ACROSS_MIN_DEG or ratio <= SWAY_ACROSS_RATIO:
+        return
+    other = "xyz"[int(np.argmax(np.abs(np.cross(axes.vertical_vector, axes.forward_vector))))]
+    how = (f"{ratio:.0f}× more along {other} than along --forward-axis {axes.forward}"
+           if math.isfinite(ratio) else
+           f"along {other}, and not at all along --forward-axis {axes.forward}")
+    raise RecordingError(
+        f"{trial.path}: the segments sway {how}; a body on a platform tilting forward and back "
+        f"sways forward and back: is the subject facing {other} (--forward-axis {other}, "
+        f"or --forward-axis=-{other})?")
 
 
 def _tilt_from_markers(trial: MotionCaptureTrial, tilt: TiltMarkers,

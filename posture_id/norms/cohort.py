@@ -14,9 +14,9 @@ from posture_id.fileio import atomic_write_text
 from posture_id.frf.analysis import frequency_response
 from posture_id.frf.bands import FrequencyBands
 from posture_id.frf.response import FrfOptions
-from posture_id.norms.norm import Norm, against_norm
+from posture_id.norms.norm import Norm, against_norm, tested_channels
 
-__all__ = ["cohort_frfs", "norm_columns", "NORM_COLUMNS"]
+__all__ = ["cohort_frfs", "NORM_COLUMNS"]
 
 #: The columns a norm adds to a cohort's summary.csv.
 NORM_COLUMNS = ("human_likeness", "inside_prediction_band", "distance_percentile")
@@ -37,7 +37,8 @@ def cohort_frfs(recordings: list[Path], out: Path, read, body_of, bands: Frequen
             frf = frequency_response(read(path), body, options)
             frf.to_json(out / f"{path.stem}.frf.json")
             if norm is not None:
-                columns = norm_columns(norm, frf.channels, path.name)
+                names = tested_channels(norm, tuple(frf.channels), where=path.name)
+                columns = [frf.channels.index(c) for c in names]
                 tested = against_norm(norm, frf.frequencies_hz, frf.response[:, columns],
                                       path.name)
                 extras[path.name] = {"human_likeness": tested.human_likeness,
@@ -48,21 +49,6 @@ def cohort_frfs(recordings: list[Path], out: Path, read, body_of, bands: Frequen
     if norm is not None:
         _extend_summary(out / "summary.csv", extras)
     return failed
-
-
-def norm_columns(norm: Norm, channels: tuple[str, ...], where: str) -> list[int]:
-    """The columns of an FRF of ``channels`` that ``norm`` tests: its channels by name; for
-    a one-channel norm of another name (a published norm's ``COM``), the body COM, or the
-    only channel there is."""
-    if all(c in channels for c in norm.channels):
-        return [channels.index(c) for c in norm.channels]
-    if len(norm.channels) == 1:
-        if "body COM" in channels:
-            return [channels.index("body COM")]
-        if len(channels) == 1:
-            return [0]
-    raise PostureIdError(f"{where}: the norm's channels {', '.join(norm.channels)} are not "
-                         f"all its own ({', '.join(channels)})")
 
 
 def _extend_summary(summary: Path, extras: dict[str, dict]) -> None:

@@ -46,6 +46,7 @@ from posture_id.fileio import JsonFile, Result, read_json
 from posture_id.frf.bands import pseudo_impulse_response
 
 __all__ = ["Norm", "NormTest", "NormTests", "build_norm", "against_norm", "FrfSet",
+           "tested_channels",
            "shrunk_covariance"]
 
 #: The format of a norm file.
@@ -577,3 +578,42 @@ def against_norm(norm: Norm, frequencies_hz: np.ndarray, response: np.ndarray,
         percentile = float(100 * np.mean(shares))
     return NormTest(name, norm, h, score, inside, percentile, pir,
                     None if channels is None else tuple(channels))
+
+
+def tested_channels(norm: Norm, available: tuple[str, ...], given: list[str] | None = None,
+                    where: str = "", hint: str = "") -> tuple[str, ...]:
+    """The channels of an input holding ``available`` that ``norm``'s channels are tested
+    against, one each: ``given`` (``--channel``, one per norm channel); else the norm's own
+    names; else, for a one-channel norm (a published norm's ``COM``), the input's only
+    channel besides the body COM, or the body COM.
+
+    Raises:
+        PostureIdError: naming ``where``, the channels it has and what to give (``hint``
+            adds to it).
+    """
+    listed = ", ".join(available)
+    if given:
+        if len(given) != len(norm.channels):
+            raise PostureIdError(f"--channel: {len(given)} given for the norm's "
+                                 f"{len(norm.channels)} channel(s) "
+                                 f"({', '.join(norm.channels)}); give one per channel")
+        missing = [c for c in given if c not in available]
+        if missing:
+            raise PostureIdError(f"{where}: no channel {', '.join(map(repr, missing))} "
+                                 f"(--channel; it has {listed})")
+        return tuple(given)
+    if all(c in available for c in norm.channels):
+        return tuple(norm.channels)
+    if len(norm.channels) == 1:
+        others = [c for c in available if c != "body COM"]
+        if len(others) == 1:
+            return (others[0],)
+        if "body COM" in available:
+            return ("body COM",)
+        raise PostureIdError(f"{where}: no channel {norm.channels[0]!r} for the norm, and "
+                             f"{len(available)} others (it has {listed}): name the one to "
+                             "test with --channel NAME")
+    missing = [c for c in norm.channels if c not in available]
+    raise PostureIdError(f"{where}: no channel {', '.join(map(repr, missing))} for the norm "
+                         f"(it has {listed}{hint}; --channel NAME, once per norm channel, "
+                         "names the input's)")

@@ -37,6 +37,7 @@ import numpy as np
 from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise
 from posture_id.dec.prior import sample_parameters
+from posture_id.errors import PostureIdError, SimulationError
 from posture_id.executors import LocalExecutor
 from posture_id.fileio import Result, atomic_write_text, json_text, jsonable
 from posture_id.identify import Method
@@ -70,8 +71,6 @@ PEOPLE_LIKE_SENSOR_DEG = 0.05
 
 def specialist_folder(body: Body) -> Path:
     """The per-body specialist (the paper's spectrogram CNN) shipped for ``body``."""
-    from posture_id.errors import PostureIdError
-
     folder = Path(__file__).resolve().parents[1] / "learning" / "models" / body.name
     if not (folder / "model.json").is_file():
         raise PostureIdError(f"{PAPER_CNN}: no per-body specialist is shipped for body "
@@ -81,8 +80,6 @@ def specialist_folder(body: Body) -> Path:
 
 
 def _has_specialist(body: Body) -> bool:
-    from posture_id.errors import PostureIdError
-
     try:
         specialist_folder(body)
     except PostureIdError:
@@ -134,8 +131,6 @@ def _recording(body: Body, truth, condition: float | str, seed: int):
 
 def _one(task: tuple) -> dict:
     """Identify one recording with one method (a worker process)."""
-    from posture_id.errors import SimulationError
-
     urdf, arrays, index, condition, method, seed = task
     if method == PAPER_CNN:
         identifier = worker_identifier(urdf, Method.CNN.value,

@@ -38,7 +38,7 @@ def make_newest_material(root: Path, paths: dict[str, str]) -> None:
     from scipy.io import savemat
 
     from posture_id import load_body
-    from posture_id.ic import IcPlant, default_ic_parameters
+    from posture_id.models.ic import IcPlant, default_ic_parameters
 
     paths["c3d"] = str(EXAMPLES / "straight_leg_subject.c3d")
     paths["dec_params"] = str(EXAMPLES / "tip_subject.truth.json")

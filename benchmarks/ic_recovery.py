@@ -5,14 +5,14 @@ Run:  .venv/bin/python benchmarks/ic_recovery.py [--per-cell 6] [--out docs/resu
       .venv/bin/python benchmarks/ic_recovery.py --calibrate [--per-cell 6]
 
 ``--calibrate`` fits recordings of other seeds (the same cells) and writes the intervals'
-calibration, ``posture_id/ic/calibration.json``: per parameter, the quantiles of
+calibration, ``posture_id/models/ic/calibration.json``: per parameter, the quantiles of
 |estimate − truth| / standard error at the levels 0.5–0.99 (what an interval at that level
 multiplies the standard error by). The report is then made on its own seed: its coverage
 is measured on recordings the calibration never saw.
 
-Recordings made by :func:`~posture_id.ic.simulation.simulate_ic` with parameters of
-:func:`~posture_id.ic.subjects.draw_ic_parameters`, fitted by
-:func:`~posture_id.ic.fit.fit_ic` as ``posture-id fit REC --model ic`` fits them. Cells:
+Recordings made by :func:`~posture_id.models.ic.simulation.simulate_ic` with parameters of
+:func:`~posture_id.models.ic.subjects.draw_ic_parameters`, fitted by
+:func:`~posture_id.fitting.frequency.fit_ic` as ``posture-id fit REC --model ic`` fits them. Cells:
 the Winter bodies of 1, 2 and 3 segments (1.75 m, 70 kg) × the 242-state PRTS ×2 and the
 80-state PRTS ×6, amplitudes 0.5–2° peak to peak; clean (0.02° sensor noise) and
 people-like (motor noise leaving 15–40 % of the COM sway locked, 0.05° sensor noise).
@@ -43,8 +43,9 @@ def run(per_cell: int, seed: int = SEED) -> list[dict]:
     import scipy.stats  # noqa: F401
 
     from posture_id import load_body
-    from posture_id.ic import IcPlant, fit_ic
-    from posture_id.ic.subjects import draw_ic_parameters, ic_recording
+    from posture_id.fitting.frequency import fit_ic
+    from posture_id.models.ic import IcPlant
+    from posture_id.models.ic.subjects import draw_ic_parameters, ic_recording
     from posture_id.simulation.stimulus import prts
     from posture_id.trials import prepare_trial
 
@@ -118,9 +119,9 @@ def report(rows: list[dict], command: str) -> str:
 
 
 def calibrate(per_cell: int) -> int:
-    """posture_id/ic/calibration.json from recordings of :data:`CALIBRATION_SEED`."""
+    """posture_id/models/ic/calibration.json from recordings of :data:`CALIBRATION_SEED`."""
     from posture_id.fileio import atomic_write_text, json_text
-    from posture_id.ic.fit import CALIBRATION
+    from posture_id.models.ic.model import CALIBRATION
 
     rows = run(per_cell, CALIBRATION_SEED)
     quantiles = {}
@@ -134,7 +135,7 @@ def calibrate(per_cell: int) -> int:
             quantiles[name] = q
     atomic_write_text(CALIBRATION, json_text({
         "about": "IC intervals: a level's interval is the estimate ± quantile × its "
-                 "Gauss-Newton standard error (posture_id/ic/fit.py)",
+                 "Gauss-Newton standard error (posture_id/fitting/frequency.py)",
         "made_by": ".venv/bin/python benchmarks/ic_recovery.py --calibrate "
                    f"--per-cell {per_cell}",
         "recordings": len(rows), "seed": CALIBRATION_SEED, "levels": list(LEVELS),
@@ -150,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--per-cell", type=int, default=6)
     parser.add_argument("--out", type=Path, default=ROOT / "docs/results/ic_recovery")
     parser.add_argument("--calibrate", action="store_true",
-                        help="write posture_id/ic/calibration.json from recordings of "
+                        help="write posture_id/models/ic/calibration.json from recordings of "
                              "another seed")
     args = parser.parse_args(argv)
     from posture_id.fileio import atomic_write_text, json_text

@@ -5,7 +5,7 @@ Run:  .venv/bin/python benchmarks/model_comparison.py [--per-model 30] [--worker
 
 ``--per-model`` recordings of each model (docs/model.md §8), made by the project's simulators,
 each compared as ``posture-id compare REC --body URDF`` compares it
-(:func:`~posture_id.ic.compare.compare_models`, the held-out cycle included where there
+(:func:`~posture_id.comparison.models.compare_models`, the held-out cycle included where there
 are three or more cycles):
 
 - bodies: Winter bodies of 1 and 2 segments (1.75 m, 70 kg), in turn (3-segment DEC fits
@@ -46,11 +46,11 @@ SEED = 8088
 def _case(k: int) -> dict:
     """Recording k: its model, body, stimulus, sway and truth, then the comparison."""
     from posture_id import load_body
+    from posture_id.comparison.models import compare_amplitudes, compare_models
     from posture_id.dec.prior import sample_parameters
     from posture_id.errors import SimulationError
-    from posture_id.ic import IcPlant
-    from posture_id.ic.compare import compare_amplitudes, compare_models
-    from posture_id.ic.subjects import draw_ic_parameters, ic_recording
+    from posture_id.models.ic import IcPlant
+    from posture_id.models.ic.subjects import draw_ic_parameters, ic_recording
     from posture_id.simulation.batch import simulate
     from posture_id.simulation.stimulus import prts
     from posture_id.simulation.subjects import people_like
@@ -107,7 +107,7 @@ def _case(k: int) -> dict:
             "locked_share": share, "preferred": result.preferred,
             "delta_bic_ic_minus_dec": result.bic["ic"] - result.bic["dec"],
             "held_out": held, "within_noise": result.within_noise,
-            "w_by_part": list(result.ic.w_by_part) if two else None,
+            "w_by_part": list(result.fits["ic"].w_by_part) if two else None,
             "seconds": time.perf_counter() - started}
 
 

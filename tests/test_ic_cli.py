@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from posture_id.cli import main
-from posture_id.ic import IcParameters, IcPlant
+from posture_id.models.ic import IcParameters, IcPlant
 
 WINTER1 = str(Path(__file__).resolve().parents[1] / "urdf" / "winter_1.75m_70kg_1seg.urdf")
 
@@ -106,7 +106,7 @@ def test_two_amplitudes_one_dec_or_an_ic_that_reweights(tmp_path, winter1, capsy
     """A DEC subject at 1° and 3° (one set of parameters explains both) and an IC subject
     whose W falls from 0.6 to 0.35 at 3°: compare --second prefers each one's model, and
     the IC answer recovers the re-weighting."""
-    from posture_id.ic.subjects import ic_recording
+    from posture_id.models.ic.subjects import ic_recording
     from posture_id.simulation.stimulus import prts
 
     plant = IcPlant.of(winter1)

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from posture_id.errors import ParameterError
-from posture_id.ic import IcParameters, IcPlant, closed_loop, default_ic_parameters, fit_ic
-from posture_id.ic.response import PARAMETER_ORDER, rightmost_pole
-from posture_id.ic.simulation import ic_sway, simulate_ic
+from posture_id.fitting.frequency import fit_ic
+from posture_id.models.ic import IcParameters, IcPlant, closed_loop, default_ic_parameters
+from posture_id.models.ic.response import PARAMETER_ORDER, rightmost_pole
+from posture_id.models.ic.simulation import ic_sway, simulate_ic
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.stimulus import prts
 from posture_id.trials import prepare_trial
@@ -138,9 +139,9 @@ def test_the_design_predicts_the_fits_own_scatter(winter2):
     """The predicted interval width of Kp, Kd, Δ and W for one IC subject and protocol
     against the scatter of the fit over 16 draws of 0.05° sensor noise (the same
     recording otherwise): within a factor 1.6 either way."""
-    from posture_id.ic.design import SHOWN, design_ic
-    from posture_id.ic.fit import BOUNDS, parameter_scale
-    from posture_id.ic.subjects import draw_ic_parameters
+    from posture_id.design.ic import SHOWN, design_ic
+    from posture_id.models.ic.model import BOUNDS, parameter_scale
+    from posture_id.models.ic.subjects import draw_ic_parameters
     from posture_id.simulation.protocols import PrtsProtocol
 
     plant = IcPlant.of(winter2)

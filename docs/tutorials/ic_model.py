@@ -15,8 +15,9 @@ from pathlib import Path
 from posture_id import load_body
 from posture_id.bodies.anthropometry import straight_links, winter_segments
 from posture_id.bodies.urdf_writer import write_chain_urdf
-from posture_id.ic import IcParameters, IcPlant, fit_ic, simulate_ic
-from posture_id.ic.compare import compare_models
+from posture_id.comparison.models import compare_models
+from posture_id.fitting.frequency import fit_ic
+from posture_id.models.ic import IcParameters, IcPlant, simulate_ic
 from posture_id.simulation.stimulus import prts
 from posture_id.studies.demo import EXAMPLES_DIR as EXAMPLES  # the shipped examples
 from posture_id.trials import prepare_trial

@@ -153,3 +153,8 @@ def write_result(result, out: Path | None, plot: Path | None = None) -> None:
             result.plot_intervals(beside)
             say(f"wrote {beside}")
     print(result.summary())
+
+
+def is_cohort(recording: str) -> bool:
+    """Whether a command's recording argument names a cohort: a folder or a glob pattern."""
+    return Path(recording).is_dir() or any(c in recording for c in "*?[")

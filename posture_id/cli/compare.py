@@ -7,7 +7,13 @@ import argparse
 from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
-from posture_id.cli.arguments import check_output_file, non_negative_int, positive_int, write_result
+from posture_id.cli.arguments import (
+    check_output_file,
+    is_cohort,
+    non_negative_int,
+    positive_int,
+    write_result,
+)
 from posture_id.cli.exit_status import answered
 from posture_id.cli.markers import recording_body
 from posture_id.cli.progress import TerminalProgress
@@ -54,9 +60,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from posture_id.cli.identify import _is_cohort
-
-    if _is_cohort(args.recording):
+    if is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)
     inputs = (args.recording, args.body, args.tilt, args.second)
@@ -64,18 +68,13 @@ def run(args: argparse.Namespace) -> int:
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
     if args.second is not None:
         return _run_amplitudes(args)
-    from posture_id.ic import IcFitOptions
-    from posture_id.ic.compare import compare_models
-    from posture_id.trials import prepare_trial
+    from posture_id.comparison.models import compare_models
 
     body = recording_body(args, DEFAULT_URDF)
-    recording, stimulus = recording_and_stimulus(args, body)
-    recording.check_segments(body.segment_names)
-    trial = prepare_trial(recording, stimulus)
-    options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
-                           starts=args.starts, seed=args.seed)
+    trial = _trial(args, body)
     with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
-        result = compare_models(trial, body, options, progress, not args.no_held_out)
+        result = compare_models(trial, body, _ic_options(args), progress,
+                                not args.no_held_out)
     write_result(result, args.out, args.plot)
     return answered(result.doubtful)
 
@@ -85,10 +84,8 @@ def run_cohort(args: argparse.Namespace) -> int:
     import glob
 
     from posture_id.cli.output_folder import OutputFolder
-    from posture_id.ic import IcFitOptions
-    from posture_id.ic.cohort import compare_cohort
+    from posture_id.comparison.cohort import compare_cohort
     from posture_id.identify.cohort import find_recordings, stimulus_record
-    from posture_id.trials import prepare_trial
 
     if args.plot:
         raise PostureIdError("--plot is for one recording; a cohort writes JSON per recording "
@@ -107,12 +104,9 @@ def run_cohort(args: argparse.Namespace) -> int:
 
         def read(path: Path):
             args.recording = path
-            recording, stimulus = recording_and_stimulus(args, body)
-            recording.check_segments(body.segment_names)
-            return prepare_trial(recording, stimulus)
+            return _trial(args, body)
 
-        options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
-                               starts=args.starts, seed=args.seed)
+        options = _ic_options(args)
         recorded = {"stimulus": stimulus_record(stimulus_from_args(args, default=None)),
                     "columns": columns_from_args(args), "body_sha256": body.sha256}
         with TerminalProgress("recordings", prefix="posture-id compare") as progress:
@@ -124,9 +118,7 @@ def run_cohort(args: argparse.Namespace) -> int:
 
 def _run_amplitudes(args: argparse.Namespace) -> int:
     """``--second``: the two parts of a two-amplitude protocol, compared at once."""
-    from posture_id.ic import IcFitOptions
-    from posture_id.ic.compare import compare_amplitudes
-    from posture_id.trials import prepare_trial
+    from posture_id.comparison.models import compare_amplitudes
 
     if args.part is not None:
         raise PostureIdError("--part: with --second each recording is its own part (the "
@@ -138,16 +130,29 @@ def _run_amplitudes(args: argparse.Namespace) -> int:
     trials = []
     for part, path in enumerate((args.recording, args.second), 1):
         args.recording, args.part = path, (part if args.protocol else None)
-        recording, stimulus = recording_and_stimulus(args, body)
-        recording.check_segments(body.segment_names)
-        trials.append(prepare_trial(recording, stimulus))
+        trials.append(_trial(args, body))
     _two_amplitudes(*(t.recording for t in trials))
-    options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
-                           starts=args.starts, seed=args.seed)
     with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
-        result = compare_amplitudes(trials, body, options, progress)
+        result = compare_amplitudes(trials, body, _ic_options(args), progress)
     write_result(result, args.out, args.plot)
     return answered(result.doubtful)
+
+
+def _ic_options(args: argparse.Namespace):
+    """The IC fit's options from the flags."""
+    from posture_id.fitting.frequency import IcFitOptions
+
+    return IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
+                        starts=args.starts, seed=args.seed)
+
+
+def _trial(args: argparse.Namespace, body):
+    """``args.recording`` read with its stimulus, checked against ``body``, prepared."""
+    from posture_id.trials import prepare_trial
+
+    recording, stimulus = recording_and_stimulus(args, body)
+    recording.check_segments(body.segment_names)
+    return prepare_trial(recording, stimulus)
 
 
 #: The larger tilt's RMS over the smaller's below which two recordings are one amplitude.

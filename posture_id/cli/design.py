@@ -74,7 +74,7 @@ def _design_ic(args: argparse.Namespace) -> int:
     """``--model ic``: the IC fit's predicted widths per protocol."""
     from posture_id.bodies.body import DEFAULT_URDF, load_body
     from posture_id.design.candidates import default_candidates
-    from posture_id.ic.design import design_ic
+    from posture_id.design.ic import design_ic
     from posture_id.simulation.protocols import read_protocol
 
     given = [flag for flag, on in (("--goal", args.goal), ("--max-minutes", args.max_minutes),
@@ -112,7 +112,8 @@ def _design(args: argparse.Namespace) -> int:
     from posture_id.design.candidates import default_candidates
     from posture_id.design.goal import PARAMETERS, DesignGoal
     from posture_id.design.noise import SwayNoise
-    from posture_id.design.predict import DesignOptions, design
+    from posture_id.design.predict import DesignOptions
+    from posture_id.design.report import design
     from posture_id.simulation.protocols import read_protocol
 
     body = load_body(args.body or DEFAULT_URDF)

@@ -184,7 +184,7 @@ def _fit_ic(args: argparse.Namespace) -> int:
     if given:
         raise PostureIdError(f"{', '.join(given)}: DEC's fit only; --model ic fits the "
                              "stimulus-locked COM sway within docs/model.md §8's bounds")
-    from posture_id.ic import IcFitOptions
+    from posture_id.fitting.frequency import IcFitOptions
 
     return ic_answer(args, IcFitOptions(
         fit_ki=args.fit_ki, fit_passive=args.fit_passive, starts=args.starts, seed=args.seed,
@@ -192,9 +192,10 @@ def _fit_ic(args: argparse.Namespace) -> int:
 
 
 def ic_answer(args: argparse.Namespace, options) -> int:
-    """The IC fit (``options``: :class:`~posture_id.ic.IcFitOptions`) of ``args.recording``
+    """The IC fit (``options``: :class:`~posture_id.fitting.frequency.IcFitOptions`) of
+    ``args.recording``
     for its body, written to ``--out`` and ``--plot`` (the recording printed without)."""
-    from posture_id.ic import fit_ic
+    from posture_id.fitting.frequency import fit_ic
 
     body = recording_body(args, DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)

@@ -11,6 +11,7 @@ from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
     check_output_file,
     interval_level,
+    is_cohort,
     say,
     write_result,
 )
@@ -90,10 +91,6 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _is_cohort(recording: str) -> bool:
-    return Path(recording).is_dir() or any(c in recording for c in "*?[")
-
-
 def _no_search_for_the_network_alone(args: argparse.Namespace) -> None:
     """Refuse least-squares flags with ``--method cnn``, which runs no least squares."""
     given = search_flags_given(args) if args.method == "cnn" else []
@@ -104,7 +101,7 @@ def _no_search_for_the_network_alone(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     _no_search_for_the_network_alone(args)
-    if _is_cohort(args.recording):
+    if is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)
     if args.scheduler or args.bodies or args.band_preset or args.norm:
@@ -141,8 +138,8 @@ def _folders_of(recordings: list[Path]) -> set[Path]:
 def _identify_ic(args: argparse.Namespace) -> int:
     """``--model ic``: the IC fit of one recording (fit --model ic's)."""
     from posture_id.cli.fit import ic_answer
+    from posture_id.fitting.frequency import IcFitOptions
     from posture_id.frf.locked import LockedOptions
-    from posture_id.ic import IcFitOptions
 
     given = [flag for flag, on in (("--method", args.method != DEFAULT_METHOD_NAME),
                                    ("--network", args.network is not None),

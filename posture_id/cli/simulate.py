@@ -203,7 +203,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _simulate_ic(args: argparse.Namespace, body, stimulus, options, c3d) -> int:
     """``--model ic``: the IC model's recording (docs/model.md §8)."""
-    from posture_id.ic import IcParameters, IcPlant, default_ic_parameters, simulate_ic
+    from posture_id.models.ic import IcParameters, IcPlant, default_ic_parameters, simulate_ic
 
     if args.deadband_rad_s != default_of(SimulationOptions, "deadband_rad_s"):
         raise PostureIdError("--deadband-rad-s is DEC's tilt estimator; the IC model has none")

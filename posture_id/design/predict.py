@@ -30,6 +30,7 @@ the bounded fit over those subjects and their noise draws.
 
 from __future__ import annotations
 
+import enum
 import time
 from dataclasses import asdict, dataclass, field
 
@@ -54,7 +55,17 @@ from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.protocols import Protocol, SingleProtocol
 
-__all__ = ["DesignOptions", "ProtocolPrediction", "predict_protocols", "design", "prior_width"]
+__all__ = ["DesignOptions", "Residual", "ProtocolPrediction", "predict_protocols", "prior_width"]
+
+class Residual(str, enum.Enum):
+    """What the predicted fit minimises (:class:`DesignOptions`)."""
+
+    LOCKED = "locked"
+    RAW = "raw"
+
+    def __str__(self) -> str:
+        return self.value
+
 
 @dataclass(frozen=True)
 class DesignOptions:
@@ -71,9 +82,10 @@ class DesignOptions:
             this share of its largest (as the locked fit's).
         noise_cycles: cycles of noise-driven sway simulated for its spectrum.
         error_draws: noise draws per subject of the bounded fit's error (:mod:`.bounded`).
-        residual: 'locked' (default): the locked fit, each harmonic and channel weighted
-            by its own noise; 'raw': least squares on every sample, which weighs every
-            frequency alike (by Parseval; in steady state the tilt's response lives at
+        residual: :attr:`Residual.LOCKED` (default): the locked fit, each harmonic and
+            channel weighted by its own noise; :attr:`Residual.RAW`: least squares on every
+            sample, which weighs every frequency alike (by Parseval; in steady state the
+            tilt's response lives at
             its harmonics, so the same harmonics, unweighted, with the noise there; what
             the raw fit gains from the transient outside them is left out).
     """
@@ -85,7 +97,7 @@ class DesignOptions:
     max_frequency_hz: float = 2.0
     excited_threshold: float = 1e-3
     noise_cycles: int = 8
-    residual: str = "locked"
+    residual: Residual = Residual.LOCKED
     error_draws: int = 256
 
     def __post_init__(self) -> None:
@@ -93,8 +105,11 @@ class DesignOptions:
             raise DesignError("draws, noise_cycles and error_draws must be ≥ 1")
         if not 0 < self.level < 1:
             raise DesignError(f"level must be in (0, 1), got {self.level}")
-        if self.residual not in ("locked", "raw"):
-            raise DesignError(f"residual must be 'locked' or 'raw', got {self.residual!r}")
+        try:
+            object.__setattr__(self, "residual", Residual(self.residual))
+        except ValueError:
+            raise DesignError(f"residual must be 'locked' or 'raw', got {self.residual!r}") \
+                from None
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -250,7 +265,7 @@ def predict_protocols(body: Body, protocols: list[Protocol], noise: SwayNoise,
                     continue
                 cov = spectra.covariance[d][rec.rows] / single.cycles
                 one = single.repetitions * harmonic_information(
-                    jac, cov, weighted=options.residual == "locked")
+                    jac, cov, weighted=options.residual is Residual.LOCKED)
                 info[d] = one if info[d] is None else info[d] + one
             done += 1
             report(progress, done, total, "recording", single.label())
@@ -293,19 +308,3 @@ def _summary(se: np.ndarray, class_se: np.ndarray, bounded: np.ndarray,
         rms = np.sqrt(np.mean(bounded**2, axis=0))
         wrong = np.mean(norm.cdf(-1.0 / class_se), axis=0)
     return widths, rms, wrong, int(subjects.sum())
-
-
-def design(body: Body, protocols: list[Protocol], noise: SwayNoise,
-           goal=None, options: DesignOptions | None = None,
-           progress: Progress | None = None):
-    """Predict every protocol and rank them for ``goal``
-    (:class:`~posture_id.design.report.DesignResult`)."""
-    from posture_id.design.goal import DesignGoal
-    from posture_id.design.report import DesignResult
-
-    options = options or DesignOptions()
-    started = time.perf_counter()
-    predictions = predict_protocols(body, protocols, noise, options, progress)
-    return DesignResult(body.name, tuple(body.joint_names), noise, options,
-                        goal or DesignGoal(), tuple(predictions),
-                        time.perf_counter() - started)

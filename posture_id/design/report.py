@@ -3,18 +3,21 @@
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from posture_id.bodies.body import Body
 from posture_id.design.goal import PARAMETERS, DesignGoal
 from posture_id.design.noise import SwayNoise
-from posture_id.design.predict import DesignOptions, ProtocolPrediction
+from posture_id.design.predict import DesignOptions, ProtocolPrediction, predict_protocols
 from posture_id.fileio import atomic_write_text, json_text
-from posture_id.simulation.protocols import write_protocol
+from posture_id.progress import Progress
+from posture_id.simulation.protocols import Protocol, write_protocol
 
-__all__ = ["DesignResult", "Ranked", "UNDETERMINED"]
+__all__ = ["DesignResult", "Ranked", "UNDETERMINED", "design"]
 
 _NAMES = {"kp": "Kp", "ki": "Ki", "kd": "Kd", "delay_s": "Δ"}
 #: A parameter whose median predicted width is at least this share of the prior's is not
@@ -163,3 +166,16 @@ def _cell(value: float) -> str:
     if not math.isfinite(value):
         return "∞"
     return f"{value:.2f}" if value < 10 else f"{value:.0f}"
+
+
+def design(body: Body, protocols: list[Protocol], noise: SwayNoise,
+           goal=None, options: DesignOptions | None = None,
+           progress: Progress | None = None):
+    """Predict every protocol and rank them for ``goal``
+    (:class:`DesignResult`)."""
+    options = options or DesignOptions()
+    started = time.perf_counter()
+    predictions = predict_protocols(body, protocols, noise, options, progress)
+    return DesignResult(body.name, tuple(body.joint_names), noise, options,
+                        goal or DesignGoal(), tuple(predictions),
+                        time.perf_counter() - started)

@@ -40,6 +40,7 @@ from posture_id.dec.parameters import (
     DecParameters,
     normalise,
 )
+from posture_id.fitting.class_stages import first_stages
 from posture_id.fitting.evaluators import (
     Evaluator,
     ExactEvaluator,
@@ -155,7 +156,7 @@ class FitRun:
     def say(self, message: str) -> None:
         report(self.progress, 0, None, "message", message)
 
-    # what the class strategies call (options.ClassStrategy.first_stages)
+    # what the class strategies call (class_stages.first_stages)
     @property
     def first_evaluator(self) -> tuple[Evaluator, float, int]:
         """The evaluator of the first stages, their tolerance and iteration limit."""
@@ -195,7 +196,7 @@ class FitRun:
         free = np.ones(lay.size, bool)
         free[lay.classes] = False  # classes are never clipped: ±1, or relaxed in between
         guess = np.where(free, np.clip(guess, self.lower, self.upper), guess)
-        start_q, chosen = options.classes.first_stages(self, guess)
+        start_q, chosen = first_stages(options.classes, self, guess)
         continuous = lay.continuous(options.fit_passive)
         if chosen is not None and options.warm_start and chosen.converged:
             # the warm start solved the final problem (classes fixed): the exact model only

@@ -8,22 +8,13 @@ compilation mode are typed values.
 from __future__ import annotations
 
 import enum
-import itertools
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
-import numpy as np
-
-from posture_id.dec.prior import relative_factors
 from posture_id.errors import PostureIdError
-from posture_id.fitting.unknowns import class_names
 from posture_id.frf.locked import LockedOptions
+from posture_id.models.dec import DELAY_BOUNDS, GAIN_BOUNDS
 from posture_id.simulation.options import SimulationOptions
-
-if TYPE_CHECKING:  # the stages need CasADi; the options must not import it
-    from posture_id.fitting.least_squares import FitRun
-    from posture_id.fitting.result import StageResult
 
 __all__ = [
     "FitError",
@@ -69,58 +60,15 @@ class RelaxedClasses:
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise FitError(f"seed must be an integer ≥ 0, got {self.seed!r}")
 
-    def first_stages(self, run: FitRun, guess: np.ndarray) -> tuple[np.ndarray, None]:
-        """Relaxed fits from the guess (classes half-way to their values) and from prior
-        draws; the best one's classes rounded to ±1 start the polish."""
-        lay = run.layout
-        evaluator, tolerance, limit = run.first_evaluator
-        rng = np.random.default_rng(self.seed)
-        starts = [run.assemble(guess, guess[lay.gains_delays], 0.5 * guess[lay.classes])]
-        for _ in range(self.starts - 1):
-            starts.append(run.assemble(guess, relative_factors(rng, 4 * lay.n) - 1,
-                                       np.zeros(lay.n)))
-        tries = []
-        for k, q0 in enumerate(starts):
-            label = "relaxed classes" + (f", start {k + 1}/{len(starts)}" if k else "")
-            tries.append(run.stage(label + run.suffix, evaluator, q0,
-                                   lay.everything(run.options.fit_passive), tolerance, limit))
-        best = min(tries, key=lambda t: t.cost)
-        signs = np.where(best.q[lay.classes] >= 0, 1.0, -1.0)
-        run.say(f"classes from the relaxed fit: {class_names(signs)}")
-        start_q = best.q.copy()
-        start_q[lay.classes] = signs
-        return start_q, None
-
 
 @dataclass(frozen=True)
 class ExhaustiveClasses:
     """Fit every one of the 2^N class combinations; keep the best."""
 
-    def first_stages(self, run: FitRun, guess: np.ndarray) -> tuple[np.ndarray, StageResult]:
-        combos = itertools.product((1.0, -1.0), repeat=run.layout.n)
-        return _best_of_classes(run, guess, [np.asarray(c, dtype=float) for c in combos])
-
 
 @dataclass(frozen=True)
 class FixedClasses:
     """Keep the classes of the initial guess."""
-
-    def first_stages(self, run: FitRun, guess: np.ndarray) -> tuple[np.ndarray, StageResult]:
-        return _best_of_classes(run, guess, [guess[run.layout.classes]])
-
-
-def _best_of_classes(run: FitRun, guess: np.ndarray, combos: list[np.ndarray]
-                     ) -> tuple[np.ndarray, StageResult]:
-    """The continuous parameters fitted under each class combination; the best."""
-    evaluator, tolerance, limit = run.first_evaluator
-    candidates = []
-    for combo in combos:
-        q0 = run.assemble(guess, guess[run.layout.gains_delays], combo)
-        candidates.append(run.stage(f"classes {class_names(combo)}{run.suffix}", evaluator,
-                                    q0, run.layout.continuous(run.options.fit_passive),
-                                    tolerance, limit))
-    chosen = min(candidates, key=lambda s: s.cost)
-    return chosen.q, chosen
 
 
 ClassStrategy = RelaxedClasses | ExhaustiveClasses | FixedClasses
@@ -175,8 +123,8 @@ class FitOptions:
 
     simulation: SimulationOptions = field(default_factory=SimulationOptions)
     classes: ClassStrategy = field(default_factory=RelaxedClasses)
-    gain_bounds: tuple[float, float] = (-1.0, 3.0)
-    delay_bounds: tuple[float, float] = (-1.0, 1.5)
+    gain_bounds: tuple[float, float] = GAIN_BOUNDS
+    delay_bounds: tuple[float, float] = DELAY_BOUNDS
     max_iterations: int = 60
     polish_iterations: int = 20
     tolerance: float = 1e-10

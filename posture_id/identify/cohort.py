@@ -20,22 +20,27 @@ run's.
 
 from __future__ import annotations
 
-import csv
 import glob
 import hashlib
-import io
-import json
 import math
 import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from posture_id.bodies.body import load_body
+from posture_id.cohorts import (
+    FINISHED,
+    CohortRow,
+    CohortTask,
+    Journal,
+    write_summary,
+)
 from posture_id.errors import PostureIdError
 from posture_id.executors import DaskExecutor
-from posture_id.fileio import Result, atomic_write_text, json_text, jsonable
+from posture_id.fileio import Result, jsonable
 from posture_id.fitting.options import FitOptions
 from posture_id.identify.core import Identifier, Method
+from posture_id.identify.verdict import TrustLevel
 from posture_id.learning.identifier import DEFAULT_LEVEL
 from posture_id.motion_capture.mapping import MarkerMapping
 from posture_id.plotting import plot_cohort
@@ -45,11 +50,7 @@ from posture_id.trials.reading import RECORDING_SUFFIXES, RecordingLayout, read_
 from posture_id.trials.subjects import subject_urdf
 
 __all__ = ["CohortResult", "SubjectIdentifiers", "find_recordings", "identify_cohort",
-           "cohort_options", "option_differences", "stimulus_record"]
-
-#: The statuses of a recording with a result.
-_FINISHED = ("done", "skipped", "redone")
-
+           "cohort_options", "stimulus_record"]
 
 def cohort_options(identifier: Identifier, stimulus: TiltProfile | None,
                    columns: RecordingLayout) -> dict:
@@ -79,17 +80,6 @@ def stimulus_record(stimulus: TiltProfile | None) -> dict | None:
                                  + stimulus.angles.tobytes()).hexdigest()}
 
 
-def option_differences(old: dict, new: dict) -> tuple[str, ...]:
-    """The top-level options that differ, as "name (old → new)" for short values."""
-    out = []
-    for key in sorted(set(old) | set(new)):
-        a, b = old.get(key), new.get(key)
-        if a != b:
-            short = all(isinstance(x, str | int | float | type(None)) for x in (a, b))
-            out.append(f"{key} ({a} → {b})" if short else key)
-    return tuple(out)
-
-
 def find_recordings(pattern: str | Path) -> list[Path]:
     """The recordings (CSV and C3D files) of a folder, or the files a glob pattern
     matches, sorted."""
@@ -111,22 +101,24 @@ class CohortResult(Result):
     Attributes:
         out: the results folder. status: per recording, "done", "skipped" (already done
             with the same options), "redone" (done before with other options: see
-            ``changed``) or the error. rows: ``summary.csv``'s rows.
+            ``changed``) or the error. rows: ``summary.csv``'s rows
+            (:class:`~posture_id.cohorts.CohortRow`).
         changed: per redone recording, the options that differed.
     """
 
     out: Path
     status: dict[str, str]
-    rows: tuple[dict, ...] = ()
+    rows: tuple[CohortRow, ...] = ()
     changed: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return {"out": str(self.out), "status": dict(self.status), "rows": list(self.rows),
+        return {"out": str(self.out), "status": dict(self.status),
+                "rows": [r.as_dict() for r in self.rows],
                 "changed": {k: list(v) for k, v in self.changed.items()}}
 
     def plot(self, path=None, ax=None):
         """Each identified recording's Kp per module and its E_rel."""
-        done = [r for r in self.rows if "e_rel_pct" in r]
+        done = [r for r in self.rows if "e_rel_pct" in r]  # rows of identified recordings
         joints = list(dict.fromkeys(k[: -len("_kp")] for r in done for k in r
                                     if k.endswith("_kp")))  # subjects' bodies may differ
         return plot_cohort([r["recording"] for r in done], joints,
@@ -137,17 +129,18 @@ class CohortResult(Result):
 
     @property
     def failed(self) -> dict[str, str]:
-        return {k: v for k, v in self.status.items() if v not in _FINISHED}
+        return {k: v for k, v in self.status.items() if v not in FINISHED}
 
     @property
     def doubtful(self) -> tuple[str, ...]:
         """The recordings whose answer is doubtful (``summary.csv``'s trust)."""
-        return tuple(r["recording"] for r in self.rows if r.get("trust") == "doubtful")
+        return tuple(r.recording for r in self.rows if r.get("trust") is TrustLevel.DOUBTFUL)
 
     def summary(self) -> str:
-        counts = {s: sum(v == s for v in self.status.values()) for s in _FINISHED}
+        counts = {s: sum(v == s for v in self.status.values())
+                  for s in ("done", "skipped", "redone")}
         doubtful = self.doubtful
-        imprecise = sum(r.get("trust") == "imprecise" for r in self.rows)
+        imprecise = sum(r.get("trust") is TrustLevel.IMPRECISE for r in self.rows)
         return (f"{self.out}: {len(self.status)} recordings, {counts['done']} identified, "
                 f"{counts['skipped']} already done, {counts['redone']} identified again "
                 f"(done before with other options), {len(self.failed)} failed"
@@ -265,55 +258,34 @@ def identify_cohort(recordings: list[Path], out: str | Path, identifier: Identif
         trial_bodies: a C3D trial whose metadata give the subject's height and mass (and
             no URDF in ``bodies``) gets that subject's Winter body.
     """
-    out = Path(out)
     subjects = SubjectIdentifiers(identifier, bodies, model,
                                   columns if trial_bodies and isinstance(columns, MarkerMapping)
                                   else None)
-    status: dict[str, str] = {}
-    changed: dict[str, tuple[str, ...]] = {}
-    todo = []
-    for path in recordings:
-        earlier = _earlier_options(out / f"{path.stem}.json")
-        if earlier is None:
-            todo.append(path)
-            continue
-        try:
-            wanted = cohort_options(subjects(path), stimulus, columns)
-        except PostureIdError:  # its body cannot be loaded: said when it is identified
-            todo.append(path)
-            continue
-        if earlier == wanted:
-            status[path.name] = "skipped"
-        else:
-            changed[path.name] = option_differences(earlier, wanted) or ("cohort_options",)
-            todo.append(path)
-    out.mkdir(parents=True, exist_ok=True)
-    done = len(status)
-    report(progress, done, len(recordings), "recording")
+    journal = Journal(out, CohortTask(
+        "parameters", lambda path: cohort_options(subjects(path), stimulus, columns),
+        _summary_row))
 
-    def record(path: Path, result: dict) -> None:
-        nonlocal done
-        if "error" in result:
-            status[path.name] = result["error"]
-        else:
-            atomic_write_text(out / f"{path.stem}.json", json_text(result))
-            status[path.name] = "redone" if path.name in changed else "done"
-        done += 1
-        report(progress, done, len(recordings), "recording")
+    def work(path: Path) -> dict | str:
+        result = _identify_file(path, subjects(path), stimulus, columns=columns)
+        return result.get("error", result)
 
     if scheduler:
+        todo = journal.plan(recordings)
+        done = len(recordings) - len(todo)
+        report(progress, done, len(recordings), "recording")
+
+        def record(path: Path, result: dict) -> None:
+            nonlocal done
+            journal.record(path, result.get("error", result))
+            done += 1
+            report(progress, done, len(recordings), "recording")
+
         _run_on_cluster(scheduler, todo, subjects, model, record, stimulus, columns)
     else:
-        for path in todo:
-            try:
-                chosen = subjects(path)
-            except PostureIdError as exc:  # a subject's body that cannot be loaded
-                record(path, {"error": str(exc)})
-                continue
-            record(path, _identify_file(path, chosen, stimulus, columns=columns))
-    rows = _write_summary(out, recordings, status)
-    return CohortResult(out, status, tuple(rows),
-                        {k: v for k, v in changed.items() if status.get(k) == "redone"})
+        journal.run(recordings, work, progress)
+    rows = journal.rows(recordings)
+    write_summary(journal.out / "summary.csv", rows, _summary_fields(rows))
+    return CohortResult(journal.out, journal.status, tuple(rows), journal.redone)
 
 
 def _run_on_cluster(address: str, todo: list[Path], subjects: SubjectIdentifiers, model,
@@ -332,16 +304,6 @@ def _run_on_cluster(address: str, todo: list[Path], subjects: SubjectIdentifiers
             record(by_name[name], result)
 
 
-def _earlier_options(target: Path) -> dict | None:
-    """The options a finished result was made with ({} for one from before they were
-    recorded), or None when there is no finished result."""
-    try:
-        data = json.loads(target.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data.get("cohort_options", {}) if "parameters" in data else None
-
-
 def _sig(x) -> float | None:
     """A number for the summary: 5 significant digits, None for a missing one."""
     return None if x is None else float(f"{float(x):.5g}")
@@ -355,40 +317,38 @@ def _trust_level(trust: dict) -> str:
     return trust.get("level") or ("doubtful" if trust.get("doubtful") else "good")
 
 
-def _write_summary(out: Path, recordings: list[Path], status: dict[str, str]) -> list[dict]:
-    """summary.csv: SI units throughout (N·m/rad, N·m·s/rad, N·m/(rad·s), s), E_rel in
-    percent, 5 significant digits; per module its class probability (P(COM), the CNN's
-    or none) and the bounds of each parameter's interval."""
-    rows = []
-    fields = ["recording", "status", "body", "method", "classes", "e_rel_pct", "trust",
-              "suggestion"]
-    for path in recordings:
-        row = {"recording": path.name, "status": status.get(path.name, "")}
-        target = out / f"{path.stem}.json"
-        if status.get(path.name) in _FINISHED:
-            data = json.loads(target.read_text(encoding="utf-8"))
-            trust = data.get("trust") or {}
-            row.update(body=data.get("provenance", {}).get("body", {}).get("name", ""),
-                       method=data["method"],
-                       e_rel_pct=None if data["e_rel"] is None else _sig(100 * data["e_rel"]),
-                       classes="/".join(m["controls"] for m in data["parameters"].values()),
-                       trust=_trust_level(trust), suggestion=trust.get("suggestion") or "")
-            probability = data.get("class_probability_com") or {}
-            intervals = (data.get("intervals") or {}).get("modules", {})
-            for joint, module in data["parameters"].items():
-                values = {f"{joint}_{key}": _sig(module[key])
-                          for key in ("kp", "ki", "kd", "delay_s")}
-                values[f"{joint}_p_com"] = _sig(probability.get(joint))
-                for key in ("kp", "ki", "kd", "delay_s"):
-                    bounds = intervals.get(joint, {}).get(key, {})
-                    values[f"{joint}_{key}_low"] = _sig(bounds.get("lower_si"))
-                    values[f"{joint}_{key}_high"] = _sig(bounds.get("upper_si"))
-                row.update(values)
-                fields += [name for name in values if name not in fields]
-        rows.append(row)
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=fields, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    atomic_write_text(out / "summary.csv", text.getvalue())
-    return rows
+#: The first columns of summary.csv; each module's follow.
+SUMMARY_FIELDS = ("recording", "status", "body", "method", "classes", "e_rel_pct", "trust",
+                  "suggestion")
+
+
+def _summary_row(data: dict) -> dict:
+    """A result's columns of summary.csv: SI units throughout (N·m/rad, N·m·s/rad,
+    N·m/(rad·s), s), E_rel in percent, 5 significant digits; per module its class
+    probability (P(COM), the CNN's or none) and the bounds of each parameter's interval."""
+    trust = data.get("trust") or {}
+    level = _trust_level(trust)
+    row = {"body": data.get("provenance", {}).get("body", {}).get("name", ""),
+           "method": data["method"],
+           "classes": "/".join(m["controls"] for m in data["parameters"].values()),
+           "e_rel_pct": None if data["e_rel"] is None else _sig(100 * data["e_rel"]),
+           "trust": TrustLevel(level) if level else "",
+           "suggestion": trust.get("suggestion") or ""}
+    probability = data.get("class_probability_com") or {}
+    intervals = (data.get("intervals") or {}).get("modules", {})
+    for joint, module in data["parameters"].items():
+        row.update({f"{joint}_{key}": _sig(module[key]) for key in ("kp", "ki", "kd", "delay_s")})
+        row[f"{joint}_p_com"] = _sig(probability.get(joint))
+        for key in ("kp", "ki", "kd", "delay_s"):
+            bounds = intervals.get(joint, {}).get(key, {})
+            row[f"{joint}_{key}_low"] = _sig(bounds.get("lower_si"))
+            row[f"{joint}_{key}_high"] = _sig(bounds.get("upper_si"))
+    return row
+
+
+def _summary_fields(rows: list[CohortRow]) -> list[str]:
+    """summary.csv's columns: the first ones, then every module's as they come."""
+    fields = list(SUMMARY_FIELDS)
+    for row in rows:
+        fields += [name for name in row.values if name not in fields]
+    return fields

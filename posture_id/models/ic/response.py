@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posture_id.ic.parameters import IcParameters
+from posture_id.models.ic.parameters import IcParameters
 
 __all__ = ["IcPlant", "closed_loop", "is_stable", "PARAMETER_ORDER", "rightmost_pole"]
 

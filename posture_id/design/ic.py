@@ -2,11 +2,11 @@
 
 The same Fisher-information reasoning as DEC's design (:mod:`posture_id.design.predict`),
 on the IC fit's own numbers: for each of ``draws`` IC subjects
-(:func:`~posture_id.ic.subjects.draw_ic_parameters`, the same subjects for every protocol)
+(:func:`~posture_id.models.ic.subjects.draw_ic_parameters`, the same subjects for every protocol)
 and each recording of a protocol (every part, every repetition):
 
 1. the exact derivatives of the model's locked COM-sway harmonics with respect to the
-   identified parameters (:class:`~posture_id.ic.fit.IcModelResponse`: the response from
+   identified parameters (:class:`~posture_id.models.exact.ExactResponse`: the response from
    rest, the transient included, as the fit sees it), projected as the fit projects them;
 2. their noise: white sensor noise on the COM sway (σ/√(2·P·C) at each harmonic of a
    P-sample cycle averaged over C cycles) and, for people-like sway, the motor-noise-driven
@@ -30,10 +30,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from posture_id.fileio import Result
+from posture_id.fitting.frequency import IcFitOptions
 from posture_id.frf.locked import LockedOptions, LockedProjection
-from posture_id.ic.fit import BOUNDS, IcFitOptions, IcModelResponse, parameter_scale
-from posture_id.ic.response import PARAMETER_ORDER, IcPlant
-from posture_id.ic.subjects import draw_ic_parameters
+from posture_id.models.exact import ExactResponse
+from posture_id.models.ic.model import BOUNDS, IC, parameter_scale
+from posture_id.models.ic.response import PARAMETER_ORDER, IcPlant
+from posture_id.models.ic.subjects import draw_ic_parameters
 from posture_id.progress import Progress, report
 from posture_id.simulation.protocols import Protocol
 
@@ -128,7 +130,7 @@ def _recording_information(body, plant: IcPlant, params, profile,
                            locked_share: float | None, seed: int,
                            locked: LockedOptions) -> np.ndarray:
     """(P, P) information of one recording about the normalised ``free`` parameters."""
-    from posture_id.ic.simulation import simulate_ic
+    from posture_id.models.ic.simulation import simulate_ic
 
     duration = profile.duration
     n = int(round(duration * _SAMPLE_RATE_HZ)) + 1
@@ -138,7 +140,7 @@ def _recording_information(body, plant: IcPlant, params, profile,
     projection = LockedProjection.for_recording(
         tilt, np.zeros((n, 1)), _SAMPLE_RATE_HZ, period, profile.periodic_from_s,
         LockedOptions(max_frequency_hz=locked.max_frequency_hz, weighted=False))
-    model = IcModelResponse(tilt, _SAMPLE_RATE_HZ, plant)
+    model = ExactResponse(IC, tilt, _SAMPLE_RATE_HZ, plant)
     clean, dy = model.sway(params, gradient=True)
     columns = [PARAMETER_ORDER.index(f) for f in free]
     scales = np.array([parameter_scale(f, plant) for f in free])

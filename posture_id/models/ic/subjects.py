@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 
-from posture_id.ic.parameters import IcParameters
-from posture_id.ic.response import IcPlant, is_stable
-from posture_id.ic.simulation import simulate_ic
+from posture_id.models.ic.parameters import IcParameters
+from posture_id.models.ic.response import IcPlant, is_stable
+from posture_id.models.ic.simulation import simulate_ic
 from posture_id.recording import Recording
 from posture_id.simulation.stimulus import TiltProfile
 

@@ -11,12 +11,13 @@ joints locked upright), so any body's recording format reads it, and its body CO
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
-from posture_id.ic.parameters import IcParameters
-from posture_id.ic.response import IcPlant
+from posture_id.models.ic.parameters import IcParameters
+from posture_id.models.ic.response import IcPlant
 from posture_id.recording import Recording
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.stimulus import TiltProfile, prts
@@ -118,17 +119,11 @@ def simulate_ic(body, params: IcParameters, stimulus: TiltProfile | None = None,
     return Recording(time, tilt, angles, body.segment_names, name="IC simulation")
 
 
-_LOOP = None
-
-
+@functools.cache
 def _compiled_loop():
     """:func:`_step_loop` compiled by numba (cached on disk), or as it is without numba."""
-    global _LOOP
-    if _LOOP is None:
-        try:
-            import numba
-
-            _LOOP = numba.njit(cache=True)(_step_loop)
-        except ImportError:  # pragma: no cover - numba is a dependency
-            _LOOP = _step_loop
-    return _LOOP
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return _step_loop
+    return numba.njit(cache=True)(_step_loop)

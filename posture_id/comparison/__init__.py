@@ -1,0 +1,1 @@
+"""Two models fitted to one recording (or a cohort) and which its sway supports."""

@@ -69,6 +69,10 @@ class CohortRow:
     def __contains__(self, key: str) -> bool:
         return key in self.as_dict()
 
+    def __iter__(self):
+        """The row's column names."""
+        return iter(self.as_dict())
+
     def as_dict(self) -> dict:
         return {"recording": self.recording, "status": self.status, **self.values}
 

@@ -100,7 +100,12 @@ class IcFitOptions(FrequencyFitOptions):
 
 
 def com_sway_deg(trial: PreparedTrial, body) -> np.ndarray:
-    """(S,) degrees: the body COM sway α_BS of a trial (:func:`~posture_id.models.dec.com_deg`)."""
+    """(S,) degrees: the body COM sway α_BS of a trial (:func:`~posture_id.models.dec.com_deg`).
+
+    Raises:
+        PostureIdError: a recording whose segments are not the body's.
+    """
+    trial.recording.check_segments(body.segment_names)
     return com_deg(trial.recording.theta, body)
 
 
@@ -438,8 +443,17 @@ def fit_frequency(model: FrequencyModel, trial: PreparedTrial, body,
 
 def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None
            ) -> FrequencyFitResult:
-    """The IC parameters of ``trial``'s body COM sway (:func:`fit_frequency` of the IC
-    model; default :class:`IcFitOptions`: Ki and the passive terms held at 0)."""
+    """The IC parameters of ``trial``'s body COM sway: :func:`fit_frequency` of the IC
+    model.
+
+    Args:
+        trial: the recording with its periodic stimulus (a :class:`PreparedTrial`).
+        body: the recorded body, turning as one about the ankle.
+        options: what is identified and how (default :class:`IcFitOptions`: Ki and the
+            passive terms held at 0).
+    Returns:
+        :class:`FrequencyFitResult`: the parameters (SI units), their intervals and the fit.
+    """
     return fit_frequency(IC, trial, body, options or IcFitOptions())
 
 

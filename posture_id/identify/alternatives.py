@@ -39,7 +39,7 @@ from dataclasses import replace
 from posture_id.bodies.body import Body
 from posture_id.bodies.scaling import scaled_body
 from posture_id.errors import PostureIdError
-from posture_id.identify.mistakes import Mistake
+from posture_id.identify.mistakes import Check, Mistake
 from posture_id.identify.noise_check import NOISE_RATIO_LIMIT
 from posture_id.trials import PreparedTrial
 
@@ -96,7 +96,7 @@ def better_explanations(trial: PreparedTrial, body: Body, ratio: float, relative
             best = (k, other)
     if best is not None:
         k, other = best
-        found.append(Mistake("columns exchanged", ratio / other, SWAP_GAIN, (
+        found.append(Mistake(Check.COLUMNS_EXCHANGED, ratio / other, SWAP_GAIN, (
             f"the {names[k]} and {names[k + 1]} columns read the other way round leave "
             f"{other:.2f}× the noise against {_times(ratio)} as given: are they exchanged?")))
     if sizes:
@@ -107,7 +107,7 @@ def better_explanations(trial: PreparedTrial, body: Body, ratio: float, relative
         tried = [(factor, ratio_of(trial, scaled)) for factor, scaled in bodies]
         factor, other = min(tried, key=lambda t: t[1])
         if other * SIZE_GAIN <= ratio:
-            found.append(Mistake("another body", ratio / other, SIZE_GAIN, (
+            found.append(Mistake(Check.ANOTHER_BODY, ratio / other, SIZE_GAIN, (
                 f"a body {abs(100 * (factor - 1)):.0f} % {'taller' if factor > 1 else 'shorter'}"
                 f" than {body.name}'s explains the sway better ({other:.2f}× the noise against "
                 f"{_times(ratio)}): is the URDF this subject's? (the sway shows a body's "

@@ -39,9 +39,9 @@ from posture_id.fitting.options import FitOptions, FixedClasses, RelaxedClasses
 from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify.alternatives import better_explanations
 from posture_id.identify.method import DEFAULT_METHOD, Method
-from posture_id.identify.mistakes import find_mistakes
+from posture_id.identify.mistakes import Check, find_mistakes
 from posture_id.identify.networks import Network, network_for
-from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, NoiseCheck, noise_check
+from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, Basis, NoiseCheck, noise_check
 from posture_id.identify.result import NOTHING_BALANCES, IdentificationResult, SegmentFit
 from posture_id.identify.verdict import (
     PEOPLE_LIKE_SHARE,
@@ -210,7 +210,7 @@ class Identifier:
         read the alternatives. ``locked``: the trial's unweighted locked projection (the
         same for every alternative: they keep its tilt)."""
         noise = verdict.noise
-        if (self.cnn is None or cnn is None or noise is None or noise.basis != "locked"
+        if (self.cnn is None or cnn is None or noise is None or noise.basis is not Basis.LOCKED
                 or not NOISE_RATIO_LIMIT < noise.ratio < math.inf):
             return verdict  # nothing to read, or an answer within the noise
         def ratio_of(other: PreparedTrial, body: Body) -> float:
@@ -219,9 +219,9 @@ class Identifier:
         base = noise.ratio if self.method is Method.CNN else ratio_of(trial, self.body)
         found = better_explanations(trial, self.body, base, noise.relative, ratio_of,
                                     sizes=isinstance(self.cnn, UniversalIdentifier))
-        if any(m.check == "another body" for m in found) and not verdict.fitted \
+        if any(m.check is Check.ANOTHER_BODY for m in found) and not verdict.fitted \
                 and self._fits_within_noise(trial, cnn):
-            found = tuple(m for m in found if m.check != "another body")
+            found = tuple(m for m in found if m.check is not Check.ANOTHER_BODY)
         if not found:
             return verdict
         return replace(verdict, mistakes=verdict.mistakes + tuple(m.sentence for m in found),

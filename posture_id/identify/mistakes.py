@@ -34,6 +34,7 @@ Each returns a :class:`Mistake` when it finds one, None when it does not or cann
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 
@@ -67,23 +68,39 @@ CONTROL_CHANGE_RATIO = 3.0
 _NEIGHBOURS = 6
 
 
+class Check(str, enum.Enum):
+    """The checks that find a mistake in a recording."""
+
+    TILT_SIGN = "tilt sign"
+    ANGLE_STEP = "angle step"
+    CONTROL_CHANGE = "control change"
+    COLUMNS_EXCHANGED = "columns exchanged"
+    ANOTHER_BODY = "another body"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class Mistake:
     """A recording that the model cannot have produced.
 
     Attributes:
-        check: which check found it ("tilt sign", "angle step", "control change").
+        check: which check found it (:class:`Check`).
         statistic: the check's statistic (module docstring); threshold: where it doubts.
         sentence: what was found, for the verdict.
     """
 
-    check: str
+    check: Check
     statistic: float
     threshold: float
     sentence: str
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "check", Check(self.check))
+
     def to_dict(self) -> dict:
-        return {"check": self.check, "statistic": self.statistic,
+        return {"check": self.check.value, "statistic": self.statistic,
                 "threshold": self.threshold, "sentence": self.sentence}
 
 
@@ -124,7 +141,7 @@ def tilt_sign(trial: PreparedTrial, body, projection: LockedProjection | None
                 f"{source.get('forward_axis')}), or the tilt's sign reversed?"
                 if source.get("format") == "c3d"
                 else "is the tilt column's or the stimulus's sign reversed?")
-    return Mistake("tilt sign", z, -TILT_SIGN_Z, (
+    return Mistake(Check.TILT_SIGN, z, -TILT_SIGN_Z, (
         f"the body sways against the tilt at low frequencies (real FRF {gain:.2f} below "
         f"{LOW_FREQUENCY_HZ:g} Hz, {abs(z):.1f} noise SDs below zero; every body balanced "
         f"by DEC follows it): {suspects}"))
@@ -153,7 +170,7 @@ def angle_steps(trial: PreparedTrial) -> list[Mistake]:
         z = abs(size) / spread if spread > 0 else math.inf
         if z > STEP_Z and abs(size) >= STEP_MIN_DEG:
             t = float(rec.time[k + w - 1] + 0.5 / rec.sample_rate_hz)
-            found.append(Mistake("angle step", z, STEP_Z, (
+            found.append(Mistake(Check.ANGLE_STEP, z, STEP_Z, (
                 f"the {name} angle jumps by {size:+.2f}° at t = {t:.2f} s ({z:.0f}× the "
                 "recording's sample-to-sample spread): a body does not move so; a marker "
                 "that moved or a sensor re-zeroed?")))
@@ -188,7 +205,7 @@ def control_change(trial: PreparedTrial, resimulated: np.ndarray | None,
     ratio = float(np.mean(power[rows] / expected))
     if not ratio > CONTROL_CHANGE_RATIO:
         return None
-    return Mistake("control change", ratio, CONTROL_CHANGE_RATIO, (
+    return Mistake(Check.CONTROL_CHANGE, ratio, CONTROL_CHANGE_RATIO, (
         f"the response to the stimulus differs between the first {half} and the last "
         f"{c - half} cycles by {ratio:.1f}× what the recording's noise leaves (one "
         "controller gives about 1): did the subject's control change within the recording "

@@ -36,6 +36,7 @@ alone would leave, so that a recording too noisy to check an answer says so.
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 
@@ -45,6 +46,17 @@ from posture_id.frf.cycles import cycle_average
 from posture_id.frf.locked import LockedOptions, LockedProjection, noise_levels
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.noise import sensor_noise_deg
+
+
+class Basis(str, enum.Enum):
+    """What sway a residual is measured on: the stimulus-locked cycle average, or every
+    sample."""
+
+    LOCKED = "locked"
+    RAW = "raw"
+
+    def __str__(self) -> str:
+        return self.value
 
 __all__ = ["NoiseCheck", "noise_check", "harmonic_noise", "NOISE_RATIO_LIMIT",
            "CLOSE_ENOUGH"]
@@ -82,11 +94,14 @@ class NoiseCheck:
     """
 
     ratio: float
-    basis: str
+    basis: Basis
     noise_deg: float
     limit: float = NOISE_RATIO_LIMIT
     relative: float = math.nan
     noise_relative: float = math.nan
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "basis", Basis(self.basis))
 
     @property
     def consistent(self) -> bool:
@@ -109,7 +124,7 @@ class NoiseCheck:
     def sentence(self) -> str:
         if not math.isfinite(self.ratio):
             return "residual without end: the model falls in re-simulation"
-        what = ("stimulus-locked residual" if self.basis == "locked" else "residual")
+        what = ("stimulus-locked residual" if self.basis is Basis.LOCKED else "residual")
         verdict = ("consistent with the recording's noise" if self.consistent
                    else "larger than the recording's noise allows")
         noisy = ("" if not math.isfinite(self.noise_relative) else
@@ -121,7 +136,7 @@ class NoiseCheck:
 
     def to_dict(self) -> dict:
         return {"ratio": self.ratio if math.isfinite(self.ratio) else None,
-                "basis": self.basis, "noise_deg": self.noise_deg, "limit": self.limit,
+                "basis": self.basis.value, "noise_deg": self.noise_deg, "limit": self.limit,
                 "relative": self.relative if math.isfinite(self.relative) else None,
                 "noise_relative": (self.noise_relative
                                    if math.isfinite(self.noise_relative) else None),
@@ -177,13 +192,13 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
         if projection.cycles < 2 and finite:  # the start's transient: as above
             noise_power = np.minimum(noise_power, spread(projection, ours))
         noise_relative = float(np.sqrt(np.sum(noise_power) / locked_power))
-        return NoiseCheck(ratio, "locked", noise, limit, relative, noise_relative)
+        return NoiseCheck(ratio, Basis.LOCKED, noise, limit, relative, noise_relative)
     noise = max(float(sensor_noise_deg(recorded)), _NOISE_FLOOR_DEG)
     if not np.all(np.isfinite(residual)):
-        return NoiseCheck(math.inf, "raw", noise, limit, math.inf)
+        return NoiseCheck(math.inf, Basis.RAW, noise, limit, math.inf)
     spread = np.degrees(recorded - recorded.mean(axis=0))
     relative = float(np.sqrt(np.sum(residual**2) / np.sum(spread**2)))
-    return NoiseCheck(float(np.sqrt(np.mean(residual**2))) / noise, "raw", noise, limit,
+    return NoiseCheck(float(np.sqrt(np.mean(residual**2))) / noise, Basis.RAW, noise, limit,
                       relative)
 
 

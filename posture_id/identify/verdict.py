@@ -50,7 +50,6 @@ The rule and its measurement: docs/identify.md, "Trust".
 
 from __future__ import annotations
 
-import enum
 import math
 from dataclasses import dataclass
 
@@ -59,6 +58,7 @@ import numpy as np
 from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.identify.method import Method
 from posture_id.identify.noise_check import CLOSE_ENOUGH, NoiseCheck
+from posture_id.models.protocol import TrustLevel
 from posture_id.uncertainty.intervals import LABELS
 
 __all__ = ["TrustVerdict", "TrustLevel", "PEOPLE_LIKE_SHARE", "PINNED_FIELDS", "PINNED_TO",
@@ -98,17 +98,6 @@ CLASSES_RIGHT_AT_LEAST = 0.8
 #: answer keeps the closeness allowance and least squares' does not
 #: (docs/identify.md, "Trust").
 FITTED_NOISE_LIMIT = 3.0
-
-
-class TrustLevel(str, enum.Enum):
-    """How far an answer can be trusted (module docstring)."""
-
-    GOOD = "good"
-    IMPRECISE = "imprecise"
-    DOUBTFUL = "doubtful"
-
-    def __str__(self) -> str:
-        return self.value
 
 
 #: What suits people-like sway (docs/real_recordings.md, docs/results/real_like.md).

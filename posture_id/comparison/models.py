@@ -33,10 +33,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from posture_id.comparison.identified import fit_as_identified
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
 from posture_id.fitting.frequency import IcFitOptions, com_sway_deg
-from posture_id.fitting.models import fit_model, fit_model_parts
+from posture_id.fitting.models import fit_model_parts
 from posture_id.frf.locked import LockedOptions, LockedProjection, floored, noise_levels
 from posture_id.models.dec import DEC
 from posture_id.models.ic import IC
@@ -294,7 +295,7 @@ def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None =
     projection = judged.projection
     fits, chi2, k, spectra = {}, {}, {}, {}
     for model in models:
-        fit = (fitted or {}).get(model.name) or fit_model(
+        fit = (fitted or {}).get(model.name) or fit_as_identified(
             model, trial, body, locked, options.get(model.name), progress)
         fits[model.name] = fit
         chi2[model.name], spectra[model.name] = judged.judge(fit.fitted_com_deg,
@@ -438,7 +439,7 @@ def _held_out(trial: PreparedTrial, body, projection: LockedProjection,
     noise = projection.noise[:, 0] * math.sqrt(c)  # one cycle's noise, not the average's
     predicted = {}
     for model in models:
-        fit = fit_model(model, train, body, locked, options.get(model.name))
+        fit = fit_as_identified(model, train, body, locked, options.get(model.name))
         predicted[model.name] = model.com_sway_deg(fit.parameters, body, trial)
     out = {}
     for name, model_com in predicted.items():

@@ -1,0 +1,89 @@
+"""A model with a network identified for a comparison the way ``posture-id identify``
+identifies it: the network's answer refined by the locked least squares (the hybrid),
+where the network serves the body; where it does not, the model's own fit
+(:func:`~posture_id.fitting.models.fit_model`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from posture_id.errors import PostureIdError
+from posture_id.fitting.models import fit_model
+from posture_id.frf.locked import LockedOptions
+from posture_id.models.protocol import Capability, Model
+from posture_id.trials import PreparedTrial
+
+__all__ = ["IdentifiedFit", "fit_as_identified"]
+
+
+@dataclass(frozen=True)
+class IdentifiedFit:
+    """An identification (:class:`~posture_id.identify.result.IdentificationResult`) as a
+    :class:`~posture_id.models.protocol.ModelFit`: its body COM sway re-simulated on the
+    compared trial."""
+
+    result: object
+    fitted_com_deg: np.ndarray
+    identified_count: int
+
+    @property
+    def parameters(self):
+        return self.result.parameters
+
+    @property
+    def falls(self) -> bool:
+        return bool(self.result.fell or not np.all(np.isfinite(self.fitted_com_deg)))
+
+    @property
+    def residual_sd(self) -> float | None:
+        fit = self.result.fit
+        return None if fit is None else fit.residual_sd
+
+    def comparison_dict(self) -> dict:
+        return {"parameters": self.parameters.to_dict(), "residual_sd": self.residual_sd,
+                "method": self.result.method.value}
+
+    def to_dict(self) -> dict:
+        return self.result.to_dict()
+
+
+#: The hybrid identifiers built, by body (its URDF's digest) and harmonics.
+_IDENTIFIERS: dict = {}
+
+
+def _identifier(body, locked: LockedOptions):
+    """The hybrid identifier of ``body`` with the locked fit at ``locked``'s harmonics
+    (built once per body), or None where no network serves the body."""
+    from posture_id.fitting.options import FitOptions
+    from posture_id.identify.core import Identifier
+    from posture_id.identify.method import Method
+    from posture_id.learning.config import LearningError
+
+    key = (body.sha256, locked)
+    if key not in _IDENTIFIERS:
+        try:
+            _IDENTIFIERS[key] = Identifier(body, Method.HYBRID,
+                                           fit_options=FitOptions(locked=locked))
+        except LearningError:
+            _IDENTIFIERS[key] = None
+    return _IDENTIFIERS[key]
+
+
+def fit_as_identified(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
+                      options=None, progress=None):
+    """``model`` fitted to ``trial`` for a comparison: a model with a network
+    (:attr:`~posture_id.models.protocol.Capability.NETWORK`) by the hybrid where its
+    network serves the body, every other one by :func:`fit_model`."""
+    identifier = (_identifier(body, locked)
+                  if Capability.NETWORK in model.capabilities and options is None else None)
+    if identifier is None:
+        return fit_model(model, trial, body, locked, options, progress)
+    try:
+        result = identifier.identify_trial(identifier.prepare(trial.recording,
+                                                              trial.stimulus), progress)
+    except PostureIdError:
+        return fit_model(model, trial, body, locked, options, progress)
+    return IdentifiedFit(result, model.com_sway_deg(result.parameters, body, trial),
+                         model.identified_count(body))

@@ -48,3 +48,57 @@ def test_a_forbidden_import_breaks_its_contract(tmp_path, module, line, broken):
     verdicts = [ln for ln in result.stdout.splitlines() if ln.startswith(broken)]
     assert verdicts and verdicts[0].endswith("BROKEN"), result.stdout
     assert "1 broken" in result.stdout, result.stdout  # only the contract named for it
+
+
+#: Prints each import cycle among the package's modules (TYPE_CHECKING and function-level
+#: imports counted), one per line.
+_CYCLES = """
+import grimp
+graph = grimp.build_graph("posture_id", include_external_packages=False)
+modules = graph.modules
+edges = {m: set(graph.find_modules_directly_imported_by(m)) & modules for m in modules}
+index, low, stack, on, found = {}, {}, [], set(), []
+def visit(v):
+    index[v] = low[v] = len(index); stack.append(v); on.add(v)
+    for w in edges[v]:
+        if w not in index:
+            visit(w); low[v] = min(low[v], low[w])
+        elif w in on:
+            low[v] = min(low[v], index[w])
+    if low[v] == index[v]:
+        part = []
+        while True:
+            w = stack.pop(); on.discard(w); part.append(w)
+            if w == v:
+                break
+        if len(part) > 1:
+            found.append(" ".join(sorted(part)))
+import sys
+sys.setrecursionlimit(100000)
+for m in sorted(modules):
+    if m not in index:
+        visit(m)
+print("\\n".join(found))
+"""
+
+
+def _cycles(cwd: Path) -> list[str]:
+    result = subprocess.run([sys.executable, "-c", _CYCLES], cwd=cwd, capture_output=True,
+                            text=True, env={"PYTHONPATH": str(cwd), "PATH": "/usr/bin:/bin"})
+    assert result.returncode == 0, result.stderr
+    return [line for line in result.stdout.splitlines() if line]
+
+
+def test_no_module_imports_itself_through_others():
+    assert _cycles(ROOT) == []
+
+
+def test_an_import_cycle_is_found_even_for_type_hints(tmp_path):
+    shutil.copytree(ROOT / "posture_id", tmp_path / "posture_id",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    options = tmp_path / "posture_id" / "fitting" / "options.py"
+    options.write_text(options.read_text() + "\nfrom typing import TYPE_CHECKING\n\nif "
+                       "TYPE_CHECKING:\n    from posture_id.fitting.least_squares import "
+                       "FitRun\n")
+    cycles = _cycles(tmp_path)
+    assert len(cycles) == 1 and "posture_id.fitting.options" in cycles[0], cycles

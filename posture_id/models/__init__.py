@@ -11,11 +11,25 @@ from posture_id.models.protocol import (
     ModelFit,
     ModelParameters,
     TrustLevel,
-    model_named,
     register,
-    registered_models,
+    registered,
 )
 
 __all__ = ["DEC", "DecModel", "IC", "IcModel", "Capability", "FrequencyModel", "Model",
            "ModelFit", "ModelParameters", "TrustLevel", "model_named", "register",
            "registered_models"]
+
+
+def registered_models() -> tuple[Model, ...]:
+    """Every model known: the project's (DEC, IC) and any registered since."""
+    return registered()
+
+
+def model_named(name: str) -> Model:
+    """The model whose ``"model"`` key is ``name``."""
+    from posture_id.errors import PostureIdError
+
+    models = {m.name: m for m in registered()}
+    if name not in models:
+        raise PostureIdError(f"unknown model {name!r} (known: {', '.join(sorted(models))})")
+    return models[name]

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from posture_id.simulation.stimulus import TiltProfile
 
 __all__ = ["Capability", "TrustLevel", "ModelParameters", "ModelFit", "Model",
-           "FrequencyModel", "register", "model_named", "registered_models"]
+           "FrequencyModel", "register", "registered"]
 
 
 class TrustLevel(str, enum.Enum):
@@ -179,23 +179,12 @@ _REGISTRY: dict[str, Model] = {}
 
 
 def register(model: Model) -> Model:
-    """Make ``model`` known by its name (to :func:`model_named` and the check suite)."""
+    """Make ``model`` known by its name (:func:`posture_id.models.model_named`, the check
+    suite)."""
     _REGISTRY[model.name] = model
     return model
 
 
-def registered_models() -> tuple[Model, ...]:
-    """Every model known: the project's (DEC, IC) and any registered since."""
-    from posture_id.models import dec, ic  # noqa: F401  (registers them)
-
+def registered() -> tuple[Model, ...]:
+    """The models registered so far."""
     return tuple(_REGISTRY.values())
-
-
-def model_named(name: str) -> Model:
-    """The model whose ``"model"`` key is ``name``."""
-    from posture_id.errors import PostureIdError
-
-    models = {m.name: m for m in registered_models()}
-    if name not in models:
-        raise PostureIdError(f"unknown model {name!r} (known: {', '.join(sorted(models))})")
-    return models[name]

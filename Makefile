@@ -58,6 +58,7 @@ docs: $(STAMP)
 figures: $(STAMP)
 	$(BIN)/posture-id identify $(EXAMPLES)/tip_subject.csv --out docs/images/tip_subject.json \
 	  --plot docs/images/tip_subject.png
+	$(BIN)/python docs/config/architecture_figure.py --out docs/images/architecture.png
 
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"

@@ -17,6 +17,7 @@ from posture_id.fileio import json_text
 from posture_id.identify import Identifier
 from posture_id.identify.method import Method
 from posture_id.learning.identifier import CnnIdentifier
+from posture_id.learning.protocol import NetworkIdentifier
 from posture_id.learning.universal.identifier import UniversalIdentifier
 from posture_id.models import DEC, TrustLevel
 from posture_id.recording import Recording
@@ -52,10 +53,12 @@ def identified(request, body, recording):
 
 
 def test_both_networks_implement_one_identifier_protocol(body):
+    other = load_body(WINTER_2SEG)
     for network in (CnnIdentifier.load(PAPER_CNN, body), UniversalIdentifier.bundled(body)):
-        for member in ("identify", "for_body", "calibration", "trained_on_this_body",
-                       "reads_people_like"):
-            assert hasattr(network, member), (type(network).__name__, member)
+        assert isinstance(network, NetworkIdentifier), type(network).__name__
+        again = network.for_body(body)  # an instance method on both: the same network
+        assert type(again) is type(network) and again.body is body
+        assert network.for_body(other).body is other
 
 
 @pytest.mark.slow

@@ -56,7 +56,7 @@ def test_identify_without_out_prints_the_result_and_writes_nothing(tip, tmp_path
 
 
 def test_identify_recovers_random_classes(tip):
-    identifier = CnnIdentifier.for_body(tip)
+    identifier = CnnIdentifier.bundled(tip)
     rng = np.random.default_rng(2024)
     checked = 0
     params = sample_parameters(tip, 12, rng)
@@ -75,7 +75,7 @@ def test_the_two_segment_body_has_its_own_model():
     body = load_body(TWO_SEGMENT)
     folder, notices = bundled_model_dir(body)
     assert folder.name == "winter_1.75m_70kg_2seg" and not notices
-    result = CnnIdentifier.for_body(body).identify(prepare_trial(simulate(body).to_recording()))
+    result = CnnIdentifier.bundled(body).identify(prepare_trial(simulate(body).to_recording()))
     assert result.classes == ("com", "com")  # the defaults of a 2-segment body
 
 
@@ -115,7 +115,7 @@ def test_a_resampled_recording_gives_the_same_classes(tip):
 
     fine = simulate(tip, options=SimulationOptions(sample_rate_hz=100.0))
     rec = Recording(fine.time, fine.tilt, fine.theta, fine.segments)
-    result = CnnIdentifier.for_body(tip).identify(prepare_trial(rec))
+    result = CnnIdentifier.bundled(tip).identify(prepare_trial(rec))
     assert result.classes == ("com", "joint", "com")
 
 

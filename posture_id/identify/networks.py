@@ -7,11 +7,13 @@ from pathlib import Path
 
 from posture_id.bodies.body import Body
 from posture_id.learning.identifier import CnnIdentifier
+from posture_id.learning.protocol import NetworkIdentifier
 from posture_id.learning.universal.identifier import UniversalIdentifier, is_universal_model
 
 __all__ = ["network_for", "Network"]
 
-Network = CnnIdentifier | UniversalIdentifier
+#: What an identification asks of a network (both networks implement it).
+Network = NetworkIdentifier
 
 
 def network_for(model: str | Path | Network | None, body: Body) -> Network:

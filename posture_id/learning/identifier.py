@@ -3,7 +3,7 @@
     >>> from posture_id import load_body, Recording
     >>> from posture_id.learning import CnnIdentifier
     >>> body = load_body()
-    >>> identifier = CnnIdentifier.for_body(body)          # the bundled model
+    >>> identifier = CnnIdentifier.bundled(body)           # the bundled model
     >>> trial = prepare_trial(Recording.from_csv("rec.csv", body.segment_names))
     >>> result = identifier.identify(trial)
     >>> result.parameters                                  # DecParameters, SI units
@@ -176,13 +176,18 @@ class CnnIdentifier:
         or None for the bundled model."""
         if isinstance(model, CnnIdentifier):
             return model
-        return cls.for_body(body) if model is None else cls.load(model, body)
+        return cls.bundled(body) if model is None else cls.load(model, body)
 
     @classmethod
-    def for_body(cls, body: Body) -> CnnIdentifier:
+    def bundled(cls, body: Body) -> CnnIdentifier:
         """The bundled model for ``body`` (see :func:`~.bundled.bundled_model_dir`)."""
         folder, notices = bundled_model_dir(body)
         return cls(load_model(folder), body, notices)
+
+    def for_body(self, body: Body) -> CnnIdentifier:
+        """A specialist for another body: the bundled one of that body (a network trained
+        on one body identifies that body only; :class:`~.protocol.NetworkIdentifier`)."""
+        return self if body is self.body else CnnIdentifier.bundled(body)
 
     def features(self, trial: PreparedTrial) -> np.ndarray:
         """(M, C, 51, 51) images of a prepared trial, or (1, 3N, 1, F) FRF features for an

@@ -60,8 +60,12 @@ def trained(tiny_set, tmp_path_factory):
 @pytest.mark.parametrize("layout", [Layout.MODULAR, Layout.MONOLITHIC, Layout.FRF])
 @pytest.mark.parametrize("optimiser", [SgdMomentum(learning_rate=0.02), AdamWOneCycle()])
 def test_tiny_training_reduces_the_loss(tiny_set, tmp_path, layout, optimiser):
+    import torch
+
+    threads = torch.get_num_threads()
     result = train(tiny_set, tmp_path / "m", _small(layout, ClassOutput.REGRESSION),
                    _one_thread(epochs=4, optimiser=optimiser))
+    assert torch.get_num_threads() == threads  # the training's one thread, not the process's
     losses = [r["train_loss"] for r in result.history]
     assert len(losses) == 4 and losses[-1] < losses[0]
     assert result.plot(tmp_path / "m" / "loss.png") is not None

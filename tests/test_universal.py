@@ -247,7 +247,9 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
 
     config = UniversalTrainingConfig(epochs=3, batch_size=64, threads=1, patience=10)
     net = UniversalNetworkConfig(hidden=(32, 32))
+    threads = torch.get_num_threads()
     whole = train_universal(tiny_set.path, tmp_path / "whole", config, net, log=lambda m: None)
+    assert torch.get_num_threads() == threads  # the training's one thread, not the process's
 
     class Stop(Exception):
         pass

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -49,6 +48,7 @@ from posture_id.learning.config import (
 )
 from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import SplitSamples, Standardiser, stimulus_of
+from posture_id.learning.threads import torch_threads
 from posture_id.plotting import plot_loss_curves
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
@@ -215,7 +215,6 @@ class Trainer:
         self.network_config = self._network(network)
         self.out = Path(out)
         self.identity = _identity(data, self.network_config, training)
-        torch.set_num_threads(training.threads or os.cpu_count() or 1)
         torch.manual_seed(training.seed)
         self.net = IdentifierNetwork(self.network_config).to(memory_format=torch.channels_last)
         self.standardiser = Standardiser.from_dataset(data, self.network_config.layout)
@@ -269,7 +268,11 @@ class Trainer:
 
     def run_epoch(self, epoch: int, progress: Progress | None = None) -> dict:
         """One pass over the training split (batches shuffled by the seed and the epoch),
-        then the validation loss; the epoch's row."""
+        then the validation loss; the epoch's row (with the configured torch threads)."""
+        with torch_threads(self.training.threads):
+            return self._run_epoch(epoch, progress)
+
+    def _run_epoch(self, epoch: int, progress: Progress | None = None) -> dict:
         began = time.perf_counter()
         rng = np.random.default_rng(np.random.SeedSequence([self.training.seed, epoch]))
         self.net.train()

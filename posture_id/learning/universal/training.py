@@ -21,7 +21,6 @@ from __future__ import annotations
 import copy
 import json
 import math
-import os
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -33,6 +32,7 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from posture_id.fileio import atomic_write, atomic_write_text, json_text
+from posture_id.learning.threads import torch_threads
 from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.network import (
@@ -169,11 +169,18 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
                     network: UniversalNetworkConfig | None = None,
                     progress: Progress | None = None, log=print) -> UniversalModel:
     """Train on the set at ``data_path`` (or the sets, together: :func:`.data.open_sets`);
-    the best model is written to ``out``."""
+    the best model is written to ``out``. Torch computes with ``config.threads`` for the
+    training and is left as it was."""
     config = config or UniversalTrainingConfig()
-    network_config = network or UniversalNetworkConfig()
+    with torch_threads(config.threads):
+        return _train(data_path, out, config, network or UniversalNetworkConfig(), progress,
+                      log)
+
+
+def _train(data_path, out, config: UniversalTrainingConfig,
+           network_config: UniversalNetworkConfig, progress: Progress | None, log
+           ) -> UniversalModel:
     out = Path(out)
-    torch.set_num_threads(config.threads or os.cpu_count() or 1)
     device = _device()
     data = open_sets(data_path)
     scope = merged_scope(data)

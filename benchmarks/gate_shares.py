@@ -27,7 +27,7 @@ from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.samples import load_split, make_samples
 from posture_id.learning.universal.scope import UniversalScope
-from posture_id.learning.universal.table import cached_samples
+from posture_id.studies.universal_table import cached_samples
 
 BUNDLED = Path("posture_id/learning/universal/models/universal")
 

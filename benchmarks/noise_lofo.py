@@ -49,8 +49,8 @@ BASE = Path("data/models/universal")
 
 def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: int,
                learning_rate: float, base: Path, tilt: float) -> None:
-    from posture_id.learning.universal.checking import calibrate_model
     from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
+    from posture_id.studies.universal_check import calibrate_model
 
     if not (out / "model.json").exists():
         # patience = epochs: the one-cycle schedule runs to its end, as the bundled
@@ -69,8 +69,8 @@ def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: in
 def _gated(data: list[Path], fine: Path, base: Path) -> Path:
     """The base and the fine-tune ``fine`` in one model gated by the noise (the bundled
     recipe's last step), calibrated on ``data``: ``fine`` + ``_gated``."""
-    from posture_id.learning.universal.checking import calibrate_model
     from posture_id.learning.universal.model import UniversalModel, ensemble_of
+    from posture_id.studies.universal_check import calibrate_model
 
     out = fine.with_name(fine.name + "_gated")
     if not (out / "calibration.json").exists():

@@ -6,7 +6,7 @@ Run:  .venv/bin/python benchmarks/universal_bodies.py SET MODEL [MODEL ...]
 For example ``data/universal_varied`` (Winter segments ×U(0.65, 1.35), docs/universal.md)
 against the bundled model (``bundled``) and one trained on that set too. Every model
 reads the same test-split module samples (the checks' own noise seed,
-:data:`~posture_id.learning.universal.checking.TEST_SEED`); per body kind (Winter, TIP,
+:data:`~posture_id.studies.universal_check.TEST_SEED`); per body kind (Winter, TIP,
 each lumped humanoid) and sway (people-like: under 60 % of the body COM sway locked, as
 the check's), it prints the share of classes right and the median |Kp error|.
 """
@@ -19,11 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.learning.universal.checking import TEST_SEED
 from posture_id.learning.universal.data import open_sets
 from posture_id.learning.universal.identifier import BUNDLED_DIR
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.samples import load_split, make_samples
+from posture_id.studies.universal_check import TEST_SEED
 
 PEOPLE_LIKE_BELOW = 0.6
 

@@ -616,7 +616,7 @@ def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_
 def test_a_table_cell_draws_until_enough_trials_stay_up():
     """TALOS falls under many prior draws: its cells draw more batches until they hold
     the trials asked for; every per-trial array is cut alike. It is one body."""
-    from posture_id.learning.universal.table import _cell, _cells
+    from posture_id.studies.universal_table import _cell, _cells
 
     cells = list(_cells())
     index = next(i for i, (family, stim, sway) in enumerate(cells)
@@ -632,7 +632,7 @@ def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
     from the scope's heights and masses, not spent on one body."""
     import json
 
-    from posture_id.learning.universal.table import TABLE_SEED, _cell, _cells
+    from posture_id.studies.universal_table import TABLE_SEED, _cell, _cells
 
     cells = list(_cells())
     index = next(i for i, (family, stim, sway) in enumerate(cells)
@@ -660,7 +660,7 @@ def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
 
 
 def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
-    from posture_id.learning.universal.table import (
+    from posture_id.studies.universal_table import (
         TableCacheError,
         _cache_key,
         _load_cell,
@@ -703,7 +703,7 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
     from posture_id.cli import main
     from posture_id.learning.universal.identifier import BUNDLED_DIR
     from posture_id.learning.universal.model import UniversalModel
-    from posture_id.learning.universal.table import (
+    from posture_id.studies.universal_table import (
         _cache_key,
         _cell,
         _cell_file,
@@ -1178,7 +1178,7 @@ def test_a_table_draws_its_own_sway_whatever_noise_the_model_was_trained_under()
     families equal those of one trained without them, and differ from the families' own."""
     from dataclasses import replace
 
-    from posture_id.learning.universal.table import _cell, _cells, table_scope
+    from posture_id.studies.universal_table import _cell, _cells, table_scope
 
     families = replace(UniversalScope(), noise_families=("low_pass", "shallow"))
     assert table_scope(families) == UniversalScope()

@@ -222,7 +222,7 @@ def run_train(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
-    from posture_id.learning.universal.checking import calibrate_model
+    from posture_id.studies.universal_check import calibrate_model
 
     report = calibrate_model(args.model, args.data)
     print(report.markdown())
@@ -246,7 +246,8 @@ def run_ensemble(args: argparse.Namespace) -> int:
 
 
 def run_typicality(args: argparse.Namespace) -> int:
-    from posture_id.learning.universal.typicality import TYPICALITY_FILE, reference_from_sets
+    from posture_id.learning.universal.typicality import TYPICALITY_FILE
+    from posture_id.studies.universal_check import reference_from_sets
 
     report = reference_from_sets(args.model, args.data)
     print(report.markdown())
@@ -265,7 +266,7 @@ def run_table(args: argparse.Namespace) -> int:
 
 def _table(args: argparse.Namespace) -> int:
     from posture_id.learning.universal.identifier import BUNDLED_DIR
-    from posture_id.learning.universal.table import family_table
+    from posture_id.studies.universal_table import family_table
 
     if args.cache is not None:
         check_output_folder(args.cache, "--cache")

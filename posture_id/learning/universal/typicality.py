@@ -36,7 +36,7 @@ from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write
 
 __all__ = ["TypicalityReference", "Typicality", "TypicalityReport", "fit_reference",
-           "reference_from_sets", "recording_scores", "shrunk_covariance", "ATYPICAL_P",
+           "recording_scores", "shrunk_covariance", "ATYPICAL_P",
            "TYPICALITY_FILE"]
 
 #: A recording whose tail probability is below this is atypical (doubted).
@@ -209,60 +209,3 @@ class TypicalityReport:
         for key, (atypical, count) in self.false_alarms.items():
             lines.append(f"| {key} ({count}) | {atypical} | {atypical / max(count, 1):.2%} |")
         return "\n".join(lines)
-
-
-def reference_from_sets(model_dir: str | Path, data_path) -> TypicalityReport:
-    """The typicality reference of the model at ``model_dir`` from the sets it was trained
-    on (or sets drawn from the same distribution): fitted on their calibration split,
-    scored on their validation split, its false alarms counted on their test split, each
-    with noise drawn as in calibration (``universal check``'s seeds); the noise families
-    the model was trained without are left out. Written into ``model_dir``
-    (:data:`TYPICALITY_FILE`, ``typicality.json``, ``typicality.md``)."""
-    from posture_id.fileio import atomic_write_text, json_text
-    from posture_id.learning.universal.checking import (
-        CALIBRATION_SEED,
-        TEST_SEED,
-        true_regimes,
-    )
-    from posture_id.learning.universal.data import open_sets
-    from posture_id.learning.universal.model import UniversalModel
-    from posture_id.learning.universal.samples import (
-        load_split,
-        make_samples,
-        require_trials,
-        without_families,
-    )
-    from posture_id.learning.universal.training import VALIDATION_SEED
-
-    model = UniversalModel.load(model_dir)
-    data = open_sets(data_path)
-    left_out = tuple(model.sidecar.get("training", {}).get("exclude_families", ()))
-
-    def samples(name: str, seed: int):
-        shards = require_trials(without_families(load_split(data, name), model.scope,
-                                                 left_out), data, name, left_out)
-        return make_samples(shards, model.scope, np.random.default_rng(seed))
-
-    fit = samples("calibration", CALIBRATION_SEED)
-    scored = samples("validation", VALIDATION_SEED)
-    reference = fit_reference(
-        model.standardised(fit.inputs), model.standardised(scored.inputs), scored.trial,
-        model.sidecar.get("weights_sha256", ""),
-        {"sets": [str(p) for p in ([data_path] if isinstance(data_path, (str, Path))
-                                   else data_path)],
-         "fit_modules": int(len(fit.inputs)), "left_out_families": list(left_out)})
-    test = samples("test", TEST_SEED)
-    scores = recording_scores(reference.d2(model.standardised(test.inputs)), test.trial)
-    atypical = np.array([reference.tail(s) < ATYPICAL_P for s in scores])
-    _, first = np.unique(test.trial, return_index=True)
-    regimes = true_regimes(test)[np.sort(first)]
-    false_alarms = {"all": (int(atypical.sum()), len(atypical))}
-    for regime in sorted(set(regimes)):
-        inside = regimes == regime
-        false_alarms[str(regime)] = (int(atypical[inside].sum()), int(inside.sum()))
-    report = TypicalityReport(reference, len(scores), false_alarms)
-    folder = Path(model_dir)
-    reference.save(folder)
-    atomic_write_text(folder / "typicality.json", json_text(report.to_dict()))
-    atomic_write_text(folder / "typicality.md", report.markdown() + "\n")
-    return report

@@ -1,5 +1,6 @@
 """Calibrate a universal model on its set's calibration split and check it on the test
-split, per regime: the numbers docs/universal.md quotes."""
+split, per regime: the numbers docs/universal.md quotes; and its typicality reference
+from the sets it was trained on."""
 
 from __future__ import annotations
 
@@ -22,8 +23,15 @@ from posture_id.learning.universal.samples import (
     without_families,
 )
 from posture_id.learning.universal.training import VALIDATION_SEED
+from posture_id.learning.universal.typicality import (
+    ATYPICAL_P,
+    TypicalityReport,
+    fit_reference,
+    recording_scores,
+)
 
-__all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes"]
+__all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes",
+           "reference_from_sets"]
 
 CALIBRATION_SEED, TEST_SEED = 0x43414C, 0x544553
 
@@ -59,7 +67,7 @@ class CheckReport:
                 "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay | class ECE % |")
         lines = ["# The universal model on its held-out test shards", "",
                  "Made by `posture-id universal check MODEL_DIR DATA_DIR` "
-                 "(posture_id.learning.universal.checking): calibrated on the calibration shards, "
+                 "(posture_id.studies.universal_check): calibrated on the calibration shards, "
                  "checked on the test shards (bodies and stimuli no training trial had). "
                  "People-like: under 60 % of the body COM sway locked; part-locked: 60–99.5 "
                  "%; clean: no motor noise. Errors: median |identified / true − 1|.", "",
@@ -106,4 +114,45 @@ def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str 
     folder = Path(model_dir)
     atomic_write_text(folder / "check.json", json_text(report.to_dict()))
     atomic_write_text(folder / "check.md", report.markdown() + "\n")
+    return report
+
+
+def reference_from_sets(model_dir: str | Path, data_path) -> TypicalityReport:
+    """The typicality reference of the model at ``model_dir`` from the sets it was trained
+    on (or sets drawn from the same distribution): fitted on their calibration split,
+    scored on their validation split, its false alarms counted on their test split, each
+    with noise drawn as in calibration (``universal check``'s seeds); the noise families
+    the model was trained without are left out. Written into ``model_dir``
+    (:data:`TYPICALITY_FILE`, ``typicality.json``, ``typicality.md``)."""
+    model = UniversalModel.load(model_dir)
+    data = open_sets(data_path)
+    left_out = tuple(model.sidecar.get("training", {}).get("exclude_families", ()))
+
+    def samples(name: str, seed: int):
+        shards = require_trials(without_families(load_split(data, name), model.scope,
+                                                 left_out), data, name, left_out)
+        return make_samples(shards, model.scope, np.random.default_rng(seed))
+
+    fit = samples("calibration", CALIBRATION_SEED)
+    scored = samples("validation", VALIDATION_SEED)
+    reference = fit_reference(
+        model.standardised(fit.inputs), model.standardised(scored.inputs), scored.trial,
+        model.sidecar.get("weights_sha256", ""),
+        {"sets": [str(p) for p in ([data_path] if isinstance(data_path, (str, Path))
+                                   else data_path)],
+         "fit_modules": int(len(fit.inputs)), "left_out_families": list(left_out)})
+    test = samples("test", TEST_SEED)
+    scores = recording_scores(reference.d2(model.standardised(test.inputs)), test.trial)
+    atypical = np.array([reference.tail(s) < ATYPICAL_P for s in scores])
+    _, first = np.unique(test.trial, return_index=True)
+    regimes = true_regimes(test)[np.sort(first)]
+    false_alarms = {"all": (int(atypical.sum()), len(atypical))}
+    for regime in sorted(set(regimes)):
+        inside = regimes == regime
+        false_alarms[str(regime)] = (int(atypical[inside].sum()), int(inside.sum()))
+    report = TypicalityReport(reference, len(scores), false_alarms)
+    folder = Path(model_dir)
+    reference.save(folder)
+    atomic_write_text(folder / "typicality.json", json_text(report.to_dict()))
+    atomic_write_text(folder / "typicality.md", report.markdown() + "\n")
     return report

@@ -190,7 +190,7 @@ class FamilyTable:
 
     def markdown(self) -> str:
         lines = ["# The universal model over body families, stimuli and sway", "",
-                 "Made by `posture-id universal table` (posture_id.learning.universal.table: "
+                 "Made by `posture-id universal table` (posture_id.studies.universal_table: "
                  "trials simulated for the table alone, their own seeds). A Winter cell's "
                  f"trials are spread over {self.bodies_per_cell} bodies of the family drawn from "
                  "the scope's heights and masses (table.json names them). Clean: sensor "

@@ -750,7 +750,7 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
 
 
 def test_ece_of_calibrated_and_overconfident_probabilities():
-    from posture_id.learning.universal.evaluation import _ece
+    from posture_id.uncertainty.coverage import confidence_calibration_error as _ece
 
     rng = np.random.default_rng(9)
     p = rng.uniform(0, 1, 200000)

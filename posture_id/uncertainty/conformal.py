@@ -43,18 +43,18 @@ class Normaliser(enum.Enum):
     STANDARD_ERROR = "standard error"
 
 
-def conformal_quantile(scores: np.ndarray, level: float) -> np.ndarray:
+def conformal_quantile(scores: np.ndarray, level: float, capped: bool = False) -> np.ndarray:
     """The split-conformal quantile of (n, ...) ``scores`` along axis 0 at ``level``: the
-    ⌈(n + 1)·level⌉-th smallest, +inf when that rank exceeds n (too few scores for the
-    level). Non-finite scores count as +inf."""
+    ⌈(n + 1)·level⌉-th smallest; when that rank exceeds n (too few scores for the level)
+    +inf, or with ``capped`` the largest score. Non-finite scores count as +inf."""
     if not 0 < level < 1:
         raise ValueError(f"a level must be in (0, 1), got {level}")
     scores = np.where(np.isfinite(scores), scores, np.inf)
     n = scores.shape[0]
     rank = math.ceil((n + 1) * level - 1e-9)
-    if rank > n:
+    if rank > n and not capped:
         return np.full(scores.shape[1:], np.inf)
-    return np.sort(scores, axis=0)[rank - 1]
+    return np.sort(scores, axis=0)[min(rank, n) - 1]
 
 
 @dataclass(frozen=True)

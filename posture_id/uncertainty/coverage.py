@@ -54,8 +54,30 @@ def expected_calibration_error(probability: np.ndarray, outcome: np.ndarray,
     return float(np.sum(count[used] * np.abs(mean_p[used] - freq[used])) / count.sum())
 
 
-def fit_temperature(logits: np.ndarray, outcome: np.ndarray) -> float:
-    """T > 0 minimising the mean negative log-likelihood of sigmoid(logit / T)."""
+def confidence_calibration_error(probability: np.ndarray, outcome: np.ndarray,
+                                 bins: int = 10) -> float:
+    """ECE of a binary class's confidence max(p, 1 − p) (p the probability of the outcome):
+    over ``bins`` equal bins of confidence from 0.5 to 1, the sample-weighted |share right −
+    mean confidence| (what the universal table reports)."""
+    p = np.ravel(probability).astype(float)
+    truth = np.ravel(outcome).astype(bool)
+    confidence = np.maximum(p, 1 - p)
+    right = (p >= 0.5) == truth
+    edges = np.linspace(0.5, 1.0, bins + 1)
+    which = np.clip(np.digitize(confidence, edges) - 1, 0, bins - 1)
+    total = 0.0
+    for b in range(bins):
+        sel = which == b
+        if sel.any():
+            total += sel.sum() * abs(right[sel].mean() - confidence[sel].mean())
+    return float(total / max(len(p), 1))
+
+
+def fit_temperature(logits: np.ndarray, outcome: np.ndarray,
+                    log_bounds: tuple[float, float] = (float(np.log(0.05)), float(np.log(50.0))),
+                    xatol: float = 1e-6) -> float:
+    """T > 0 minimising the mean negative log-likelihood of sigmoid(logit / T), searched
+    for log T within ``log_bounds`` to ``xatol``."""
     z = np.ravel(logits).astype(float)
     y = np.ravel(outcome).astype(float)
 
@@ -65,6 +87,6 @@ def fit_temperature(logits: np.ndarray, outcome: np.ndarray) -> float:
 
     from scipy.optimize import minimize_scalar  # only where a temperature is fitted
 
-    best = minimize_scalar(nll, bounds=(np.log(0.05), np.log(50.0)), method="bounded",
-                           options={"xatol": 1e-6})
+    best = minimize_scalar(nll, bounds=log_bounds, method="bounded",
+                           options={"xatol": xatol})
     return float(np.exp(best.x))

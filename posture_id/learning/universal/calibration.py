@@ -32,11 +32,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.universal.model import ModelError, UniversalModel, UniversalPrediction
 from posture_id.learning.universal.samples import STIMULUS_COLUMNS, Samples
+from posture_id.uncertainty.conformal import conformal_quantile
+from posture_id.uncertainty.coverage import fit_temperature
 
 __all__ = ["RATIO_EDGES", "COLOUR_EDGE", "LEVELS", "MIN_CELL", "POOLED", "TREND_TERMS",
            "TREND_RATIO_FLOOR", "UniversalCalibration", "calibrate", "regime_of",
@@ -116,21 +117,15 @@ def regime_text(regime: str) -> str:
 
 
 def _conformal(scores: np.ndarray) -> list[list[float]]:
-    """(levels, 4) conformal quantiles: the ⌈(n + 1)·level⌉-th smallest score."""
-    n = len(scores)
-    ranked = np.sort(scores, axis=0)
-    rank = np.minimum(np.ceil((n + 1) * np.asarray(LEVELS)).astype(int), n) - 1
-    return ranked[rank].tolist()
+    """(levels, 4) conformal quantiles at :data:`LEVELS`, capped at the largest score
+    (:func:`~posture_id.uncertainty.conformal.conformal_quantile`)."""
+    return [conformal_quantile(scores, level, capped=True).tolist() for level in LEVELS]
 
 
 def _temperature(logit: np.ndarray, truth: np.ndarray) -> float:
-    y = (truth > 0).astype(float)
-
-    def nll(log_t: float) -> float:
-        z = logit / np.exp(log_t)
-        return float(np.mean(np.logaddexp(0, z) - y * z))
-
-    return float(np.exp(minimize_scalar(nll, bounds=(-3, 3), method="bounded").x))
+    """The class's temperature (:func:`~posture_id.uncertainty.coverage.fit_temperature`),
+    searched for within e^±3."""
+    return fit_temperature(logit, truth > 0, log_bounds=(-3.0, 3.0), xatol=1e-5)
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ from posture_id.learning.universal.calibration import (
 )
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.samples import Samples
+from posture_id.uncertainty.coverage import confidence_calibration_error
 
 __all__ = ["GroupScore", "score_samples", "relative_errors"]
 
@@ -57,21 +58,6 @@ class GroupScore:
                 "level": self.level}
 
 
-def _ece(probability: np.ndarray, truth: np.ndarray, bins: int = 10) -> float:
-    """Expected calibration error of P(class = +1): over 10 bins of the confidence
-    max(p, 1 − p), the sample-weighted |accuracy − mean confidence|."""
-    confidence = np.maximum(probability, 1 - probability)
-    right = (probability >= 0.5) == truth
-    edges = np.linspace(0.5, 1.0, bins + 1)
-    which = np.clip(np.digitize(confidence, edges) - 1, 0, bins - 1)
-    total = 0.0
-    for b in range(bins):
-        sel = which == b
-        if sel.any():
-            total += sel.sum() * abs(right[sel].mean() - confidence[sel].mean())
-    return float(total / max(len(probability), 1))
-
-
 def score_samples(model: UniversalModel, samples: Samples,
                   calibration: UniversalCalibration | None, level: float = 0.9,
                   groups: np.ndarray | None = None) -> dict[str, GroupScore]:
@@ -106,7 +92,8 @@ def score_samples(model: UniversalModel, samples: Samples,
             median_error_pct={n: float(100 * np.median(errors[sel, i]))
                               for i, n in enumerate(_NAMES)},
             coverage_pct={n: float(100 * np.mean(inside[sel, i])) for i, n in enumerate(_NAMES)},
-            level=level, class_ece_pct=100 * _ece(probability[sel], samples.targets[sel, 4] > 0),
+            level=level, class_ece_pct=100 * confidence_calibration_error(
+                probability[sel], samples.targets[sel, 4] > 0),
             by_module=tuple({n: float(100 * np.median(errors[sel & (samples.module == m), i]))
                              for i, n in enumerate(_NAMES)}
                             for m in np.unique(samples.module[sel])))

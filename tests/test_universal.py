@@ -627,6 +627,26 @@ def test_a_table_cell_draws_until_enough_trials_stay_up():
     assert int(arrays["simulated"]) >= 4 and np.all(arrays["motor_noise_deg"] == 0)
 
 
+def test_a_table_cell_with_a_body_whose_trials_all_fell_scores_the_others():
+    """With few trials a Winter cell gives each body one: a body whose one trial fell adds
+    nothing to the cell (it stopped `universal table --trials 64` with a reshape error)."""
+    from posture_id.studies.universal_table import _PER_TRIAL, _cell, _cells, cell_samples
+
+    cells = list(_cells())
+    index = next(i for i, (family, stim, sway) in enumerate(cells)
+                 if family == "Winter 3-seg" and stim == (80, 6, 3.0) and sway == "clean")
+    scope = UniversalScope()
+    groups = _cell(index, 3, scope.to_dict(), bodies_per_cell=3)
+    whole = cell_samples(index, [dict(g) for g in groups], scope, bodies_per_cell=3)
+    fallen = dict(groups[1])
+    fallen.update({key: fallen[key][:0] for key in _PER_TRIAL}, kept=np.array(0))
+    rest = cell_samples(index, [dict(groups[0]), fallen, dict(groups[2])], scope,
+                        bodies_per_cell=3)
+    kept = [int(g["kept"]) for g in groups]
+    assert len(rest.targets) == len(whole.targets) * (kept[0] + kept[2]) // sum(kept)
+    assert len(rest.targets) > 0
+
+
 def test_a_winter_table_cell_spreads_its_trials_over_bodies_of_the_family():
     """A Winter cell scores the family: its trials are split evenly over bodies drawn
     from the scope's heights and masses, not spent on one body."""

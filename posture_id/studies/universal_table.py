@@ -235,10 +235,13 @@ def cell_samples(index: int, groups: list[dict], scope: UniversalScope,
                  seed: int = TABLE_SEED, bodies_per_cell: int = BODIES_PER_CELL) -> Samples:
     """The module samples of cell ``index`` from its simulated ``groups`` (one per body):
     the sensor noise and drift of its sway drawn as the table draws them. ``scope``: the
-    table's (:func:`table_scope`)."""
+    table's (:func:`table_scope`). A body none of whose trials stayed up (a lumped robot,
+    or a Winter body given one trial) adds none."""
     sway = list(_cells())[index][2]
     shards = []
     for j, arrays in enumerate(groups):
+        if int(arrays["kept"]) == 0:
+            continue
         arrays["index"] = index * bodies_per_cell + j
         shards.append(LoadedShard.of(arrays))
     return make_samples(shards, replace(scope, **SWAY[sway]),

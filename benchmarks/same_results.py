@@ -10,7 +10,7 @@ can be run with the same interpreter. The commands, each small enough to run in 
 2 cores and each seeded:
 
 - ``posture-id demo``: the answers of the shipped example recordings;
-- ``posture-id universal table --trials 64``: every cell of the universal table;
+- ``posture-id universal table --trials 256``: every cell of the universal table;
 - ``benchmarks/ic_recovery.py --per-cell 1``: the IC fit on 12 IC recordings;
 - ``benchmarks/model_comparison.py --per-model 4``: DEC against IC on 8 recordings;
 - ``benchmarks/honest_verdict.py --subjects 2``: the verdict's counts on clean, people-like
@@ -57,7 +57,7 @@ class Step:
 STEPS = (
     Step("demo", ("{py}", "-m", "posture_id.cli", "demo", "--out", "{out}"), ("*.json",)),
     Step("universal table", ("{py}", "-m", "posture_id.cli", "universal", "table",
-                             "--trials", "64", "--out", "{out}"), ("table.json",)),
+                             "--trials", "256", "--out", "{out}"), ("table.json",)),
     Step("ic_recovery", ("{py}", "{tree}/benchmarks/ic_recovery.py", "--per-cell", "1",
                          "--out", "{out}"), ("rows.json",)),
     Step("model_comparison", ("{py}", "{tree}/benchmarks/model_comparison.py",

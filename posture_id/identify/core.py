@@ -138,6 +138,17 @@ class Identifier:
         trial = self.prepare(recording, stimulus)
         return self.identify_trial(trial, progress, start)
 
+    def hybrid_fit(self, trial: PreparedTrial, progress: Progress | None = None):
+        """The hybrid's answer alone, without its verdict: the network's answer on a trial
+        prepared by :meth:`prepare`, refined by least squares with this identifier's fit
+        options (:class:`~posture_id.fitting.result.FitResult`)."""
+        if self.cnn is None:
+            raise PostureIdError(f"{self.body.name}: no network serves this body (the "
+                                 "hybrid starts from one)")
+        fit, _ = _refine(trial, self.body, self.cnn.identify(trial, self.level),
+                         self.fit_options, progress, [])
+        return fit
+
     def identify_trial(self, trial: PreparedTrial, progress: Progress | None = None,
                        start: float | None = None) -> IdentificationResult:
         """Identify a trial already prepared by :meth:`prepare`."""

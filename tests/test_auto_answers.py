@@ -59,18 +59,20 @@ def test_a_fallen_network_answer_on_people_like_sway_still_gets_an_answer(
 
 def test_when_nothing_balances_the_body_the_longest_standing_answer_is_given(
         tip, subject, network_that_falls, monkeypatch):
-    original = Identifier.identify_trial
-    network = Identifier(tip, Method.CNN)
+    from posture_id.identify.core import Step
 
-    def hybrid_falls_too(self, trial, progress=None, start=None):
-        # stand-ins for a refinement and a fit from the defaults that fall too
-        if self.method in (Method.HYBRID, Method.FIT):
-            answer = original(network, trial, progress, start)
-            later = 1.0 if self.method is Method.HYBRID else 0.5
-            return replace(answer, method=self.method, fell_at_s=answer.fell_at_s + later)
-        return original(self, trial, progress, start)
+    original = Identifier._identify
 
-    monkeypatch.setattr(Identifier, "identify_trial", hybrid_falls_too)
+    def hybrid_falls_too(self, trial, step, progress=None, start=None, answer=None):
+        # stand-ins for auto's refinement and fit from the defaults, that fall too
+        if step.method in (Method.HYBRID, Method.FIT):
+            network = original(self, trial, Step(Method.CNN, self.fit_options), progress,
+                               start)
+            later = 1.0 if step.method is Method.HYBRID else 0.5
+            return replace(network, method=step.method, fell_at_s=network.fell_at_s + later)
+        return original(self, trial, step, progress, start, answer)
+
+    monkeypatch.setattr(Identifier, "_identify", hybrid_falls_too)
     result = identify(subject.recording, tip)
     assert result.fell and result.verdict.doubtful and result.method is Method.HYBRID
     assert any("the one that stays up longest is given, doubtful" in n

@@ -22,11 +22,10 @@ body-sway errors E_id and E_rel (docs/model.md §7) and each segment's residual.
 
 from __future__ import annotations
 
-import copy
 import enum
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from statistics import NormalDist
 
@@ -155,14 +154,22 @@ class Identifier:
         start = time.perf_counter() if start is None else start
         if self.method is Method.AUTO:
             return self._auto(trial, progress, start)
-        method, body, options = self.method, self.body, self.fit_options
+        return self._identify(trial, Step(self.method, self.fit_options), progress, start)
+
+    def _identify(self, trial: PreparedTrial, step: Step, progress: Progress | None,
+                  start: float, answer=None) -> IdentificationResult:
+        """One identification of ``trial`` by ``step``'s method and fit options; ``answer``:
+        the network's answer on this very trial when it was already made (not made
+        again)."""
+        method, body, options = step.method, self.body, step.fit_options
+        network = None if method is Method.FIT else self.cnn
         notices: list[str] = []
         cnn = fit = None
         relaxed_refit = False
         spent = 0.0
-        if self.cnn is not None:
+        if network is not None:
             began = time.perf_counter()
-            cnn = self.cnn.identify(trial, self.level)
+            cnn = answer if answer is not None else network.identify(trial, self.level)
             spent = time.perf_counter() - began
             notices += cnn.notices
         began = time.perf_counter()
@@ -178,8 +185,8 @@ class Identifier:
             notices += fit.notices
             parameters, normalised = fit.parameters, fit.normalised
             # the hybrid's scales are calibrated for the network's own body only
-            calibration = (self.cnn.calibration if method is Method.HYBRID
-                           and self.cnn.trained_on_this_body else None)
+            calibration = (network.calibration if method is Method.HYBRID
+                           and network.trained_on_this_body else None)
             scales = None if calibration is None else calibration.least_squares
             intervals = fit.intervals_at(self.level, scales, **_network_floor(
                 options, scales, cnn))
@@ -197,9 +204,9 @@ class Identifier:
         checked = _resimulate(body, trial, parameters, options.simulation, locked)
         body_share = checked.pop("locked_share")  # the verdict's, not a result field
         verdict = _verdict(method, options, trial, checked, body_share, cnn, fit, locked,
-                           self.cnn is not None and self.cnn.reads_people_like,
+                           network is not None and network.reads_people_like,
                            body, intervals, parameters)
-        verdict = self._alternatives(trial, verdict, cnn, locked)
+        verdict = self._alternatives(trial, verdict, cnn, locked, step)
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
             class_probability=None if cnn is None else np.asarray(cnn.class_probability),
@@ -214,31 +221,31 @@ class Identifier:
 
 
     def _alternatives(self, trial: PreparedTrial, verdict: TrustVerdict, cnn,
-                      locked: LockedProjection | None) -> TrustVerdict:
+                      locked: LockedProjection | None, step: Step) -> TrustVerdict:
         """The verdict with the mistakes an alternative reading reveals
         (:mod:`~posture_id.identify.alternatives`: columns exchanged, another body's
         size), looked for when the answer leaves more than the noise and a network can
         read the alternatives. ``locked``: the trial's unweighted locked projection (the
         same for every alternative: they keep its tilt)."""
         noise = verdict.noise
-        if (self.cnn is None or cnn is None or noise is None or noise.basis is not Basis.LOCKED
+        if (cnn is None or noise is None or noise.basis is not Basis.LOCKED
                 or not NOISE_RATIO_LIMIT < noise.ratio < math.inf):
             return verdict  # nothing to read, or an answer within the noise
         def ratio_of(other: PreparedTrial, body: Body) -> float:
             return self._network_check(other, body, locked).ratio
 
-        base = noise.ratio if self.method is Method.CNN else ratio_of(trial, self.body)
+        base = noise.ratio if step.method is Method.CNN else ratio_of(trial, self.body)
         found = better_explanations(trial, self.body, base, noise.relative, ratio_of,
                                     sizes=isinstance(self.cnn, UniversalIdentifier))
         if any(m.check is Check.ANOTHER_BODY for m in found) and not verdict.fitted \
-                and self._fits_within_noise(trial, cnn):
+                and self._fits_within_noise(trial, cnn, step.fit_options):
             found = tuple(m for m in found if m.check is not Check.ANOTHER_BODY)
         if not found:
             return verdict
         return replace(verdict, mistakes=verdict.mistakes + tuple(m.sentence for m in found),
                        suggestion="")
 
-    def _fits_within_noise(self, trial: PreparedTrial, cnn) -> bool:
+    def _fits_within_noise(self, trial: PreparedTrial, cnn, fit_options: FitOptions) -> bool:
         """Least squares from the network's answer ``cnn`` on the stimulus-locked sway (the
         locked hybrid's fit) explains ``trial`` on this identifier's body within its noise.
         The size check's confirmation: on clean sway the network's own error can read a
@@ -246,7 +253,7 @@ class Identifier:
         the noise (docs/identify.md, "Mistakes"); a body that cannot have made the
         recording leaves least squares above it. Only the fit and its check: nothing of
         the hybrid's verdict is needed here."""
-        options = replace(self.fit_options, locked=LockedOptions())
+        options = replace(fit_options, locked=LockedOptions())
         try:
             fit, _ = _refine(trial, self.body, cnn, options, None, [])
         except PostureIdError:  # no fit: nothing confirms the given body, the reading stands
@@ -277,15 +284,6 @@ class Identifier:
         return noise_check(trial, sway.theta, projection=locked, body_sway=(
             body.com_angles(recorded)[:, 0], sway.alpha[: len(recorded), 0]))
 
-    def _as(self, method: Method) -> Identifier:
-        """This identifier with another method, sharing its network (none for least
-        squares alone)."""
-        other = copy.copy(self)
-        other.method = method
-        if method is Method.FIT:
-            other.cnn = None
-        return other
-
     def _auto(self, trial: PreparedTrial, progress: Progress | None,
               start: float) -> IdentificationResult:
         """:attr:`Method.AUTO`: the network's answer, refined by least squares when
@@ -302,13 +300,12 @@ class Identifier:
         returned, doubtful (``posture-id identify`` exits 1 then, its answer written)."""
         unread = self.network_refusal or _unreadable_by_network(trial)
         if unread is not None:
-            fitted = self._as(Method.FIT).identify_trial(trial, progress, start)
+            fitted = self._identify(trial, Step(Method.FIT, self.fit_options), progress, start)
             return replace(fitted, notices=(
                 f"{trial.name}: {unread}: identified by least squares from the body's "
                 "defaults (--method auto)", *fitted.notices))
-        network = self._as(Method.CNN)
-        answer = network.identify_trial(trial, progress, start)
-        answer, trial, moved = self._onset(answer, trial, network, progress, start)
+        answer = self._identify(trial, Step(Method.CNN, self.fit_options), progress, start)
+        answer, trial, moved = self._onset(answer, trial, progress, start)
         result = self._refined(answer, trial, progress, start)
         return result if moved is None else replace(result, notices=(moved, *result.notices))
 
@@ -319,17 +316,18 @@ class Identifier:
         how = auto_refinement(verdict)
         if how is Refinement.KEEP:
             return answer
-        hybrid = self._as(Method.HYBRID)
-        on = "the sway"
+        options, on = self.fit_options, "the sway"
         if how is Refinement.LOCKED_PRIOR:
             on = "the stimulus-locked sway, with the network's spread as the prior"
-            hybrid.fit_options = replace(self.fit_options, locked=LockedOptions(),
-                                         **network_prior(answer, self.level))
+            options = replace(options, locked=LockedOptions(),
+                              **network_prior(answer, self.level))
         elif how is Refinement.LOCKED:
             on = "the stimulus-locked sway"
-            if self.fit_options.locked is None:
-                hybrid.fit_options = replace(self.fit_options, locked=LockedOptions())
-        refined = hybrid.identify_trial(trial, progress, start)
+            if options.locked is None:
+                options = replace(options, locked=LockedOptions())
+        # the hybrid starts from the network's answer already made on this trial
+        refined = self._identify(trial, Step(Method.HYBRID, options), progress, start,
+                                 answer.cnn)
         why = "; ".join(verdict.reasons) or "; ".join(verdict.imprecision)
         said = (f"{trial.name}: the network's answer was {verdict.level} ({why}): refined by "
                 f"least squares on {on} (--method auto)")
@@ -341,10 +339,9 @@ class Identifier:
             # both fall: least squares from the body's defaults on the locked sway, the
             # prior of docs/model.md §5 holding what the sway leaves open (where the
             # network's answer is no start at all)
-            fit = self._as(Method.FIT)
-            fit.fit_options = replace(self.fit_options, locked=LockedOptions(), prior_sd=0.5,
-                                      prior_centre=None)
-            fitted = fit.identify_trial(trial, progress, start)
+            fitted = self._identify(trial, Step(Method.FIT, replace(
+                self.fit_options, locked=LockedOptions(), prior_sd=0.5, prior_centre=None)),
+                progress, start)
             said += ("; the refined model falls in re-simulation too: fitted again from the "
                      "body's defaults on the stimulus-locked sway with docs/model.md §5's prior "
                      "(--method fit --locked --prior-sd 0.5)")
@@ -358,7 +355,7 @@ class Identifier:
         return replace(refined, notices=(said, *refined.notices))
 
     def _onset(self, answer: IdentificationResult, trial: PreparedTrial,
-               network: Identifier, progress: Progress | None, start: float
+               progress: Progress | None, start: float
                ) -> tuple[IdentificationResult, PreparedTrial, str | None]:
         """A stimulus that was named or rebuilt rather than recorded (:attr:`PreparedTrial.
         tilt_recorded` False) and leaves more than the noise: the offset (within half a
@@ -386,12 +383,20 @@ class Identifier:
                 "more than the noise; no shift of it within half a cycle did better: check "
                 "its onset (--onset-s) and --max-offset-s"))), trial, None
         shifted = min(better, key=lambda t: t[0])[1]
-        moved = network.identify_trial(shifted, progress, start)
+        moved = self._identify(shifted, Step(Method.CNN, self.fit_options), progress, start)
         return moved, shifted, (
             f"{trial.name}: the stimulus was named, not recorded, and the answer on it left "
             f"more than the noise: the sway says it ran {shifted.time_offset_s:+.2f} s from "
             "where it was named; identified there (--method auto; name the onset with "
             "--onset-s, or search it with --max-offset-s)")
+
+
+@dataclass(frozen=True)
+class Step:
+    """One identification ``auto`` (or any method) runs: its method and fit options."""
+
+    method: Method
+    fit_options: FitOptions
 
 
 class Refinement(enum.Enum):

@@ -24,7 +24,7 @@ from posture_id.fileio import atomic_write_text, json_text
 from posture_id.progress import Progress, report
 
 __all__ = ["Status", "CohortRow", "CohortTask", "Journal", "option_differences",
-           "write_summary"]
+           "write_summary", "changed_and_failed"]
 
 
 class Status(str, enum.Enum):
@@ -207,6 +207,15 @@ class Journal:
         """Per recording done again, the options that changed."""
         return {k: v for k, v in self.changed.items()
                 if self.status.get(k) == Status.REDONE.value}
+
+
+def changed_and_failed(changed: Mapping[str, tuple[str, ...]], failed: Mapping[str, str],
+                       again: str) -> str:
+    """A cohort summary's lines for the recordings done again (``again``: "identified",
+    "compared") with the options that changed, and for those that failed, with why."""
+    return ("".join(f"\n  {k}: {again} again, its options changed: {', '.join(v)}"
+                    for k, v in changed.items())
+            + "".join(f"\n  {k}: {v}" for k, v in failed.items()))
 
 
 def write_summary(path: Path, rows: list[CohortRow], fields: list[str]) -> None:

@@ -15,7 +15,13 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from posture_id.cohorts import CohortRow, CohortTask, Journal, write_summary
+from posture_id.cohorts import (
+    CohortRow,
+    CohortTask,
+    Journal,
+    changed_and_failed,
+    write_summary,
+)
 from posture_id.comparison.models import DEFAULT_MODELS, UNDECIDED, compare_models
 from posture_id.fileio import Result, json_text
 from posture_id.fitting.frequency import IcFitOptions
@@ -60,9 +66,7 @@ class CompareCohort(Result):
         return (f"{self.out}: {len(self.rows)} recordings: {first.label} preferred "
                 f"{counts[first.name]}, {second.label} {counts[second.name]}, undecided "
                 f"{counts[UNDECIDED]}, failed {len(self.failed)}"
-                + "".join(f"\n  {k}: compared again, its options changed: {', '.join(v)}"
-                          for k, v in self.changed.items())
-                + "".join(f"\n  {k}: {v}" for k, v in self.failed.items())
+                + changed_and_failed(self.changed, self.failed, "compared")
                 + (f"\n  neither model within the noise: {', '.join(self.doubtful)}"
                    if self.doubtful else ""))
 

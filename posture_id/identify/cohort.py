@@ -33,6 +33,7 @@ from posture_id.cohorts import (
     CohortRow,
     CohortTask,
     Journal,
+    changed_and_failed,
     write_summary,
 )
 from posture_id.errors import PostureIdError
@@ -144,9 +145,7 @@ class CohortResult(Result):
         return (f"{self.out}: {len(self.status)} recordings, {counts['done']} identified, "
                 f"{counts['skipped']} already done, {counts['redone']} identified again "
                 f"(done before with other options), {len(self.failed)} failed"
-                + "".join(f"\n  {k}: identified again, its options changed: {', '.join(v)}"
-                          for k, v in self.changed.items())
-                + "".join(f"\n  {k}: {v}" for k, v in self.failed.items())
+                + changed_and_failed(self.changed, self.failed, "identified")
                 + (f"\n  trust doubtful: {', '.join(doubtful)} (the JSON says why and what "
                    "to try)" if doubtful else "")
                 + (f"\n  trust imprecise: {imprecise} (right as far as their noise shows; "

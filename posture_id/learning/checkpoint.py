@@ -20,17 +20,15 @@ architecture this code does not build.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import torch
-from safetensors import SafetensorError
-from safetensors.torch import load_file, save_file
 
 from posture_id._version import __version__
-from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text, jsonable
+from posture_id.fileio import jsonable
 from posture_id.learning.config import ClassOutput, Layout, LearningError, NetworkConfig
+from posture_id.learning.model_files import SIDECAR, WEIGHTS, read_model_files, write_model_files
 from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import Standardiser
 
@@ -39,8 +37,6 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "LoadedModel", "save_model", "load_model"
 
 FORMAT = "posture_id-model"
 FORMAT_VERSION = 1
-WEIGHTS = "model.safetensors"
-SIDECAR = "model.json"
 #: The five outputs of a module.
 TARGETS = [
     {"name": "kp", "unit": "normalised: (Kp - Kp_default) / Kp_default"},
@@ -88,13 +84,11 @@ def save_model(folder: str | Path, network: IdentifierNetwork, standardiser: Sta
     ``sidecar`` holds what only the caller knows (body, stimulus, data set, training); the
     format, version, architecture, features and targets are added here.
     """
-    folder = Path(folder)
     tensors = {f"network.{k}": v.detach().contiguous()
                for k, v in network.state_dict().items()}
     tensors.update({k: v.float() if v.dtype == torch.float64 else v
                     for k, v in standardiser.to_tensors().items()})
-    atomic_write(folder / WEIGHTS, lambda tmp: save_file(tensors, str(tmp)))
-    data = {
+    write_model_files(folder, tensors, {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "package_version": __version__,
@@ -105,47 +99,35 @@ def save_model(folder: str | Path, network: IdentifierNetwork, standardiser: Sta
                             "target_std": standardiser.target_std.tolist(),
                             "images": "tensors standardiser.image_mean/_std in the weights"},
         **sidecar,
-        "weights_sha256": file_sha256(folder / WEIGHTS),
-    }
-    atomic_write_text(folder / SIDECAR, json_text(data))
-    return folder
+    })
+    return Path(folder)
+
+
+def _check_sidecar(sidecar: dict, path: Path) -> None:
+    """Refuse a sidecar of the universal model, of another format or a newer version, or
+    of features this code does not compute."""
+    if sidecar.get("format") == "posture_id-universal-model":
+        raise LearningError(f"{path.parent}: the universal model, not a per-body model: "
+                            "`posture-id universal table` scores it, `posture-id evaluate "
+                            "SPECIALIST SET --universal` sets it beside a specialist")
+    if sidecar.get("format") != FORMAT:
+        raise LearningError(f"{path}: not a posture_id model (format is not '{FORMAT}')")
+    version = sidecar.get("format_version")
+    if not isinstance(version, int) or version > FORMAT_VERSION:
+        raise LearningError(f"{path}: model format version {version!r} is newer than "
+                            f"this posture_id reads ({FORMAT_VERSION}); upgrade posture_id")
+    config = network_config_from_dict(sidecar.get("architecture") or {})
+    if sidecar.get("features") != config.feature_definition:
+        raise LearningError(f"{path}: the model was trained on another feature "
+                            "definition than this code computes; retrain it")
 
 
 def load_model(folder: str | Path) -> LoadedModel:
     """Load and check a model directory (see the module doc); never unpickles."""
     folder = Path(folder)
-    if not folder.is_dir():
-        raise LearningError(f"{folder}: no such model directory")
-    sidecar_path, weights_path = folder / SIDECAR, folder / WEIGHTS
-    for path in (sidecar_path, weights_path):
-        if not path.is_file():
-            raise LearningError(f"{path}: missing; a model directory holds {SIDECAR} and "
-                                f"{WEIGHTS}")
-    try:
-        sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise LearningError(f"{sidecar_path}: not valid JSON ({exc})") from None
-    if isinstance(sidecar, dict) and sidecar.get("format") == "posture_id-universal-model":
-        raise LearningError(f"{folder}: the universal model, not a per-body model: "
-                            "`posture-id universal table` scores it, `posture-id evaluate "
-                            "SPECIALIST SET --universal` sets it beside a specialist")
-    if not isinstance(sidecar, dict) or sidecar.get("format") != FORMAT:
-        raise LearningError(f"{sidecar_path}: not a posture_id model (format is not '{FORMAT}')")
-    version = sidecar.get("format_version")
-    if not isinstance(version, int) or version > FORMAT_VERSION:
-        raise LearningError(f"{sidecar_path}: model format version {version!r} is newer than "
-                            f"this posture_id reads ({FORMAT_VERSION}); upgrade posture_id")
-    if file_sha256(weights_path) != sidecar.get("weights_sha256"):
-        raise LearningError(f"{weights_path}: corrupt or truncated (SHA-256 differs from "
-                            f"{SIDECAR})")
+    sidecar, tensors = read_model_files(folder, LearningError, _check_sidecar)
+    weights_path = folder / WEIGHTS
     config = network_config_from_dict(sidecar.get("architecture") or {})
-    if sidecar.get("features") != config.feature_definition:
-        raise LearningError(f"{sidecar_path}: the model was trained on another feature "
-                            "definition than this code computes; retrain it")
-    try:
-        tensors = load_file(str(weights_path))
-    except (SafetensorError, OSError, ValueError) as exc:
-        raise LearningError(f"{weights_path}: not a readable safetensors file ({exc})") from None
     network = IdentifierNetwork(config)
     weights = {k[len("network."):]: v for k, v in tensors.items() if k.startswith("network.")}
     try:

@@ -10,12 +10,11 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from safetensors import SafetensorError
-from safetensors.torch import load_file, save_file
 
 from posture_id._version import __version__
 from posture_id.errors import PostureIdError
-from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
+from posture_id.fileio import json_text
+from posture_id.learning.model_files import SIDECAR, WEIGHTS, read_model_files, write_model_files
 from posture_id.learning.universal.features import UNIVERSAL_FEATURE_DEFINITION
 from posture_id.learning.universal.gate import NoiseGate
 from posture_id.learning.universal.network import (
@@ -29,8 +28,6 @@ __all__ = ["UniversalModel", "UniversalPrediction", "ModelError", "FORMAT", "WEI
            "SIDECAR", "ensemble_of"]
 
 FORMAT = "posture_id-universal-model"
-WEIGHTS = "model.safetensors"
-SIDECAR = "model.json"
 
 
 class ModelError(PostureIdError):
@@ -146,47 +143,24 @@ class UniversalModel:
 
     def save(self, folder: str | Path, extra: dict | None = None) -> Path:
         """Write the model atomically (weights, then the sidecar naming their hash)."""
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        atomic_write(folder / WEIGHTS, lambda tmp: save_file(self.tensors(), str(tmp)))
-        self.sidecar = {
-            **self.sidecar, **(extra or {}),
-            "format": FORMAT, "package_version": __version__,
+        sidecar = {k: v for k, v in {**self.sidecar, **(extra or {})}.items()
+                   if k != "weights_sha256"}
+        self.sidecar = write_model_files(folder, self.tensors(), {
+            **sidecar, "format": FORMAT, "package_version": __version__,
             "architecture": {**asdict(self.network.config),
                              "hidden": list(self.network.config.hidden)},
-            "features": UNIVERSAL_FEATURE_DEFINITION,
-            "weights_sha256": file_sha256(folder / WEIGHTS),
-        }
-        atomic_write_text(folder / SIDECAR, json_text(self.sidecar))
-        self.path = folder
-        return folder
+            "features": UNIVERSAL_FEATURE_DEFINITION})
+        self.path = Path(folder)
+        return self.path
 
     @classmethod
     def load(cls, folder: str | Path) -> UniversalModel:
         folder = Path(folder)
-        sidecar_file, weights = folder / SIDECAR, folder / WEIGHTS
-        for file in (sidecar_file, weights):
-            if not file.is_file():
-                raise ModelError(f"{folder}: not a universal model ({file.name} is missing)")
-        try:
-            sidecar = json.loads(sidecar_file.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ModelError(f"{sidecar_file}: not valid JSON ({exc})") from None
-        if not isinstance(sidecar, dict) or sidecar.get("format") != FORMAT:
-            raise ModelError(f"{sidecar_file}: not a universal model's sidecar")
-        if sidecar.get("features") != json.loads(json_text(UNIVERSAL_FEATURE_DEFINITION)):
-            raise ModelError(f"{sidecar_file}: made for other features than this code's; "
-                             "train it again (make models)")
-        if file_sha256(weights) != sidecar.get("weights_sha256"):
-            raise ModelError(f"{weights}: corrupt or not the weights its sidecar names "
-                             "(SHA-256 differs)")
+        sidecar, tensors = read_model_files(folder, ModelError, _check_sidecar)
+        sidecar_file = folder / SIDECAR
         arch = sidecar["architecture"]
         config = UniversalNetworkConfig(int(arch["inputs"]), tuple(arch["hidden"]),
                                         float(arch["dropout"]), int(arch.get("members", 1)))
-        try:
-            tensors = load_file(str(weights))
-        except SafetensorError as exc:
-            raise ModelError(f"{weights}: cannot be read ({exc})") from None
         if "gate" in sidecar:
             try:
                 gate = NoiseGate.from_dict(sidecar["gate"])
@@ -204,6 +178,15 @@ class UniversalModel:
                if k.startswith("standardiser.")}
         return cls(network, std["input_mean"], std["input_std"], std["target_mean"],
                    std["target_std"], sidecar, folder)
+
+
+def _check_sidecar(sidecar: dict, path: Path) -> None:
+    """Refuse a sidecar of another format, or of features this code does not compute."""
+    if sidecar.get("format") != FORMAT:
+        raise ModelError(f"{path}: not a universal model's sidecar")
+    if sidecar.get("features") != json.loads(json_text(UNIVERSAL_FEATURE_DEFINITION)):
+        raise ModelError(f"{path}: made for other features than this code's; train it "
+                         "again (make models)")
 
 
 def ensemble_of(models: list[UniversalModel], by_noise: bool = False) -> UniversalModel:

@@ -464,6 +464,10 @@ def test_conformal_quantiles_and_temperature_recover_known_answers():
     assert [regime_text(k) for k in keys] == [
         "1 segment, clean, white noise", "3 segments, mostly noise, noise shaped by the body",
         "2 segments, clean, white noise", "3 segments, a little noisy, noise shaped by the body"]
+    from posture_id.learning.universal.calibration import Regime
+
+    assert [Regime.parse(k).key for k in (*keys, "2:3", "3")] == [*keys, "2:3", "3"]
+    assert [r.key for r in Regime.parse("3:4c").broader()] == ["3:4c", "3:4", "3"]
 
 
 def test_a_body_the_calibration_had_none_of_gets_the_pooled_values_or_a_clear_error():

@@ -40,7 +40,7 @@ from posture_id.uncertainty.conformal import conformal_quantile
 from posture_id.uncertainty.coverage import fit_temperature
 
 __all__ = ["RATIO_EDGES", "COLOUR_EDGE", "LEVELS", "MIN_CELL", "POOLED", "TREND_TERMS",
-           "TREND_RATIO_FLOOR", "UniversalCalibration", "calibrate", "regime_of",
+           "TREND_RATIO_FLOOR", "UniversalCalibration", "calibrate", "regime_of", "Regime",
            "regime_text", "trend_terms", "CALIBRATION_FILE"]
 
 #: Bin edges of the noise ratio: clean below 0.02, in four bins there (the network's own
@@ -100,20 +100,53 @@ def trend_terms(segments: np.ndarray, ratio: np.ndarray, colour: np.ndarray,
                             inputs[:, STIMULUS_COLUMNS].astype(float)])
 
 
+@dataclass(frozen=True)
+class Regime:
+    """A calibration regime: the segment count, the noise-ratio bin (0..len(RATIO_EDGES))
+    and whether the noise is shaped by the body (None: either). Its :attr:`key` is how
+    ``calibration.json`` names it ('3:2w', '3:2c', '3:2', '3')."""
+
+    segments: int
+    ratio_bin: int | None = None
+    coloured: bool | None = None
+
+    @classmethod
+    def parse(cls, key: str) -> Regime:
+        segments, _, rest = key.partition(":")
+        if not rest:
+            return cls(int(segments))
+        colour = {"w": False, "c": True}.get(rest[-1])
+        return cls(int(segments), int(rest.rstrip("wc")), colour)
+
+    @property
+    def key(self) -> str:
+        if self.ratio_bin is None:
+            return str(self.segments)
+        tint = "" if self.coloured is None else "c" if self.coloured else "w"
+        return f"{self.segments}:{self.ratio_bin}{tint}"
+
+    def broader(self) -> list[Regime]:
+        """This regime, its noise-ratio bin over both colours, its segment count."""
+        return [self, Regime(self.segments, self.ratio_bin), Regime(self.segments)]
+
+    def text(self) -> str:
+        """In words: '3 segments, clean, white noise'."""
+        n = self.segments
+        upper = RATIO_EDGES[self.ratio_bin] if self.ratio_bin < len(RATIO_EDGES) else 1.0
+        words = next(w for edge, w in _RATIO_WORDS if upper <= edge)
+        tint = {False: ", white noise", True: ", noise shaped by the body"}.get(
+            self.coloured, "")
+        return f"{n} segment{'s' if n != 1 else ''}, {words}{tint}"
+
+
 def _broader(regime: str) -> list[str]:
-    """The regime, its noise-ratio bin over both colours, its segment count."""
-    n, rest = regime.split(":")
-    return [regime, f"{n}:{rest.rstrip('wc')}", n]
+    """The keys of a regime, its noise-ratio bin over both colours, its segment count."""
+    return [r.key for r in Regime.parse(regime).broader()]
 
 
 def regime_text(regime: str) -> str:
     """A regime key in words: '3 segments, clean, white noise'."""
-    n, rest = regime.split(":")
-    b = int(rest.rstrip("wc"))
-    upper = RATIO_EDGES[b] if b < len(RATIO_EDGES) else 1.0
-    words = next(w for edge, w in _RATIO_WORDS if upper <= edge)
-    tint = {"w": ", white noise", "c": ", noise shaped by the body"}.get(rest[-1], "")
-    return f"{n} segment{'s' if n != '1' else ''}, {words}{tint}"
+    return Regime.parse(regime).text()
 
 
 def _conformal(scores: np.ndarray) -> list[list[float]]:

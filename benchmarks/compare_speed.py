@@ -4,8 +4,9 @@ says, on this tree and (``--before TREE``) another checkout side by side.
 Run:  .venv/bin/python benchmarks/compare_speed.py --out DIR [--before TREE] [--recordings 3]
 
 Recordings: the TIP (3 segments) under DEC parameters drawn from docs/model.md §5's prior
-(seed 31 + k; a subject that falls is skipped), 2 cycles of the 242-state PRTS at 1°, motor noise leaving 30 % of the body
-COM sway locked, 0.05° sensor noise (:func:`~posture_id.simulation.subjects.people_like`).
+(seed 31 + k; a subject that falls is skipped), 2 cycles of the 242-state PRTS at 1°,
+motor noise leaving 30 % of the body COM sway locked, 0.05° sensor noise
+(:func:`~posture_id.simulation.subjects.people_like`).
 Each is compared by the command line of each tree (``python -m posture_id.cli compare``,
 ``PYTHONPATH`` at the tree), one after the other on the same machine. Writes
 ``report.md`` and ``rows.json``.

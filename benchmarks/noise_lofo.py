@@ -60,8 +60,8 @@ def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: in
                                          max_learning_rate=learning_rate,
                                          exclude_families=exclude, fresh_motor_noise=True,
                                          motor_noise_tilt=tilt)
-        train_universal(data, out, config, log=lambda m: print(f"  {out.name}: {m}",
-                                                               flush=True))
+        train_universal(data, out, config, progress=lambda u: u.message and print(
+            f"  {out.name}: {u.message}", flush=True))
     if not (out / "calibration.json").exists():
         calibrate_model(out, data)
 

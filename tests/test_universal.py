@@ -248,32 +248,32 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
     config = UniversalTrainingConfig(epochs=3, batch_size=64, threads=1, patience=10)
     net = UniversalNetworkConfig(hidden=(32, 32))
     threads = torch.get_num_threads()
-    whole = train_universal(tiny_set.path, tmp_path / "whole", config, net, log=lambda m: None)
+    whole = train_universal(tiny_set.path, tmp_path / "whole", config, net)
     assert torch.get_num_threads() == threads  # the training's one thread, not the process's
 
     class Stop(Exception):
         pass
 
-    def stop_after_first(message):
-        if message.startswith("epoch 1/"):
+    def stop_after_first(update):
+        if update.message.startswith("epoch 1/"):
             raise Stop
 
     with pytest.raises(Stop):
-        train_universal(tiny_set.path, tmp_path / "resumed", config, net, log=stop_after_first)
-    resumed = train_universal(tiny_set.path, tmp_path / "resumed", config, net,
-                              log=lambda m: None)
+        train_universal(tiny_set.path, tmp_path / "resumed", config, net, progress=stop_after_first)
+    resumed = train_universal(tiny_set.path, tmp_path / "resumed", config, net)
     for key, value in whole.network.state_dict().items():
         assert torch.equal(value, resumed.network.state_dict()[key]), key
     # an interrupted run on other data (here: its set had another shard count) is not
     # resumed: the run starts afresh
     with pytest.raises(Stop):
-        train_universal(tiny_set.path, tmp_path / "other", config, net, log=stop_after_first)
+        train_universal(tiny_set.path, tmp_path / "other", config, net, progress=stop_after_first)
     state_file = tmp_path / "other" / "train-state.json"
     state = json.loads(state_file.read_text())
     state["sets"][0]["shards"] += 1
     state_file.write_text(json.dumps(state))
     said: list[str] = []
-    train_universal(tiny_set.path, tmp_path / "other", config, net, log=said.append)
+    train_universal(tiny_set.path, tmp_path / "other", config, net,
+                    progress=lambda update: said.append(update.message))
     assert [m for m in said if m.startswith("epoch")][0].startswith("epoch 1/")
     loaded = UniversalModel.load(tmp_path / "whole")
     x = np.random.default_rng(0).standard_normal((5, whole.input_mean.size)).astype(np.float32)
@@ -302,7 +302,7 @@ def test_keep_clean_holds_the_clean_outputs_of_the_model_fine_tuned_from(tiny_se
         train_universal,
     )
 
-    quiet = {"log": lambda m: None}
+    quiet = {"progress": None}
     net = UniversalNetworkConfig(hidden=(32, 32), dropout=0.0)
     start = train_universal(tiny_set.path, tmp_path / "start", UniversalTrainingConfig(
         epochs=2, batch_size=64, threads=1), net, **quiet)
@@ -392,7 +392,7 @@ def test_training_on_two_sets_reads_both(tiny_set, tmp_path):
             assert np.all(shard.arrays["motor_noise_deg"] > 0)
     model = train_universal([tiny_set.path, people.path], tmp_path / "model",
                             UniversalTrainingConfig(epochs=1, batch_size=64, threads=1),
-                            UniversalNetworkConfig(hidden=(16,)), log=lambda m: None)
+                            UniversalNetworkConfig(hidden=(16,)))
     assert [d["path"] for d in model.sidecar["datasets"]] == [
         str(tiny_set.path.resolve()), str(people.path.resolve())]
     assert model.scope.locked_share == (0.1, 1.0)

@@ -118,7 +118,7 @@ def test_a_model_fine_tuned_from_the_bundled_one_keeps_its_standardisation(famil
     base = UniversalModel.load(BUNDLED_DIR)
     config = UniversalTrainingConfig(epochs=1, batch_size=64, threads=1, init=str(BUNDLED_DIR),
                                      max_learning_rate=1e-4, exclude_families=("shallow",))
-    tuned = train_universal(family_set.path, tmp_path / "tuned", config, log=lambda m: None)
+    tuned = train_universal(family_set.path, tmp_path / "tuned", config)
     again = UniversalModel.load(tmp_path / "tuned")
     np.testing.assert_array_equal(again.input_mean, base.input_mean)
     np.testing.assert_array_equal(again.target_std, base.target_std)

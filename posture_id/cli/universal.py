@@ -216,7 +216,7 @@ def run_train(args: argparse.Namespace) -> int:
     network = UniversalNetworkConfig(members=args.members, **shape)
     with TerminalProgress("epoch", prefix="posture-id universal train",
                           quiet=args.quiet) as progress:
-        train_universal(args.data, args.out, config, network, progress=progress, log=say)
+        train_universal(args.data, args.out, config, network, progress=progress)
     say(f"wrote {args.out / 'model.safetensors'} and model.json")
     return 0
 

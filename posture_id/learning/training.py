@@ -48,7 +48,7 @@ from posture_id.learning.config import (
 )
 from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import SplitSamples, Standardiser, stimulus_of
-from posture_id.learning.threads import torch_threads
+from posture_id.learning.trainer import EpochTrainer
 from posture_id.plotting import plot_loss_curves
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
@@ -189,8 +189,8 @@ def train(dataset: str | Path, out: str | Path, network: NetworkConfig | None = 
     return trainer.run(progress)
 
 
-class Trainer:
-    """One training run, in steps (in the manner of sbi's trainers):
+class Trainer(EpochTrainer):
+    """One training run of the CNN, in steps (in the manner of sbi's trainers):
 
     1. **configure** (the constructor): the data set, the network (an FRF network's input
        width follows the stimulus), its standardiser, loss, samples and optimiser;
@@ -215,6 +215,8 @@ class Trainer:
         self.network_config = self._network(network)
         self.out = Path(out)
         self.identity = _identity(data, self.network_config, training)
+        self.epochs, self.patience = training.epochs, training.patience
+        self.threads = training.threads
         torch.manual_seed(training.seed)
         self.net = IdentifierNetwork(self.network_config).to(memory_format=torch.channels_last)
         self.standardiser = Standardiser.from_dataset(data, self.network_config.layout)
@@ -262,17 +264,9 @@ class Trainer:
         self.best = (state["best_validation_loss"], state["best_epoch"])
         return True
 
-    def should_stop(self, epoch: int) -> bool:
-        """Early stopping: no better validation loss for ``patience`` epochs."""
-        return self.best[1] > 0 and epoch - self.best[1] > self.training.patience
-
     def run_epoch(self, epoch: int, progress: Progress | None = None) -> dict:
         """One pass over the training split (batches shuffled by the seed and the epoch),
-        then the validation loss; the epoch's row (with the configured torch threads)."""
-        with torch_threads(self.training.threads):
-            return self._run_epoch(epoch, progress)
-
-    def _run_epoch(self, epoch: int, progress: Progress | None = None) -> dict:
+        then the validation loss; the epoch's row."""
         began = time.perf_counter()
         rng = np.random.default_rng(np.random.SeedSequence([self.training.seed, epoch]))
         self.net.train()
@@ -311,23 +305,13 @@ class Trainer:
                      self.history, self.best)
         return improved
 
-    def run(self, progress: Progress | None = None) -> TrainingResult:
-        """Epochs from where the run stands to the configured number, or until early
-        stopping."""
-        epochs = self.training.epochs
-        stopped_early = False
-        for epoch in range(len(self.history) + 1, epochs + 1):
-            if self.should_stop(epoch):
-                stopped_early = True
-                break
-            row = self.run_epoch(epoch, progress)
-            improved = self.checkpoint(row)
-            report(progress, len(self.train_set), len(self.train_set), "sample",
-                   f"epoch {epoch}/{epochs}: train loss {row['train_loss']:.4f}, "
-                   f"validation {row['validation_loss']:.4f}{' (best)' if improved else ''}, "
-                   f"{row['seconds']:.0f} s")
-        else:
-            stopped_early = len(self.history) < epochs
+    def said(self, progress: Progress | None, epoch: int, row: dict, improved: bool) -> None:
+        report(progress, len(self.train_set), len(self.train_set), "sample",
+               f"epoch {epoch}/{self.epochs}: train loss {row['train_loss']:.4f}, "
+               f"validation {row['validation_loss']:.4f}{' (best)' if improved else ''}, "
+               f"{row['seconds']:.0f} s")
+
+    def finish(self, stopped_early: bool) -> TrainingResult:
         return TrainingResult(self.out, len(self.history), self.best[1], self.best[0],
                               stopped_early, time.perf_counter() - self.started,
                               tuple(self.history),

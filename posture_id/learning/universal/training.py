@@ -32,7 +32,7 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from posture_id.fileio import atomic_write, atomic_write_text, json_text
-from posture_id.learning.threads import torch_threads
+from posture_id.learning.trainer import EpochTrainer
 from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.network import (
@@ -49,7 +49,8 @@ from posture_id.learning.universal.samples import (
 )
 from posture_id.progress import Progress, report
 
-__all__ = ["UniversalTrainingConfig", "train_universal", "VALIDATION_SEED", "POINT_LOSSES"]
+__all__ = ["UniversalTrainingConfig", "UniversalTrainer", "UniversalTrainingResult",
+           "train_universal", "VALIDATION_SEED", "POINT_LOSSES"]
 
 #: Seed of the validation split's noise (fixed, so epochs are compared alike).
 VALIDATION_SEED = 0x56414C
@@ -167,133 +168,192 @@ def _targets(samples: Samples, mean: np.ndarray, std: np.ndarray) -> torch.Tenso
 def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Path,
                     config: UniversalTrainingConfig | None = None,
                     network: UniversalNetworkConfig | None = None,
-                    progress: Progress | None = None, log=print) -> UniversalModel:
+                    progress: Progress | None = None) -> UniversalModel:
     """Train on the set at ``data_path`` (or the sets, together: :func:`.data.open_sets`);
-    the best model is written to ``out``. Torch computes with ``config.threads`` for the
-    training and is left as it was."""
-    config = config or UniversalTrainingConfig()
-    with torch_threads(config.threads):
-        return _train(data_path, out, config, network or UniversalNetworkConfig(), progress,
-                      log)
+    the best model is written to ``out`` and returned (a :class:`UniversalTrainer` run to
+    its end; progress and a line per epoch through ``progress``)."""
+    trainer = UniversalTrainer(data_path, out, config, network, progress)
+    return trainer.run(progress).model
 
 
-def _train(data_path, out, config: UniversalTrainingConfig,
-           network_config: UniversalNetworkConfig, progress: Progress | None, log
-           ) -> UniversalModel:
-    out = Path(out)
-    device = _device()
-    data = open_sets(data_path)
-    scope = merged_scope(data)
-    t0 = time.perf_counter()
-    left_out = config.exclude_families
-    train_shards = require_trials(without_families(load_split(data, "train"), scope,
-                                                   left_out), data, "train", left_out)
-    validation = make_samples(
-        require_trials(without_families(load_split(data, "validation"), scope, left_out),
-                       data, "validation", left_out),
-        scope, np.random.default_rng(VALIDATION_SEED))
-    first = make_samples(train_shards, scope, np.random.default_rng([config.seed, 0]),
-                         config.fresh_motor_noise, config.motor_noise_tilt)
-    log(f"loaded {len(train_shards)} training shards ({len(first)} module samples), "
-        f"{len(validation)} validation samples in {time.perf_counter() - t0:.0f} s")
-    torch.manual_seed(config.seed)
-    if config.init is not None:  # fine-tuning: its network and standardisation
-        base = UniversalModel.load(config.init)
-        teacher = copy.deepcopy(base.network).eval() if config.keep_clean else None
-        net = base.network.to(device)
-        net.train()
-        network_config = net.config
-        input_mean, input_std = base.input_mean, base.input_std
-        target_mean, target_std = base.target_mean, base.target_std
-    else:
-        teacher = None
-        input_mean = first.inputs.mean(axis=0, dtype=np.float64)
-        input_std = np.maximum(first.inputs.std(axis=0, dtype=np.float64), 1e-6)
-        target_mean = first.targets[:, :4].mean(axis=0)
-        target_std = first.targets[:, :4].std(axis=0)
-        net = UniversalNetwork(network_config).to(device)
-    model = UniversalModel(net, input_mean, input_std, target_mean, target_std)
-    steps = math.ceil(len(first) / config.batch_size)
-    optimiser = torch.optim.AdamW(net.parameters(), lr=config.max_learning_rate,
-                                  weight_decay=config.weight_decay)
-    schedule = torch.optim.lr_scheduler.OneCycleLR(
-        optimiser, max_lr=config.max_learning_rate, total_steps=config.epochs * steps + 1)
-    sets = _run_identity(data, network_config)
-    out.mkdir(parents=True, exist_ok=True)  # only once the sets are read and fit to train
-    state = _resume(out, net, optimiser, schedule, config, sets)
-    best_state = state.pop("best_weights", None)
-    history = state.get("history", [])
-    best = state.get("best", math.inf)
-    x_val = model.standardise(validation.inputs).to(device)
-    t_val = _targets(validation, target_mean, target_std).to(device)
-    for epoch in range(len(history), config.epochs):
+@dataclass(frozen=True)
+class UniversalTrainingResult:
+    """A finished run: the model (written to ``out``), the epochs run, the best one and
+    whether early stopping ended it."""
+
+    model: UniversalModel
+    out: Path
+    epochs_run: int
+    best_epoch: int
+    stopped_early: bool
+
+
+class UniversalTrainer(EpochTrainer):
+    """One training run of the universal network (the module doc): configured and resumed
+    by the constructor, run by :meth:`~posture_id.learning.trainer.EpochTrainer.run`.
+
+    Attributes:
+        config, network_config: how it trains and what. data, scope: the sets and their
+        merged scope. model: the network with its standardisation. history, best: as
+        :class:`~posture_id.learning.trainer.EpochTrainer`'s.
+    """
+
+    def __init__(self, data_path: str | Path | Sequence[str | Path], out: str | Path,
+                 config: UniversalTrainingConfig | None = None,
+                 network: UniversalNetworkConfig | None = None,
+                 progress: Progress | None = None) -> None:
+        self.config = config = config or UniversalTrainingConfig()
+        self.progress = progress
+        network_config = network or UniversalNetworkConfig()
+        self.epochs, self.patience, self.threads = config.epochs, config.patience, config.threads
+        self.out = out = Path(out)
+        self.device = device = _device()
+        self.data = data = open_sets(data_path)
+        self.scope = scope = merged_scope(data)
+        t0 = time.perf_counter()
+        left_out = config.exclude_families
+        self.train_shards = require_trials(without_families(load_split(data, "train"), scope,
+                                                            left_out), data, "train", left_out)
+        validation = make_samples(
+            require_trials(without_families(load_split(data, "validation"), scope, left_out),
+                           data, "validation", left_out),
+            scope, np.random.default_rng(VALIDATION_SEED))
+        self.first = first = make_samples(self.train_shards, scope,
+                                          np.random.default_rng([config.seed, 0]),
+                                          config.fresh_motor_noise, config.motor_noise_tilt)
+        report(progress, 0, config.epochs, "epoch",
+               f"loaded {len(self.train_shards)} training shards ({len(first)} module "
+               f"samples), {len(validation)} validation samples in "
+               f"{time.perf_counter() - t0:.0f} s")
+        torch.manual_seed(config.seed)
+        self.base = None
+        if config.init is not None:  # fine-tuning: its network and standardisation
+            self.base = base = UniversalModel.load(config.init)
+            self.teacher = copy.deepcopy(base.network).eval() if config.keep_clean else None
+            net = base.network.to(device)
+            net.train()
+            network_config = net.config
+            input_mean, input_std = base.input_mean, base.input_std
+            target_mean, target_std = base.target_mean, base.target_std
+        else:
+            self.teacher = None
+            input_mean = first.inputs.mean(axis=0, dtype=np.float64)
+            input_std = np.maximum(first.inputs.std(axis=0, dtype=np.float64), 1e-6)
+            target_mean = first.targets[:, :4].mean(axis=0)
+            target_std = first.targets[:, :4].std(axis=0)
+            net = UniversalNetwork(network_config).to(device)
+        self.net, self.network_config = net, network_config
+        self.model = UniversalModel(net, input_mean, input_std, target_mean, target_std)
+        self.steps = math.ceil(len(first) / config.batch_size)
+        self.optimiser = torch.optim.AdamW(net.parameters(), lr=config.max_learning_rate,
+                                           weight_decay=config.weight_decay)
+        self.schedule = torch.optim.lr_scheduler.OneCycleLR(
+            self.optimiser, max_lr=config.max_learning_rate,
+            total_steps=config.epochs * self.steps + 1)
+        self.sets = _run_identity(data, network_config)
+        out.mkdir(parents=True, exist_ok=True)  # only once the sets are read and fit to train
+        state = _resume(out, net, self.optimiser, self.schedule, config, self.sets)
+        self.best_state = state.pop("best_weights", None)
+        self.history = state.get("history", [])
+        losses = [h["validation_loss"] for h in self.history]
+        self.best = (state.get("best", math.inf),
+                     int(np.argmin(losses)) + 1 if losses else 0)
+        self.x_val = self.model.standardise(validation.inputs).to(device)
+        self.t_val = _targets(validation, target_mean, target_std).to(device)
+
+    def run_epoch(self, epoch: int, progress: Progress | None = None) -> dict:
+        """Epoch ``epoch`` (1-based) on the training split's samples made afresh (its
+        noise drawn from the seed and the epoch), then the validation loss."""
+        config, net, index = self.config, self.net, epoch - 1
         started = time.perf_counter()
-        samples = first if epoch == 0 else make_samples(
-            train_shards, scope, np.random.default_rng([config.seed, epoch]),
+        samples = self.first if index == 0 else make_samples(
+            self.train_shards, self.scope, np.random.default_rng([config.seed, index]),
             config.fresh_motor_noise, config.motor_noise_tilt)
-        x = model.standardise(samples.inputs)
-        t = _targets(samples, target_mean, target_std)
-        kept = _kept_outputs(teacher, samples, x)
-        order = torch.from_numpy(np.random.default_rng([config.seed, 1, epoch]).permutation(len(x)))
-        torch.manual_seed(config.seed * 100003 + epoch)  # dropout: the same on a resumed run
+        x = self.model.standardise(samples.inputs)
+        t = _targets(samples, self.model.target_mean, self.model.target_std)
+        kept = _kept_outputs(self.teacher, samples, x)
+        order = torch.from_numpy(np.random.default_rng([config.seed, 1, index])
+                                 .permutation(len(x)))
+        torch.manual_seed(config.seed * 100003 + index)  # dropout: the same on a resumed run
         net.train()
         total = 0.0
-        for i in range(steps):
+        for i in range(self.steps):
             pick = order[i * config.batch_size : (i + 1) * config.batch_size]
             if not len(pick):
                 continue
-            outputs = net(x[pick].to(device))
-            loss, _ = _loss(outputs, t[pick].to(device), config.point_loss)
+            outputs = net(x[pick].to(self.device))
+            loss, _ = _loss(outputs, t[pick].to(self.device), config.point_loss)
             if kept is not None:
-                clean, teacher_out = kept[0][pick].to(device), kept[1][pick].to(device)
+                clean = kept[0][pick].to(self.device)
+                teacher_out = kept[1][pick].to(self.device)
                 if clean.any():
                     loss = loss + config.keep_clean * clean.float().mean() * _gap(
                         outputs[:, clean], teacher_out[clean])
-            optimiser.zero_grad(set_to_none=True)
+            self.optimiser.zero_grad(set_to_none=True)
             loss.backward()
-            optimiser.step()
-            schedule.step()
+            self.optimiser.step()
+            self.schedule.step()
             total += loss.item() * len(pick)
         net.eval()
+        x_val, t_val = self.x_val, self.t_val
         with torch.no_grad():
             val = float(np.mean([_loss(net(x_val[i:i + 8192]), t_val[i:i + 8192],
                                        config.point_loss)[1].item()
                                  for i in range(0, len(x_val), 8192)]))
-        history.append({"epoch": epoch + 1, "train_loss": total / len(x),
-                        "validation_loss": val, "seconds": time.perf_counter() - started})
-        if val < best:
-            best = val
-            best_state = {k: v.detach().cpu().clone() for k, v in net.state_dict().items()}
-        _save_state(out, net, optimiser, schedule, best_state, history, best, config, sets)
-        log(f"epoch {epoch + 1}/{config.epochs}: train {total / len(x):.4f}, validation "
-            f"{val:.4f}{' (best)' if val == best else ''}, {time.perf_counter() - started:.0f} s")
-        report(progress, epoch + 1, config.epochs, "epoch")
-        stale = len(history) - 1 - int(np.argmin([h["validation_loss"] for h in history]))
-        if stale >= config.patience:
-            log(f"no improvement for {config.patience} epochs: stopping")
-            break
-    net.load_state_dict(best_state)
-    net.cpu()
-    model.sidecar = {
-        "scope": scope.to_dict(),
-        "dataset": {"path": str(data[0].path.resolve()),
-                    "config": data[0].manifest["config"],
-                    "counts": data[0].manifest.get("counts")},
-        "datasets": [{"path": str(d.path.resolve()), "config": d.manifest["config"],
-                      "counts": d.manifest.get("counts")} for d in data],
-        "training": {**asdict(config), "history": history,
-                     "best_epoch": int(np.argmin([h["validation_loss"] for h in history])) + 1,
-                     "device": str(device), "train_samples": len(first)},
-        "ranges": _ranges(first, None if config.init is None else base.sidecar["ranges"]),
-    }
-    if config.init is not None:
-        model.sidecar["fine_tuned_from"] = {"path": str(Path(config.init).resolve()),
-                                            "weights_sha256": base.sidecar["weights_sha256"],
-                                            "training": base.sidecar.get("training")}
-    model.save(out)
-    for name in ("train-state.safetensors", "train-state.json"):
-        (out / name).unlink(missing_ok=True)
-    return model
+        return {"epoch": epoch, "train_loss": total / len(x), "validation_loss": val,
+                "seconds": time.perf_counter() - started}
+
+    def checkpoint(self, row: dict) -> bool:
+        self.history.append(row)
+        improved = row["validation_loss"] < self.best[0]
+        if improved:
+            self.best = (row["validation_loss"], row["epoch"])
+            self.best_state = {k: v.detach().cpu().clone()
+                               for k, v in self.net.state_dict().items()}
+        _save_state(self.out, self.net, self.optimiser, self.schedule, self.best_state,
+                    self.history, self.best[0], self.config, self.sets)
+        return improved
+
+    def said(self, progress: Progress | None, epoch: int, row: dict, improved: bool) -> None:
+        report(progress, epoch, self.epochs, "epoch",
+               f"epoch {epoch}/{self.epochs}: train {row['train_loss']:.4f}, validation "
+               f"{row['validation_loss']:.4f}{' (best)' if improved else ''}, "
+               f"{row['seconds']:.0f} s")
+
+    def finish(self, stopped_early: bool) -> UniversalTrainingResult:
+        """The best epoch's weights, with the sidecar, written to ``out``; the state to
+        resume from removed."""
+        config, history, data = self.config, self.history, self.data
+        if stopped_early:
+            report(self.progress, len(history), self.epochs, "epoch",
+                   f"no improvement for {self.patience} epochs: stopping")
+        self.net.load_state_dict(self.best_state)
+        self.net.cpu()
+        model = self.model
+        model.sidecar = {
+            "scope": self.scope.to_dict(),
+            "dataset": {"path": str(data[0].path.resolve()),
+                        "config": data[0].manifest["config"],
+                        "counts": data[0].manifest.get("counts")},
+            "datasets": [{"path": str(d.path.resolve()), "config": d.manifest["config"],
+                          "counts": d.manifest.get("counts")} for d in data],
+            "training": {**asdict(config), "history": history,
+                         "best_epoch": int(np.argmin([h["validation_loss"]
+                                                      for h in history])) + 1,
+                         "device": str(self.device), "train_samples": len(self.first)},
+            "ranges": _ranges(self.first, None if self.base is None
+                              else self.base.sidecar["ranges"]),
+        }
+        if self.base is not None:
+            model.sidecar["fine_tuned_from"] = {
+                "path": str(Path(config.init).resolve()),
+                "weights_sha256": self.base.sidecar["weights_sha256"],
+                "training": self.base.sidecar.get("training")}
+        model.save(self.out)
+        for name in ("train-state.safetensors", "train-state.json"):
+            (self.out / name).unlink(missing_ok=True)
+        return UniversalTrainingResult(model, self.out, len(history), self.best[1],
+                                       stopped_early)
 
 
 def _ranges(samples: Samples, before: dict | None = None) -> dict:

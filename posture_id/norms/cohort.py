@@ -6,11 +6,10 @@ normative set in one more command (``norm build FOLDER/*.frf.json``), and its
 from __future__ import annotations
 
 import csv
-import io
 from pathlib import Path
 
+from posture_id.cohorts import CohortRow, write_summary
 from posture_id.errors import PostureIdError
-from posture_id.fileio import atomic_write_text
 from posture_id.frf.analysis import frequency_response
 from posture_id.frf.bands import FrequencyBands
 from posture_id.frf.response import FrfOptions
@@ -54,15 +53,14 @@ def cohort_frfs(recordings: list[Path], out: Path, read, body_of, bands: Frequen
 def _extend_summary(summary: Path, extras: dict[str, dict]) -> None:
     """summary.csv with the norm's columns (empty for a recording without them)."""
     with summary.open(encoding="utf-8", newline="") as handle:
-        rows = list(csv.DictReader(handle))
-    fields = list(rows[0]) if rows else ["recording"]
+        read = list(csv.DictReader(handle))
+    fields = list(read[0]) if read else ["recording"]
     fields += [c for c in NORM_COLUMNS if c not in fields]
-    for row in rows:
-        row.update({c: "" for c in NORM_COLUMNS})
-        row.update({k: "" if v is None else v
-                    for k, v in extras.get(row.get("recording"), {}).items()})
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fields, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    atomic_write_text(summary, text.getvalue())
+    rows = []
+    for row in read:
+        values = {**{k: v for k, v in row.items() if k not in ("recording", "status")},
+                  **{c: "" for c in NORM_COLUMNS}}
+        values.update({k: "" if v is None else v
+                       for k, v in extras.get(row.get("recording"), {}).items()})
+        rows.append(CohortRow(row.get("recording", ""), row.get("status", ""), values))
+    write_summary(summary, rows, fields)

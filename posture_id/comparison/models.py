@@ -253,7 +253,7 @@ class _Judged:
                        neighbours)
 
 
-def _locked_and_options(models, options: dict | None, ic_options: IcFitOptions | None
+def _locked_and_options(options: dict | None, ic_options: IcFitOptions | None
                         ) -> tuple[LockedOptions, dict]:
     """The harmonics compared (up to 2 Hz) and each model's fit options."""
     options = dict(options or {})
@@ -290,7 +290,7 @@ def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None =
         PostureIdError: a stimulus that is not periodic.
     """
     started = clock.perf_counter()
-    locked, options = _locked_and_options(models, options, ic_options)
+    locked, options = _locked_and_options(options, ic_options)
     judged = _Judged.of(trial, body, locked)
     projection = judged.projection
     fits, chi2, k, spectra = {}, {}, {}, {}
@@ -405,7 +405,7 @@ def compare_amplitudes(trials: list[PreparedTrial], body,
         PostureIdError: a part whose stimulus is not periodic.
     """
     started = clock.perf_counter()
-    locked, options = _locked_and_options(models, options, ic_options)
+    locked, options = _locked_and_options(options, ic_options)
     judged = [_Judged.of(t, body, locked) for t in trials]
     fits, chi2, k = {}, {}, {}
     for model in models:

@@ -12,13 +12,13 @@ record and what row of ``summary.csv`` a result makes (:class:`CohortTask`).
 from __future__ import annotations
 
 import csv
-import enum
 import io
 import json
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from posture_id.choices import Choice
 from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.progress import Progress, report
@@ -27,15 +27,13 @@ __all__ = ["Status", "CohortRow", "CohortTask", "Journal", "option_differences",
            "write_summary", "changed_and_failed"]
 
 
-class Status(str, enum.Enum):
+class Status(Choice):
     """What became of a recording with a result (a failed one's status is its reason)."""
 
     DONE = "done"
     SKIPPED = "skipped"
     REDONE = "redone"
 
-    def __str__(self) -> str:
-        return self.value
 
 
 #: The statuses of a recording with a result.

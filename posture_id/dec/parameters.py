@@ -12,7 +12,6 @@ default to the body's defaults.
 
 from __future__ import annotations
 
-import enum
 import json
 import math
 from collections.abc import Mapping
@@ -22,6 +21,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from posture_id.choices import Choice
 from posture_id.errors import ParameterError
 from posture_id.fileio import JsonFile
 
@@ -49,15 +49,13 @@ PAPER_TABLE = {
     "knee": {"kd": 18.394, "ki": 6.1312, "kpas": 61.25, "bpas": 11.25, "delay_s": 0.070},
     "hip": {"kd": 18.394, "ki": 1.8394, "kpas": 36.5, "bpas": 11.25, "delay_s": 0.121},
 }
-class Controls(str, enum.Enum):
+class Controls(Choice):
     """A module's class C: the variable it controls. A string enum: it compares equal to,
     prints and writes to JSON as its value ("com", "joint")."""
 
     COM = "com"  # C = +1: the COM-above angle in space
     JOINT = "joint"  # C = −1: the joint angle
 
-    def __str__(self) -> str:
-        return self.value
 
     def __format__(self, spec: str) -> str:
         return format(self.value, spec)

@@ -30,7 +30,6 @@ the bounded fit over those subjects and their noise draws.
 
 from __future__ import annotations
 
-import enum
 import time
 from dataclasses import asdict, dataclass, field
 
@@ -39,6 +38,7 @@ from scipy.optimize import brentq
 from scipy.stats import norm
 
 from posture_id.bodies.body import Body
+from posture_id.choices import Choice
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
 from posture_id.dec.prior import SIGMA, sample_parameters
 from posture_id.design.bounded import bounded_errors, fit_bounds
@@ -57,14 +57,12 @@ from posture_id.simulation.protocols import Protocol, SingleProtocol
 
 __all__ = ["DesignOptions", "Residual", "ProtocolPrediction", "predict_protocols", "prior_width"]
 
-class Residual(str, enum.Enum):
+class Residual(Choice):
     """What the predicted fit minimises (:class:`DesignOptions`)."""
 
     LOCKED = "locked"
     RAW = "raw"
 
-    def __str__(self) -> str:
-        return self.value
 
 
 @dataclass(frozen=True)

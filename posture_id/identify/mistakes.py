@@ -34,12 +34,12 @@ Each returns a :class:`Mistake` when it finds one, None when it does not or cann
 
 from __future__ import annotations
 
-import enum
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from posture_id.choices import Choice
 from posture_id.frf.cycles import cycle_average
 from posture_id.frf.locked import LockedOptions, LockedProjection, noise_levels
 from posture_id.identify.noise_check import harmonic_noise
@@ -68,7 +68,7 @@ CONTROL_CHANGE_RATIO = 3.0
 _NEIGHBOURS = 6
 
 
-class Check(str, enum.Enum):
+class Check(Choice):
     """The checks that find a mistake in a recording."""
 
     TILT_SIGN = "tilt sign"
@@ -77,8 +77,6 @@ class Check(str, enum.Enum):
     COLUMNS_EXCHANGED = "columns exchanged"
     ANOTHER_BODY = "another body"
 
-    def __str__(self) -> str:
-        return self.value
 
 
 @dataclass(frozen=True)

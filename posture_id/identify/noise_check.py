@@ -36,27 +36,25 @@ alone would leave, so that a recording too noisy to check an answer says so.
 
 from __future__ import annotations
 
-import enum
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from posture_id.choices import Choice
 from posture_id.frf.cycles import cycle_average
 from posture_id.frf.locked import LockedOptions, LockedProjection, noise_levels
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.noise import sensor_noise_deg
 
 
-class Basis(str, enum.Enum):
+class Basis(Choice):
     """What sway a residual is measured on: the stimulus-locked cycle average, or every
     sample."""
 
     LOCKED = "locked"
     RAW = "raw"
 
-    def __str__(self) -> str:
-        return self.value
 
 __all__ = ["NoiseCheck", "noise_check", "harmonic_noise", "NOISE_RATIO_LIMIT",
            "CLOSE_ENOUGH"]

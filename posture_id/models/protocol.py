@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from posture_id.choices import Choice
+
 if TYPE_CHECKING:
     from posture_id.recording import Recording
     from posture_id.simulation.options import SimulationOptions
@@ -29,7 +31,7 @@ __all__ = ["Capability", "TrustLevel", "ModelParameters", "ModelFit", "Model",
            "FrequencyModel", "register", "registered"]
 
 
-class TrustLevel(str, enum.Enum):
+class TrustLevel(Choice):
     """How far an answer can be trusted (docs/identify.md, "Trust"): the same three levels
     for every model and every way of identifying it."""
 
@@ -37,8 +39,6 @@ class TrustLevel(str, enum.Enum):
     IMPRECISE = "imprecise"
     DOUBTFUL = "doubtful"
 
-    def __str__(self) -> str:
-        return self.value
 
 
 class Capability(enum.Enum):

@@ -25,11 +25,11 @@ can be checked on the others (``benchmarks/noise_families.py``; docs/real_record
 
 from __future__ import annotations
 
-import enum
 from dataclasses import dataclass
 
 import numpy as np
 
+from posture_id.choices import Choice
 from posture_id.simulation.measurement import MeasurementNoise
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ, MotorShape
 
@@ -39,7 +39,7 @@ __all__ = ["NoiseFamily", "NoiseDraw", "draw_noise", "DRIFTING_COLOUR_SLOPE"]
 DRIFTING_COLOUR_SLOPE = (1.0, 2.0)
 
 
-class NoiseFamily(str, enum.Enum):
+class NoiseFamily(Choice):
     """A family of noise processes (module docstring)."""
 
     LOW_PASS = "low_pass"
@@ -49,8 +49,6 @@ class NoiseFamily(str, enum.Enum):
     DRIFTING = "drifting"
     CHANGING = "changing"
 
-    def __str__(self) -> str:
-        return self.value
 
 
 @dataclass(frozen=True)

@@ -38,10 +38,12 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-#: Keys whose values are wall-clock times or machine facts, not results.
+#: Keys whose values are wall-clock times or machine facts (a compiled model found in
+#: the cache or compiled), not results.
 TIMING_KEYS = frozenset({"seconds", "elapsed_s", "wall_s", "fit_seconds", "longest_fit_s",
                          "threads", "workers", "created", "duration_s", "time_per_trial_ms",
-                         "ms_per_trial", "trials_per_s"})
+                         "ms_per_trial", "trials_per_s", "backend", "wall_time_s",
+                         "identification_time_s"})
 
 
 @dataclass(frozen=True)
@@ -105,7 +107,17 @@ def run_step(step: Step, tree: Path, out: Path) -> dict:
         for file in sorted(folder.glob(pattern)):
             values.update({f"{file.name}{k}": v
                            for k, v in numbers(json.loads(file.read_text())).items()})
-    return {"seconds": seconds, "rc": done.returncode, "values": values}
+    return {"seconds": seconds, "rc": done.returncode, "values": values, "tree": str(tree)}
+
+
+def _is_result(path: str) -> bool:
+    """Whether a value's path names a result (not a time or a machine fact)."""
+    return path.rsplit("/", 1)[-1].split("[", 1)[0] not in TIMING_KEYS
+
+
+def _in_tree(value, tree: str | None):
+    """A string value with its tree's path (where the run was) written ``<tree>``."""
+    return value.replace(tree, "<tree>") if isinstance(value, str) and tree else value
 
 
 def difference(a, b) -> float:
@@ -131,8 +143,9 @@ def report(before: dict, after: dict) -> str:
         a = after.get(name)
         if a is None:
             continue
-        common = sorted(set(b["values"]) & set(a["values"]))
-        diffs = {k: difference(b["values"][k], a["values"][k]) for k in common}
+        common = sorted(k for k in set(b["values"]) & set(a["values"]) if _is_result(k))
+        diffs = {k: difference(_in_tree(b["values"][k], b.get("tree")),
+                               _in_tree(a["values"][k], a.get("tree"))) for k in common}
         changed = {k: d for k, d in diffs.items() if d > 0}
         largest = max(changed.values(), default=0.0)
         lost = len(set(b["values"]) - set(a["values"]))

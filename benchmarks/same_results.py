@@ -107,7 +107,8 @@ def run_step(step: Step, tree: Path, out: Path) -> dict:
         for file in sorted(folder.glob(pattern)):
             values.update({f"{file.name}{k}": v
                            for k, v in numbers(json.loads(file.read_text())).items()})
-    return {"seconds": seconds, "rc": done.returncode, "values": values, "tree": str(tree)}
+    return {"seconds": seconds, "rc": done.returncode, "values": values, "tree": str(tree),
+            "out": str(out)}
 
 
 def _is_result(path: str) -> bool:
@@ -115,9 +116,16 @@ def _is_result(path: str) -> bool:
     return path.rsplit("/", 1)[-1].split("[", 1)[0] not in TIMING_KEYS
 
 
-def _in_tree(value, tree: str | None):
-    """A string value with its tree's path (where the run was) written ``<tree>``."""
-    return value.replace(tree, "<tree>") if isinstance(value, str) and tree else value
+def _in_tree(value, run: dict):
+    """A string value with the paths of its run's package and output folder written
+    ``<tree>`` and ``<out>`` (where the run was, not what it found)."""
+    if not isinstance(value, str):
+        return value
+    for path, name in ((run.get("tree"), "<tree>"), (run.get("out"), "<out>")):
+        if path:
+            value = value.replace(f"{path}/posture_id/", f"{name}/posture_id/") \
+                if name == "<tree>" else value.replace(path, name)
+    return value
 
 
 def difference(a, b) -> float:
@@ -144,8 +152,8 @@ def report(before: dict, after: dict) -> str:
         if a is None:
             continue
         common = sorted(k for k in set(b["values"]) & set(a["values"]) if _is_result(k))
-        diffs = {k: difference(_in_tree(b["values"][k], b.get("tree")),
-                               _in_tree(a["values"][k], a.get("tree"))) for k in common}
+        diffs = {k: difference(_in_tree(b["values"][k], b), _in_tree(a["values"][k], a))
+                 for k in common}
         changed = {k: d for k, d in diffs.items() if d > 0}
         largest = max(changed.values(), default=0.0)
         lost = len(set(b["values"]) - set(a["values"]))

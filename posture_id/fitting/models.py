@@ -71,11 +71,6 @@ class DecFit:
     def to_dict(self) -> dict:
         return self.result.to_dict()
 
-    def __getattr__(self, name: str):  # the fit's own fields (stages, intervals, ...)
-        if name in ("result", "body", "parts"):
-            raise AttributeError(name)
-        return getattr(self.result, name)
-
 
 def fit_model(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
               options=None, progress=None):

@@ -2,14 +2,15 @@
 verdicts): one typed protocol that DEC and the independent-channel model implement, and that
 a new model implements to be fitted, simulated, compared and run over a cohort.
 
-A model is a stateless object (``DEC``, ``IC``; :func:`model_named` finds one by the
-``"model"`` key of its parameter files). Its parameters are frozen and write themselves as
-JSON with that key. Beside the core (parameters, prior and bounds, simulation, a trial's
-predicted body COM sway) it declares what it supports in :attr:`Model.capabilities`, and
-the stages pick their way of fitting it from them (:func:`posture_id.fitting.models.fit_model`):
-a closed-loop frequency response gives the exact frequency-domain fit
-(:mod:`posture_id.fitting.frequency`), per-joint modules the locked time-domain least
-squares; a network that identifies it and experiment design are declared the same way.
+A model is a stateless object (``DEC``, ``IC``; :func:`posture_id.models.model_named` finds
+one by the ``"model"`` key of its parameter files). Its parameters are frozen and write
+themselves as JSON with that key. Beside the core (parameters, prior and bounds, simulation,
+a trial's predicted body COM sway) it declares what it supports in
+:attr:`Model.capabilities`, and the stages pick their way of fitting it from them
+(:func:`posture_id.fitting.models.fit_model`): a closed-loop frequency response gives the
+exact frequency-domain fit (:mod:`posture_id.fitting.frequency`), per-joint modules the
+locked time-domain least squares; a network that identifies it and experiment design are
+declared the same way.
 """
 
 from __future__ import annotations

@@ -8,9 +8,10 @@ each compared as ``posture-id compare REC --body URDF`` compares it
 (:func:`~posture_id.comparison.models.compare_models`, the held-out cycle included where there
 are three or more cycles):
 
-- bodies: Winter bodies of 1 and 2 segments (1.75 m, 70 kg), in turn (3-segment DEC fits
-  take minutes each, and the IC model sees only the COM: the 2-segment body is as much as
-  the comparison needs; ``benchmarks/ic_recovery.py`` covers 3 segments);
+- bodies: Winter bodies of 1 and 2 segments (1.75 m, 70 kg), in turn (the IC model sees
+  only the COM: the 2-segment body is as much as the comparison needs;
+  ``benchmarks/compare_speed.py`` times 3-segment comparisons, ``benchmarks/ic_recovery.py``
+  covers 3-segment IC fits);
 - stimuli: the 242-state PRTS ×2 and the 80-state PRTS ×6 in turn, 0.5–2° peak to peak
   (one amplitude);
 - DEC parameters from docs/model.md §5's prior; IC parameters drawn around the literature's

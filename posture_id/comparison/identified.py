@@ -80,7 +80,8 @@ def fit_as_identified(model: Model, trial: PreparedTrial, body, locked: LockedOp
                       options=None, progress=None):
     """``model`` fitted to ``trial`` for a comparison: a model with a network
     (:attr:`~posture_id.models.protocol.Capability.NETWORK`) by the hybrid where its
-    network serves the body, every other one by :func:`fit_model`."""
+    network serves the body (and its answer stays up on the trial), every other one, and
+    a hybrid answer that falls, by :func:`fit_model`."""
     identifier = (_identifier(body, locked)
                   if Capability.NETWORK in model.capabilities and options is None else None)
     if identifier is None:
@@ -90,5 +91,8 @@ def fit_as_identified(model: Model, trial: PreparedTrial, body, locked: LockedOp
                                        progress)
     except PostureIdError:
         return fit_model(model, trial, body, locked, options, progress)
-    return IdentifiedFit(result, model.com_sway_deg(result.parameters, body, trial),
-                         model.identified_count(body))
+    fitted = IdentifiedFit(result, model.com_sway_deg(result.parameters, body, trial),
+                           model.identified_count(body))
+    if fitted.falls:  # the hybrid ended on a model that falls here: the model's own fit
+        return fit_model(model, trial, body, locked, options, progress)
+    return fitted

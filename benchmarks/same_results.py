@@ -121,11 +121,9 @@ def _in_tree(value, run: dict):
     ``<tree>`` and ``<out>`` (where the run was, not what it found)."""
     if not isinstance(value, str):
         return value
-    for path, name in ((run.get("tree"), "<tree>"), (run.get("out"), "<out>")):
-        if path:
-            value = value.replace(f"{path}/posture_id/", f"{name}/posture_id/") \
-                if name == "<tree>" else value.replace(path, name)
-    return value
+    if run.get("tree"):
+        value = value.replace(f"{run['tree']}/posture_id/", "<tree>/posture_id/")
+    return value.replace(run["out"], "<out>") if run.get("out") else value
 
 
 def difference(a, b) -> float:

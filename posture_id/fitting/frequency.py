@@ -67,9 +67,13 @@ class FrequencyFitOptions:
         if not 0.5 <= self.level <= 0.99:
             raise PostureIdError(f"the fit's level must be within 0.5–0.99, got {self.level}")
 
+    def asked(self, model: FrequencyModel) -> tuple[str, ...]:
+        """The parameters asked to be identified, in any order."""
+        return tuple(self.parameters or model.identified)
+
     def free_of(self, model: FrequencyModel) -> tuple[str, ...]:
         """The identified parameters, in the model's ``parameter_order``."""
-        names = self.parameters or model.identified
+        names = self.asked(model)
         unknown = sorted(set(names) - set(model.parameter_order))
         if unknown:
             raise PostureIdError(f"{model.label} has no parameter(s) {unknown} (it has "
@@ -90,13 +94,9 @@ class IcFitOptions(FrequencyFitOptions):
         """The identified parameters, in the IC model's order."""
         return self.free_of(IC)
 
-    def free_of(self, model: FrequencyModel) -> tuple[str, ...]:
-        names = list(self.parameters or IC.identified)
-        if self.fit_ki:
-            names.append("ki")
-        if self.fit_passive:
-            names += ["kpas", "bpas"]
-        return tuple(n for n in model.parameter_order if n in names)
+    def asked(self, model: FrequencyModel) -> tuple[str, ...]:
+        return (*super().asked(model), *(("ki",) if self.fit_ki else ()),
+                *(("kpas", "bpas") if self.fit_passive else ()))
 
 
 def com_sway_deg(trial: PreparedTrial, body) -> np.ndarray:

@@ -17,12 +17,7 @@ from posture_id.models.protocol import (
 
 __all__ = ["DEC", "DecModel", "IC", "IcModel", "Capability", "FrequencyModel", "Model",
            "ModelFit", "ModelParameters", "TrustLevel", "model_named", "register",
-           "registered_models"]
-
-
-def registered_models() -> tuple[Model, ...]:
-    """Every model known: the project's (DEC, IC) and any registered since."""
-    return registered()
+           "registered"]
 
 
 def model_named(name: str) -> Model:

@@ -20,7 +20,7 @@ import numpy as np
 
 from posture_id.models.ic.parameters import MODEL_NAME, IcParameters, default_ic_parameters
 from posture_id.models.ic.response import PARAMETER_ORDER, IcPlant, closed_loop, is_stable
-from posture_id.models.ic.simulation import ic_sway, simulate_ic
+from posture_id.models.ic.simulation import simulate_ic
 from posture_id.models.protocol import Capability, register
 
 __all__ = ["IcModel", "IC", "BOUNDS", "TYPICAL", "CALIBRATION", "interval_multiplier",
@@ -129,10 +129,6 @@ class IcModel:
 
     def interval_multiplier(self, name: str, level: float) -> tuple[float, bool]:
         return interval_multiplier(name, level)
-
-    def sway(self, params: IcParameters, plant: IcPlant, stimulus, options=None):
-        """(time (S,) s, θ (S,) rad) stepped in time (:func:`ic_sway`)."""
-        return ic_sway(params, plant, stimulus, options)
 
     def __repr__(self) -> str:
         return "IC"

@@ -238,9 +238,8 @@ class _Judged:
                                  "stimulus (its locked harmonics)")
         rec = trial.recording
         sway = com_sway_deg(trial, body)
-        projection = LockedProjection.for_recording(
-            rec.tilt, sway[:, None], rec.sample_rate_hz, trial.stimulus.period_s,
-            trial.stimulus.periodic_from_s, locked, trial.name)
+        projection = LockedProjection.for_stimulus(
+            trial.stimulus, rec.tilt, sway[:, None], rec.sample_rate_hz, locked, trial.name)
         spectrum = projection.all_harmonics(sway[:, None])[:, 0]
         frequencies = np.arange(1, len(spectrum) + 1) * rec.sample_rate_hz / projection.period
         rows = np.flatnonzero(frequencies <= MAX_FREQUENCY_HZ)

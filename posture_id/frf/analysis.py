@@ -31,21 +31,29 @@ def frequency_response(trial: PreparedTrial, body: Body | None = None,
     period_s = period_s or stimulus.period_s
     if period_s is None:
         hint = trial.rate_hint
-        raise RecordingError(f"{trial.name}: the tilt is not a PRTS of 242 or 80 states; "
-                             "give the stimulus's period (period_s, --period-s)"
+        raise RecordingError(f"{trial.name}: the tilt is not a PRTS of 242 or 80 states "
+                             "and does not repeat for two whole cycles or more while the "
+                             "platform moves (too short for its lowest frequency, or not "
+                             "periodic); give the stimulus's period (period_s, --period-s)"
                              + ("" if hint is None
                                 else f"; and {hint.removeprefix(trial.name + ': ')}"))
     start = int(np.searchsorted(recording.time, stimulus.periodic_from_s - 1e-9))
-    _check_period(trial, start, period_s)
+    own_period = stimulus.period_s is not None and abs(period_s - stimulus.period_s) < 1e-9
+    stop = len(recording.time)
+    if own_period and stimulus.cycles is not None:  # level again after its steady cycles
+        stop = min(stop, start + stimulus.cycles * int(round(period_s
+                                                             * recording.sample_rate_hz)))
+    _check_period(trial, start, stop, period_s)
     channels = tuple(recording.segments)
-    outputs = recording.theta[start:]
+    outputs = recording.theta[start:stop]
     if body is not None:
         trial.require_segments(body.segment_names)
-        outputs = np.column_stack([outputs, body.com_angles(recording.theta[start:])[:, 0]])
+        outputs = np.column_stack([outputs, body.com_angles(outputs)[:, 0]])
         channels += ("body COM",)
-    response = frequency_response_arrays(recording.tilt[start:], outputs,
+    response = frequency_response_arrays(recording.tilt[start:stop], outputs,
                                          recording.sample_rate_hz, period_s, channels, options,
-                                         trial.name)
+                                         trial.name,
+                                         stimulus.frequencies_hz if own_period else None)
     return replace(response, recording_source=recording.source)
 
 
@@ -54,12 +62,12 @@ def frequency_response(trial: PreparedTrial, body: Body | None = None,
 PERIOD_MISMATCH = 0.1
 
 
-def _check_period(trial: PreparedTrial, start: int, period_s: float) -> None:
+def _check_period(trial: PreparedTrial, start: int, stop: int, period_s: float) -> None:
     """Refuse a period the tilt does not repeat with (with two whole cycles or more to
     compare): an FRF over cycles that are not the stimulus's is meaningless."""
     rec = trial.recording
     p = int(round(period_s * rec.sample_rate_hz))
-    tilt = rec.tilt[start:]
+    tilt = rec.tilt[start:stop]
     cycles = len(tilt) // p if p > 0 else 0
     if cycles < 2:
         return

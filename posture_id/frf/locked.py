@@ -30,7 +30,11 @@ import numpy as np
 
 from posture_id.errors import PostureIdError
 from posture_id.frf.cycles import cycle_average, cycle_spans
-from posture_id.frf.response import check_analysis_options, samples_per_cycle
+from posture_id.frf.response import (
+    check_analysis_options,
+    driven_harmonics,
+    samples_per_cycle,
+)
 from posture_id.trials import PreparedTrial
 
 __all__ = ["LockedOptions", "LockedProjection", "noise_levels", "floored", "cycle_spectrum"]
@@ -114,8 +118,9 @@ class LockedProjection:
 
     Attributes:
         start: first analysed sample. period: P, samples per cycle. cycles: C analysed.
-        drift_order: the drift removed. excited: (P/2,) bool, the harmonics 1..P/2 the
-        stimulus excites. harmonics: (K,) indices k of the compared harmonics (frequency
+        drift_order: the drift removed. excited: (P/2,) bool, the harmonics 1..P/2 where
+        the tilt has power (driven, or a platform's distortion: no noise estimate there).
+        harmonics: (K,) indices k of the compared harmonics, the driven ones (frequency
         k/(P·dt)). frequencies_hz: (K,). noise: (K, M) the noise
         level σ (SD of the real and of the imaginary part) of each harmonic of each of the
         M channels of the recording it was made for (ones when unweighted), in the
@@ -135,28 +140,38 @@ class LockedProjection:
     def for_recording(cls, tilt: np.ndarray, sway: np.ndarray, sample_rate_hz: float,
                       period_s: float, start_s: float = 0.0,
                       options: LockedOptions | None = None,
-                      name: str = "recording") -> LockedProjection:
+                      name: str = "recording", cycles: int | None = None,
+                      driven_hz: tuple[float, ...] | None = None) -> LockedProjection:
         """The projection for one recording.
 
         Args:
             tilt: (S,) rad, the stimulus on the samples. sway: (S, M) the recorded channels.
             sample_rate_hz: the samples' rate. period_s: one stimulus cycle.
             start_s: where the periodic stimulus starts (after a lead-in), s.
+            cycles: the stimulus's whole cycles from ``start_s`` (the platform level
+                again after them), None: every whole cycle to the end.
+            driven_hz: the frequencies the stimulus drives, Hz (None: every harmonic
+                whose tilt amplitude clears ``options.excited_threshold``).
         """
         options = options or LockedOptions()
         p = samples_per_cycle(period_s, sample_rate_hz, name)
         sway = np.asarray(sway, dtype=float)
         first = int(math.ceil(start_s * sample_rate_hz - 1e-9))
-        offset, cycles = cycle_spans(len(sway) - first, p, options.skip_cycles, name)
+        available = len(sway) - first if cycles is None else min(len(sway) - first,
+                                                                 cycles * p)
+        offset, cycles = cycle_spans(available, p, options.skip_cycles, name)
         start, drift = first + offset, options.drift_order if cycles >= 2 else 0
 
         def spectrum(x: np.ndarray) -> np.ndarray:
             return cycle_spectrum(x, start, p, cycles, drift)
 
         u = np.abs(spectrum(np.asarray(tilt, dtype=float)))
-        excited = u > options.excited_threshold * u.max()
         frequencies = np.arange(1, p // 2 + 1) * sample_rate_hz / p
-        keep = excited & (frequencies <= options.max_frequency_hz)
+        # harmonics where the tilt has power are no noise estimate, driven or a
+        # platform's distortion; only the driven ones are compared
+        excited = u > options.excited_threshold * u.max()
+        driven = excited if driven_hz is None else driven_harmonics(frequencies, driven_hz)
+        keep = driven & (frequencies <= options.max_frequency_hz)
         if not keep.any():
             raise PostureIdError(f"{name}: the tilt excites no frequency up to "
                                  f"{options.max_frequency_hz:g} Hz")
@@ -178,9 +193,18 @@ class LockedProjection:
         """The projection for a prepared trial's segment angles (degrees), from where its
         stimulus's periodic part starts; the stimulus must be periodic."""
         rec = trial.recording
-        return cls.for_recording(rec.tilt, np.degrees(rec.theta), rec.sample_rate_hz,
-                                 trial.stimulus.period_s, trial.stimulus.periodic_from_s,
-                                 options, trial.name)
+        return cls.for_stimulus(trial.stimulus, rec.tilt, np.degrees(rec.theta),
+                                rec.sample_rate_hz, options, trial.name)
+
+    @classmethod
+    def for_stimulus(cls, stimulus, tilt: np.ndarray, sway: np.ndarray,
+                     sample_rate_hz: float, options: LockedOptions | None = None,
+                     name: str = "recording") -> LockedProjection:
+        """:meth:`for_recording` for a periodic :class:`~posture_id.simulation.stimulus.
+        TiltProfile`: its period, start, steady cycles and driven frequencies."""
+        return cls.for_recording(tilt, sway, sample_rate_hz, stimulus.period_s,
+                                 stimulus.periodic_from_s, options, name, stimulus.cycles,
+                                 stimulus.frequencies_hz)
 
     @classmethod
     def for_periodic_trial(cls, trial: PreparedTrial, options: LockedOptions | None = None

@@ -32,7 +32,7 @@ from posture_id.frf.bands import FrequencyBands, pseudo_impulse_response
 from posture_id.frf.cycles import cycle_average
 
 __all__ = ["FrfOptions", "FrequencyResponse", "frequency_response_arrays",
-           "check_analysis_options", "samples_per_cycle", "coherence_level",
+           "check_analysis_options", "samples_per_cycle", "driven_harmonics", "coherence_level",
            "SIGNIFICANCE"]
 
 #: The coherence's significance level: pure noise exceeds the level this often.
@@ -45,6 +45,14 @@ def coherence_level(averages: np.ndarray | int, alpha: float = SIGNIFICANCE) -> 
     n = np.asarray(averages, dtype=float)
     with np.errstate(divide="ignore"):
         return np.where(n >= 2, 1.0 - alpha ** (1.0 / np.maximum(n - 1, 1e-12)), 1.0)
+
+
+def driven_harmonics(frequencies_hz: np.ndarray, driven_hz) -> np.ndarray:
+    """(K,) bool: which of the harmonics ``frequencies_hz`` are among ``driven_hz``."""
+    f = np.asarray(frequencies_hz, dtype=float)
+    driven = np.asarray(driven_hz, dtype=float)
+    return np.any(np.abs(f[:, None] - driven[None, :]) <= 1e-6 * np.maximum(driven, 1e-9),
+                  axis=1)
 
 
 def samples_per_cycle(period_s: float, sample_rate_hz: float, name: str) -> int:
@@ -246,9 +254,13 @@ class FrequencyResponse(Result):
 def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate_hz: float,
                               period_s: float, channels: tuple[str, ...],
                               options: FrfOptions | None = None,
-                              name: str = "recording") -> FrequencyResponse:
+                              name: str = "recording",
+                              driven_hz: tuple[float, ...] | None = None) -> FrequencyResponse:
     """FRFs of ``outputs`` (S, M) relative to ``tilt`` (S,), both rad, sampled evenly at
-    ``sample_rate_hz`` from the stimulus's start; ``period_s``: one stimulus cycle."""
+    ``sample_rate_hz`` from the stimulus's start; ``period_s``: one stimulus cycle;
+    ``driven_hz``: the frequencies the stimulus drives, Hz (a recognised sinusoid's: its
+    platform's distortion harmonics are not analysed), None: every harmonic whose tilt
+    amplitude clears ``options.excited_threshold``."""
     options = options or FrfOptions()
     if options.max_frequency_hz > sample_rate_hz / 2:
         raise PostureIdError(f"{name}: max_frequency_hz {options.max_frequency_hz:g} Hz is above "
@@ -267,8 +279,9 @@ def frequency_response_arrays(tilt: np.ndarray, outputs: np.ndarray, sample_rate
     yf = np.fft.rfft(y_cycles.cycles, axis=1)  # (C, K, M)
     freqs = np.fft.rfftfreq(p, 1.0 / sample_rate_hz)
     amplitude = np.abs(uf).mean(axis=0)
-    excited = ((amplitude > options.excited_threshold * amplitude[1:].max()) & (freqs > 0)
-               & (freqs <= options.max_frequency_hz))
+    excited = ((driven_harmonics(freqs, driven_hz) if driven_hz is not None
+                else amplitude > options.excited_threshold * amplitude[1:].max())
+               & (freqs > 0) & (freqs <= options.max_frequency_hz))
     if not excited.any():
         raise PostureIdError(f"{name}: the tilt excites no frequency up to "
                              f"{options.max_frequency_hz:g} Hz")

@@ -8,7 +8,7 @@ piecewise linear; a user profile (array or CSV) is interpolated linearly between
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -59,6 +59,12 @@ class TiltProfile:
         periodic_from_s: s, when the periodic part starts (after a lead-in and the
             platform's lag); 0 for a stimulus that starts at once.
         states: the states of a PRTS's cycle (242 or 80), None for another tilt.
+        cycles: the whole cycles of the periodic part from ``periodic_from_s`` (a
+            periodic tilt between level stretches or after a fade-in), None: every whole
+            cycle until the recording ends.
+        frequencies_hz: the frequencies the stimulus drives (a recognised sinusoid's, not
+            its platform's distortion), None: every harmonic of the period the tilt has
+            power at.
     """
 
     times: np.ndarray
@@ -67,6 +73,8 @@ class TiltProfile:
     period_s: float | None = None
     periodic_from_s: float = 0.0
     states: int | None = None
+    cycles: int | None = None
+    frequencies_hz: tuple[float, ...] | None = None
 
     @property
     def whole_cycles_s(self) -> float | None:
@@ -101,11 +109,10 @@ class TiltProfile:
         times = self.times + offset_s
         end = self.duration
         keep = (times > 1e-12) & (times < end - 1e-12)
-        return TiltProfile(np.concatenate([[0.0], times[keep], [end]]),
-                           np.interp(np.concatenate([[0.0], times[keep], [end]]) - offset_s,
-                                     self.times, self.angles),
-                           f"{self.description}, offset {offset_s:+.3f} s", self.period_s,
-                           self.periodic_from_s, self.states)
+        knots = np.concatenate([[0.0], times[keep], [end]])
+        return replace(self, times=knots,
+                       angles=np.interp(knots - offset_s, self.times, self.angles),
+                       description=f"{self.description}, offset {offset_s:+.3f} s")
 
     def spanning(self, duration_s: float) -> TiltProfile:
         """The same tilt over exactly ``duration_s``: cut there (a recording shorter than
@@ -122,8 +129,7 @@ class TiltProfile:
         else:
             times = np.concatenate([self.times, [duration_s]])
             angles = np.concatenate([self.angles, [self.angles[-1]]])
-        return TiltProfile(times, angles, self.description, self.period_s,
-                           self.periodic_from_s, self.states)
+        return replace(self, times=times, angles=angles)
 
     def on_grid(self, dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
         """Tilt and tilt velocity at t = n·dt, n = 0..n_steps → two (n_steps + 1,) arrays."""

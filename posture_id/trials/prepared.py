@@ -16,6 +16,7 @@ import numpy as np
 
 from posture_id.errors import RecordingError, StimulusError
 from posture_id.recording import Recording
+from posture_id.simulation.periodic import recognise_periodic
 from posture_id.simulation.stimulus import (
     LAB_STATE_RANGE_S,
     PRTS_REGISTERS,
@@ -183,11 +184,18 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
         if stimulus is not None:
             notices.append(f"{name}: the tilt is a {stimulus.description}; the exact profile "
                            "is used (samples miss its corners)")
+        elif (periodic := recognise_periodic(recording.time, recording.tilt)) is not None:
+            stimulus, found = periodic
+            notices.append(f"{name}: the tilt is a {stimulus.description}; the analysis "
+                           "spans the steady cycles (level stretches and any fade left out)")
+            if found.distortion_note() is not None:
+                notices.append(f"{name}: {found.distortion_note()}")
         else:
             stimulus = tilt_from_array(recording.time, recording.tilt, description=name)
-            notices.append(f"{name}: the tilt is not a PRTS at the rate its time column "
-                           "gives; it is interpolated linearly between samples (name the "
-                           "stimulus to use its exact profile)")
+            notices.append(f"{name}: the tilt is neither a PRTS at the rate its time "
+                           "column gives nor a periodic tilt repeated twice or more; it is "
+                           "interpolated linearly between samples (name the stimulus to use "
+                           "its exact profile)")
     original = recording.sample_rate_hz
     resampled = recording if rate_hz is None else recording.resampled(rate_hz)
     if resampled is not recording:

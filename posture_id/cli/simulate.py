@@ -77,6 +77,13 @@ def add_parser(sub) -> None:
                           "markers at the body's joints, platform markers, an analog tilt "
                           "channel)")
     sim.add_argument("--plot", type=Path, help="plot of tilt and sway to write (PNG)")
+    sim.add_argument("--force-plate-out", type=Path, metavar="CSV",
+                     help="also write the trial as a force plate under the feet records it: "
+                          "time_s,tilt_deg,cop_mm,fz_n (the COP from the ankle torque and the "
+                          "support's reaction, forward along the plate from the point under "
+                          "the ankle; the normal force)")
+    sim.add_argument("--cop-noise-mm", type=non_negative_float, default=0.0,
+                     help="white noise on the written COP, mm (SD; default 0)")
     add_c3d_writing_arguments(sim)
     sim.set_defaults(func=run)
 
@@ -134,7 +141,16 @@ def _c3d_options(args: argparse.Namespace, end_s: float):
 
 
 def _write_recording(args: argparse.Namespace, recording, body, c3d) -> None:
-    """``--out``: CSV, or a C3D trial written with ``c3d`` (:func:`_c3d_options`)."""
+    """``--out``: CSV, or a C3D trial written with ``c3d`` (:func:`_c3d_options`); and
+    ``--force-plate-out``: the force plate's columns of the noise-free motion."""
+    if args.force_plate_out is not None:
+        from posture_id.force_plate.writing import write_force_plate_csv
+
+        write_force_plate_csv(args.force_plate_out, body, recording, args.cop_noise_mm,
+                              args.seed)
+        say(f"wrote {args.force_plate_out} (the force plate's COP and normal force)")
+    if args.sensor_noise_deg > 0:  # on the angles as markers see them; the plate's own
+        recording = recording.with_sensor_noise(args.sensor_noise_deg, args.seed)
     if c3d is None:
         recording.to_csv(args.out)
         return
@@ -177,6 +193,10 @@ def run(args: argparse.Namespace) -> int:
     inputs = (args.body, args.params, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_output_file(args.force_plate_out, "--force-plate-out", inputs,
+                      outputs=(args.out, args.plot))
+    if args.cop_noise_mm and args.force_plate_out is None:
+        raise PostureIdError("--cop-noise-mm goes with --force-plate-out")
     body = load_body(args.body or DEFAULT_URDF)
     stimulus = stimulus_from_args(args, default=prts())
     c3d = _c3d_options(args, stimulus.duration)
@@ -188,8 +208,6 @@ def run(args: argparse.Namespace) -> int:
              if args.motor_noise > 0 else None)
     result = simulate(body, params, stimulus, options, motor_noise=motor)
     recording = result.to_recording()
-    if args.sensor_noise_deg > 0:
-        recording = recording.with_sensor_noise(args.sensor_noise_deg, args.seed)
     _write_recording(args, recording, body, c3d)
     say(f"wrote {args.out} ({len(result.time)} samples at {options.sample_rate_hz:g} Hz)")
     if args.plot:
@@ -211,8 +229,6 @@ def _simulate_ic(args: argparse.Namespace, body, stimulus, options, c3d) -> int:
               else default_ic_parameters(IcPlant.of(body).mgh))
     recording = simulate_ic(body, params, stimulus, options, args.motor_noise,
                             args.motor_cutoff_hz, args.seed)
-    if args.sensor_noise_deg > 0:
-        recording = recording.with_sensor_noise(args.sensor_noise_deg, args.seed)
     _write_recording(args, recording, body, c3d)
     say(f"wrote {args.out} ({len(recording.time)} samples at {options.sample_rate_hz:g} Hz; "
         f"{params.summary()})")

@@ -190,7 +190,8 @@ def _sines(frequencies: np.ndarray, amplitudes: np.ndarray, phases: np.ndarray,
     t = np.arange(n + 1) / KNOT_RATE_HZ
     x = (amplitudes[None] * np.sin(2 * np.pi * np.outer(t, frequencies) + phases[None])).sum(1)
     x -= float((amplitudes * np.sin(phases)).sum())
-    return TiltProfile(t, np.radians(x), description, period_s=period, periodic_from_s=0.0)
+    return TiltProfile(t, np.radians(x), description, period_s=period, periodic_from_s=0.0,
+                       cycles=int(round(duration / period)))
 
 
 @dataclass(frozen=True)

@@ -235,6 +235,7 @@ def prts(
         period_s=states * state_s,
         periodic_from_s=delay,
         states=states,
+        cycles=int(cycles),
     )
 
 

@@ -142,7 +142,8 @@ def main() -> None:
              "people-like sway (15–40 % of the body COM sway locked); the COP from the "
              f"motion with {COP_NOISE_MM:g} mm of white noise. Errors of the FRF from "
              "the COP against the FRF of the simulated body COM, at every stimulated "
-             "frequency up to 2 Hz.", "", *band_table(rows), ""]
+             "frequency up to 2 Hz.", "", "<!-- --8<-- [start:table] -->",
+             *band_table(rows), "<!-- --8<-- [end:table] -->", ""]
     for segments in (1, 2, 3):
         lines.append(f"- {segments} segment(s): the median error within 5 % in gain and 3° "
                      f"in phase up to {holds_to(rows, segments):.3g} Hz.")

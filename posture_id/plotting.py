@@ -17,7 +17,7 @@ from posture_id.fileio import atomic_write
 
 __all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit", "plot_locked_sway",
            "plot_coverage", "plot_reliability", "plot_identifiability", "plot_intervals",
-           "plot_score_grid", "plot_marker_angles"]
+           "plot_score_grid", "plot_marker_angles", "plot_condition_frfs"]
 
 
 def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
@@ -569,6 +569,55 @@ def plot_model_frfs(frequencies_hz, recorded, models: dict, coherence, title: st
     return fig
 
 
+def plot_condition_frfs(conditions, trials, curves: dict, title: str = "", path=None,
+                        ax=None):
+    """Several trials of one subject fitted jointly: every trial's recorded locked FRF of
+    the COM sway (gain, phase; points, coloured by its condition, one marker per trial of
+    a condition) with the model's FRF in each condition over them (lines, the same
+    colour): the figure of a joint fit.
+
+    Args:
+        conditions: (C,) the condition labels (colours C0, C1, ... in this order).
+        trials: per trial (condition, frequencies_hz (K,), recorded (K,) complex, model
+            (K,) complex at those frequencies).
+        curves: condition → ((F,) Hz, (F,) complex): the model's FRF in that condition.
+    """
+    fig, axes = _axes(ax, 2, 1, (8, 6.5), sharex=True)
+    gain, phase = axes[0, 0], axes[1, 0]
+    colour = {c: f"C{k}" for k, c in enumerate(conditions)}
+    unwrapped = {}
+    for condition in conditions:
+        f, h = curves[condition]
+        unwrapped[condition] = (np.asarray(f), np.degrees(np.unwrap(np.angle(h))))
+        gain.plot(f, np.abs(h), color=colour[condition], lw=1.5, label=f"model, {condition}")
+        phase.plot(*unwrapped[condition], color=colour[condition], lw=1.5)
+    seen: dict = {}
+    markers = "osD^v<>ph*"
+    for condition, f, recorded, _ in trials:
+        k = seen[condition] = seen.get(condition, -1) + 1
+        f = np.asarray(f)
+        degrees = np.degrees(np.angle(recorded))
+        near = np.interp(f, *unwrapped[condition])  # the curve's branch of the phase
+        degrees = degrees + 360.0 * np.round((near - degrees) / 360.0)
+        style = {"ls": "none", "marker": markers[k % len(markers)], "ms": 5,
+                 "mfc": colour[condition], "mec": "k", "mew": 0.5}
+        gain.plot(f, np.abs(recorded), **style,
+                  label=f"recorded, {condition}" if k == 0 else None)
+        phase.plot(f, degrees, **style)
+    gain.set_yscale("log")
+    gain.set_ylabel("gain (deg/deg)")
+    phase.set_ylabel("phase (°)")
+    phase.set_xscale("log")
+    phase.set_xlabel("frequency (Hz)")
+    for a in (gain, phase):
+        a.grid(alpha=0.3, which="both")
+    gain.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
 def plot_model_comparison(frequencies_hz, stimulated, recorded, models: dict, noise,
                           title: str = "", path=None, ax=None):
     """Two models against one recording's locked sway at every compared harmonic: the
@@ -759,6 +808,45 @@ def plot_marker_angles(angles, path=None, ax=None):
         a.grid(alpha=0.3)
     fig.suptitle(f"{angles.trial.path.name}: markers (shaded: gaps filled) and the angles "
                  "derived from them")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_paired_difference(result, path=None, ax=None):
+    """Two conditions within the same subjects (:class:`~posture_id.norms.paired.
+    PairedComparison`): per channel (columns), the mean gain ratio B/A (%, top) and the
+    mean phase difference B − A (degrees, bottom) at each frequency (Hz, log axis) with
+    their intervals; the frequencies whose p-value is below 5 % in red, filled."""
+    m = len(result.channels)
+    fig, axes = _axes(ax, 2, m, (6 * m, 6), sharex="col")
+    f = np.asarray(result.frequencies_hz, dtype=float)
+    a, b = result.names
+    for c, name in enumerate(result.channels):
+        differ = result.p_values[:, c] < 0.05
+        rows = ((result.gain_ratio_percent, result.gain_ratio_low, result.gain_ratio_high,
+                 100.0, f"gain {b}/{a} (%)"),
+                (result.phase_difference_deg, result.phase_low, result.phase_high, 0.0,
+                 f"phase {b} − {a} (°)"))
+        for r, (mean, low, high, null, label) in enumerate(rows):
+            cell = axes[r, c]
+            cell.axhline(null, color="k", lw=0.6)
+            for mask, colour, face, what in ((~differ, "C0", "white", "p ≥ 0.05"),
+                                             (differ, "C3", "C3", "p < 0.05 (uncorrected)")):
+                if not mask.any():
+                    continue
+                centre = mean[mask, c]
+                cell.errorbar(f[mask], centre, yerr=[centre - low[mask, c],
+                                                     high[mask, c] - centre],
+                              fmt="o", color=colour, mfc=face, capsize=3, label=what)
+            cell.set_xscale("log")
+            cell.set_ylabel(label)
+            cell.grid(alpha=0.3)
+        axes[0, c].set_title(f"{name}: mean and {100 * result.level:.0f} % interval")
+        axes[0, c].legend(fontsize=7)
+        axes[1, c].set_xlabel("frequency (Hz)")
+    fig.suptitle(f"{a} against {b}, {result.size} subjects (paired): whole FRF "
+                 f"p = {result.p_value:.4f}")
     fig.tight_layout()
     _save(fig, path)
     return fig

@@ -82,14 +82,25 @@ def add_parser(sub) -> None:
     t.set_defaults(func=run_test)
     c = n.add_parser("compare", help="two groups of FRFs (the difference of their mean PIRs "
                                      "and a permutation test), or of identify results "
-                                     "(parameter by parameter)")
+                                     "(parameter by parameter); --paired: two conditions "
+                                     "of the same subjects")
     c.add_argument("--group", type=Path, nargs="+", action="append", required=True,
-                   metavar="FILE", help="one group's files (give --group twice)")
+                   metavar="FILE", help="one group's files (give --group twice); with "
+                                        "--paired the i-th file (or table row) of each "
+                                        "group is the same subject's")
     c.add_argument("--names", nargs=2, default=["A", "B"], help="the groups' names")
+    c.add_argument("--paired", action="store_true",
+                   help="the groups are two conditions of the same subjects, in the same "
+                        "order: a sign-flip permutation test of the within-subject "
+                        "differences, per frequency and for the whole FRF (or per "
+                        "parameter), with t-based intervals of the mean gain ratio and "
+                        "phase difference (--bootstrap unused; docs/norms.md)")
     c.add_argument("--permutations", type=positive_int, default=2000,
                    help="permutations (default %(default)d)")
     c.add_argument("--out", type=Path, required=True, help="comparison JSON")
-    c.add_argument("--plot", type=Path, help="the difference with its band (PNG)")
+    c.add_argument("--plot", type=Path, help="the difference with its band (PNG); with "
+                                             "--paired the gain ratio and phase difference "
+                                             "per frequency")
     _sources(c)
     c.set_defaults(func=run_compare)
 
@@ -274,8 +285,9 @@ def run_compare(args: argparse.Namespace) -> int:
     first = {p.resolve() for p in args.group[0]}
     shared = [p for p in args.group[1] if p.resolve() in first]
     if shared:
-        raise PostureIdError(f"{shared[0]}: in both groups (--group ... --group ...); a "
-                             "member belongs to one group")
+        raise PostureIdError(f"{shared[0]}: in both groups (--group ... --group ...); "
+                             + ("with --paired a subject's two conditions are two files"
+                                if args.paired else "a member belongs to one group"))
     inputs = tuple(p for g in args.group for p in g)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
@@ -287,16 +299,34 @@ def run_compare(args: argparse.Namespace) -> int:
     channels = tuple(args.channel) if args.channel else None
     a, _ = read_frfs(args.group[0], channels, args.variable, args.frequencies)
     b, _ = read_frfs(args.group[1], channels, args.variable, args.frequencies)
-    _no_member_twice(a, b, args.group)
-    result = compare_groups(a, b, tuple(args.names), args.permutations, args.bootstrap,
-                            args.level, args.rate_hz, args.seed)
+    if args.paired:
+        from posture_id.norms.paired import compare_paired
+
+        _same_subjects(len(a), len(b), args.names)
+        _no_member_twice(a, b, args.group, paired=True)
+        result = compare_paired(a, b, tuple(args.names), args.permutations, args.level,
+                                args.seed)
+    else:
+        _no_member_twice(a, b, args.group)
+        result = compare_groups(a, b, tuple(args.names), args.permutations, args.bootstrap,
+                                args.level, args.rate_hz, args.seed)
     write_result(result, args.out, args.plot)
     return 0
 
 
-def _no_member_twice(a, b, groups: list[list[Path]]) -> None:
+def _same_subjects(count_a: int, count_b: int, names: list[str]) -> None:
+    """--paired: refuse groups of other sizes (each subject is in both, in order)."""
+    if count_a != count_b:
+        raise PostureIdError(f"--paired: {names[0]} has {count_a} subjects, {names[1]} has "
+                             f"{count_b}; the i-th of each group is one subject, in both "
+                             "groups")
+
+
+def _no_member_twice(a, b, groups: list[list[Path]], paired: bool = False) -> None:
     """Refuse a member of the second group whose FRF is one of the first's (a copy under
-    another name: the groups would share members, and the test assumes they do not)."""
+    another name: the groups would share members, and the test assumes they do not). With
+    ``paired``, a subject's two conditions identical (a condition's file copied: its
+    difference would be exactly zero, as no two recordings give) is named as such."""
     import numpy as np
 
     def label(frfs, k: int, files: list[Path]) -> str:
@@ -306,10 +336,18 @@ def _no_member_twice(a, b, groups: list[list[Path]]) -> None:
         return  # compare_groups says how they differ
     for j, hb in enumerate(b.response):
         for i, ha in enumerate(a.response):
-            if np.array_equal(ha, hb):
+            if not np.array_equal(ha, hb):
+                continue
+            if paired and i == j:
                 raise PostureIdError(
-                    f"{label(b, j, groups[1])}: the same FRF as {label(a, i, groups[0])} "
-                    "of the first group (a copy?); a member belongs to one group")
+                    f"{label(b, j, groups[1])}: the same FRF as its pair "
+                    f"{label(a, i, groups[0])} (a copied file?); a subject's two conditions "
+                    "are two recordings")
+            raise PostureIdError(
+                f"{label(b, j, groups[1])}: the same FRF as {label(a, i, groups[0])} "
+                "of the first group (a copy?); "
+                + ("a recording belongs to one subject and condition" if paired
+                   else "a member belongs to one group"))
 
 
 def _is_identified(path: Path) -> bool:
@@ -326,11 +364,39 @@ def _is_identified(path: Path) -> bool:
 
 
 def _compare_identified(args: argparse.Namespace) -> int:
-    """Two groups of identify results, parameter by parameter."""
+    """Two groups of identify results, parameter by parameter (``--paired``: two conditions
+    of the same subjects)."""
     from posture_id.norms.parameters import compare_parameters, read_identified
 
-    result = compare_parameters(read_identified(args.group[0]), read_identified(args.group[1]),
-                                tuple(args.names), args.permutations, args.bootstrap,
-                                args.level, args.seed)
+    a, b = read_identified(args.group[0]), read_identified(args.group[1])
+    if args.paired:
+        from posture_id.norms.paired import compare_paired_parameters
+
+        _same_subjects(len(a.names), len(b.names), args.names)
+        _no_result_twice(a, b, args.group)
+        result = compare_paired_parameters(a, b, tuple(args.names), args.permutations,
+                                           args.level, args.seed)
+    else:
+        result = compare_parameters(a, b, tuple(args.names), args.permutations,
+                                    args.bootstrap, args.level, args.seed)
     write_result(result, args.out, args.plot)
     return 0
+
+
+def _no_result_twice(a, b, groups: list[list[Path]]) -> None:
+    """--paired on identify results: refuse a result of the second group whose every
+    parameter is one of the first's (a copied file; for its own pair the difference would
+    be exactly zero)."""
+    import numpy as np
+
+    if set(a.values) != set(b.values):
+        return  # compare_paired_parameters says how they differ
+    keys = list(a.values)
+    va = np.stack([a.values[k] for k in keys], axis=1)
+    vb = np.stack([b.values[k] for k in keys], axis=1)
+    for j, row in enumerate(vb):
+        for i in np.flatnonzero(np.all(va == row, axis=1)):
+            what = "its pair" if i == j else "the first group's"
+            raise PostureIdError(f"{groups[1][j]}: the same identified parameters as {what} "
+                                 f"{groups[0][i]} (a copied file?); a subject's two "
+                                 "conditions are two recordings")

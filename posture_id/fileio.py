@@ -1,13 +1,11 @@
 """Files: atomic writes (a file is either absent or complete, never half written), SHA-256,
-and the one reader of numeric CSV files."""
+JSON, and the one reader of numeric text tables (:mod:`posture_id.text_table`)."""
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import enum
 import hashlib
-import io
 import json
 import math
 import os
@@ -19,8 +17,10 @@ from typing import Any
 import numpy as np
 
 from posture_id.errors import PostureIdError
+from posture_id.text_table import TextTable, read_text_table
 
 __all__ = ["atomic_write", "atomic_write_text", "file_sha256", "read_numeric_csv",
+           "read_text_table", "TextTable",
            "jsonable", "json_text", "Result", "JsonFile", "read_json",
            "check_time_column", "PLAUSIBLE_INTERVAL_S"]
 
@@ -63,80 +63,66 @@ def file_sha256(path: Path) -> str:
 
 def read_numeric_csv(path: str | Path, error: type[Exception], what: str
                      ) -> tuple[list[str], np.ndarray]:
-    """Read a CSV file of numbers with one header line: the one reader for every numeric
-    file posture_id takes (tilt profiles, recordings).
+    """Read a numeric text table: the one reader for every numeric file posture_id takes
+    (tilt profiles, recordings); :func:`posture_id.text_table.read_text_table` with the
+    header and values alone.
 
-    Rules: UTF-8 (a byte-order mark is ignored); blank lines are skipped; every row has as
-    many fields as the header; every cell is a finite number; at least one data row.
+    Rules: UTF-8 (a byte-order mark is ignored), else Windows Latin-1; comma, tab or ``;``
+    separated, decimal commas with the latter two; blank and comment (``#``, ``%``) lines
+    skipped, title lines above the header too; every row has as many fields as the header
+    (a trailing delimiter left out); every cell is a finite number; at least one data row.
 
     Args:
         path: the file. error: the exception class to raise (a ``PostureIdError``).
         what: what the file should be, for messages ("tilt file", "recording").
     Returns:
-        (header names stripped of spaces, values (rows, columns) float64).
+        (header names stripped of spaces around them, values (rows, columns) float64).
     Raises:
         error: one line naming the file, the line and column, and the problem.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise error(f"{path}: no such {what}") from None
-    except IsADirectoryError:
-        raise error(f"{path}: is a folder, expected a {what} (CSV)") from None
-    except UnicodeDecodeError as exc:
-        raise error(f"{path}: not UTF-8 text (byte {exc.start}); save the {what} as UTF-8 "
-                    "CSV") from None
-    except OSError as exc:
-        raise error(f"{path}: cannot be read ({exc.strerror})") from None
-    numbered = [(n, row) for n, row in enumerate(csv.reader(io.StringIO(text)), start=1) if row]
-    if not numbered:
-        raise error(f"{path}: empty file, expected a {what}")
-    header = [h.strip() for h in numbered[0][1]]
-    values = np.empty((len(numbered) - 1, len(header)))
-    for k, (line, row) in enumerate(numbered[1:]):
-        if len(row) != len(header):
-            raise error(f"{path}: line {line}: {len(row)} fields, the header has {len(header)}")
-        for c, cell in enumerate(row):
-            try:
-                x = float(cell)
-            except ValueError:
-                raise error(
-                    f"{path}: line {line}, column '{header[c]}': not a number ({cell!r})"
-                ) from None
-            if not math.isfinite(x):
-                raise error(
-                    f"{path}: line {line}, column '{header[c]}': {cell.strip()} is not a finite "
-                    "number"
-                )
-            values[k, c] = x
-    if len(values) == 0:
-        raise error(f"{path}: a header and no data rows")
-    return header, values
+    table = read_text_table(path, error, what)
+    return list(table.header), table.values
 
 
 #: Sample intervals a recording or tilt file can plausibly have, s (1 Hz to 10 kHz).
 PLAUSIBLE_INTERVAL_S = (1e-4, 1.0)
 
 
-def check_time_column(path: Path, time_s: np.ndarray, error: type[Exception]) -> None:
-    """Refuse a time column that does not increase or is not in seconds (by its median
-    sample interval: milliseconds give intervals of 10 or 20 "seconds")."""
+def check_time_column(path: Path, time_s: np.ndarray, error: type[Exception],
+                      column: str = "time_s", unit: str = "s", flag: str | None = None,
+                      lines: np.ndarray | None = None) -> None:
+    """Refuse a time column that does not increase or whose unit is not the one it was read
+    in (by its median sample interval: milliseconds read as seconds give intervals of 10 or
+    20 "seconds").
+
+    Args:
+        time_s: (S,) the column in seconds (converted from ``unit``).
+        column: its name in the file. unit: ``"s"`` or ``"ms"``, the unit it was read in.
+        flag: the flag that gives its unit (``"--time-units"``), named in the advice; None
+            where there is none (the standard ``time_s`` column, or a unit the header states).
+        lines: (S,) the file's line of each sample (1-based), to name; default: the row
+            after a one-line header.
+    """
     steps = np.diff(time_s)
     if len(steps) == 0:
         raise error(f"{path}: fewer than two samples")
     bad = np.flatnonzero(steps <= 0)
     if bad.size:
-        raise error(f"{path}: row {bad[0] + 2}: time_s does not increase "
+        where = f"row {bad[0] + 2}" if lines is None else f"line {lines[bad[0] + 1]}"
+        raise error(f"{path}: {where}: {column} does not increase "
                     f"({time_s[bad[0]]:g} then {time_s[bad[0] + 1]:g})")
     median = float(np.median(steps))
     low, high = PLAUSIBLE_INTERVAL_S
-    if median > high:
-        raise error(f"{path}: column 'time_s': the median sample interval is {median:g} s "
-                    f"({1 / median:.3g} Hz); is the time in milliseconds? time_s is in seconds")
-    if median < low:
-        raise error(f"{path}: column 'time_s': the median sample interval is {median:g} s "
-                    f"({1 / median:.3g} Hz); time_s is in seconds")
+    said = (f"{path}: column '{column}': the median sample interval is {median:g} s "
+            f"({1 / median:.3g} Hz)")
+    if median > high and unit == "s":
+        raise error(f"{said}; is the time in milliseconds? "
+                    + (f"give {flag} ms" if flag else f"{column} is in seconds"))
+    if median < low and unit == "ms":
+        raise error(f"{said} read as milliseconds; is the time in seconds? "
+                    + (f"give {flag} s" if flag else "its header says ms"))
+    if median > high or median < low:
+        raise error(f"{said}; {column} is in {'seconds' if unit == 's' else 'milliseconds'}")
 
 
 def jsonable(value: Any) -> Any:

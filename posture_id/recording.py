@@ -19,8 +19,9 @@ import numpy as np
 
 from posture_id.errors import RecordingError
 from posture_id.fileio import atomic_write_text, check_time_column, read_numeric_csv
+from posture_id.text_table import TextTable, read_text_table, split_unit
 
-__all__ = ["Recording", "RecordingColumns", "AngleUnit", "RADIANS_SUSPECT_DEG"]
+__all__ = ["Recording", "RecordingColumns", "AngleUnit", "TimeUnit", "RADIANS_SUSPECT_DEG"]
 
 #: A recording whose every angle (tilt and segments, "degrees") stays below this is taken
 #: to be in radians by mistake: 0.1° of sway and tilt at most is below any stimulus used.
@@ -42,18 +43,33 @@ class AngleUnit(enum.Enum):
     RADIANS = "rad"
 
 
+class TimeUnit(enum.Enum):
+    """The unit of a file's time column."""
+
+    SECONDS = "s"
+    MILLISECONDS = "ms"
+
+
 @dataclass(frozen=True)
 class RecordingColumns:
-    """Which columns of a lab's CSV file hold what, and in which units: the file read as it
-    is, whatever its header says.
+    """Which columns of a lab's file hold what, and in which units: the file read as it
+    is, whatever its header says (:func:`posture_id.text_table.read_text_table`: comma,
+    tab or ``;`` separated, decimal commas, title lines, units in the header).
+
+    A column is named by its whole header name (``"Time [ms]"``) or by its name without
+    the unit (``"Time"``). A unit the header states in brackets (``[ms]``, ``[deg]``,
+    ``[°]``, ``[rad]``) is the column's unit; a unit given here that contradicts it is
+    refused.
 
     Attributes:
-        time: the time column (seconds), or None: samples at ``sample_rate_hz``.
+        time: the time column, or None: samples at ``sample_rate_hz``.
         tilt: the platform-tilt column, or None: the file has none (the tilt is taken from
             the named stimulus).
         angles: the angle columns, support upward, one per body segment; their segment
             names are the body's (``Recording.from_csv``'s ``segments``).
-        unit: of the tilt and angle columns.
+        unit: of the tilt and angle columns whose header states none; None: degrees.
+            A column's header's unit is its own.
+        time_unit: of the time column; None: the header's, else seconds.
         sample_rate_hz: the true sampling rate: overrides a wrong time column (and is
             needed without one).
     """
@@ -61,8 +77,9 @@ class RecordingColumns:
     time: str | None = "time_s"
     tilt: str | None = "tilt_deg"
     angles: tuple[str, ...] = ()
-    unit: AngleUnit = AngleUnit.DEGREES
+    unit: AngleUnit | None = None
     sample_rate_hz: float | None = None
+    time_unit: TimeUnit | None = None
 
     def __post_init__(self) -> None:
         if not self.angles:
@@ -73,13 +90,18 @@ class RecordingColumns:
             raise RecordingError(f"column {', '.join(repr(c) for c in twice)} is named more "
                                  "than once (time, tilt and angle columns must each be their "
                                  "own): one segment's sway would be read as another's")
-        if not isinstance(self.unit, AngleUnit):
-            raise RecordingError(f"unit must be an AngleUnit, got {self.unit!r}")
+        if self.unit is not None and not isinstance(self.unit, AngleUnit):
+            raise RecordingError(f"unit must be an AngleUnit or None, got {self.unit!r}")
+        if self.time_unit is not None and not isinstance(self.time_unit, TimeUnit):
+            raise RecordingError(f"time_unit must be a TimeUnit or None, got "
+                                 f"{self.time_unit!r}")
         rate = self.sample_rate_hz
         if rate is not None and not (math.isfinite(rate) and rate > 0):
             raise RecordingError(f"sample rate must be a finite number > 0 Hz, got {rate}")
         if self.time is None and rate is None:
             raise RecordingError("without a time column, give the sample rate")
+        if self.time is None and self.time_unit is not None:
+            raise RecordingError("a time unit without a time column: name the column")
 
 
 @dataclass(frozen=True)
@@ -198,71 +220,62 @@ class Recording:
              columns: RecordingColumns | None = None) -> Recording:
         """A recording file with the standard header (:meth:`from_csv`), or a lab's file
         read by its ``columns`` (:meth:`from_lab_csv`; without ``segments`` the angle
-        columns name the segments, ``_deg`` left out)."""
+        columns name the segments, a unit and ``_deg`` left out)."""
         if columns is None:
             return cls.from_csv(path, segments, tilt_of)
         names = tuple(segments) if segments is not None else tuple(
-            c.removesuffix("_deg") for c in columns.angles)
+            split_unit(c)[0].removesuffix("_deg") for c in columns.angles)
         return cls.from_lab_csv(path, columns, names, tilt_of)
 
     @classmethod
     def from_lab_csv(cls, path: str | Path, columns: RecordingColumns,
                      segments: tuple[str, ...],
                      tilt_of: Callable[[np.ndarray], np.ndarray] | None = None) -> Recording:
-        """Read a lab's file as it is: the columns ``columns`` names, in its units, with
+        """Read a lab's file as it is: the columns ``columns`` names, in its units (those
+        its header states, else ``columns``'s; milliseconds converted to seconds), with
         the angle columns taken for the body's ``segments`` (in order).
 
         Raises:
-            RecordingError: naming the file, the missing column or the problem.
+            RecordingError: naming the file, the missing column or the problem (a unit
+                given that contradicts the header's, a unit that is not an angle's or a
+                time's, a time column in the wrong unit, angles that look like the other
+                unit).
         """
         path = Path(path)
-        header, values = read_numeric_csv(path, RecordingError, "recording")
+        table = read_text_table(path, RecordingError, "recording")
         wanted = [c for c in (columns.time, columns.tilt, *columns.angles) if c is not None]
-        missing = [c for c in wanted if c not in header]
-        if missing:
-            raise RecordingError(f"{path}: no column {', '.join(repr(c) for c in missing)} "
-                                 f"(the header is {','.join(header)})")
+        table.require(wanted)
         if len(columns.angles) != len(segments):
             raise RecordingError(
                 f"{path}: {len(columns.angles)} angle column(s) "
                 f"({','.join(columns.angles)}) for a body of {len(segments)} segment(s) "
                 f"({','.join(segments)}): give one per segment, support upward")
-        column = {name: values[:, header.index(name)] for name in wanted}
+        column = {name: table.column(name) for name in wanted}
         if columns.sample_rate_hz is not None:
-            time = np.arange(len(values)) / columns.sample_rate_hz
+            time = np.arange(table.n_rows) / columns.sample_rate_hz
         else:
-            check_time_column(path, column[columns.time], RecordingError)
-            time = column[columns.time] - column[columns.time][0]
-        to_rad = np.radians if columns.unit is AngleUnit.DEGREES else np.asarray
-        theta = np.column_stack([to_rad(column[c]) for c in columns.angles])
+            unit, stated = _time_unit(table, columns)
+            seconds = column[columns.time] / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
+            check_time_column(path, seconds, RecordingError, column=columns.time,
+                              unit=unit.value, flag=None if stated else "--time-units",
+                              lines=table.row_lines)
+            time = seconds - seconds[0]
+        units = _angle_units(table, columns)
+        angle_names = [*columns.angles, *([columns.tilt] if columns.tilt is not None else [])]
+
+        def to_rad(name: str) -> np.ndarray:
+            values = column[name]
+            return np.radians(values) if units[name][0] is AngleUnit.DEGREES else values
+
+        theta = np.column_stack([to_rad(c) for c in columns.angles])
         if columns.tilt is not None:
-            tilt = to_rad(column[columns.tilt])
+            tilt = to_rad(columns.tilt)
         elif tilt_of is not None:
             tilt = tilt_of(time)
         else:
             raise RecordingError(f"{path}: no tilt column named; name the stimulus the "
                                  "recording was made with (the PRTS flags, or --tilt FILE)")
-        largest = float(np.degrees(np.abs(theta).max()))
-        if columns.unit is AngleUnit.DEGREES and 0 < largest < RADIANS_SUSPECT_DEG:
-            raise RecordingError(
-                f"{path}: every angle is below {RADIANS_SUSPECT_DEG}° (largest |value| "
-                f"{largest:.3g}); the columns look like radians: give their unit (--units rad)")
-        if columns.unit is AngleUnit.RADIANS:
-            tilt_range = (float(np.degrees(np.ptp(tilt))) if columns.tilt is not None
-                          else 0.0)
-            if tilt_range > TILT_SUSPECT_DEG:
-                raise RecordingError(
-                    f"{path}: column {columns.tilt!r} spans {np.ptp(column[columns.tilt]):.3g}, "
-                    f"which in radians is {tilt_range:.0f}° of platform tilt, more than any "
-                    "posture platform runs; the columns look like degrees: give their unit "
-                    "(--units deg, the default)")
-            if largest > DEGREES_SUSPECT_DEG:
-                worst = max(columns.angles, key=lambda c: float(np.abs(column[c]).max()))
-                raise RecordingError(
-                    f"{path}: column {worst!r} reaches {np.abs(column[worst]).max():.3g}, "
-                    f"which in radians is {largest:.0f}°: no standing body sways so far; "
-                    "the columns look like degrees: give their unit (--units deg, the "
-                    "default)")
+        _check_angle_units(path, column, units, angle_names, columns)
         return cls(time, tilt, theta, tuple(segments), str(path),
                    tilt_recorded=columns.tilt is not None)
 
@@ -327,3 +340,91 @@ def _check_segment_names(names, segments, name: str) -> None:
         raise RecordingError(f"{name}: segment columns {','.join(names)} do not match the "
                              f"body's segments {','.join(segments)}; give the body the "
                              "recording was made with (--body URDF)")
+
+
+def _time_unit(table: TextTable, columns: RecordingColumns) -> tuple[TimeUnit, bool]:
+    """The time column's unit (its header's, else ``columns.time_unit``, else seconds) and
+    whether the header states it.
+
+    Raises:
+        RecordingError: a header unit that is not a time's, or one the columns contradict.
+    """
+    name = columns.time
+    stated = table.unit_of(name)
+    given = columns.time_unit
+    if stated is None:
+        return given or TimeUnit.SECONDS, False
+    if stated not in {u.value for u in TimeUnit}:
+        raise RecordingError(f"{table.path}: column {table.header[table.index(name)]!r} is in "
+                             f"{stated} by its header; the time column must be in s or ms")
+    if given is not None and given.value != stated:
+        raise RecordingError(
+            f"{table.path}: column {table.header[table.index(name)]!r} is in {stated} by its "
+            f"header, but the time unit given is {given.value} (--time-units "
+            f"{given.value}): leave the unit out or correct the header")
+    return TimeUnit(stated), True
+
+
+def _angle_units(table: TextTable, columns: RecordingColumns
+                 ) -> dict[str, tuple[AngleUnit, str]]:
+    """Each tilt and angle column's unit and where it comes from: ``"header"`` (its
+    header states it), ``"given"`` (``columns.unit``) or ``"default"`` (degrees).
+
+    Raises:
+        RecordingError: a header unit that is not an angle's, or one ``columns.unit``
+            contradicts.
+    """
+    names = [c for c in (columns.tilt, *columns.angles) if c is not None]
+    angle_units = {u.value for u in AngleUnit}
+    stated = {}
+    for name in names:
+        unit = table.unit_of(name)
+        if unit is None:
+            continue
+        whole = table.header[table.index(name)]
+        if unit not in angle_units:
+            raise RecordingError(f"{table.path}: column {whole!r} is in {unit} by its header; "
+                                 "the tilt and angle columns must be angles (deg or rad)")
+        if columns.unit is not None and columns.unit.value != unit:
+            raise RecordingError(
+                f"{table.path}: column {whole!r} is in {unit} by its header, but the angle "
+                f"unit given is {columns.unit.value} (--units {columns.unit.value}): leave "
+                "the unit out or correct the header")
+        stated[name] = AngleUnit(unit)
+    return {name: (stated[name], "header") if name in stated
+            else (columns.unit, "given") if columns.unit is not None
+            else (AngleUnit.DEGREES, "default") for name in names}
+
+
+def _check_angle_units(path: Path, column: dict[str, np.ndarray],
+                       units: dict[str, tuple[AngleUnit, str]], names: list[str],
+                       columns: RecordingColumns) -> None:
+    """Refuse angle columns whose values look like the other unit than the one they are
+    read in, when no header states it: all below 0.1° as degrees; a tilt spanning more
+    than 20° or a segment beyond 30° as radians."""
+    assumed = [n for n in names if units[n][1] != "header"]
+    segments = [n for n in columns.angles if n in assumed]
+    if segments and all(units[n][0] is AngleUnit.DEGREES for n in segments):
+        largest = max(float(np.abs(column[n]).max()) for n in segments)
+        if len(segments) == len(columns.angles) and 0 < largest < RADIANS_SUSPECT_DEG:
+            raise RecordingError(
+                f"{path}: every angle is below {RADIANS_SUSPECT_DEG}° (largest |value| "
+                f"{largest:.3g}); the columns look like radians: give their unit (--units "
+                "rad)")
+    tilt = columns.tilt
+    if tilt in assumed and units[tilt][0] is AngleUnit.RADIANS:
+        tilt_range = float(np.degrees(np.ptp(column[tilt])))
+        if tilt_range > TILT_SUSPECT_DEG:
+            raise RecordingError(
+                f"{path}: column {tilt!r} spans {np.ptp(column[tilt]):.3g}, which in radians "
+                f"is {tilt_range:.0f}° of platform tilt, more than any posture platform runs; "
+                "the columns look like degrees: give their unit (--units deg)")
+    in_radians = [n for n in segments if units[n][0] is AngleUnit.RADIANS]
+    if in_radians:
+        worst = max(in_radians, key=lambda c: float(np.abs(column[c]).max()))
+        largest = float(np.degrees(np.abs(column[worst]).max()))
+        if largest > DEGREES_SUSPECT_DEG:
+            raise RecordingError(
+                f"{path}: column {worst!r} reaches {np.abs(column[worst]).max():.3g}, which "
+                f"in radians is {largest:.0f}°: no standing body sways so far; the columns "
+                "look like degrees: give their unit (--units deg)")

@@ -274,7 +274,8 @@ def test_bad_recording_for_identify(tmp_path, capsys, recording_lines, case):
     (lambda d: d / "missing.csv", "no such recording"),
     (lambda d: (d / "r.csv").mkdir() or d / "r.csv", "is a folder"),
     (lambda d: _written(d / "r.csv", "time_s,tilt_deg,shank_deg\n0,\xb0,1\n".encode(
-        "cp1252")), "not UTF-8"),
+        "cp1252")), "line 2, column 'tilt_deg': not a number ('\xb0')"),  # read as cp1252
+    (lambda d: _written(d / "r.csv", b"time_s,tilt_deg\n0,\x00\n"), "binary data"),
 ])
 def test_recording_file_itself(tmp_path, capsys, setup, problem):
     path = setup(tmp_path)
@@ -321,7 +322,8 @@ def test_bad_tilt_file(tmp_path, capsys, case):
     (lambda d: d / "missing.csv", "no such tilt file"),
     (lambda d: (d / "t.csv").mkdir() or d / "t.csv", "is a folder"),
     (lambda d: _written(d / "t.csv", "time_s,tilt_deg\n0,\xb0\n".encode("cp1252")),
-     "not UTF-8"),
+     "line 2, column 'tilt_deg': not a number ('\xb0')"),  # read as cp1252
+    (lambda d: _written(d / "t.csv", b"time_s,tilt_deg\n0,\x00\n"), "binary data"),
 ])
 def test_tilt_file_itself(tmp_path, capsys, setup, problem):
     path = setup(tmp_path)

@@ -83,7 +83,7 @@ def mapping_from_args(args: argparse.Namespace) -> MarkerMapping | None:
         ("--angle-columns", getattr(args, "angle_columns", None)),
         ("--time-column", getattr(args, "time_column", "time_s") != "time_s"),
         ("--tilt-column", getattr(args, "tilt_column", "tilt_deg") != "tilt_deg"),
-        ("--units", getattr(args, "units", "deg") != "deg"),
+        ("--units", getattr(args, "units", None) is not None),
         ("--sample-rate-hz", getattr(args, "sample_rate_hz", None) is not None)) if on]
     if columns:
         raise PostureIdError(f"{', '.join(columns)} read a CSV file's columns, and the "

@@ -16,7 +16,7 @@ from posture_id.cli.arguments import (
 from posture_id.cli.markers import add_marker_arguments, mapping_from_args, write_marker_plot
 from posture_id.errors import PostureIdError
 from posture_id.motion_capture.mapping import MarkerMapping
-from posture_id.recording import AngleUnit, Recording, RecordingColumns
+from posture_id.recording import AngleUnit, Recording, RecordingColumns, TimeUnit
 from posture_id.simulation.protocols import Protocol, read_protocol
 from posture_id.simulation.stimulus import (
     PRTS_REGISTERS,
@@ -117,21 +117,33 @@ def protocol_profile(protocol: Protocol, part: int | None, where) -> TiltProfile
     return recordings[(part or 1) - 1].profile()
 
 
+def _units_given(args: argparse.Namespace) -> str | None:
+    """``--units`` as given, None when it was not (the header's unit, else deg)."""
+    units = getattr(args, "units", None)
+    return None if units is None else str(units)
+
+
 def add_column_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags that read a lab's file as it is: which column is what, and in which unit."""
     group = parser.add_argument_group(
-        "a lab's columns", "read the file as it is (default: time_s,tilt_deg,<segment>_deg)")
+        "a lab's columns", "read the file as it is: comma, tab or ';' separated, decimal "
+        "commas, title lines, units in the header such as 'Time [ms]' (default: "
+        "time_s,tilt_deg,<segment>_deg); a column is named by its header name with or "
+        "without its unit")
     group.add_argument("--angle-columns", nargs="+", metavar="COLUMN",
                        help="the sway columns, one per body segment, support upward (a "
                             "body-COM column with a 1-segment body); the other column flags "
                             "apply with it")
     group.add_argument("--time-column", default="time_s",
-                       help="the time column, seconds (default %(default)s)")
+                       help="the time column (default %(default)s)")
+    group.add_argument("--time-units", choices=[u.value for u in TimeUnit],
+                       help="unit of the time column (default: the header's, else s)")
     group.add_argument("--tilt-column", default="tilt_deg",
                        help="the platform-tilt column, or 'none' (the tilt is then the named "
                             "stimulus's; default %(default)s)")
-    group.add_argument("--units", choices=[u.value for u in AngleUnit], default="deg",
-                       help="unit of the tilt and angle columns (default %(default)s)")
+    group.add_argument("--units", choices=[u.value for u in AngleUnit],
+                       help="unit of the tilt and angle columns (default: the header's, "
+                            "else deg)")
     group.add_argument("--sample-rate-hz", type=positive_float,
                        help="the true sampling rate: overrides a wrong time column")
     add_marker_arguments(parser)
@@ -140,14 +152,22 @@ def add_column_arguments(parser: argparse.ArgumentParser) -> None:
 def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
     """How the flags say the file is read: a lab's columns, a C3D's marker mapping, or
     None for the standard header."""
+    units = _units_given(args)
+    time_units = getattr(args, "time_units", None)
     mapping = mapping_from_args(args)
     if mapping is not None:
+        if time_units is not None:
+            raise PostureIdError("--time-units reads a CSV file's time column; a C3D trial "
+                                 "has its own rate")
         return mapping
     if not getattr(args, "angle_columns", None):
-        if getattr(args, "sample_rate_hz", None) is not None or \
-                getattr(args, "units", "deg") != "deg":
-            raise PostureIdError("--sample-rate-hz and --units go with --angle-columns "
-                                 "(name the file's columns)")
+        flags = [flag for flag, on in (
+            ("--sample-rate-hz", getattr(args, "sample_rate_hz", None) is not None),
+            ("--units", units not in (None, AngleUnit.DEGREES.value)),
+            ("--time-units", time_units not in (None, TimeUnit.SECONDS.value))) if on]
+        if flags:
+            raise PostureIdError(f"{' and '.join(flags)} go{'es' if len(flags) == 1 else ''} "
+                                 "with --angle-columns (name the file's columns)")
         if getattr(args, "time_column", "time_s") != "time_s" or \
                 getattr(args, "tilt_column", "tilt_deg") != "tilt_deg":
             raise PostureIdError("--time-column and --tilt-column go with --angle-columns "
@@ -155,7 +175,9 @@ def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
         return None
     tilt = None if args.tilt_column.lower() == "none" else args.tilt_column
     return RecordingColumns(time=args.time_column, tilt=tilt, angles=tuple(args.angle_columns),
-                            unit=AngleUnit(args.units), sample_rate_hz=args.sample_rate_hz)
+                            unit=None if units is None else AngleUnit(units),
+                            time_unit=None if time_units is None else TimeUnit(time_units),
+                            sample_rate_hz=args.sample_rate_hz)
 
 
 def recording_and_stimulus(args: argparse.Namespace, body) -> tuple[Recording,

@@ -32,18 +32,19 @@ def draw_ic_parameters(rng: np.random.Generator, plant: IcPlant) -> IcParameters
 
 
 def ic_recording(body, params: IcParameters, stimulus: TiltProfile,
-                 locked_share: float | None, seed: int, sensor_noise_deg: float = 0.02
-                 ) -> tuple[Recording, float]:
+                 locked_share: float | None, seed: int, sensor_noise_deg: float = 0.02,
+                 options=None) -> tuple[Recording, float]:
     """An IC recording with white sensor noise; people-like when ``locked_share`` is given:
     the motor-noise level (degrees, returned; 0 without) that leaves that share of the body
-    COM sway's variance locked (the model is linear, so the level is exact)."""
-    clean = simulate_ic(body, params, stimulus)
+    COM sway's variance locked (the model is linear, so the level is exact). ``options``:
+    the :class:`~posture_id.simulation.options.SimulationOptions` (its sample rate)."""
+    clean = simulate_ic(body, params, stimulus, options)
     if locked_share is None:
         return clean.with_sensor_noise(sensor_noise_deg, seed), 0.0
-    unit = simulate_ic(body, params, stimulus, motor_sd_deg=0.1, seed=seed)
+    unit = simulate_ic(body, params, stimulus, options, motor_sd_deg=0.1, seed=seed)
     com_clean = body.com_angles(clean.theta)[:, 0]
     noise = body.com_angles(unit.theta)[:, 0] - com_clean
     level = 0.1 * math.sqrt(np.var(com_clean) * (1 - locked_share)
                             / (locked_share * np.var(noise)))
-    noisy = simulate_ic(body, params, stimulus, motor_sd_deg=level, seed=seed)
+    noisy = simulate_ic(body, params, stimulus, options, motor_sd_deg=level, seed=seed)
     return noisy.with_sensor_noise(sensor_noise_deg, seed), level

@@ -30,7 +30,9 @@ demo: $(STAMP)
 # in *.truth.json) with 0.01° white sensor noise; and a lab-like file for the tutorial
 # (docs/tutorials/lab_recording.py): COM only, the lab's columns, a lab's PRTS; and a
 # motion-capture trial of the straight-leg subject (docs/tutorials/c3d_trial.py): C3D,
-# markers with 0.3 mm noise and a gap, platform markers and an analog tilt channel.
+# markers with 0.3 mm noise and a gap, platform markers and an analog tilt channel; and a
+# force-plate trial as a posturography system exports it (docs/tutorials/force_plate_study.py):
+# tab-separated, a title line, ms, the COP in mm, a sinusoid between level stretches.
 EXAMPLES := posture_id/studies/examples
 examples: $(STAMP)
 	$(BIN)/posture-id simulate --params $(EXAMPLES)/tip_subject.truth.json \
@@ -39,6 +41,7 @@ examples: $(STAMP)
 	  --params $(EXAMPLES)/straight_leg_subject.truth.json \
 	  --sensor-noise-deg 0.01 --seed 2 --out $(EXAMPLES)/straight_leg_subject.csv
 	$(BIN)/python -m posture_id.studies.lab_example $(EXAMPLES)
+	$(BIN)/python -m posture_id.studies.force_plate_study $(EXAMPLES)
 	$(BIN)/posture-id simulate --body urdf/winter_1.75m_70kg_2seg.urdf \
 	  --params $(EXAMPLES)/straight_leg_subject.truth.json --motor-noise 0.02 --seed 3 \
 	  --out $(EXAMPLES)/straight_leg_subject.c3d --c3d-forward-axis=-y --frame-rate-hz 50 \

@@ -21,7 +21,8 @@ from posture_id.errors import RecordingError
 from posture_id.fileio import atomic_write_text, check_time_column, read_numeric_csv
 from posture_id.text_table import TextTable, read_text_table, split_unit
 
-__all__ = ["Recording", "RecordingColumns", "AngleUnit", "TimeUnit", "RADIANS_SUSPECT_DEG"]
+__all__ = ["Recording", "RecordingColumns", "lab_columns", "AngleUnit", "TimeUnit",
+           "RADIANS_SUSPECT_DEG"]
 
 #: A recording whose every angle (tilt and segments, "degrees") stays below this is taken
 #: to be in radians by mistake: 0.1° of sway and tilt at most is below any stimulus used.
@@ -66,7 +67,9 @@ class RecordingColumns:
         tilt: the platform-tilt column, or None: the file has none (the tilt is taken from
             the named stimulus).
         angles: the angle columns, support upward, one per body segment; their segment
-            names are the body's (``Recording.from_csv``'s ``segments``).
+            names are the body's (``Recording.from_csv``'s ``segments``); none where the
+            sway comes from other columns (a force plate's COP:
+            :class:`~posture_id.force_plate.reading.ForcePlateColumns`).
         unit: of the tilt and angle columns whose header states none; None: degrees.
             A column's header's unit is its own.
         time_unit: of the time column; None: the header's, else seconds.
@@ -82,8 +85,6 @@ class RecordingColumns:
     time_unit: TimeUnit | None = None
 
     def __post_init__(self) -> None:
-        if not self.angles:
-            raise RecordingError("name the angle columns (one per body segment)")
         named = [c for c in (self.time, self.tilt, *self.angles) if c is not None]
         twice = sorted({c for c in named if named.count(c) > 1})
         if twice:
@@ -242,40 +243,15 @@ class Recording:
                 unit).
         """
         path = Path(path)
+        if not columns.angles:
+            raise RecordingError(f"{path}: name the angle columns (one per body segment)")
         table = read_text_table(path, RecordingError, "recording")
-        wanted = [c for c in (columns.time, columns.tilt, *columns.angles) if c is not None]
-        table.require(wanted)
         if len(columns.angles) != len(segments):
             raise RecordingError(
                 f"{path}: {len(columns.angles)} angle column(s) "
                 f"({','.join(columns.angles)}) for a body of {len(segments)} segment(s) "
                 f"({','.join(segments)}): give one per segment, support upward")
-        column = {name: table.column(name) for name in wanted}
-        if columns.sample_rate_hz is not None:
-            time = np.arange(table.n_rows) / columns.sample_rate_hz
-        else:
-            unit, stated = _time_unit(table, columns)
-            seconds = column[columns.time] / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
-            check_time_column(path, seconds, RecordingError, column=columns.time,
-                              unit=unit.value, flag=None if stated else "--time-units",
-                              lines=table.row_lines)
-            time = seconds - seconds[0]
-        units = _angle_units(table, columns)
-        angle_names = [*columns.angles, *([columns.tilt] if columns.tilt is not None else [])]
-
-        def to_rad(name: str) -> np.ndarray:
-            values = column[name]
-            return np.radians(values) if units[name][0] is AngleUnit.DEGREES else values
-
-        theta = np.column_stack([to_rad(c) for c in columns.angles])
-        if columns.tilt is not None:
-            tilt = to_rad(columns.tilt)
-        elif tilt_of is not None:
-            tilt = tilt_of(time)
-        else:
-            raise RecordingError(f"{path}: no tilt column named; name the stimulus the "
-                                 "recording was made with (the PRTS flags, or --tilt FILE)")
-        _check_angle_units(path, column, units, angle_names, columns)
+        time, tilt, theta = lab_columns(table, columns, tilt_of)
         return cls(time, tilt, theta, tuple(segments), str(path),
                    tilt_recorded=columns.tilt is not None)
 
@@ -333,6 +309,50 @@ class Recording:
             name=str(path),
             tilt_recorded=recorded,
         )
+
+
+def lab_columns(table: TextTable, columns: RecordingColumns,
+                tilt_of: Callable[[np.ndarray], np.ndarray] | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(time (S,) s from 0, tilt (S,) rad, angles (S, A) rad) of a lab's ``table`` read by
+    ``columns`` (:meth:`Recording.from_lab_csv`; A may be 0: the sway comes from other
+    columns); the tilt from ``tilt_of`` where no tilt column is named.
+
+    Raises:
+        RecordingError: naming the file and the column (missing, a unit contradicted or
+            not an angle's or a time's, angles that look like the other unit).
+    """
+    path = table.path
+    wanted = [c for c in (columns.time, columns.tilt, *columns.angles) if c is not None]
+    table.require(wanted)
+    column = {name: table.column(name) for name in wanted}
+    if columns.sample_rate_hz is not None:
+        time = np.arange(table.n_rows) / columns.sample_rate_hz
+    else:
+        unit, stated = _time_unit(table, columns)
+        seconds = column[columns.time] / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
+        check_time_column(path, seconds, RecordingError, column=columns.time,
+                          unit=unit.value, flag=None if stated else "--time-units",
+                          lines=table.row_lines)
+        time = seconds - seconds[0]
+    units = _angle_units(table, columns)
+    angle_names = [*columns.angles, *([columns.tilt] if columns.tilt is not None else [])]
+
+    def to_rad(name: str) -> np.ndarray:
+        values = column[name]
+        return np.radians(values) if units[name][0] is AngleUnit.DEGREES else values
+
+    theta = (np.column_stack([to_rad(c) for c in columns.angles]) if columns.angles
+             else np.zeros((len(time), 0)))
+    if columns.tilt is not None:
+        tilt = to_rad(columns.tilt)
+    elif tilt_of is not None:
+        tilt = tilt_of(time)
+    else:
+        raise RecordingError(f"{path}: no tilt column named; name the stimulus the "
+                             "recording was made with (the PRTS flags, or --tilt FILE)")
+    _check_angle_units(path, column, units, angle_names, columns)
+    return time, tilt, theta
 
 
 def _check_segment_names(names, segments, name: str) -> None:

@@ -161,3 +161,73 @@ def test_units_and_forces_that_are_not_a_standing_bodys_are_refused():
     with pytest.raises(RecordingError, match="ankle height"):
         CopOptions(ankle_height_m=-0.1)
     assert math.isfinite(float(in_mm.sum()))
+
+
+# ---------------------------------------------------------------- a force plate's file
+
+
+def _lab_file(tmp_path, segments=2, export=None, seed=3):
+    """A DEC subject's trial on the 80-state PRTS with a level tail, written as the plate
+    exports it; (path, body, true body-COM sway (S,) rad on the file's samples)."""
+    from posture_id.force_plate.writing import LAB_EXPORT, write_force_plate_csv
+
+    body = winter(segments)
+    stimulus = prts(cycles=3, states=80)
+    stimulus = stimulus.spanning(stimulus.duration + 5.0)
+    recording = _trial(body, stimulus, seed=seed, motor_deg=0.2)
+    path = write_force_plate_csv(tmp_path / "trial.txt", body, recording, 0.1, seed,
+                                 export or LAB_EXPORT)
+    return path, body, body.com_angles(recording.theta)[:, 0]
+
+
+def test_a_force_plate_file_is_read_as_the_body_com_sway(tmp_path):
+    from dataclasses import replace
+
+    from posture_id.force_plate.reading import ForcePlateColumns, read_force_plate
+    from posture_id.force_plate.writing import LAB_EXPORT
+
+    path, body, truth = _lab_file(tmp_path, segments=1,
+                                  export=replace(LAB_EXPORT, delimiter=";",
+                                                 decimal_comma=True))
+    columns = ForcePlateColumns(cop="COP AP", time="Time", tilt="Platform", force="Fz")
+    recording = read_force_plate(path, columns, body)
+    assert recording.segments == body.segment_names and recording.duration_s == pytest.approx(
+        65.0, abs=0.02)
+    inner = slice(200, -200)
+    error = recording.theta[inner, 0] - truth[inner] + truth.mean()
+    assert np.sqrt(np.mean(error**2)) < 0.01 * np.std(truth)
+    assert recording.source["force_plate"]["cop_unit"] == "mm"
+    # a unit that contradicts the header, a header unit that is no length: refused
+    with pytest.raises(RecordingError, match=r"in mm by its header.*--cop-units cm"):
+        read_force_plate(path, replace(columns, cop_unit=CopUnit.CM), body)
+    with pytest.raises(RecordingError, match="must be a length"):
+        read_force_plate(path, replace(columns, cop="Fz", force=None), body)
+    with pytest.raises(RecordingError, match="no column|COP XY"):
+        read_force_plate(path, replace(columns, cop="COP XY"), body)
+
+
+def test_the_command_line_reads_a_force_plate_trial_as_a_lab_wrote_it(tmp_path, capsys):
+    import json
+
+    from posture_id.cli import main
+
+    path, body, _ = _lab_file(tmp_path, segments=2)
+    flags = ["--time-column", "Time", "--time-units", "ms", "--tilt-column", "Platform",
+             "--cop-column", "COP AP", "--cop-units", "mm"]
+    out = tmp_path / "trial.frf.json"
+    assert main(["frf", str(path), "--body", str(body.urdf_path), *flags, "--out",
+                 str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "as one segment" in err  # a 2-segment body: its COM sway is what the plate gives
+    frf = json.loads(out.read_text())
+    assert list(frf["channels"]) == ["body", "body COM"]
+    # how the sway was derived travels with the result
+    assert frf["provenance"]["recording_source"]["force_plate"]["body"].startswith(body.name)
+    assert min(frf["frequencies_hz"]) == pytest.approx(0.05)
+    for bad, why in ((["frf", str(path), *flags, "--out", str(out)], "--body"),
+                     (["frf", str(path), "--body", str(body.urdf_path), *flags,
+                       "--angle-columns", "Platform", "--out", str(out)], "two sources"),
+                     (["frf", str(path), "--body", str(body.urdf_path), "--cop-units", "mm",
+                       "--out", str(out)], "go with --cop-column")):
+        assert main(bad) == 2
+        assert why in capsys.readouterr().err

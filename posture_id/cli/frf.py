@@ -10,6 +10,7 @@ from posture_id.cli.arguments import (
     default_of,
     non_negative_int,
     positive_float,
+    say,
     write_result,
 )
 from posture_id.cli.markers import recording_body
@@ -77,8 +78,10 @@ def run(args: argparse.Namespace) -> int:
     body = recording_body(args, None)
     recording, stimulus = recording_and_stimulus(args, body)
     options = _options(args)
-    result = frequency_response(prepare_trial(recording, stimulus, rate_hz=None), body,
-                                options, args.period_s)
+    trial = prepare_trial(recording, stimulus, rate_hz=None)
+    result = frequency_response(trial, body, options, args.period_s)
+    for notice in trial.notices:  # what was found on the way in (a refusal says its own)
+        say(notice)
     write_result(result, args.out, args.plot)
     return 0
 

@@ -84,7 +84,8 @@ def mapping_from_args(args: argparse.Namespace) -> MarkerMapping | None:
         ("--time-column", getattr(args, "time_column", "time_s") != "time_s"),
         ("--tilt-column", getattr(args, "tilt_column", "tilt_deg") != "tilt_deg"),
         ("--units", getattr(args, "units", None) is not None),
-        ("--sample-rate-hz", getattr(args, "sample_rate_hz", None) is not None)) if on]
+        ("--sample-rate-hz", getattr(args, "sample_rate_hz", None) is not None),
+        ("--cop-column", getattr(args, "cop_column", None))) if on]
     if columns:
         raise PostureIdError(f"{', '.join(columns)} read a CSV file's columns, and the "
                              f"marker flags ({', '.join(given)}) a C3D trial: give the ones "
@@ -142,6 +143,24 @@ def trial_subject(path: Path) -> tuple[float, float]:
     return trial.height_m, trial.mass_kg
 
 
+def _force_plate_body(args: argparse.Namespace):
+    """A force plate's recording is the body-COM sway of the subject's body (``--body``,
+    required) taken as one segment (said on stderr when the body has more)."""
+    from posture_id.bodies.body import load_body
+    from posture_id.bodies.one_segment import one_segment_body
+
+    if args.body is None:
+        raise PostureIdError("--cop-column: the COP is turned into the body's sway through the "
+                             "subject's body: give it (--body URDF; posture-id body --height-m "
+                             "H --mass-kg M --segments 1 writes one)")
+    body = load_body(args.body)
+    single = one_segment_body(body)
+    if single is not body:
+        say(f"{args.body}: the force plate gives the body COM alone: the body as one segment "
+            f"(its mass, COM height and inertia about the ankle; {single.urdf_path})")
+    return single
+
+
 def recording_body(args: argparse.Namespace, default: Path | None):
     """The body a command reads ``args.recording`` for: ``--body``; else, for a C3D trial
     whose metadata give the subject's height and mass, their Winter body with as many
@@ -150,6 +169,8 @@ def recording_body(args: argparse.Namespace, default: Path | None):
     from posture_id.motion_capture import is_c3d, marker_angles, read_c3d
     from posture_id.trials.subjects import subject_urdf
 
+    if getattr(args, "cop_column", None):
+        return _force_plate_body(args)
     if args.body is not None:
         return load_body(args.body)
     mapping = (mapping_from_args(args)

@@ -15,6 +15,8 @@ from posture_id.cli.arguments import (
 )
 from posture_id.cli.markers import add_marker_arguments, mapping_from_args, write_marker_plot
 from posture_id.errors import PostureIdError
+from posture_id.force_plate.cop import CopUnit
+from posture_id.force_plate.reading import ForcePlateColumns
 from posture_id.motion_capture.mapping import MarkerMapping
 from posture_id.recording import AngleUnit, Recording, RecordingColumns, TimeUnit
 from posture_id.simulation.protocols import Protocol, read_protocol
@@ -146,7 +148,31 @@ def add_column_arguments(parser: argparse.ArgumentParser) -> None:
                             "else deg)")
     group.add_argument("--sample-rate-hz", type=positive_float,
                        help="the true sampling rate: overrides a wrong time column")
+    plate = parser.add_argument_group(
+        "a force plate's file", "the COP turned into the body-COM sway through the subject's "
+        "body (--body), which is then taken as one segment (docs/force_plates.md)")
+    plate.add_argument("--cop-column", metavar="NAME",
+                       help="the COP column, forward along the plate (in place of "
+                            "--angle-columns)")
+    plate.add_argument("--cop-units", choices=[u.value for u in CopUnit],
+                       help="unit of the COP column (default: the header's, else mm)")
+    plate.add_argument("--force-column", metavar="NAME",
+                       help="the plate's normal force, N (default: the static load "
+                            "m·g·cos(tilt))")
+    plate.add_argument("--ankle-height-m", type=non_negative_float,
+                       help="the ankle axis above the plate's surface, m (default 0)")
+    plate.add_argument("--cop-sign", choices=("+1", "-1"),
+                       help="-1 when the plate's COP axis points backward")
     add_marker_arguments(parser)
+
+
+def _force_plate_flags(args: argparse.Namespace) -> list[str]:
+    """The force-plate flags given besides --cop-column."""
+    return [flag for flag, key in (("--cop-units", "cop_units"),
+                                   ("--force-column", "force_column"),
+                                   ("--ankle-height-m", "ankle_height_m"),
+                                   ("--cop-sign", "cop_sign"))
+            if getattr(args, key, None) is not None]
 
 
 def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
@@ -160,6 +186,22 @@ def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
             raise PostureIdError("--time-units reads a CSV file's time column; a C3D trial "
                                  "has its own rate")
         return mapping
+    plate = _force_plate_flags(args)
+    if getattr(args, "cop_column", None):
+        if getattr(args, "angle_columns", None):
+            raise PostureIdError("--cop-column and --angle-columns are two sources of the "
+                                 "sway: give one")
+        tilt = None if args.tilt_column.lower() == "none" else args.tilt_column
+        return ForcePlateColumns(
+            cop=args.cop_column, time=args.time_column, tilt=tilt,
+            force=args.force_column, unit=None if units is None else AngleUnit(units),
+            time_unit=None if time_units is None else TimeUnit(time_units),
+            sample_rate_hz=args.sample_rate_hz,
+            cop_unit=None if args.cop_units is None else CopUnit(args.cop_units),
+            ankle_height_m=args.ankle_height_m or 0.0,
+            cop_sign=int(args.cop_sign or "+1"))
+    if plate:
+        raise PostureIdError(f"{', '.join(plate)} go with --cop-column (a force plate's COP)")
     if not getattr(args, "angle_columns", None):
         flags = [flag for flag, on in (
             ("--sample-rate-hz", getattr(args, "sample_rate_hz", None) is not None),
@@ -187,7 +229,7 @@ def recording_and_stimulus(args: argparse.Namespace, body) -> tuple[Recording,
     stimulus = stimulus_from_args(args, default=None)
     layout = columns_from_args(args)
     recording = read_recording(args.recording, None if body is None else body.segment_names,
-                               None if stimulus is None else stimulus.angle, layout)
+                               None if stimulus is None else stimulus.angle, layout, body)
     if isinstance(layout, MarkerMapping) and getattr(args, "plot", None):
         write_marker_plot(Path(args.recording), layout, Path(args.plot))
     return recording, stimulus

@@ -81,7 +81,8 @@ def write_force_plate_csv(path: str | Path, body, recording: Recording,
         header = ["time_ms" if export.time_ms else "time_s", "tilt_deg", "cop_mm", "fz_n"]
     time = columns["time_s"] * (1e3 if export.time_ms else 1.0)
     rows = np.column_stack([time, columns["tilt_deg"], columns["cop_mm"], columns["fz_n"]])
-    formats = ("{:.10g}" if export.time_ms else "{:.6f}", "{:.5f}", "{:.3f}", "{:.2f}")
+    rows[rows == 0] = 0.0  # no "-0.0000"
+    formats = ("{:.10g}" if export.time_ms else "{:.6f}", "{:.4f}", "{:.2f}", "{:.1f}")
     lines = [] if export.title is None else [export.title]
     lines.append(export.delimiter.join(header))
     for row in rows:

@@ -177,7 +177,8 @@ def _identify_file(path: Path, identifier: Identifier, stimulus: TiltProfile | N
     ``name``: what messages call it (default the path)."""
     try:
         recording = read_recording(path, identifier.body.segment_names,
-                                   None if stimulus is None else stimulus.angle, columns)
+                                   None if stimulus is None else stimulus.angle, columns,
+                                   identifier.body)
         if name is not None:
             recording = replace(recording, name=name)
         result = identifier.identify(recording, stimulus).to_dict()

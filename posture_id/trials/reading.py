@@ -9,28 +9,32 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.errors import RecordingError
+from posture_id.force_plate.reading import ForcePlateColumns, read_force_plate
 from posture_id.motion_capture import is_c3d
 from posture_id.motion_capture.mapping import MarkerMapping
 from posture_id.recording import Recording, RecordingColumns
 
 __all__ = ["read_recording", "RecordingLayout", "RECORDING_SUFFIXES"]
 
-#: How a file's contents are read: a lab's columns (CSV), a marker mapping (C3D), or None
-#: (the standard CSV header).
-RecordingLayout = RecordingColumns | MarkerMapping | None
+#: How a file's contents are read: a lab's columns (CSV), a force plate's columns (the COP
+#: turned into the body-COM sway), a marker mapping (C3D), or None (the standard CSV header).
+RecordingLayout = RecordingColumns | ForcePlateColumns | MarkerMapping | None
 #: The suffixes a cohort's folder is searched for.
 RECORDING_SUFFIXES = (".csv", ".c3d")
 
 
 def read_recording(path: str | Path, segments: tuple[str, ...] | None = None,
                    tilt_of: Callable[[np.ndarray], np.ndarray] | None = None,
-                   layout: RecordingLayout = None) -> Recording:
+                   layout: RecordingLayout = None, body=None) -> Recording:
     """The recording in ``path`` for a body of ``segments`` (link names, in order).
 
     Args:
         tilt_of: the named stimulus's tilt (rad) at given times (s): fills in a file
             without a tilt (no tilt column; no platform markers or channel).
-        layout: a CSV's columns, or a C3D's :class:`MarkerMapping` (required for C3D).
+        layout: a CSV's columns, a force plate's, or a C3D's :class:`MarkerMapping`
+            (required for C3D).
+        body: the subject's body, which a force plate's COP is turned into sway through
+            (the recording is then that of the body as one segment).
 
     Raises:
         RecordingError: naming the file and the problem (a C3D without a marker mapping,
@@ -46,6 +50,12 @@ def read_recording(path: str | Path, segments: tuple[str, ...] | None = None,
         from posture_id.motion_capture.c3d_file import read_c3d
 
         return marker_angles(read_c3d(path), layout).recording(segments, tilt_of)
+    if isinstance(layout, ForcePlateColumns):
+        if body is None:
+            raise RecordingError(f"{path}: the COP is turned into the body's sway through "
+                                 "the subject's body: give it (--body URDF; posture-id body "
+                                 "--height-m H --mass-kg M --segments 1 writes one)")
+        return read_force_plate(path, layout, body, tilt_of)
     if isinstance(layout, MarkerMapping):
         raise RecordingError(f"{path}: the marker flags (--segment-markers, --com-markers, "
                              "--tilt-markers, --tilt-channel, --forward-axis) read a C3D "

@@ -1,0 +1,148 @@
+"""A force plate's file read as a recording: its COP turned into the body-COM sway angle
+(:func:`~posture_id.force_plate.cop.com_angle_from_cop`) of the subject's body taken as one
+segment (:func:`~posture_id.bodies.one_segment.one_segment_body`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.bodies.body import Body
+from posture_id.bodies.one_segment import one_segment_body
+from posture_id.errors import RecordingError
+from posture_id.force_plate.cop import BodyLoad, CopOptions, CopUnit, com_angle_from_cop
+from posture_id.recording import AngleUnit, Recording, RecordingColumns, TimeUnit, lab_columns
+from posture_id.text_table import read_text_table
+
+__all__ = ["ForcePlateColumns", "read_force_plate", "FORCE_UNITS_N"]
+
+#: The normal force's units a header may state, and their factor to newtons.
+FORCE_UNITS_N = {"N": 1.0, "n": 1.0, "kN": 1e3, "kn": 1e3}
+
+
+@dataclass(frozen=True)
+class ForcePlateColumns:
+    """Which columns of a force plate's file hold what (a column named with or without
+    its header's unit), and how the COP is read.
+
+    Attributes:
+        cop: the COP column (forward along the plate).
+        time, tilt, unit, time_unit, sample_rate_hz: as :class:`~posture_id.recording.
+            RecordingColumns`'s (the tilt's unit; None: the header's, else degrees).
+        force: the plate's normal-force column (N, or kN by its header), or None: the
+            static load m·g·cos α.
+        cop_unit: of the COP column; None: the header's (``[mm]``, ``[cm]``, ``[m]``),
+            else mm.
+        ankle_height_m: the ankle axis above the plate's surface, m.
+        cop_sign: −1 when the plate's COP axis points backward.
+    """
+
+    cop: str
+    time: str | None = "time_s"
+    tilt: str | None = "tilt_deg"
+    force: str | None = None
+    unit: AngleUnit | None = None
+    time_unit: TimeUnit | None = None
+    sample_rate_hz: float | None = None
+    cop_unit: CopUnit | None = None
+    ankle_height_m: float = 0.0
+    cop_sign: int = 1
+
+    def __post_init__(self) -> None:
+        named = [c for c in (self.time, self.tilt, self.cop, self.force) if c is not None]
+        twice = sorted({c for c in named if named.count(c) > 1})
+        if twice:
+            raise RecordingError(f"column {', '.join(repr(c) for c in twice)} is named more "
+                                 "than once (time, tilt, COP and force columns are each their "
+                                 "own)")
+        if self.cop_unit is not None and not isinstance(self.cop_unit, CopUnit):
+            raise RecordingError(f"cop_unit must be a CopUnit or None, got {self.cop_unit!r}")
+        self.cop_options(CopUnit.MM)  # checks the height and sign
+        self.recording_columns  # noqa: B018 (checks the time, tilt and units)
+
+    @property
+    def recording_columns(self) -> RecordingColumns:
+        """The time and tilt columns, with their units."""
+        return RecordingColumns(self.time, self.tilt, (), self.unit, self.sample_rate_hz,
+                                self.time_unit)
+
+    def cop_options(self, unit: CopUnit) -> CopOptions:
+        return CopOptions(unit, self.ankle_height_m, self.cop_sign)
+
+    def to_dict(self) -> dict:
+        """JSON-ready (a result's ``source``)."""
+        return {"cop_column": self.cop, "force_column": self.force,
+                "ankle_height_m": self.ankle_height_m, "cop_sign": self.cop_sign}
+
+
+def _cop_unit(table, columns: ForcePlateColumns) -> CopUnit:
+    """The COP column's unit: its header's, else the one given, else mm; a given one that
+    contradicts the header, or a header unit that is not a length, refused."""
+    stated = table.unit_of(columns.cop)
+    whole = table.header[table.index(columns.cop)]
+    lengths = {u.value for u in CopUnit}
+    if stated is None:
+        return columns.cop_unit or CopUnit.MM
+    if stated not in lengths:
+        raise RecordingError(f"{table.path}: column {whole!r} is in {stated} by its header; "
+                             "the COP column must be a length (mm, cm or m)")
+    if columns.cop_unit is not None and columns.cop_unit.value != stated:
+        raise RecordingError(
+            f"{table.path}: column {whole!r} is in {stated} by its header, but the COP unit "
+            f"given is {columns.cop_unit.value} (--cop-units {columns.cop_unit.value}): leave "
+            "the unit out or correct the header")
+    return CopUnit(stated)
+
+
+def _force(table, columns: ForcePlateColumns) -> np.ndarray | None:
+    """(S,) N, the normal-force column (its header's unit: N or kN), or None."""
+    if columns.force is None:
+        return None
+    stated = table.unit_of(columns.force)
+    if stated is not None and stated not in FORCE_UNITS_N:
+        raise RecordingError(
+            f"{table.path}: column {table.header[table.index(columns.force)]!r} is in "
+            f"{stated} by its header; the normal force must be in N or kN")
+    return table.column(columns.force) * FORCE_UNITS_N.get(stated or "N", 1.0)
+
+
+def read_force_plate(path: str | Path, columns: ForcePlateColumns, body: Body,
+                     tilt_of: Callable[[np.ndarray], np.ndarray] | None = None) -> Recording:
+    """The body-COM sway recorded by a force plate: a recording of ``body`` as one
+    segment (:func:`~posture_id.bodies.one_segment.one_segment_body`; its one angle the
+    body-COM sway from the COP), the tilt from its column or ``tilt_of``.
+
+    Raises:
+        RecordingError: naming the file and the column (missing, in a unit that is not a
+            length or a force, samples not evenly spaced, a force that is not a standing
+            body's).
+    """
+    path = Path(path)
+    table = read_text_table(path, RecordingError, "force-plate recording")
+    table.require([c for c in (columns.cop, columns.force) if c is not None])
+    time, tilt, _ = lab_columns(table, columns.recording_columns, tilt_of)
+    steps = np.diff(time)
+    if len(steps) and np.any(np.abs(steps - np.median(steps)) > 0.01 * np.median(steps)):
+        bad = int(np.argmax(np.abs(steps - np.median(steps)) > 0.01 * np.median(steps)))
+        raise RecordingError(f"{path}: line {table.row_lines[bad + 1]}: samples are not "
+                             "evenly spaced in time; the COP route needs an even rate")
+    unit = _cop_unit(table, columns)
+    load = BodyLoad.of(body)
+    rate = 1.0 / float(np.median(steps))
+    com = com_angle_from_cop(table.column(columns.cop), rate, load, tilt,
+                             _force(table, columns), columns.cop_options(unit), str(path))
+    single = one_segment_body(body)
+    source = {"force_plate": {**columns.to_dict(), "cop_unit": unit.value,
+                              "body": body.name, "mass_kg": load.mass_kg,
+                              "com_height_m": load.com_height_m,
+                              "inertia_about_ankle_kg_m2": load.inertia_kg_m2,
+                              "corner_hz": load.corner_hz if math.isfinite(load.corner_hz)
+                              else None,
+                              "method": "the COP's ankle torque through the body as one "
+                                        "rigid segment about the ankle (docs/force_plates.md)"}}
+    return Recording(time, tilt, com[:, None], single.segment_names, str(path),
+                     tilt_recorded=columns.tilt is not None, source=source)

@@ -850,3 +850,51 @@ def plot_paired_difference(result, path=None, ax=None):
     fig.tight_layout()
     _save(fig, path)
     return fig
+
+
+def plot_study_conditions(result, path=None, ax=None):
+    """A study's conditions (:class:`~posture_id.manifest.run.StudyResult`): each
+    per-condition parameter of every subject across the conditions (one line per
+    subject, left), and the body-COM gain against frequency in each condition (every
+    subject thin, the median thick, right)."""
+    rows = list(result.summary_rows)
+    conditions = list(result.conditions)
+    names = sorted({k.split(" [")[0] for r in rows for k in r
+                    if k.endswith("]") and not k.startswith(("gain ", "phase "))
+                    and " low [" not in k and " high [" not in k})
+    fig, axes = _axes(ax, 1, len(names) + 1, (5 * (len(names) + 1), 4))
+    axes = np.atleast_1d(axes).ravel()
+    for cell, name in zip(axes, names, strict=False):
+        for r in rows:
+            values = [r.get(f"{name} [{c}]") for c in conditions]
+            if all(v is not None for v in values):
+                cell.plot(range(len(conditions)), values, "o-", alpha=0.7, label=r["subject"])
+        cell.set_xticks(range(len(conditions)), conditions)
+        cell.set_ylabel(name)
+        cell.set_title(f"{name} per condition (a line per subject)")
+        cell.grid(alpha=0.3)
+    gains = axes[-1]
+    for k, c in enumerate(conditions):
+        curves = []
+        for r in rows:
+            points = sorted((float(key.split()[1]), v) for key, v in r.items()
+                            if key.startswith("gain ") and key.endswith(f"[{c}]")
+                            and v is not None)
+            if points:
+                f, g = zip(*points, strict=True)
+                gains.plot(f, g, color=f"C{k}", alpha=0.25, lw=0.8)
+                curves.append(dict(points))
+        common = sorted(set.intersection(*(set(p) for p in curves))) if curves else []
+        if common:
+            gains.plot(common, [np.median([p[f] for p in curves]) for f in common], "o-",
+                       color=f"C{k}", lw=2, label=f"{c} (median)")
+    gains.set_xscale("log")
+    gains.set_xlabel("frequency (Hz)")
+    gains.set_ylabel("body-COM gain (deg/deg)")
+    gains.set_title("body-COM FRF gain per condition")
+    gains.legend(fontsize=7)
+    gains.grid(alpha=0.3)
+    fig.suptitle(f"study: {len(result.subjects)} subjects, {len(conditions)} conditions")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig

@@ -147,3 +147,33 @@ def test_a_trial_too_short_for_its_period_says_so(tmp_path):
     trial = prepare_trial(recording, None, rate_hz=None)
     with pytest.raises(RecordingError, match="two whole cycles"):
         frequency_response(trial)
+
+
+def test_a_labs_sinusoid_trial_as_written_gives_the_frf_at_its_one_frequency(tmp_path, capsys):
+    """The trial a new user brings: tab-separated, a title line, times in ms, a ±4°
+    sinusoid at 0.2 Hz with the platform's distortion between 60 and 124 s of 180 s; the
+    sway 0.8 times the tilt, 0.3 s late. By the command line alone."""
+    import json
+
+    from posture_id.cli import main
+
+    rate = 100.0
+    t, tilt = lab_tilt(sinusoid(0.2, 4.0, distortion=0.04), rate, 60, 64, 56, noise_deg=0.005)
+    sway = 0.8 * np.interp(t - 0.3, t, np.degrees(tilt), left=0.0)
+    sway += 0.05 * np.random.default_rng(5).standard_normal(len(t))
+    lines = ["Trial 7 - sinusoid 0.2 Hz - subject 3",
+             "Time [ms]\tPlatform [deg]\tCOM [deg]"]
+    lines += [f"{1000 * a:.0f}\t{np.degrees(b):.5f}\t{c:.5f}" for a, b, c in zip(t, tilt, sway,
+                                                                                 strict=True)]
+    path = tmp_path / "trial07.txt"
+    path.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "trial07.frf.json"
+    assert main(["frf", str(path), "--angle-columns", "COM", "--time-column", "Time",
+                 "--tilt-column", "Platform", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "sinusoid 0.2 Hz" in err and "distortion" in err
+    frf = json.loads(out.read_text())
+    assert frf["frequencies_hz"] == pytest.approx([0.2])
+    channel = frf["channels"]["COM"]
+    assert channel["gain"][0] == pytest.approx(0.8, rel=0.01)
+    assert channel["phase_deg"][0] == pytest.approx(-360 * 0.2 * 0.3, abs=1.0)

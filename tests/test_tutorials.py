@@ -12,9 +12,10 @@ TUTORIALS = sorted((Path(__file__).parents[1] / "docs" / "tutorials").glob("*.py
 
 
 def test_there_are_tutorials():
-    assert [t.name for t in TUTORIALS] == ["c3d_trial.py", "cohort.py", "ic_model.py",
-                                            "lab_recording.py",
-                                            "norms.py", "python_api.py", "robot.py"]
+    assert [t.name for t in TUTORIALS] == ["c3d_trial.py", "cohort.py",
+                                            "force_plate_study.py", "ic_model.py",
+                                            "lab_recording.py", "norms.py", "python_api.py",
+                                            "robot.py"]
 
 
 @pytest.mark.slow

@@ -30,6 +30,7 @@ from posture_id.cli import (
     norm,
     platform_command,
     simulate,
+    study,
     train,
     universal,
 )
@@ -44,7 +45,7 @@ __all__ = ["main", "build_parser", "COMMAND_GROUPS"]
 #: The commands by task, as the top-level help lists them.
 COMMAND_GROUPS = (
     ("identify and analyse a recording",
-     ("identify", "fit", "compare", "frf", "norm")),
+     ("identify", "fit", "compare", "frf", "norm", "study")),
     ("build bodies, stimuli and studies",
      ("body", "simulate", "stimulus", "design")),
     ("train and evaluate networks",
@@ -74,7 +75,7 @@ def build_parser() -> Parser:
                         help="show the traceback of an unexpected error (a bug)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser,
                                 metavar="COMMAND", title="commands", prog="posture-id")
-    for command in (identify, fit, compare, frf, norm, body, simulate, platform_command,
+    for command in (identify, fit, compare, frf, norm, study, body, simulate, platform_command,
                     design, universal, dataset, train, evaluate, calibration, benchmark,
                     demo):
         command.add_parser(sub)

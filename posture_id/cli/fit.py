@@ -42,7 +42,10 @@ __all__ = ["add_parser", "run", "add_search_arguments", "search_keywords", "ic_a
 def add_parser(sub) -> None:
     fit = sub.add_parser("fit", help="identify DEC (or IC) parameters from a recording "
                                      "(least squares)")
-    fit.add_argument("recording", type=Path, help="recording CSV (time_s,tilt_deg,<seg>_deg...)")
+    fit.add_argument("recording", type=Path, nargs="+",
+                     help="recording CSV (time_s,tilt_deg,<seg>_deg...); several: one joint "
+                          "fit of one subject's trials (docs/fit.md, \"One subject, several "
+                          "trials\")")
     fit.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     fit.add_argument("--model", choices=("dec", "ic"), default="dec",
                      help="dec (default) or ic: the independent-channel model fitted to the "
@@ -62,6 +65,14 @@ def add_parser(sub) -> None:
                      help="--classes relaxed: seed of the prior draws (default %(default)d)")
     fit.add_argument("--no-compile", action="store_true",
                      help="run CasADi in its virtual machine (no C compiler)")
+    fit.add_argument("--per-trial", nargs="+", metavar="NAME",
+                     help="several recordings: the parameters that take one value per "
+                          "condition (IC: W; DEC: a module's kp, ki, kd or delay_s, e.g. "
+                          "ankle.kp); the rest are shared (default: every one shared)")
+    fit.add_argument("--conditions", nargs="+", metavar="LABEL",
+                     help="several recordings: one condition label per recording, in their "
+                          "order (e.g. open open open closed closed closed; default: each "
+                          "recording its own condition)")
     add_search_arguments(fit)
     add_lab_stimulus_arguments(fit, "tilt CSV (time_s,tilt_deg) the recording was made with")
     add_column_arguments(fit)
@@ -147,6 +158,15 @@ def options_from(args: argparse.Namespace) -> FitOptions:
 
 
 def run(args: argparse.Namespace) -> int:
+    recordings = list(args.recording)
+    if len(recordings) > 1:
+        return _fit_joint(args, recordings)
+    given = [f for f, v in (("--per-trial", args.per_trial), ("--conditions", args.conditions))
+             if v]
+    if given:
+        raise PostureIdError(f"{', '.join(given)}: go with several recordings (one recording "
+                             "is one condition, every parameter its own)")
+    args.recording = recordings[0]
     inputs = (args.recording, args.body, args.init, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
@@ -189,6 +209,70 @@ def _fit_ic(args: argparse.Namespace) -> int:
     return ic_answer(args, IcFitOptions(
         fit_ki=args.fit_ki, fit_passive=args.fit_passive, starts=args.starts, seed=args.seed,
         locked=LockedOptions(max_frequency_hz=args.max_frequency_hz)))
+
+
+def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
+    """``fit REC REC ... [--per-trial NAME ...] [--conditions LABEL ...]``: one joint fit
+    of every recording (:func:`~posture_id.fitting.joint_conditions.fit_joint`), written to
+    ``--out`` and ``--plot``."""
+    from copy import copy
+
+    from posture_id.fitting.joint_conditions import fit_joint, resolve_parameter
+    from posture_id.models import model_named
+    from posture_id.models.protocol import TrustLevel
+
+    inputs = (*recordings, args.body, args.tilt)
+    check_output_file(args.out, "--out", inputs)
+    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    if args.conditions is not None and len(args.conditions) != len(recordings):
+        raise PostureIdError(f"--conditions: {len(args.conditions)} label(s) for "
+                             f"{len(recordings)} recordings: give one label per recording")
+    alone = [f for f, on in (("--init", args.init is not None),
+                             ("--max-offset-s", bool(args.max_offset_s)),
+                             ("--part", args.part is not None)) if on]
+    if alone:
+        raise PostureIdError(f"{', '.join(alone)}: go with one recording (a joint fit of "
+                             "several starts from the first's own fit)")
+    model = model_named(args.model)
+    if args.model == "ic":
+        given = [f for f in search_flags_given(args) if f in _DEC_ONLY]
+        given += [f for f, on in (("--classes", args.classes != "relaxed"),
+                                  ("--no-compile", args.no_compile)) if on]
+        if given:
+            raise PostureIdError(f"{', '.join(given)}: DEC's fit only; --model ic fits the "
+                                 "stimulus-locked COM sway within docs/model.md §8's bounds")
+        from posture_id.fitting.frequency import IcFitOptions
+
+        options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
+                               starts=args.starts, seed=args.seed,
+                               locked=LockedOptions(max_frequency_hz=args.max_frequency_hz))
+    else:
+        if args.fit_ki:
+            raise PostureIdError("--fit-ki goes with --model ic (DEC's Ki is always "
+                                 "identified)")
+        options = options_from(args)
+        if options.locked is None:  # the joint fit compares the locked harmonics
+            options = replace(options, locked=LockedOptions(
+                max_frequency_hz=args.max_frequency_hz))
+    first = copy(args)
+    first.recording = recordings[0]
+    body = recording_body(first, DEFAULT_URDF)
+    per = tuple(dict.fromkeys(resolve_parameter(model, body, name, options)
+                              for name in args.per_trial or ()))
+    names = [p.name for p in recordings]
+    labels = list(args.conditions) if args.conditions is not None else (
+        names if len(set(names)) == len(names) else [str(p) for p in recordings])
+    trials = []
+    for path in recordings:
+        one = copy(args)
+        one.recording = path
+        recording, stimulus = recording_and_stimulus(one, body)
+        recording.check_segments(body.segment_names)
+        trials.append(prepare_trial(recording, stimulus))
+    with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
+        result = fit_joint(model, trials, body, labels, per, options, progress=progress)
+    write_result(result, args.out, args.plot)
+    return answered(result.trust_level is TrustLevel.DOUBTFUL)
 
 
 def ic_answer(args: argparse.Namespace, options) -> int:

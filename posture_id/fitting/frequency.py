@@ -13,7 +13,16 @@ transform of dH/dp (the model's ``closed_loop``), so the least squares
 (scipy's trust-region reflective) has the exact Jacobian. Several starts (the first at
 the literature's typical values; the search stops at the first answer whose residual is
 within the noise's 99th percentile); an answer
-whose closed loop is unstable is never returned (the model's ``is_stable``).
+whose closed loop is unstable is never returned (the model's ``is_stable``): where every
+start ends on an unstable loop, the stable starts are searched again with unstable loops
+barred. A stimulus that excites one harmonic only (a sinusoid) is analysed over several
+of its cycles at once (:func:`analysis_cycles`), so that its noise is estimated on both
+sides of its frequency.
+
+Several trials at once, grouped into conditions (:func:`search_conditions`,
+:class:`ConditionLayout`): each trial's residual stacked, each with its condition's
+parameters; :func:`fit_frequency_parts` is its special case (every part its own
+condition), :func:`~posture_id.fitting.joint_conditions.fit_joint` the fit of a session.
 
 Intervals: Gauss-Newton standard errors, the covariance (JᵀJ)⁻¹ of the weighted residual
 scaled by its χ² per degree of freedom where that exceeds 1, times the model's multiplier
@@ -25,13 +34,13 @@ from __future__ import annotations
 
 import math
 import time as clock
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
-from posture_id.frf.locked import LockedOptions, LockedProjection
+from posture_id.frf.locked import LockedOptions, LockedProjection, floored, noise_levels
 from posture_id.models.dec import com_deg
 from posture_id.models.exact import ExactResponse
 from posture_id.models.ic.model import IC
@@ -40,7 +49,9 @@ from posture_id.trials import PreparedTrial
 
 __all__ = ["FrequencyFitOptions", "IcFitOptions", "FrequencyFitResult", "fit_frequency",
            "fit_ic", "com_sway_deg", "FrequencyPartsFit", "fit_frequency_parts",
-           "fit_ic_parts"]
+           "fit_ic_parts", "LockedCom", "locked_projection", "analysis_cycles",
+           "ConditionLayout", "Precision", "on_search_bound", "ConditionSearch",
+           "search_conditions"]
 
 
 @dataclass(frozen=True)
@@ -255,25 +266,105 @@ class FrequencyFitResult(Result):
                                "the noise", path=path, ax=ax)
 
 
-class _Part:
+def locked_projection(trial: PreparedTrial, sway: np.ndarray, locked: LockedOptions
+                      ) -> LockedProjection:
+    """The projection of a trial's sway (S, M) onto its locked harmonics
+    (:class:`~posture_id.frf.locked.LockedProjection`), analysed cycle by cycle of its
+    stimulus; a stimulus that excites one harmonic only (a sinusoid), over several of its
+    cycles at once (:func:`analysis_cycles`), so that its noise is estimated on both sides
+    of the stimulated frequency."""
+    rec, stimulus = trial.recording, trial.stimulus
+    one = LockedProjection.for_stimulus(stimulus, rec.tilt, sway, rec.sample_rate_hz, locked,
+                                        trial.name)
+    together = analysis_cycles(one, locked)
+    if together == 1:
+        return one
+    return LockedProjection.for_recording(rec.tilt, sway, rec.sample_rate_hz,
+                                          together * stimulus.period_s,
+                                          stimulus.periodic_from_s, locked, trial.name,
+                                          None if stimulus.cycles is None
+                                          else stimulus.cycles // together,
+                                          stimulus.frequencies_hz)
+
+
+def analysis_cycles(projection: LockedProjection, locked: LockedOptions) -> int:
+    """How many stimulus cycles one analysed cycle spans: 1, but for a stimulus that
+    excites one harmonic only (a sinusoid, with no cycles skipped). Its harmonic is the
+    cycle's first, so every harmonic left empty, whose sway estimates the noise, lies
+    above it, where sway is weaker: the noise was underestimated (at 0.4 Hz by a factor of
+    about 7 in amplitude on people-like IC sway, docs/fit.md). Analysed over m cycles at
+    once, the stimulus is harmonic m and the empty ones lie on both sides: m is half the
+    cycles (two analysed cycles, the drift still removed) where that leaves at least
+    ``neighbours`` empty harmonics below it, else every cycle (one analysed cycle, only
+    the offset removed)."""
+    if len(projection.harmonics) != 1 or locked.skip_cycles:
+        return 1
+    half = projection.cycles // 2
+    return half if half >= locked.neighbours + 1 else projection.cycles
+
+
+class LockedCom:
+    """One recording's stimulus-locked body COM sway: its projection onto the locked
+    harmonics (:class:`~posture_id.frf.locked.LockedProjection`), the sway (S,) degrees,
+    the weights (K,) 1/σ of the compared harmonics and their recorded values (K,) complex,
+    degrees. What every fit of the COM sway compares and its FRF plots."""
+
+    def __init__(self, trial: PreparedTrial, body, locked: LockedOptions,
+                 label: str = "the fit") -> None:
+        if trial.stimulus.period_s is None:
+            raise PostureIdError(f"{trial.name}: {label} compares "
+                                 "stimulus-locked harmonics and needs a periodic stimulus (a "
+                                 "PRTS or a protocol)")
+        self.trial = trial
+        self.sway = com_sway_deg(trial, body)
+        self.projection = locked_projection(trial, self.sway[:, None], locked)
+        self.weights = 1.0 / self.projection.noise[:, 0]
+        self.recorded = self.projection.spectrum(self.sway[:, None])[:, 0]
+
+    @property
+    def tilt_spectrum(self) -> np.ndarray:
+        """(K,) complex: the tilt's (degrees) at the compared harmonics."""
+        tilt_deg = np.degrees(self.trial.recording.tilt)
+        return self.projection.spectrum(tilt_deg[:, None])[:, 0]
+
+    def frf(self, sway_deg: np.ndarray | None = None) -> np.ndarray:
+        """(K,) complex, tilt → COM sway at the compared harmonics: the recording's, or
+        that of ``sway_deg`` (S,) degrees (a fitted model's) on the same tilt."""
+        spectrum = (self.recorded if sway_deg is None
+                    else self.projection.spectrum(np.asarray(sway_deg)[:, None])[:, 0])
+        return spectrum / self.tilt_spectrum
+
+    def explained(self, fitted_deg: np.ndarray) -> float:
+        """The share of the recorded locked COM sway ``fitted_deg`` (S,) explains."""
+        return float(self.projection.explained(self.sway[:, None], fitted_deg[:, None])[0])
+
+    def coherence(self) -> np.ndarray:
+        """(K,) the locked share of the sway's power at each compared harmonic."""
+        return _coherence(self.projection, self.sway)
+
+
+class _Part(LockedCom):
     """One recording's share of a fit: its locked COM-sway harmonics, their noise and
     the model's response on its tilt."""
 
     def __init__(self, model: FrequencyModel, trial: PreparedTrial, body, plant,
                  locked: LockedOptions) -> None:
+        super().__init__(trial, body, locked, f"the {model.label} fit")
         rec = trial.recording
-        if trial.stimulus.period_s is None:
-            raise PostureIdError(f"{trial.name}: the {model.label} fit compares "
-                                 "stimulus-locked harmonics and needs a periodic stimulus (a "
-                                 "PRTS or a protocol)")
-        self.trial = trial
-        self.sway = com_sway_deg(trial, body)
-        self.projection = LockedProjection.for_recording(
-            rec.tilt, self.sway[:, None], rec.sample_rate_hz, trial.stimulus.period_s,
-            trial.stimulus.periodic_from_s, locked, trial.name)
-        self.weights = 1.0 / self.projection.noise[:, 0]
-        self.recorded = self.projection.spectrum(self.sway[:, None])[:, 0]
         self.model = ExactResponse(model, rec.tilt, rec.sample_rate_hz, plant)
+        weighted = self.recorded * self.weights
+        self.target = np.concatenate([weighted.real, weighted.imag])
+
+    def reweighted(self, fitted_deg: np.ndarray, neighbours: int) -> None:
+        """Estimate the noise again from what ``fitted_deg`` (S,), a fitted model's sway,
+        leaves of the recording at the harmonics the stimulus leaves empty (the model's own
+        transient is not noise), and weight the compared harmonics by it."""
+        projection = self.projection
+        residual = (self.sway - fitted_deg)[:, None]
+        power = np.abs(projection.all_harmonics(residual)) ** 2
+        noise = floored(noise_levels(power, projection.excited, projection.harmonics - 1,
+                                     neighbours))[:, 0]
+        self.weights = 1.0 / noise
         weighted = self.recorded * self.weights
         self.target = np.concatenate([weighted.real, weighted.imag])
 
@@ -282,6 +373,62 @@ class _Part:
         w = self.weights if y.ndim == 1 else self.weights[:, None]
         spectrum = self.projection.spectrum(y) * w
         return np.concatenate([spectrum.real, spectrum.imag])
+
+
+@dataclass(frozen=True)
+class ConditionLayout:
+    """Where each part's parameters sit in the search vector x of a fit of several parts
+    grouped into conditions: x holds every identified parameter once (``free``, in the
+    model's order; a per-condition one there is the first condition's value), then, for
+    every further condition, its ``per_condition`` parameters in turn.
+
+    Attributes:
+        free: the identified parameters, in the model's ``parameter_order``.
+        per_condition: those that take one value per condition (in ``free``'s order).
+        conditions: (parts,) the condition index 0..C−1 of each part.
+    """
+
+    free: tuple[str, ...]
+    per_condition: tuple[str, ...]
+    conditions: tuple[int, ...]
+
+    @classmethod
+    def of(cls, free: tuple[str, ...], per_condition, conditions, name: str
+           ) -> ConditionLayout:
+        """The layout; ``per_condition`` is put in ``free``'s order.
+
+        Raises:
+            PostureIdError: a per-condition parameter that is not identified (naming
+                ``name``).
+        """
+        missing = [n for n in per_condition if n not in free]
+        if missing:
+            raise PostureIdError(f"{name}: per-condition parameter(s) {', '.join(missing)} "
+                                 f"not identified (identified: {', '.join(free)})")
+        return cls(tuple(free), tuple(n for n in free if n in per_condition),
+                   tuple(int(c) for c in conditions))
+
+    @property
+    def count(self) -> int:
+        """C, the conditions."""
+        return max(self.conditions) + 1
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """(X,) the parameter each entry of x stands for."""
+        return self.free + self.per_condition * (self.count - 1)
+
+    def index(self, condition: int, name: str) -> int:
+        """The entry of x holding ``name``'s value in ``condition``."""
+        if condition == 0 or name not in self.per_condition:
+            return self.free.index(name)
+        return (len(self.free) + (condition - 1) * len(self.per_condition)
+                + self.per_condition.index(name))
+
+    def entries(self, condition: int) -> list[int]:
+        """(len(free),) the entries of x of ``condition``'s parameters, in ``free``'s
+        order."""
+        return [self.index(condition, n) for n in self.free]
 
 
 @dataclass(frozen=True)
@@ -294,34 +441,32 @@ class _Search:
     names: tuple[str, ...]
 
 
-def _search(model: FrequencyModel, parts: list[_Part], free: tuple[str, ...], plant,
-            options: FrequencyFitOptions, name: str) -> _Search:
-    """Multi-start bounded least squares over ``free`` (shared by every part) and, with
-    several parts, one of the model's ``per_part`` parameter per part after the first (the
-    first part's is in ``free``)."""
+def _search(model: FrequencyModel, parts: list[_Part], layout: ConditionLayout, plant,
+            options: FrequencyFitOptions, name: str, first: np.ndarray | None = None
+            ) -> _Search:
+    """Multi-start bounded least squares over x (:class:`ConditionLayout`): every part's
+    residual stacked, each part with its condition's parameters. The first start is
+    ``first`` (search units) when given, else the model's typical values. Returns the best
+    start; its ``params`` are per condition."""
     from scipy.optimize import least_squares
     from scipy.stats import chi2 as chi2_distribution
 
     order = model.parameter_order
-    per_part = model.per_part
-    if len(parts) > 1 and per_part not in free:
-        raise PostureIdError(f"{name}: fitting parts at once needs {per_part} identified")
-    names = tuple(free) + (per_part,) * (len(parts) - 1)
-    part_index = ([free.index(per_part)] + list(range(len(free), len(names)))
-                  if per_part in free else [None] * len(parts))
+    free, names = layout.free, layout.names
+    entries = [layout.entries(c) for c in range(layout.count)]
     columns = [order.index(n) for n in free]
     scales = np.array([model.scale(n, plant) for n in free])
     fixed = model.search_start(plant)
     target = np.concatenate([p.target for p in parts])
 
+    def conditions_of(x: np.ndarray) -> list:
+        return [model.with_values(fixed, {n: float(x[i]) * model.scale(n, plant)
+                                          for n, i in zip(free, index, strict=True)})
+                for index in entries]
+
     def params_of(x: np.ndarray) -> list:
-        shared = model.with_values(fixed, {n: float(v) * model.scale(n, plant)
-                                           for n, v in zip(free, x[: len(free)], strict=True)})
-        if part_index[0] is None:
-            return [shared] * len(parts)
-        return [model.with_values(shared, {per_part: float(x[i]) * model.scale(per_part,
-                                                                                plant)})
-                for i in part_index]
+        each = conditions_of(x)
+        return [each[c] for c in layout.conditions]
 
     def residual(x: np.ndarray) -> np.ndarray:
         return np.concatenate([p.weighted(np.degrees(p.model.sway(q)))
@@ -329,47 +474,109 @@ def _search(model: FrequencyModel, parts: list[_Part], free: tuple[str, ...], pl
 
     def jacobian(x: np.ndarray) -> np.ndarray:
         blocks = []
-        for k, (p, q) in enumerate(zip(parts, params_of(x), strict=True)):
+        for p, q, c in zip(parts, params_of(x), layout.conditions, strict=True):
             _, dy = p.model.sway(q, gradient=True)
             d = np.zeros((len(dy[0]), len(names)))
-            d[:, : len(free)] = np.degrees(dy[columns]).T * scales[None, :]
-            if part_index[k] is not None:
-                column = order.index(per_part)
-                d[:, free.index(per_part)] = 0.0
-                d[:, part_index[k]] = np.degrees(dy[column]) * model.scale(per_part, plant)
+            d[:, entries[c]] = np.degrees(dy[columns]).T * scales[None, :]
             blocks.append(p.weighted(d))
         return np.vstack(blocks)
 
     low = np.array([model.search_bounds[n][0] for n in names])
     high = np.array([model.search_bounds[n][1] for n in names])
     rng = np.random.default_rng(options.seed)
-    starts = [np.array([model.typical[n] for n in names])]
+    starts = [np.array([model.typical[n] for n in names]) if first is None
+              else np.clip(first, low, high)]
     for _ in range(options.starts - 1):
         starts.append(low + (high - low) * rng.uniform(0.1, 0.9, len(names)))
     enough = float(chi2_distribution.ppf(0.99, max(len(target) - len(names), 1)))
+    stable = [x0 for x0 in starts
+              if all(model.is_stable(q, plant) for q in conditions_of(x0))]
+
+    def barred(x: np.ndarray) -> np.ndarray:
+        """The residual, far beyond any stable loop's where the loop is unstable: the
+        trust region steps back from it."""
+        if all(model.is_stable(q, plant) for q in conditions_of(x)):
+            return residual(x)
+        return np.full(len(target), 1e3 * (1.0 + float(np.linalg.norm(target))))
+
     best = None
-    for x0 in starts:
-        try:
-            fit = least_squares(residual, x0, jac=jacobian, bounds=(low, high),
-                                method="trf", x_scale="jac", max_nfev=200)
-        except (ValueError, FloatingPointError):
-            continue
-        if not np.all(np.isfinite(fit.fun)) or not all(model.is_stable(q, plant)
-                                                        for q in params_of(fit.x)):
-            continue
-        if best is None or fit.cost < best.cost:
-            best = fit
-        if 2 * best.cost <= enough:  # as close as the noise allows: no start does better
+    # first every start free to pass through unstable loops; where every one ended on an
+    # unstable loop, the stable starts again with unstable loops barred
+    for function, tries in ((residual, starts), (barred, stable)):
+        for x0 in tries:
+            try:
+                fit = least_squares(function, x0, jac=jacobian, bounds=(low, high),
+                                    method="trf", x_scale="jac", max_nfev=200)
+            except (ValueError, FloatingPointError):
+                continue
+            if not np.all(np.isfinite(fit.fun)) or not all(model.is_stable(q, plant)
+                                                            for q in conditions_of(fit.x)):
+                continue
+            if best is None or fit.cost < best.cost:
+                best = fit
+            if 2 * best.cost <= enough:  # as close as the noise allows: no start does better
+                break
+        if best is not None:
             break
     if best is None:  # every search ran off to an unstable loop: the best stable start
-        stable = [x0 for x0 in starts
-                  if all(model.is_stable(q, plant) for q in params_of(x0))]
         if not stable:
             raise PostureIdError(f"{name}: no {model.label} model with a stable closed loop "
                                  "fits this recording within its search bounds")
         x0 = min(stable, key=lambda x: float(np.sum(residual(x) ** 2)))
         best = _StartOnly(x0, residual(x0), jacobian(x0))
-    return _Search(best.x, best, tuple(params_of(best.x)), names)
+    return _Search(best.x, best, tuple(conditions_of(best.x)), names)
+
+
+@dataclass(frozen=True)
+class Precision:
+    """The intervals of a least-squares answer (the module doc).
+
+    Attributes:
+        standard_errors: (X,) SI units: Gauss-Newton, the covariance (JᵀJ)⁻¹ of the
+            weighted residual scaled by χ²/dof where that exceeds 1.
+        multipliers: (X,) what a ``level`` interval multiplies each by (the model's).
+        calibrated: (X,) whether that multiplier is calibrated.
+    """
+
+    standard_errors: np.ndarray
+    multipliers: np.ndarray
+    calibrated: tuple[bool, ...]
+
+    @classmethod
+    def of(cls, model: FrequencyModel, plant, names: tuple[str, ...], jac: np.ndarray,
+           chi2: float, dof: int, level: float, multiplier=None) -> Precision:
+        """For x's entries standing for ``names`` (search units), from the Jacobian
+        (R, X) of the weighted residual at the answer; ``multiplier(name, level)`` gives
+        (multiplier, calibrated) (default: the model's ``interval_multiplier``)."""
+        scale2 = max(1.0, chi2 / max(dof, 1))
+        try:
+            cov = np.linalg.pinv(jac.T @ jac) * scale2
+        except np.linalg.LinAlgError:
+            cov = np.full((len(names), len(names)), np.inf)
+        scales = np.array([model.scale(n, plant) for n in names])
+        standard_errors = np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
+        multipliers = [(multiplier or model.interval_multiplier)(n, level) for n in names]
+        return cls(standard_errors, np.array([m for m, _ in multipliers]),
+                   tuple(c for _, c in multipliers))
+
+    @property
+    def half_widths(self) -> np.ndarray:
+        """(X,) SI units: each interval's half-width."""
+        return self.multipliers * self.standard_errors
+
+
+def on_search_bound(model: FrequencyModel, names: tuple[str, ...], x: np.ndarray
+                    ) -> list[int]:
+    """The entries of x (search units) of a judged parameter (the model's ``pinned``) whose
+    search range starts above 0 that end within 0.1 % of the range of a bound."""
+    out = []
+    for k, (n, value) in enumerate(zip(names, x, strict=True)):
+        lo, hi = model.search_bounds[n]
+        span = hi - lo
+        if n in model.pinned and lo > 0 and (value - lo < 1e-3 * span
+                                             or hi - value < 1e-3 * span):
+            out.append(k)
+    return out
 
 
 class _StartOnly:
@@ -402,42 +609,25 @@ def fit_frequency(model: FrequencyModel, trial: PreparedTrial, body,
     plant = model.plant(body)
     part = _Part(model, trial, body, plant, options.locked)
     free = options.free_of(model)
-    found = _search(model, [part], free, plant, options, trial.name)
+    found = _search(model, [part], ConditionLayout.of(free, (), (0,), trial.name), plant,
+                    options, trial.name)
     params, best = found.params[0], found.fit
     chi2 = float(2 * best.cost)
     dof = len(part.target) - len(free)
-    jac = best.jac
-    scale2 = max(1.0, chi2 / max(dof, 1))
-    try:
-        cov = np.linalg.pinv(jac.T @ jac) * scale2
-    except np.linalg.LinAlgError:
-        cov = np.full((len(free), len(free)), np.inf)
-    scales = np.array([model.scale(n, plant) for n in free])
-    standard_errors = np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
-    multipliers = [model.interval_multiplier(n, options.level) for n in free]
-    half = np.array([m for m, _ in multipliers]) * standard_errors
+    precision = Precision.of(model, plant, free, best.jac, chi2, dof, options.level)
     intervals = {n: (max(getattr(params, n) - h, 0.0), getattr(params, n) + h)
-                 for n, h in zip(free, half, strict=True)}
-    low = np.array([model.search_bounds[n][0] for n in free])
-    high = np.array([model.search_bounds[n][1] for n in free])
-    span = high - low
-    on_bound = tuple(n for n, x, lo, hi, sp in zip(free, found.x, low, high, span, strict=True)
-                     if n in model.pinned and lo > 0
-                     and (x - lo < 1e-3 * sp or hi - x < 1e-3 * sp))
+                 for n, h in zip(free, precision.half_widths, strict=True)}
+    on_bound = tuple(free[k] for k in on_search_bound(model, free, found.x))
     fitted = np.degrees(part.model.sway(params))
     projection, sway = part.projection, part.sway
-    explained = float(projection.explained(sway[:, None], fitted[:, None])[0])
-    tilt_deg = np.degrees(trial.recording.tilt)
-    u = projection.spectrum(tilt_deg[:, None])[:, 0]
     model_frf = model.closed_loop(params, plant, 2j * np.pi * projection.frequencies_hz)
-    coherence = _coherence(projection, sway)
     return FrequencyFitResult(params, free, intervals, options.level, chi2, dof,
                               len(projection.harmonics), on_bound, True,
-                              clock.perf_counter() - started, explained, fitted, sway,
-                              projection.frequencies_hz, part.recorded / u, model_frf,
-                              coherence, trial.name,
-                              dict(zip(free, standard_errors.tolist(), strict=True)),
-                              tuple(n for n, (_, c) in zip(free, multipliers, strict=True)
+                              clock.perf_counter() - started, part.explained(fitted), fitted,
+                              sway, projection.frequencies_hz, part.frf(), model_frf,
+                              part.coherence(), trial.name,
+                              dict(zip(free, precision.standard_errors.tolist(), strict=True)),
+                              tuple(n for n, c in zip(free, precision.calibrated, strict=True)
                                     if c), model)
 
 
@@ -455,6 +645,52 @@ def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None
         :class:`FrequencyFitResult`: the parameters (SI units), their intervals and the fit.
     """
     return fit_frequency(IC, trial, body, options or IcFitOptions())
+
+
+@dataclass(frozen=True)
+class ConditionSearch:
+    """A search of several trials grouped into conditions (:func:`search_conditions`).
+
+    Attributes:
+        parts: (T,) each trial's locked harmonics, weights and model response.
+        layout: where each condition's parameters sit in x. found: the best start (its x
+        in search units, scipy's result with the Jacobian, ``params`` per condition).
+        plant: what the closed loop needs of the body.
+    """
+
+    parts: list
+    layout: ConditionLayout
+    found: _Search
+    plant: object
+
+
+def search_conditions(model: FrequencyModel, trials: list[PreparedTrial], body,
+                      conditions: list[int], per_condition: tuple[str, ...],
+                      options: FrequencyFitOptions, noise_from_residual: bool = False
+                      ) -> ConditionSearch:
+    """The multi-start search over every trial at once, each with its condition's
+    parameters (``conditions``: (T,) indices 0..C−1; ``per_condition``: the parameters
+    that take one value per condition, the rest of the identified ones shared). With
+    ``noise_from_residual``, the noise at each harmonic is estimated again from what the
+    first answer leaves of every trial (:meth:`_Part.reweighted`) and the search is run
+    again from that answer.
+
+    Raises:
+        PostureIdError: a stimulus that is not periodic, a per-condition parameter that is
+            not identified, no start that gives a stable closed loop.
+    """
+    plant = model.plant(body)
+    parts = [_Part(model, t, body, plant, options.locked) for t in trials]
+    name = " + ".join(t.name for t in trials)
+    layout = ConditionLayout.of(options.free_of(model), per_condition, conditions, name)
+    found = _search(model, parts, layout, plant, options, name)
+    if noise_from_residual:
+        for part, c in zip(parts, layout.conditions, strict=True):
+            part.reweighted(np.degrees(part.model.sway(found.params[c])),
+                            options.locked.neighbours)
+        found = _search(model, parts, layout, plant, replace(options, starts=1), name,
+                        first=found.x)
+    return ConditionSearch(parts, layout, found, plant)
 
 
 @dataclass(frozen=True)
@@ -501,16 +737,17 @@ class FrequencyPartsFit:
 def fit_frequency_parts(model: FrequencyModel, trials: list[PreparedTrial], body,
                         options: FrequencyFitOptions | None = None) -> FrequencyPartsFit:
     """The parameters of ``model`` for every one of ``trials`` (the same subject at
-    several amplitudes), shared but for the model's per-part one."""
+    several amplitudes), shared but for the model's per-part one: the joint search of
+    :func:`search_conditions` (what :func:`~posture_id.fitting.joint_conditions.fit_joint`
+    runs) with every part its own condition and the per-part parameter the one per
+    condition, the noise from the recorded sway."""
     options = options or FrequencyFitOptions()
-    plant = model.plant(body)
-    parts = [_Part(model, t, body, plant, options.locked) for t in trials]
-    free = options.free_of(model)
-    found = _search(model, parts, free, plant, options, " + ".join(t.name for t in trials))
-    fitted = tuple(np.degrees(p.model.sway(q)) for p, q in zip(parts, found.params,
+    joint = search_conditions(model, trials, body, list(range(len(trials))),
+                              (model.per_part,) if len(trials) > 1 else (), options)
+    fitted = tuple(np.degrees(p.model.sway(q)) for p, q in zip(joint.parts, joint.found.params,
                                                                 strict=True))
-    return FrequencyPartsFit(found.params, float(2 * found.fit.cost), fitted,
-                             len(found.names), model)
+    return FrequencyPartsFit(joint.found.params, float(2 * joint.found.fit.cost), fitted,
+                             len(joint.layout.names), model)
 
 
 def fit_ic_parts(trials: list[PreparedTrial], body,

@@ -3,7 +3,14 @@ two-amplitude protocol): the locked fit of the first part, then a polish of ever
 gains and delays (classes and passive terms kept) against all parts at once, their
 weighted locked harmonics stacked. DEC's claim is that one set of parameters explains
 every amplitude (its dead-band makes the response depend on it); this is the fit that
-tests it."""
+tests it.
+
+The same polish with some unknowns taken per condition (:func:`polish_by_condition`,
+what :func:`~posture_id.fitting.joint_conditions.fit_joint` runs for DEC): the trials
+grouped into conditions, the named unknowns (an ankle Kp, a delay) one per condition,
+the rest shared. The unknowns are then the extended vector of
+:class:`ConditionEvaluator`: q (7N,) as for one trial, its per-condition entries standing
+for the first condition, then those entries again for every further condition."""
 
 from __future__ import annotations
 
@@ -17,26 +24,79 @@ from posture_id.fitting.result import FitResult, StageResult
 from posture_id.fitting.unknowns import parameters_from_qs
 from posture_id.trials import PreparedTrial
 
-__all__ = ["JointEvaluator", "JointFit", "fit_recordings_jointly"]
+__all__ = ["ConditionEvaluator", "JointEvaluator", "JointFit", "fit_recordings_jointly",
+           "ConditionPolish", "polish_by_condition"]
 
 
-class JointEvaluator(Evaluator):
-    """Several evaluators of the same unknowns, their residuals and Jacobians stacked."""
+class ConditionEvaluator(Evaluator):
+    """Evaluators of several trials (``parts``) grouped into conditions, their residuals
+    and Jacobians stacked, over the extended unknowns (the module doc).
 
-    def __init__(self, parts: list[Evaluator]) -> None:
+    Args:
+        parts: one evaluator per trial, each of q (Q,).
+        conditions: (parts,) each part's condition index 0..C−1.
+        per_condition: indices into q (Q,) of the unknowns that take one value per
+            condition (empty: everything shared, the extended vector is q itself).
+        size: Q, the length of one trial's q.
+    """
+
+    def __init__(self, parts: list[Evaluator], conditions: list[int] | None = None,
+                 per_condition: tuple[int, ...] = (), size: int = 0) -> None:
         super().__init__(np.zeros((0, 0)))
         self.parts = parts
+        self.conditions = list(conditions) if conditions is not None else [0] * len(parts)
+        self.per_condition = tuple(per_condition)
+        self.size = size
+
+    def column(self, condition: int, index: int) -> int:
+        """The entry of the extended vector that holds q[``index``] in ``condition``."""
+        if condition == 0 or index not in self.per_condition:
+            return index
+        return (self.size + (condition - 1) * len(self.per_condition)
+                + self.per_condition.index(index))
+
+    def q_of(self, q: np.ndarray, condition: int) -> np.ndarray:
+        """One trial's q (Q,) in ``condition`` from the extended vector."""
+        if not self.per_condition or condition == 0:
+            return q[: self.size] if self.size else q
+        out = q[: self.size].copy()
+        for k in self.per_condition:
+            out[k] = q[self.column(condition, k)]
+        return out
+
+    def extended(self, q: np.ndarray, conditions: int) -> np.ndarray:
+        """The extended vector of ``conditions`` conditions that all start at q (Q,)."""
+        return np.concatenate([q] + [q[list(self.per_condition)]] * (conditions - 1))
 
     def residual(self, q: np.ndarray) -> np.ndarray:
-        return np.concatenate([p.residual(q) for p in self.parts])
+        return np.concatenate([p.residual(self.q_of(q, c))
+                               for p, c in zip(self.parts, self.conditions, strict=True)])
 
     def jacobian(self, q: np.ndarray, free: list[int], residual: np.ndarray) -> np.ndarray:
         out, start = [], 0
-        for p in self.parts:
-            mine = p.residual(q)
-            out.append(p.jacobian(q, free, residual[start : start + len(mine)]))
-            start += len(mine)
+        position = {e: k for k, e in enumerate(free)}
+        for p, c in zip(self.parts, self.conditions, strict=True):
+            mine = self.q_of(q, c)
+            rows = len(p.residual(mine))
+            # the unknowns of this part's q that are free here, and their columns
+            base = [i for i in range(len(mine)) if self.column(c, i) in position] \
+                if self.per_condition else list(free)
+            block = p.jacobian(mine, base, residual[start : start + rows])
+            if self.per_condition:
+                full = np.zeros((rows, len(free)))
+                full[:, [position[self.column(c, i)] for i in base]] = block
+                block = full
+            out.append(block)
+            start += rows
         return np.vstack(out)
+
+
+class JointEvaluator(ConditionEvaluator):
+    """Several evaluators of the same unknowns, their residuals and Jacobians stacked
+    (one condition: every unknown shared)."""
+
+    def __init__(self, parts: list[Evaluator]) -> None:
+        super().__init__(parts)
 
 
 class JointFit:
@@ -66,3 +126,67 @@ def fit_recordings_jointly(trials: list[PreparedTrial], body: Body, options: Fit
         0, body.joint_names)
     fitted = [r.problem.simulate(stage.q, r.u) for r in runs]
     return JointFit(params, stage, first, fitted)
+
+
+class ConditionPolish:
+    """The per-condition polish of a joint DEC fit.
+
+    Attributes:
+        shared: the joint fit with every parameter shared it started from.
+        stage: the polish (its q the extended vector, its Jacobian (R, free) over
+            ``free``, its residual (R,): the weighted locked harmonics of every trial,
+            ``data_rows`` of them, then any prior's rows); the shared fit's own stage when
+            nothing varies by condition.
+        evaluator: the :class:`ConditionEvaluator` (how the extended vector reads).
+        free: the extended vector's entries fitted. runs: one :class:`FitRun` per trial.
+        parameters: per condition, its DecParameters. fitted: per trial, the (S, N) rad
+        segment angles of the answer. data_rows: the residual's rows that are data.
+    """
+
+    def __init__(self, shared: JointFit, stage: StageResult, evaluator: ConditionEvaluator,
+                 free: list[int], runs: list[FitRun], parameters: list,
+                 fitted: list[np.ndarray], data_rows: int) -> None:
+        self.shared, self.stage, self.evaluator, self.free = shared, stage, evaluator, free
+        self.runs, self.parameters, self.fitted = runs, parameters, fitted
+        self.data_rows = data_rows
+
+
+def polish_by_condition(trials: list[PreparedTrial], body: Body, options: FitOptions,
+                        conditions: list[int], per_condition: tuple[int, ...],
+                        progress=None) -> ConditionPolish:
+    """Every trial's parameters, shared but for the unknowns ``per_condition`` (indices
+    into q, :mod:`~posture_id.fitting.unknowns`), one per condition (``conditions``: each
+    trial's index 0..C−1): :func:`fit_recordings_jointly`, then its gains and delays
+    polished again with those unknowns one per condition, each condition's starting at the
+    shared answer. ``options`` must ask for the locked fit."""
+    shared = fit_recordings_jointly(trials, body, options, progress)
+    runs = [FitRun.start(t, body, options, progress) for t in trials]
+    count = max(conditions) + 1
+    if count == 1:
+        per_condition = ()
+    size = runs[0].layout.size
+    evaluator = ConditionEvaluator([r.exact for r in runs], conditions, per_condition, size)
+    free = runs[0].layout.continuous(options.fit_passive) + [
+        evaluator.column(c, k) for c in range(1, count) for k in per_condition]
+    pick = list(per_condition) * (count - 1)
+
+    def extend(values: np.ndarray | None) -> np.ndarray | None:
+        return None if values is None else np.concatenate([values, values[pick]])
+
+    if per_condition:
+        stage = run_stage("joint polish (per condition)", evaluator,
+                          evaluator.extended(shared.stage.q, count), free,
+                          extend(runs[0].lower), extend(runs[0].upper), options.tolerance,
+                          options.max_iterations, progress, extend(runs[0].prior_sd),
+                          extend(runs[0].prior_centre))
+    else:
+        stage = shared.stage
+    prior = extend(runs[0].prior_sd)
+    priored = 0 if prior is None else int(np.count_nonzero(1.0 / prior[free] > 0))
+    defaults = runs[0].problem.defaults
+    parameters = [parameters_from_qs(evaluator.q_of(stage.q, c)[None], defaults).trial(
+        0, body.joint_names) for c in range(count)]
+    fitted = [r.problem.simulate(evaluator.q_of(stage.q, c), r.u)
+              for r, c in zip(runs, conditions, strict=True)]
+    return ConditionPolish(shared, stage, evaluator, free, runs, parameters, fitted,
+                           len(stage.residual) - priored)

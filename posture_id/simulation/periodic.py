@@ -271,7 +271,7 @@ def find_periodic(times_s: np.ndarray, tilt_rad: np.ndarray,
         kind = "sum of sines"
     else:
         kind = "multisine"
-    period_s = p * dt
+    period_s = round(p * dt, 9)  # a whole number of samples; the time column's rounding out
     strongest = float(spectrum[driven].max())
     return PeriodicTilt(
         period_samples=p, period_s=period_s, start=first + begin,

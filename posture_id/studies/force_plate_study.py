@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from posture_id.errors import SimulationError
 from posture_id.fileio import atomic_write_text, json_text
 
 __all__ = ["CONDITIONS", "FREQUENCIES_HZ", "EXAMPLE_TRIAL", "lab_sinusoid",
@@ -66,7 +67,6 @@ def lab_sinusoid(f_hz: float, amplitude_deg: float = AMPLITUDE_DEG):
 def write_trial(path: Path, body, params, f_hz: float, seed: int,
                 title: str) -> Path:
     """One trial of ``params`` (IC) on ``body`` at ``f_hz``, written as the plate's export."""
-    from posture_id.errors import SimulationError
     from posture_id.force_plate.writing import LAB_EXPORT, write_force_plate_csv
     from posture_id.models.ic.subjects import ic_recording
     from posture_id.simulation.options import SimulationOptions
@@ -81,14 +81,15 @@ def write_trial(path: Path, body, params, f_hz: float, seed: int,
                                  replace(LAB_EXPORT, title=title))
 
 
-def _subject(k: int):
-    """Subject ``k``'s body (its URDF path, the body) and its shared IC parameters."""
+def _subject(k: int, attempt: int = 0):
+    """Subject ``k``'s height, mass, body and shared IC parameters (``attempt``: drawn
+    again after a subject who fell)."""
     from posture_id.bodies.anthropometry import winter_body_file
     from posture_id.bodies.body import load_body
     from posture_id.models.ic.model import IC
     from posture_id.models.ic.parameters import IcParameters
 
-    rng = np.random.default_rng([k, 2026])
+    rng = np.random.default_rng([k, 2026] + ([attempt] if attempt else []))
     height = round(float(rng.uniform(1.60, 1.90)), 2)
     mass = round(float(rng.uniform(55.0, 90.0)), 1)
     body = load_body(winter_body_file(height, mass, 1))
@@ -113,28 +114,45 @@ def make_example_trial(folder: str | Path) -> Path:
                        "eyes closed, sinusoid 0.2 Hz")
 
 
-def make_study(folder: str | Path, subjects: int = 6) -> Path:
-    """Write a study of ``subjects`` subjects × :data:`CONDITIONS` × :data:`FREQUENCIES_HZ`
+def _write_subject(folder: Path, name: str, body, params, frequencies_hz, k: int
+                   ) -> list[tuple[str, str]]:
+    """Every trial of one subject; (condition, file) each."""
+    files = []
+    for c, (condition, w) in enumerate(CONDITIONS.items()):
+        for j, f in enumerate(frequencies_hz):
+            file = f"{name}_{condition}_{f:g}Hz.txt"
+            write_trial(folder / file, body, replace(params, w=w), f, 1000 * k + 10 * c + j,
+                        f"Posturography export, subject {name}, {condition}, "
+                        f"sinusoid {f:g} Hz")
+            files.append((condition, file))
+    return files
+
+
+def make_study(folder: str | Path, subjects: int = 6,
+               frequencies_hz: tuple[float, ...] = FREQUENCIES_HZ) -> Path:
+    """Write a study of ``subjects`` subjects × :data:`CONDITIONS` × ``frequencies_hz``
     trials into ``folder``, with ``manifest.csv`` and ``truth.json``; the manifest's path."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     rows, truth = ["subject,condition,file,height_m,mass_kg"], {}
     for k in range(1, subjects + 1):
-        height, mass, body, params = _subject(k)
         name = f"S{k:02d}"
+        for attempt in range(20):  # motor noise can tip a subject over: draw another
+            height, mass, body, params = _subject(k, attempt)
+            try:
+                files = _write_subject(folder, name, body, params, frequencies_hz, k)
+                break
+            except SimulationError:
+                continue
+        else:
+            raise SimulationError(f"{name}: no subject drawn stands through every trial")
         truth[name] = {"height_m": height, "mass_kg": mass,
                        "shared": {n: getattr(params, n) for n in
                                   ("kp", "kd", "delay_s", "torque_feedback_gain",
                                    "torque_feedback_time_s")},
                        "w": dict(CONDITIONS)}
-        for c, (condition, w) in enumerate(CONDITIONS.items()):
-            for j, f in enumerate(FREQUENCIES_HZ):
-                file = f"{name}_{condition}_{f:g}Hz.txt"
-                write_trial(folder / file, body, replace(params, w=w),
-                            f, 1000 * k + 10 * c + j,
-                            f"Posturography export, subject {name}, {condition}, "
-                            f"sinusoid {f:g} Hz")
-                rows.append(f"{name},{condition},{file},{height:g},{mass:g}")
+        rows += [f"{name},{condition},{file},{height:g},{mass:g}"
+                 for condition, file in files]
     atomic_write_text(folder / "truth.json", json_text(truth))
     return atomic_write_text(folder / "manifest.csv", "\n".join(rows) + "\n")
 

@@ -1,0 +1,91 @@
+"""``posture-id study MANIFEST --out DIR``: a whole study from its manifest (every trial's
+FRF, each subject's joint fit, summary.csv, paired tests between the conditions)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.cli.arguments import (
+    check_output_file,
+    default_of,
+    non_negative_int,
+    positive_float,
+    positive_int,
+    say,
+)
+from posture_id.cli.progress import TerminalProgress
+from posture_id.cli.stimulus import add_column_arguments, columns_from_args
+from posture_id.errors import PostureIdError
+from posture_id.frf.response import FrfOptions
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("study", help="a whole study from its manifest (CSV: subject, condition, "
+                                     "file, and the body or height_m and mass_kg): every "
+                                     "trial's FRF, each subject's joint fit, paired tests "
+                                     "between the conditions")
+    p.add_argument("manifest", type=Path, help="the manifest CSV (files relative to it)")
+    p.add_argument("--out", type=Path, required=True,
+                   help="results folder: frf/, fits/, paired/, summary.csv (a row per "
+                        "subject, the conditions as columns), trials.csv, study.json; a "
+                        "study started again goes on where it stopped")
+    p.add_argument("--model", choices=("ic", "dec", "none"), default="ic",
+                   help="the model fitted to each subject's trials (default %(default)s; "
+                        "none: FRFs only)")
+    p.add_argument("--per-condition", nargs="+", metavar="NAME", default=None,
+                   help="the parameters that take one value per condition (default: w for "
+                        "ic, none for dec; dec: e.g. ankle.kp)")
+    p.add_argument("--segments", type=positive_int, default=1,
+                   help="segments of the Winter body of a subject given by height and mass "
+                        "(default %(default)d)")
+    p.add_argument("--skip-cycles", type=non_negative_int,
+                   default=default_of(FrfOptions, "skip_cycles"),
+                   help="whole cycles left out at the start of each trial's FRF (default "
+                        "%(default)d)")
+    p.add_argument("--max-frequency-hz", type=positive_float,
+                   default=default_of(FrfOptions, "max_frequency_hz"),
+                   help="highest FRF frequency kept (default %(default)g Hz)")
+    p.add_argument("--permutations", type=positive_int, default=2000,
+                   help="of the paired tests (default %(default)d)")
+    p.add_argument("--workers", type=positive_int,
+                   help="local processes (default: every core)")
+    p.add_argument("--scheduler", help="a Dask distributed scheduler (tcp://host:port)")
+    p.add_argument("--plot", type=Path,
+                   help="the per-condition parameters and FRF gains of every subject (PNG)")
+    add_column_arguments(p)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from posture_id.manifest import StudyOptions, read_manifest, run_study
+
+    check_output_file(args.plot, "--plot", (args.manifest,))
+    if args.out.exists() and not args.out.is_dir():
+        raise PostureIdError(f"{args.out}: --out is a file; give a folder")
+    manifest = read_manifest(args.manifest)
+    model = None if args.model == "none" else args.model
+    per_condition = args.per_condition
+    if per_condition is None:
+        per_condition = ["w"] if model == "ic" else []
+    if model is None and args.per_condition:
+        raise PostureIdError("--per-condition goes with a model (--model ic or dec)")
+    if args.scheduler:
+        from posture_id.executors import check_scheduler_address
+
+        check_scheduler_address(args.scheduler)
+    options = StudyOptions(layout=columns_from_args(args), model=model,
+                           per_condition=tuple(per_condition), segments=args.segments,
+                           frf=FrfOptions(skip_cycles=args.skip_cycles,
+                                          max_frequency_hz=args.max_frequency_hz),
+                           permutations=args.permutations, workers=args.workers,
+                           scheduler=args.scheduler)
+    with TerminalProgress("study") as progress:
+        result = run_study(manifest, args.out, options, progress)
+    print(result.summary())
+    if args.plot:
+        result.plot(args.plot)
+        say(f"wrote {args.plot}")
+    return 1 if result.failed else 0

@@ -1,0 +1,618 @@
+"""One subject, several trials: one joint fit of a model to every trial of a session, the
+parameters that are the subject's shared, the named ones one per condition (eyes open and
+closed, firm and foam, several amplitudes; docs/fit.md, "One subject, several trials").
+
+:func:`fit_joint` fits, the way the model's capabilities allow:
+
+- a model with a closed loop (the IC model, any
+  :class:`~posture_id.models.protocol.FrequencyModel`): the exact frequency-domain fit of
+  :mod:`posture_id.fitting.frequency`, every trial's weighted locked COM-sway harmonics
+  stacked, each trial with its condition's parameters (:class:`~.frequency.ConditionLayout`).
+  ``fit_frequency_parts`` (a W per part of a two-amplitude protocol) is this fit with every
+  part its own condition;
+- DEC (per-joint modules): the locked time-domain least squares, one set of parameters
+  for every trial first (:func:`~posture_id.fitting.joint.fit_recordings_jointly`), then
+  polished with the named module parameters (``"ankle.kp"``, ``"ankle.delay_s"``, any
+  module's Kp, Ki, Kd or delay) one per condition
+  (:func:`~posture_id.fitting.joint.polish_by_condition`).
+
+Intervals: the Gauss-Newton covariance of the joint weighted residual (every trial's
+harmonics in units of their noise), scaled by χ²/(c·dof) where that exceeds 1 (c: what
+the estimated noise levels make χ²/dof on average, :func:`chi2_correction`), times the
+joint fit's calibrated multiplier (:data:`JOINT_CALIBRATION`, made by
+``benchmarks/joint_fit.py --calibrate``; a model it does not hold: the model's own; DEC's
+locked fit: the normal quantile); a parameter the trials leave undetermined (a standard
+error of 0) gets its whole search range. The verdict is the frequency fit's
+(:class:`JointFit`).
+"""
+
+from __future__ import annotations
+
+import math
+import time as clock
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from posture_id.errors import PostureIdError
+from posture_id.fileio import Result
+from posture_id.frf.locked import LockedOptions
+from posture_id.models.protocol import Capability, Model, ModelParameters, TrustLevel
+from posture_id.trials import PreparedTrial
+
+__all__ = ["JointFit", "fit_joint", "joint_parameter_names", "resolve_parameter",
+           "DEC_PER_CONDITION", "JOINT_CALIBRATION", "joint_multiplier", "chi2_correction"]
+
+#: DEC's module parameters that may take one value per condition.
+DEC_PER_CONDITION = ("kp", "ki", "kd", "delay_s")
+#: DEC's judged parameters (as ``identify``'s verdict: each module's Kp, Kd and delay
+#: pinned to ±10 %; Kp or Kd on a search bound makes the answer doubtful).
+_DEC_PINNED = {"kp": 0.1, "kd": 0.1, "delay_s": 0.1}
+_DEC_BOUND_JUDGED = ("kp", "kd")
+#: The level of DEC's joint intervals (the normal quantile: DEC's locked fit has no
+#: calibrated multiplier).
+DEC_LEVEL = 0.9
+#: Where each module parameter's block sits in the fit's unknowns q
+#: (:mod:`posture_id.fitting.unknowns`: Kp, Ki, Kd, Δ, class, Kpas, Bpas, N each).
+_Q_BLOCK = {"kp": 0, "ki": 1, "kd": 2, "delay_s": 3, "kpas": 5, "bpas": 6}
+
+
+# calibration: begin (written by `.venv/bin/python benchmarks/joint_fit.py --calibrate`)
+#: The joint fit's interval calibration, per model name: per parameter, the quantiles of
+#: |estimate − truth| / standard error at ``levels`` over simulated subjects of its own
+#: seed (docs/fit.md, "One subject, several trials"). A model or a parameter not here
+#: takes the model's own multiplier (:func:`joint_multiplier`).
+JOINT_CALIBRATION: dict = {
+    "ic": {
+        "made_by": ".venv/bin/python benchmarks/joint_fit.py --calibrate --subjects 96",
+        "subjects_per_sway": 96, "seed": 7070,
+        "levels": [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.99],
+        "quantiles": {
+            "kp": [0.5102, 0.631, 0.8881, 1.169, 1.416, 1.752, 3.001],
+            "kd": [0.546, 0.7244, 1.146, 1.674, 2.266, 2.894, 4.288],
+            "delay_s": [0.4244, 0.5693, 0.8907, 1.247, 1.676, 2.102, 3.619],
+            "torque_feedback_gain": [0.3541, 0.513, 0.776, 1.267, 1.974, 3.572, 5.908],
+            "torque_feedback_time_s": [0.4784, 0.7832, 1.129, 1.746, 3.664, 5.37, 2.32e+04],
+            "w": [0.5317, 0.6988, 0.8285, 1.071, 1.473, 1.816, 3.156],
+        },
+    },
+}
+# calibration: end
+
+
+def joint_multiplier(model: Model, name: str, level: float) -> tuple[float, bool]:
+    """(what a joint fit's ``level`` interval of ``name`` multiplies its standard error
+    by, whether it is calibrated): :data:`JOINT_CALIBRATION`'s quantile for the model and
+    parameter, else the model's own ``interval_multiplier``."""
+    calibration = JOINT_CALIBRATION.get(model.name)
+    quantiles = None if calibration is None else calibration["quantiles"].get(name)
+    if quantiles is None:
+        return model.interval_multiplier(name, level)
+    return float(np.interp(level, calibration["levels"], quantiles)), True
+
+
+def chi2_correction(locked: LockedOptions) -> float:
+    """ν/(ν − 2), ν = 4·neighbours: the mean of χ²/dof for a right model when every
+    harmonic's noise is estimated from 2·neighbours empty harmonics (1 unweighted)."""
+    if not locked.weighted:
+        return 1.0
+    nu = 4 * locked.neighbours
+    return nu / (nu - 2)
+
+
+def _labelled(name: str, condition: str | None) -> str:
+    """How a parameter is named in a verdict: ``w [eyes closed]`` for a per-condition one."""
+    return name if condition is None else f"{name} [{condition}]"
+
+
+@dataclass(frozen=True)
+class JointFit(Result):
+    """One model fitted to several trials of one subject at once: the shared parameters
+    and, per condition, the per-condition ones.
+
+    Attributes:
+        model: the model fitted.
+        trials: (T,) the trials' names. trial_conditions: (T,) each one's condition.
+        conditions: (C,) the distinct condition labels, in the order they first appear.
+        per_condition_names: the parameters that take one value per condition.
+        shared: {name: value} the shared identified parameters (SI units).
+        per_condition: {condition: {name: value}} (SI units).
+        parameters: {condition: the model's full parameter object in that condition}.
+        intervals: {"shared": {name: (low, high)}, "per_condition": {condition: {name:
+            (low, high)}}} at ``level`` (SI units).
+        standard_errors: the same shape, one standard error each (SI units).
+        level: the intervals' nominal coverage. calibrated: the parameters whose interval
+            multiplier is calibrated.
+        chi2: the joint weighted residual's squared norm (units of the noise).
+        dof: its degrees of freedom (real numbers compared − identified parameters).
+        compared: the real numbers compared (2 per locked harmonic and channel).
+        on_bound: judged parameters on a search bound (labelled as in the verdict).
+        stable: every condition's model balances (a closed loop that settles; a DEC
+            answer that does not fall).
+        seconds: the fit's time.
+        explained: (T,) the share of each trial's locked COM sway the model explains.
+        frequencies_hz, recorded_frf, model_frf: per trial (K_t,): the compared
+            harmonics, the recorded locked FRF of the COM sway (tilt → sway, complex) and
+            the model's.
+        curves: {condition: (F,) Hz, (F,) complex}: the model's FRF in that condition.
+        fitted_deg: per trial (S_t,) the model's COM sway, degrees.
+        pins: the judged parameters' pins (half-width beyond which one is not pinned:
+            relative to the value, absolute for ``absolute_pins``).
+        identified_count: the parameters identified in all.
+        provenance_options: the fit's options, as the JSON records them.
+        chi2_correction: c, what χ²/dof is on average when the model is right: each
+            harmonic's noise is estimated from 2·``neighbours`` empty harmonics (ν = 4·
+            neighbours degrees of freedom), which makes it ν/(ν − 2) (1.2 for the default
+            3 neighbours; the comparison's correction). The verdict, the noise ratio and
+            the intervals' χ² scaling take χ²/c.
+    """
+
+    model: Model = field(repr=False)
+    trials: tuple[str, ...]
+    trial_conditions: tuple[str, ...]
+    conditions: tuple[str, ...]
+    per_condition_names: tuple[str, ...]
+    shared: dict
+    per_condition: dict
+    parameters: dict[str, ModelParameters] = field(repr=False)
+    intervals: dict = field(repr=False)
+    standard_errors: dict = field(repr=False)
+    level: float
+    calibrated: tuple[str, ...]
+    chi2: float
+    dof: int
+    compared: int
+    on_bound: tuple[str, ...]
+    stable: bool
+    seconds: float
+    explained: tuple[float, ...]
+    frequencies_hz: tuple = field(repr=False)
+    recorded_frf: tuple = field(repr=False)
+    model_frf: tuple = field(repr=False)
+    curves: dict = field(repr=False)
+    fitted_deg: tuple = field(repr=False)
+    pins: dict = field(repr=False, default_factory=dict)
+    absolute_pins: frozenset = field(repr=False, default=frozenset())
+    identified_count: int = 0
+    provenance_options: object = field(repr=False, default=None)
+    chi2_correction: float = 1.0
+
+    @property
+    def noise_ratio(self) -> float:
+        """√(χ²/(c·dof)), c = ``chi2_correction``: 1 when the model explains every trial as
+        well as its noise allows."""
+        return math.sqrt(self.chi2 / self.chi2_correction / max(self.dof, 1))
+
+    @property
+    def consistent(self) -> bool:
+        """χ²/c within its 99th percentile for ``dof`` degrees of freedom."""
+        from scipy.stats import chi2
+
+        return self.chi2 / self.chi2_correction <= chi2.ppf(0.99, max(self.dof, 1))
+
+    def _every_interval(self):
+        """(label, name, value, (low, high)) of every identified parameter."""
+        for name, bounds in self.intervals["shared"].items():
+            yield name, name, self.shared[name], bounds
+        for condition, inner in self.intervals["per_condition"].items():
+            for name, bounds in inner.items():
+                yield (_labelled(name, condition), name, self.per_condition[condition][name],
+                       bounds)
+
+    @property
+    def unpinned(self) -> tuple[str, ...]:
+        """The judged parameters (each condition's, for a per-condition one) whose interval
+        is wider than its pin."""
+        out = []
+        for label, name, value, (low, high) in self._every_interval():
+            pin = self.pins.get(name)
+            if pin is None:
+                continue
+            width = pin if name in self.absolute_pins else pin * abs(value)
+            if (high - low) / 2 > width:
+                out.append(label)
+        return tuple(out)
+
+    @property
+    def trust_level(self) -> TrustLevel:
+        """As a frequency fit's (docs/identify.md, "Trust"): doubtful (the joint residual
+        beyond the noise, a judged parameter on a search bound, a model that does not
+        balance), imprecise (consistent, but a judged parameter not pinned), or good."""
+        if not self.consistent or self.on_bound or not self.stable:
+            return TrustLevel.DOUBTFUL
+        return TrustLevel.IMPRECISE if self.unpinned else TrustLevel.GOOD
+
+    def verdict_line(self) -> str:
+        if self.trust_level is TrustLevel.DOUBTFUL:
+            why = ([f"residual {self.noise_ratio:.2f}× the noise"] if not self.consistent
+                   else []) + ([f"on a search bound: {', '.join(self.on_bound)}"]
+                               if self.on_bound else []) + (
+                [] if self.stable else ["a condition's model does not balance"])
+            return f"trust: DOUBTFUL: {'; '.join(why)}"
+        if self.trust_level is TrustLevel.IMPRECISE:
+            return (f"trust: imprecise: {', '.join(self.unpinned)} not pinned by these "
+                    "trials; the intervals give the precision")
+        return "trust: good"
+
+    # what a comparison reads of a fit (posture_id.models.protocol.ModelFit)
+    @property
+    def fitted_com_deg(self) -> tuple[np.ndarray, ...]:
+        return self.fitted_deg
+
+    @property
+    def falls(self) -> bool:
+        return not all(np.all(np.isfinite(f)) for f in self.fitted_deg)
+
+    def comparison_dict(self) -> dict:
+        return self.to_dict()
+
+    def to_dict(self) -> dict:
+        from posture_id.provenance import provenance
+
+        def pairs(d: dict) -> dict:
+            return {k: list(v) for k, v in d.items()}
+
+        return {"model": self.model.name,
+                "shared": dict(self.shared),
+                "per_condition": {c: dict(v) for c, v in self.per_condition.items()},
+                "per_condition_parameters": list(self.per_condition_names),
+                "parameters": {c: p.to_dict() for c, p in self.parameters.items()},
+                "intervals": {"shared": pairs(self.intervals["shared"]),
+                              "per_condition": {c: pairs(v) for c, v in
+                                                self.intervals["per_condition"].items()}},
+                "standard_errors": self.standard_errors,
+                "level": self.level, "calibrated": list(self.calibrated),
+                "chi2": self.chi2, "dof": self.dof, "compared": self.compared,
+                "noise_ratio": self.noise_ratio, "consistent": self.consistent,
+                "chi2_correction": self.chi2_correction, "on_bound": list(self.on_bound),
+                "trust": {"level": self.trust_level.value,
+                          "doubtful": self.trust_level is TrustLevel.DOUBTFUL,
+                          "unpinned": list(self.unpinned), "line": self.verdict_line()},
+                "stable": self.stable, "seconds": self.seconds,
+                "conditions": list(self.conditions),
+                "trials": [{"name": n, "condition": c, "explained": e,
+                            "frequencies_hz": f}
+                           for n, c, e, f in zip(self.trials, self.trial_conditions,
+                                                 self.explained, self.frequencies_hz,
+                                                 strict=True)],
+                "identified": self.identified_count,
+                "provenance": provenance(self.provenance_options)}
+
+    def summary(self) -> str:
+        lines = [f"{self.model.label} joint fit of {len(self.trials)} trial(s) in "
+                 f"{len(self.conditions)} condition(s): residual {self.noise_ratio:.2f}× the "
+                 f"noise ({'consistent with' if self.consistent else 'beyond'} it; χ² "
+                 f"{self.chi2:.1f} on {self.dof} dof); {self.seconds:.2f} s"]
+        how = {n: "calibrated " if n in self.calibrated else "" for n in
+               (*self.shared, *self.per_condition_names)}
+        level = f"{100 * self.level:.0f} %"
+        lines.append("shared:")
+        for name, value in self.shared.items():
+            low, high = self.intervals["shared"][name]
+            lines.append(f"  {name:<24} {value:10.4g}   {level} {how[name]}interval "
+                         f"{low:.4g} – {high:.4g}")
+        for condition in self.conditions:
+            lines.append(f"{condition}:")
+            for name, value in self.per_condition[condition].items():
+                low, high = self.intervals["per_condition"][condition][name]
+                lines.append(f"  {name:<24} {value:10.4g}   {level} {how[name]}interval "
+                             f"{low:.4g} – {high:.4g}")
+        for name, condition, share in zip(self.trials, self.trial_conditions, self.explained,
+                                          strict=True):
+            lines.append(f"  trial {name} [{condition}]: explains {100 * share:.1f} % of its "
+                         "locked COM sway")
+        lines.append(self.verdict_line())
+        return "\n".join(lines)
+
+    def plot(self, path=None, ax=None):
+        """Every trial's recorded locked FRF of the COM sway (gain and phase; points,
+        coloured by condition) with the joint model's FRF in its condition over it."""
+        from posture_id.plotting import plot_condition_frfs
+
+        trials = [(c, f, r, m) for c, f, r, m in zip(
+            self.trial_conditions, self.frequencies_hz, self.recorded_frf, self.model_frf,
+            strict=True)]
+        return plot_condition_frfs(
+            self.conditions, trials, self.curves,
+            f"{self.model.label} joint fit of {len(self.trials)} trials: residual "
+            f"{self.noise_ratio:.2f}× the noise", path=path, ax=ax)
+
+
+def joint_parameter_names(model: Model, body, options=None) -> tuple[str, ...]:
+    """The names :func:`fit_joint` accepts as per-condition parameters of ``model``: a
+    closed loop's identified parameters (``options``' or the model's), DEC's
+    ``"<joint>.kp"``, ``".ki"``, ``".kd"`` and ``".delay_s"`` of every module of ``body``."""
+    if Capability.FREQUENCY_RESPONSE in model.capabilities:
+        from posture_id.fitting.frequency import FrequencyFitOptions
+
+        return (options or FrequencyFitOptions()).free_of(model)
+    if Capability.LOCKED_FIT in model.capabilities:
+        return tuple(f"{joint}.{name}" for joint in body.joint_names
+                     for name in DEC_PER_CONDITION)
+    raise PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
+                         "loop nor per-joint modules)")
+
+
+def resolve_parameter(model: Model, body, name: str, options=None) -> str:
+    """``name`` as :func:`fit_joint` spells it (``W`` → ``w``, ``ankle.Kp`` →
+    ``ankle.kp``).
+
+    Raises:
+        PostureIdError: not a parameter of the model that may vary by condition (the
+            message lists those that may).
+    """
+    names = joint_parameter_names(model, body, options)
+    for known in names:
+        if known.lower() == str(name).lower():
+            return known
+    raise PostureIdError(f"{name!r} is not a parameter of the {model.label} model that a "
+                         f"joint fit identifies (its parameters: {', '.join(names)})")
+
+
+def _condition_indices(conditions: Sequence[str], trials: list[PreparedTrial]
+                       ) -> tuple[tuple[str, ...], list[int]]:
+    """(the distinct labels in order of first appearance, each trial's index)."""
+    if len(conditions) != len(trials):
+        raise PostureIdError(f"{len(conditions)} condition label(s) for {len(trials)} "
+                             "trial(s): give one label per trial")
+    labels: list[str] = []
+    for label in conditions:
+        if not isinstance(label, str) or not label.strip():
+            raise PostureIdError(f"condition labels must be non-empty text, got {label!r}")
+        if label not in labels:
+            labels.append(label)
+    return tuple(labels), [labels.index(c) for c in conditions]
+
+
+def fit_joint(model: Model, trials: list[PreparedTrial], body, conditions: Sequence[str],
+              per_condition: tuple[str, ...] = (), options=None, progress=None,
+              noise_from_residual: bool = True) -> JointFit:
+    """One fit of ``model`` to every one of ``trials`` (one subject): the parameters
+    ``per_condition`` names one per condition, the rest of the identified ones shared.
+
+    Args:
+        model: a model with a closed loop (IC, any
+            :class:`~posture_id.models.protocol.FrequencyModel`) or DEC.
+        trials: (T,) the trials, each with its periodic stimulus, all of ``body``.
+        body: the subject's body.
+        conditions: (T,) one label per trial ("eyes open", "eyes closed"...); trials with
+            the same label share the per-condition parameters too.
+        per_condition: the parameters that take one value per condition (IC: ``"w"``;
+            DEC: ``"ankle.kp"``; :func:`joint_parameter_names`); empty: every parameter
+            shared.
+        options: the model's fit options: a
+            :class:`~posture_id.fitting.frequency.FrequencyFitOptions` for a closed loop, a
+            :class:`~posture_id.fitting.options.FitOptions` for DEC (its ``locked``
+            defaulting to :class:`~posture_id.frf.locked.LockedOptions`); None: defaults.
+        progress: told the stages of DEC's fit.
+        noise_from_residual: a model with a closed loop: after a first fit, estimate each
+            harmonic's noise again from the residual's empty harmonics (the model's own
+            transient from rest taken out of them) and fit again from the first answer
+            (False: the recorded sway's, as :func:`~.frequency.fit_frequency`).
+    Returns:
+        :class:`JointFit`.
+    Raises:
+        PostureIdError: no trials, a label count other than the trials', a per-condition
+            name that is not the model's (the message lists them), a stimulus that is not
+            periodic, a trial of another body.
+    """
+    started = clock.perf_counter()
+    trials = list(trials)
+    if not trials:
+        raise PostureIdError("a joint fit needs at least one trial")
+    labels, index = _condition_indices(conditions, trials)
+    _check_options(model, options)
+    names = joint_parameter_names(model, body, options)
+    unknown = [n for n in per_condition if n not in names]
+    if unknown:
+        raise PostureIdError(f"per-condition parameter(s) {', '.join(map(repr, unknown))} "
+                             f"not among the {model.label} model's (its parameters: "
+                             f"{', '.join(names)})")
+    per = tuple(n for n in names if n in per_condition)
+    if Capability.FREQUENCY_RESPONSE in model.capabilities:
+        return _fit_frequency_joint(model, trials, body, labels, index, per, options,
+                                    started, noise_from_residual)
+    return _fit_locked_joint(model, trials, body, labels, index, per, options, progress,
+                             started)
+
+
+def _check_options(model: Model, options) -> None:
+    """Refuse options of another kind than the model's fit takes (None is its default)."""
+    if options is None:
+        return
+    if Capability.FREQUENCY_RESPONSE in model.capabilities:
+        from posture_id.fitting.frequency import FrequencyFitOptions as wanted
+    else:
+        from posture_id.fitting.options import FitOptions as wanted
+    if not isinstance(options, wanted):
+        raise PostureIdError(f"the {model.label} joint fit takes {wanted.__name__}, got "
+                             f"{type(options).__name__}")
+
+
+def _split(names: tuple[str, ...], per: tuple[str, ...], conditions: tuple[str, ...],
+           each) -> tuple[dict, dict]:
+    """({name: each(name, 0)} of the shared names, {condition: {name: each(name, c)}})."""
+    shared = {n: each(n, 0) for n in names if n not in per}
+    by_condition = {c: {n: each(n, k) for n in per} for k, c in enumerate(conditions)}
+    return shared, by_condition
+
+
+def _bounds_of(values: dict, half: dict, ranges: Mapping[str, tuple[float, float]]
+               ) -> dict:
+    """{name: (low, high)}: value ± half-width, not below 0; the whole search range
+    (``ranges``, SI) where the half-width is 0 or not finite: the trials leave that
+    parameter undetermined (the Gauss-Newton covariance gives a direction the residual
+    does not change along no variance at all)."""
+    out = {}
+    for n, value in values.items():
+        low, high = ranges[n]
+        if not math.isfinite(half[n]) or half[n] <= 1e-9 * (high - low):
+            out[n] = (float(low), float(high))
+        else:
+            out[n] = (max(value - half[n], 0.0), value + half[n])
+    return out
+
+
+def _fit_frequency_joint(model, trials, body, labels, index, per, options, started,
+                         noise_from_residual: bool) -> JointFit:
+    """The joint fit of a model with a closed loop (the module doc)."""
+    from posture_id.fitting.frequency import (
+        FrequencyFitOptions,
+        Precision,
+        on_search_bound,
+        search_conditions,
+    )
+
+    options = options or FrequencyFitOptions()
+    joint = search_conditions(model, trials, body, index, per, options, noise_from_residual)
+    parts, layout, found, plant = joint.parts, joint.layout, joint.found, joint.plant
+    free = layout.free
+    chi2 = float(2 * found.fit.cost)
+    compared = int(sum(len(p.target) for p in parts))
+    dof = compared - len(layout.names)
+    correction = chi2_correction(options.locked)
+    precision = Precision.of(model, plant, layout.names, found.fit.jac, chi2 / correction,
+                             dof, options.level,
+                             lambda n, level: joint_multiplier(model, n, level))
+
+    def entry(array):
+        return lambda n, c: float(array[layout.index(c, n)])
+
+    values = found.x * np.array([model.scale(n, plant) for n in layout.names])
+    shared, by_condition = _split(free, layout.per_condition, labels, entry(values))
+    se_shared, se_by = _split(free, layout.per_condition, labels,
+                              entry(precision.standard_errors))
+    half_shared, half_by = _split(free, layout.per_condition, labels,
+                                  entry(precision.half_widths))
+    bound_entries = set(on_search_bound(model, layout.names, found.x))
+    on_bound = tuple(_labelled(n, None if n not in layout.per_condition else labels[c])
+                     for c in range(layout.count) for n in free
+                     if layout.index(c, n) in bound_entries
+                     and (c == 0 or n in layout.per_condition))
+    params = dict(zip(labels, found.params, strict=True))
+    ranges = {n: (lo * model.scale(n, plant), hi * model.scale(n, plant))
+              for n, (lo, hi) in model.search_bounds.items()}
+    fitted = tuple(np.degrees(p.model.sway(params[labels[c]]))
+                   for p, c in zip(parts, index, strict=True))
+    model_frf = tuple(model.closed_loop(params[labels[c]], plant,
+                                        2j * np.pi * p.projection.frequencies_hz)
+                      for p, c in zip(parts, index, strict=True))
+    curves = {}
+    for c, label in enumerate(labels):
+        f = np.concatenate([p.projection.frequencies_hz
+                            for p, k in zip(parts, index, strict=True) if k == c])
+        grid = np.geomspace(0.8 * f.min(), 1.25 * f.max(), 200)
+        curves[label] = (grid, model.closed_loop(params[label], plant, 2j * np.pi * grid))
+    calibrated = tuple(n for n in free
+                       if precision.calibrated[layout.names.index(n)])
+    return JointFit(
+        model, tuple(t.name for t in trials), tuple(labels[c] for c in index), labels,
+        layout.per_condition, shared, by_condition, params,
+        {"shared": _bounds_of(shared, half_shared, ranges),
+         "per_condition": {c: _bounds_of(by_condition[c], half_by[c], ranges)
+                           for c in labels}},
+        {"shared": se_shared, "per_condition": se_by}, options.level, calibrated, chi2, dof,
+        compared, on_bound, True, clock.perf_counter() - started,
+        tuple(p.explained(f) for p, f in zip(parts, fitted, strict=True)),
+        tuple(p.projection.frequencies_hz for p in parts), tuple(p.frf() for p in parts),
+        model_frf, curves, fitted, dict(model.pinned), frozenset(model.absolute_pins),
+        len(layout.names), options, correction)
+
+
+def _fit_locked_joint(model, trials, body, labels, index, per, options, progress, started
+                      ) -> JointFit:
+    """DEC's joint fit: the locked least squares, shared, then per condition (the module
+    doc). Its intervals are at :data:`DEC_LEVEL`, the normal quantile (uncalibrated)."""
+    from scipy.stats import norm
+
+    from posture_id.fitting.frequency import LockedCom
+    from posture_id.fitting.joint import polish_by_condition
+    from posture_id.fitting.models import _falls
+    from posture_id.fitting.options import FitOptions
+    from posture_id.models.dec import com_deg
+
+    options = options or FitOptions()
+    if options.locked is None:
+        options = replace(options, locked=LockedOptions())
+    joints = body.joint_names
+    fields = (*DEC_PER_CONDITION, *(("kpas", "bpas") if options.fit_passive else ()))
+    names = tuple(f"{j}.{f}" for f in fields for j in joints)
+
+    def q_index(name: str) -> int:  # where a module parameter sits in q (fitting.unknowns)
+        joint, field_name = name.split(".")
+        return _Q_BLOCK[field_name] * len(joints) + joints.index(joint)
+
+    polish = polish_by_condition(trials, body, options, index, tuple(q_index(p) for p in per),
+                                 progress)
+    stage, evaluator, free = polish.stage, polish.evaluator, polish.free
+    data = polish.data_rows
+    residual = stage.residual[:data]
+    chi2 = float(residual @ residual)
+    dof = data - len(free)
+    jac = stage.jacobian
+    correction = chi2_correction(options.locked)
+    try:
+        cov = np.linalg.pinv(jac.T @ jac) * max(1.0, chi2 / correction / max(dof, 1))
+    except np.linalg.LinAlgError:
+        cov = np.full((len(free), len(free)), np.inf)
+    se_normalised = dict(zip(free, np.sqrt(np.clip(np.diag(cov), 0, None)), strict=True))
+    multiplier = float(norm.ppf(0.5 + DEC_LEVEL / 2))
+    defaults = polish.runs[0].problem.defaults
+    params = dict(zip(labels, polish.parameters, strict=True))
+    lower, upper = polish.runs[0].lower, polish.runs[0].upper
+
+    def value(name: str, c: int) -> float:
+        joint, field_name = name.split(".")
+        return float(getattr(params[labels[c]][joint], field_name))
+
+    def se(name: str, c: int) -> float:  # normalised p̃ = p/p_default − 1: dp = p_default·dp̃
+        joint, field_name = name.split(".")
+        return (se_normalised.get(evaluator.column(c, q_index(name)), math.inf)
+                * float(getattr(defaults[joint], field_name)))
+
+    shared, by_condition = _split(names, per, labels, value)
+    se_shared, se_by = _split(names, per, labels, se)
+    ranges = {}
+    for name in names:
+        joint, field_name = name.split(".")
+        default = float(getattr(defaults[joint], field_name))
+        k = q_index(name)
+        ranges[name] = (default * (1 + lower[k]), default * (1 + upper[k]))
+    on_bound = []
+    for c, label in enumerate(labels):
+        for name in names:
+            if name.split(".")[1] not in _DEC_BOUND_JUDGED or (c > 0 and name not in per):
+                continue
+            base = q_index(name)
+            x = stage.q[evaluator.column(c, base)]
+            margin = 1e-3 * (upper[base] - lower[base])
+            if x <= lower[base] + margin or x >= upper[base] - margin:
+                on_bound.append(_labelled(name, label if name in per else None))
+    coms = [LockedCom(t, body, options.locked, "the DEC joint fit") for t in trials]
+    fitted = tuple(com_deg(theta, body) for theta in polish.fitted)
+    model_frf = tuple(lc.frf(f) for lc, f in zip(coms, fitted, strict=True))
+    curves = {}
+    for c, label in enumerate(labels):
+        f = np.concatenate([lc.projection.frequencies_hz
+                            for lc, k in zip(coms, index, strict=True) if k == c])
+        h = np.concatenate([m for m, k in zip(model_frf, index, strict=True) if k == c])
+        order = np.argsort(f, kind="stable")
+        curves[label] = (f[order], h[order])
+    return JointFit(
+        model, tuple(t.name for t in trials), tuple(labels[c] for c in index), labels, per,
+        shared, by_condition, params,
+        {"shared": _bounds_of(shared, {k: multiplier * v for k, v in se_shared.items()},
+                              ranges),
+         "per_condition": {c: _bounds_of(by_condition[c], {k: multiplier * v
+                                                           for k, v in se_by[c].items()},
+                                           ranges)
+                           for c in labels}},
+        {"shared": se_shared, "per_condition": se_by}, DEC_LEVEL, (), chi2, dof, data,
+        tuple(on_bound), not any(_falls(theta) for theta in polish.fitted),
+        clock.perf_counter() - started,
+        tuple(lc.explained(f) for lc, f in zip(coms, fitted, strict=True)),
+        tuple(lc.projection.frequencies_hz for lc in coms), tuple(lc.frf() for lc in coms),
+        model_frf, curves, fitted,
+        {f"{j}.{f}": pin for f, pin in _DEC_PINNED.items() for j in joints}, frozenset(),
+        len(free) + len(joints), options, correction)

@@ -1,0 +1,97 @@
+"""A whole study from its manifest (posture_id/manifest): the manifest read and refused
+clearly, every trial's FRF, resumable, summary.csv with the conditions as columns, paired
+tests between the conditions; and on the command line."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from posture_id.errors import PostureIdError
+from posture_id.force_plate.reading import ForcePlateColumns
+from posture_id.manifest import StudyOptions, read_manifest, run_study
+from posture_id.recording import TimeUnit
+from posture_id.studies.force_plate_study import make_study
+
+PLATE = ForcePlateColumns(cop="COP AP", time="Time", tilt="Platform",
+                          time_unit=TimeUnit.MILLISECONDS)
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    """Three subjects, eyes open and closed, one sinusoid (0.2 Hz) each."""
+    return make_study(tmp_path_factory.mktemp("study"), subjects=3, frequencies_hz=(0.2,))
+
+
+def test_the_manifest_is_read_and_its_mistakes_named(study, tmp_path):
+    manifest = read_manifest(study)
+    assert manifest.subjects == ("S01", "S02", "S03")
+    assert manifest.conditions == ("eyes_open", "eyes_closed")
+    assert all(t.file.is_file() and t.height_m for t in manifest.trials)
+    text = study.read_text().splitlines()
+    cases = {
+        "no column": [text[0].replace("condition", "cond"), *text[1:]],
+        "line 3, column 'file': no such file": [text[0], text[1],
+                                                text[2].replace(".txt", ".csv")],
+        "line 2, column 'height_m': 175 is not a person's": [
+            text[0], ",".join(text[1].split(",")[:3] + ["175"] + text[1].split(",")[4:])],
+        "already the trial of line 2": [text[0], text[1], text[1]],
+        "body differs from line 2": [text[0], text[1],
+                                     text[2].replace(text[2].split(",")[-1], "99")],
+    }
+    for why, lines in cases.items():
+        bad = study.parent / "bad.csv"
+        bad.write_text("\n".join(lines) + "\n")
+        with pytest.raises(PostureIdError, match=why.replace("(", r"\(").replace(")", r"\)")):
+            read_manifest(bad)
+
+
+def test_a_study_of_force_plate_trials_makes_every_frf_and_the_paired_test(study, tmp_path):
+    out = tmp_path / "out"
+    options = StudyOptions(layout=PLATE, model=None, workers=1)
+    result = run_study(read_manifest(study), out, options)
+    assert not result.failed and len(result.trial_rows) == 6
+    with open(out / "summary.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["subject"] for r in rows] == ["S01", "S02", "S03"]
+    for condition in ("eyes_open", "eyes_closed"):
+        assert all(float(r[f"gain 0.2 Hz [{condition}]"]) > 0 for r in rows)
+    # with the eyes closed (W 0.6 against 0.35) every subject follows the platform more
+    assert all(float(r["gain 0.2 Hz [eyes_closed]"]) > float(r["gain 0.2 Hz [eyes_open]"])
+               for r in rows)
+    paired = json.loads((out / "paired" / "eyes_open_vs_eyes_closed.json").read_text())
+    assert paired["frf"]["pairs"] == 3 and paired["frf"]["exact"]
+    # started again: nothing is done twice
+    again = run_study(read_manifest(study), out, options)
+    assert {r.status for r in again.trial_rows} == {"skipped"}
+
+
+@pytest.mark.slow
+def test_a_study_fits_every_subject_jointly_and_compares_the_conditions_weights(study,
+                                                                               tmp_path):
+    out = tmp_path / "out"
+    result = run_study(read_manifest(study), out,
+                       StudyOptions(layout=PLATE, model="ic", per_condition=("w",)))
+    assert not result.failed
+    row = result.summary_rows[0]
+    assert row["w [eyes_closed]"] > row["w [eyes_open]"]
+    tests = result.paired["eyes_open vs eyes_closed"]
+    assert tests["parameters"]["parameters"][0]["parameter"] == "w"
+    assert tests["parameters"]["parameters"][0]["difference"] < 0
+
+
+def test_the_command_line_runs_a_study(study, tmp_path, capsys):
+    from posture_id.cli import main
+
+    out = tmp_path / "cli"
+    flags = ["--time-column", "Time", "--time-units", "ms", "--tilt-column", "Platform",
+             "--cop-column", "COP AP"]
+    assert main(["study", str(study), "--out", str(out), "--model", "none", "--workers",
+                 "1", *flags, "--plot", str(tmp_path / "study.png")]) == 0
+    assert "3 subject(s)" in capsys.readouterr().out
+    assert (tmp_path / "study.png").is_file() and (out / "trials.csv").is_file()
+    assert main(["study", str(study), "--out", str(out), "--model", "none",
+                 "--per-condition", "w", *flags]) == 2
+    assert "--per-condition goes with a model" in capsys.readouterr().err

@@ -14,15 +14,20 @@ The public API; each name lives in the package of its stage (docs/development.md
   :func:`simulate`, :func:`simulate_batch`, :class:`SimulationOptions`,
   :func:`simulate_reference` (Pinocchio, slow)
 - **Recordings**: :class:`Recording`, :class:`RecordingColumns` (a lab's columns),
-  :class:`MarkerMapping` and :class:`LabAxes` (a C3D trial's markers)
+  :class:`TimeUnit`, :class:`MarkerMapping` and :class:`LabAxes` (a C3D trial's markers),
+  :class:`ForcePlateColumns` and :func:`com_angle_from_cop` (a force plate's COP),
+  :func:`recognise_periodic` (any periodic tilt in a tilt column)
 - **Least squares** (CasADi): :func:`fit_recording`, :class:`FitOptions`,
   :class:`FitProblem`, :class:`FitResult`
 - **The independent-channel model**: :func:`fit_ic`, :class:`IcFitOptions`,
   :class:`IcParameters`, :func:`simulate_ic`, :func:`compare_models` (DEC against IC),
   :func:`compare_amplitudes`
+- **One subject, several trials; a study**: :func:`fit_joint`, :class:`JointFit`,
+  :func:`read_manifest`, :func:`run_study`, :class:`StudyOptions`
 - **FRFs and norms**: :func:`frequency_response`, :class:`FrfOptions`,
   :class:`FrequencyBands`, :data:`BAND_PRESETS`, :func:`read_frfs`, :class:`FrfSet`,
-  :class:`Norm`, :func:`build_norm`, :func:`against_norm`, :func:`compare_groups`
+  :class:`Norm`, :func:`build_norm`, :func:`against_norm`, :func:`compare_groups`,
+  :func:`compare_paired` (two conditions within subjects)
 - **Training data**: :func:`generate_dataset`, :class:`DatasetConfig`, :class:`Dataset`
 
 Everything but the first groups loads on first use, so that ``import posture_id`` does
@@ -40,7 +45,7 @@ from posture_id.dec import (
     sample_parameters,
 )
 from posture_id.errors import PostureIdError
-from posture_id.recording import AngleUnit, Recording, RecordingColumns
+from posture_id.recording import AngleUnit, Recording, RecordingColumns, TimeUnit
 from posture_id.simulation import (
     BatchResult,
     SimulationOptions,
@@ -66,6 +71,16 @@ __all__ = [
     "Recording",
     "RecordingColumns",
     "AngleUnit",
+    "TimeUnit",
+    "ForcePlateColumns",
+    "com_angle_from_cop",
+    "recognise_periodic",
+    "fit_joint",
+    "JointFit",
+    "read_manifest",
+    "run_study",
+    "StudyOptions",
+    "compare_paired",
     "read_recording",
     "prepare_trial",
     "identify",
@@ -113,6 +128,15 @@ __all__ = [
 ]
 
 _LAZY = {
+    "ForcePlateColumns": "posture_id.force_plate.reading",
+    "com_angle_from_cop": "posture_id.force_plate.cop",
+    "recognise_periodic": "posture_id.simulation.periodic",
+    "fit_joint": "posture_id.fitting.joint_conditions",
+    "JointFit": "posture_id.fitting.joint_conditions",
+    "read_manifest": "posture_id.manifest",
+    "run_study": "posture_id.manifest",
+    "StudyOptions": "posture_id.manifest",
+    "compare_paired": "posture_id.norms.paired",
     "read_recording": "posture_id.trials.reading",
     "prepare_trial": "posture_id.trials",
     "Identifier": "posture_id.identify",

@@ -374,3 +374,39 @@ def test_the_command_names_decs_parameters(ic_csvs, tmp_path, capsys):
     err = capsys.readouterr().err
     assert ("'kp' is not a parameter of the DEC model that a joint fit identifies (its "
             "parameters: ankle.kp, ankle.ki, ankle.kd, ankle.delay_s)") in err
+
+
+def test_a_jacobians_null_space_names_the_undetermined_parameters():
+    from posture_id.fitting.frequency import undetermined
+
+    rng = np.random.default_rng(0)
+    full = rng.normal(size=(12, 4))
+    assert not undetermined(full).any()
+    traded = full.copy()
+    traded[:, 3] = 2 * traded[:, 1] - traded[:, 0]  # the fourth trades off with two others
+    assert list(undetermined(traded)) == [True, True, False, True]
+    assert undetermined(rng.normal(size=(2, 6))).all()  # 2 numbers for 6 parameters
+
+
+def test_one_sinusoid_trial_leaves_the_ic_parameters_undetermined_and_says_so():
+    from posture_id.bodies.anthropometry import winter_body_file
+    from posture_id.bodies.body import load_body
+    from posture_id.fitting.frequency import fit_ic
+    from posture_id.models.ic.model import IC
+    from posture_id.models.ic.subjects import ic_recording
+    from posture_id.models.protocol import TrustLevel
+    from posture_id.simulation.protocols import SumOfSinesProtocol
+    from posture_id.trials import prepare_trial
+
+    body = load_body(winter_body_file(1.75, 70.0, 1))
+    sine = SumOfSinesProtocol(frequencies_hz=(0.2,), amplitudes_deg=(1.0,), cycles=8)
+    recording, _ = ic_recording(body, IC.default_parameters(body), sine.profile(), None, 3)
+    fit = fit_ic(prepare_trial(recording, None, rate_hz=50.0), body)
+    assert fit.harmonics == 1 and set(fit.undetermined) == set(fit.free)
+    assert fit.trust_level is TrustLevel.IMPRECISE
+    assert "not determined by this recording" in fit.verdict_line()
+    plant = IC.plant(body)
+    for name in fit.free:  # no interval narrower than what 2 numbers can tell
+        low, high = IC.search_bounds[name]
+        assert fit.intervals[name] == pytest.approx((low * IC.scale(name, plant),
+                                                     high * IC.scale(name, plant)))

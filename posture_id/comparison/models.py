@@ -36,7 +36,7 @@ import numpy as np
 from posture_id.comparison.identified import fit_as_identified
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
-from posture_id.fitting.frequency import IcFitOptions, com_sway_deg
+from posture_id.fitting.frequency import IcFitOptions, com_sway_deg, locked_projection
 from posture_id.fitting.models import fit_model_parts
 from posture_id.frf.locked import LockedOptions, LockedProjection, floored, noise_levels
 from posture_id.models.dec import DEC
@@ -238,8 +238,9 @@ class _Judged:
                                  "stimulus (its locked harmonics)")
         rec = trial.recording
         sway = com_sway_deg(trial, body)
-        projection = LockedProjection.for_stimulus(
-            trial.stimulus, rec.tilt, sway[:, None], rec.sample_rate_hz, locked, trial.name)
+        # a sinusoid over several of its cycles, as the fits analyse it (its noise
+        # estimated on both sides of its frequency)
+        projection = locked_projection(trial, sway[:, None], locked)
         spectrum = projection.all_harmonics(sway[:, None])[:, 0]
         frequencies = np.arange(1, len(spectrum) + 1) * rec.sample_rate_hz / projection.period
         rows = np.flatnonzero(frequencies <= MAX_FREQUENCY_HZ)

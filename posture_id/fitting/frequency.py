@@ -188,13 +188,23 @@ class FrequencyFitResult(Result):
         return tuple(out)
 
     @property
+    def undetermined(self) -> tuple[str, ...]:
+        """The identified parameters the recording leaves undetermined (fewer numbers
+        compared than parameters, or parameters that trade off exactly): their interval
+        is their whole search range."""
+        return tuple(n for n in self.free
+                     if not math.isfinite(self.standard_errors.get(n, 0.0)))
+
+    @property
     def trust_level(self) -> TrustLevel:
         """The trust verdict's level, as for every answer (docs/identify.md, "Trust"):
         doubtful (a residual beyond the noise, a judged parameter on a search bound),
-        imprecise (consistent, but a judged parameter not pinned), or good."""
+        imprecise (consistent, but a judged parameter not pinned or left undetermined),
+        or good."""
         if not self.consistent or self.on_bound or not self.stable:
             return TrustLevel.DOUBTFUL
-        return TrustLevel.IMPRECISE if self.unpinned else TrustLevel.GOOD
+        return (TrustLevel.IMPRECISE if self.unpinned or self.undetermined
+                else TrustLevel.GOOD)
 
     def verdict_line(self) -> str:
         if self.trust_level is TrustLevel.DOUBTFUL:
@@ -202,6 +212,12 @@ class FrequencyFitResult(Result):
                    else []) + ([f"on a search bound: {', '.join(self.on_bound)}"]
                                if self.on_bound else [])
             return f"trust: DOUBTFUL: {'; '.join(why)}"
+        if self.trust_level is TrustLevel.IMPRECISE and self.undetermined:
+            return (f"trust: imprecise: {', '.join(self.undetermined)} not determined by "
+                    f"this recording ({2 * self.harmonics} numbers compared for "
+                    f"{len(self.free)} parameters; its interval is its whole search range): "
+                    "fit the trials of several frequencies or conditions at once "
+                    "(posture-id fit TRIAL TRIAL ...)")
         if self.trust_level is TrustLevel.IMPRECISE:
             return (f"trust: imprecise: {', '.join(self.unpinned)} not pinned to 10 % by this "
                     "recording; the intervals give the precision")
@@ -555,6 +571,10 @@ class Precision:
             cov = np.full((len(names), len(names)), np.inf)
         scales = np.array([model.scale(n, plant) for n in names])
         standard_errors = np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
+        # a direction the residual does not change along (fewer numbers compared than
+        # parameters, or parameters that trade off exactly) has no finite variance: the
+        # pseudo-inverse would give it none at all
+        standard_errors[undetermined(jac)] = np.inf
         multipliers = [(multiplier or model.interval_multiplier)(n, level) for n in names]
         return cls(standard_errors, np.array([m for m, _ in multipliers]),
                    tuple(c for _, c in multipliers))
@@ -563,6 +583,35 @@ class Precision:
     def half_widths(self) -> np.ndarray:
         """(X,) SI units: each interval's half-width."""
         return self.multipliers * self.standard_errors
+
+
+def undetermined(jac: np.ndarray, tolerance: float = 1e-10) -> np.ndarray:
+    """(X,) bool: the parameters (columns of the Jacobian (R, X)) with a share in its
+    null space: their value can change, with others, and leave the residual as it is
+    (fewer rows than columns, or columns that are combinations of others, singular values
+    below ``tolerance`` of the largest)."""
+    jac = np.asarray(jac, dtype=float)
+    if not jac.size or not np.all(np.isfinite(jac)):
+        return np.zeros(jac.shape[1] if jac.ndim == 2 else 0, dtype=bool)
+    _, singular, vt = np.linalg.svd(jac, full_matrices=True)
+    rank = int(np.count_nonzero(singular > tolerance * max(float(singular.max()), 1e-300)))
+    null = vt[rank:]
+    return np.any(np.abs(null) > 1e-3, axis=0) if len(null) else np.zeros(jac.shape[1],
+                                                                        dtype=bool)
+
+
+def interval_bounds(values: dict, half: dict, ranges) -> dict:
+    """{name: (low, high)}: value ± half-width, not below 0; the whole search range
+    (``ranges``: {name: (low, high)}, SI) where the half-width is 0 or not finite: the
+    recordings leave that parameter undetermined (:func:`undetermined`)."""
+    out = {}
+    for n, value in values.items():
+        low, high = ranges[n]
+        if not math.isfinite(half[n]) or half[n] <= 1e-9 * (high - low):
+            out[n] = (float(low), float(high))
+        else:
+            out[n] = (max(value - half[n], 0.0), value + half[n])
+    return out
 
 
 def on_search_bound(model: FrequencyModel, names: tuple[str, ...], x: np.ndarray
@@ -615,8 +664,10 @@ def fit_frequency(model: FrequencyModel, trial: PreparedTrial, body,
     chi2 = float(2 * best.cost)
     dof = len(part.target) - len(free)
     precision = Precision.of(model, plant, free, best.jac, chi2, dof, options.level)
-    intervals = {n: (max(getattr(params, n) - h, 0.0), getattr(params, n) + h)
-                 for n, h in zip(free, precision.half_widths, strict=True)}
+    ranges = {n: (lo * model.scale(n, plant), hi * model.scale(n, plant))
+              for n, (lo, hi) in model.search_bounds.items()}
+    intervals = interval_bounds({n: getattr(params, n) for n in free},
+                                dict(zip(free, precision.half_widths, strict=True)), ranges)
     on_bound = tuple(free[k] for k in on_search_bound(model, free, found.x))
     fitted = np.degrees(part.model.sway(params))
     projection, sway = part.projection, part.sway

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import time as clock
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -224,6 +224,7 @@ class JointFit(Result):
         return TrustLevel.IMPRECISE if self.unpinned else TrustLevel.GOOD
 
     def verdict_line(self) -> str:
+        """One line: the trust level and why."""
         if self.trust_level is TrustLevel.DOUBTFUL:
             why = ([f"residual {self.noise_ratio:.2f}× the noise"] if not self.consistent
                    else []) + ([f"on a search bound: {', '.join(self.on_bound)}"]
@@ -238,16 +239,21 @@ class JointFit(Result):
     # what a comparison reads of a fit (posture_id.models.protocol.ModelFit)
     @property
     def fitted_com_deg(self) -> tuple[np.ndarray, ...]:
+        """Per trial (S_t,): the model's COM sway, degrees."""
         return self.fitted_deg
 
     @property
     def falls(self) -> bool:
+        """Whether the model's sway of any trial is not finite (it fell)."""
         return not all(np.all(np.isfinite(f)) for f in self.fitted_deg)
 
     def comparison_dict(self) -> dict:
+        """What a comparison reads of the fit: its JSON."""
         return self.to_dict()
 
     def to_dict(self) -> dict:
+        """Strict JSON-ready: the shared and per-condition parameters, the intervals, the
+        verdict, the trials."""
         from posture_id.provenance import provenance
 
         def pairs(d: dict) -> dict:
@@ -280,6 +286,8 @@ class JointFit(Result):
                 "provenance": provenance(self.provenance_options)}
 
     def summary(self) -> str:
+        """Printable: the parameters with their intervals, each trial's share explained,
+        the verdict."""
         lines = [f"{self.model.label} joint fit of {len(self.trials)} trial(s) in "
                  f"{len(self.conditions)} condition(s): residual {self.noise_ratio:.2f}× the "
                  f"noise ({'consistent with' if self.consistent else 'beyond'} it; χ² "
@@ -438,28 +446,13 @@ def _split(names: tuple[str, ...], per: tuple[str, ...], conditions: tuple[str, 
     return shared, by_condition
 
 
-def _bounds_of(values: dict, half: dict, ranges: Mapping[str, tuple[float, float]]
-               ) -> dict:
-    """{name: (low, high)}: value ± half-width, not below 0; the whole search range
-    (``ranges``, SI) where the half-width is 0 or not finite: the trials leave that
-    parameter undetermined (the Gauss-Newton covariance gives a direction the residual
-    does not change along no variance at all)."""
-    out = {}
-    for n, value in values.items():
-        low, high = ranges[n]
-        if not math.isfinite(half[n]) or half[n] <= 1e-9 * (high - low):
-            out[n] = (float(low), float(high))
-        else:
-            out[n] = (max(value - half[n], 0.0), value + half[n])
-    return out
-
-
 def _fit_frequency_joint(model, trials, body, labels, index, per, options, started,
                          noise_from_residual: bool) -> JointFit:
     """The joint fit of a model with a closed loop (the module doc)."""
     from posture_id.fitting.frequency import (
         FrequencyFitOptions,
         Precision,
+        interval_bounds,
         on_search_bound,
         search_conditions,
     )
@@ -509,8 +502,8 @@ def _fit_frequency_joint(model, trials, body, labels, index, per, options, start
     return JointFit(
         model, tuple(t.name for t in trials), tuple(labels[c] for c in index), labels,
         layout.per_condition, shared, by_condition, params,
-        {"shared": _bounds_of(shared, half_shared, ranges),
-         "per_condition": {c: _bounds_of(by_condition[c], half_by[c], ranges)
+        {"shared": interval_bounds(shared, half_shared, ranges),
+         "per_condition": {c: interval_bounds(by_condition[c], half_by[c], ranges)
                            for c in labels}},
         {"shared": se_shared, "per_condition": se_by}, options.level, calibrated, chi2, dof,
         compared, on_bound, True, clock.perf_counter() - started,
@@ -526,7 +519,7 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
     doc). Its intervals are at :data:`DEC_LEVEL`, the normal quantile (uncalibrated)."""
     from scipy.stats import norm
 
-    from posture_id.fitting.frequency import LockedCom
+    from posture_id.fitting.frequency import LockedCom, interval_bounds
     from posture_id.fitting.joint import polish_by_condition
     from posture_id.fitting.models import _falls
     from posture_id.fitting.options import FitOptions
@@ -602,9 +595,9 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
     return JointFit(
         model, tuple(t.name for t in trials), tuple(labels[c] for c in index), labels, per,
         shared, by_condition, params,
-        {"shared": _bounds_of(shared, {k: multiplier * v for k, v in se_shared.items()},
+        {"shared": interval_bounds(shared, {k: multiplier * v for k, v in se_shared.items()},
                               ranges),
-         "per_condition": {c: _bounds_of(by_condition[c], {k: multiplier * v
+         "per_condition": {c: interval_bounds(by_condition[c], {k: multiplier * v
                                                            for k, v in se_by[c].items()},
                                            ranges)
                            for c in labels}},

@@ -139,6 +139,7 @@ def com_angle_from_cop(cop: np.ndarray, sample_rate_hz: float, load: BodyLoad,
         tilt_rad: (S,) the platform's tilt (for the static normal force m·g·cos α).
         normal_force_n: (S,) N, the plate's normal force, when it was recorded.
         options: the COP's unit, the ankle's height above the plate, the sign.
+        name: what messages call the recording.
     Raises:
         RecordingError: a COP or force that is not finite, a normal force that is not a
             standing body's (below half or above 1.5 times m·g: another unit, or nobody on

@@ -71,6 +71,7 @@ class ForcePlateColumns:
                                 self.time_unit)
 
     def cop_options(self, unit: CopUnit) -> CopOptions:
+        """How the COP column is read, in ``unit``."""
         return CopOptions(unit, self.ankle_height_m, self.cop_sign)
 
     def to_dict(self) -> dict:

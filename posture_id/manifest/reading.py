@@ -108,6 +108,9 @@ def _number(path: Path, line: int, column: str, cell: str, span: tuple[float, fl
 def read_manifest(path: str | Path) -> StudyManifest:
     """Read and check a study manifest (the module doc).
 
+    Args:
+        path: the manifest CSV; the files and URDFs it names are relative to its folder.
+
     Raises:
         PostureIdError: one line naming the manifest, the line and the column: a column
             missing, an empty cell, a file or URDF that does not exist, a height or mass

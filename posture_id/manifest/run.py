@@ -66,6 +66,7 @@ class StudyOptions:
         return jsonable({"layout": self.layout, "frf": self.frf, "segments": self.segments})
 
     def fit_record(self) -> dict:
+        """What a subject's joint fit is made with (its JSON's ``cohort_options``)."""
         return jsonable({**self.frf_record(), "model": self.model,
                          "per_condition": list(self.per_condition)})
 
@@ -218,7 +219,18 @@ def _run(journal: Journal, keys: list[Path], tasks: dict, fn, options: StudyOpti
 
 def run_study(manifest: StudyManifest, out: str | Path, options: StudyOptions | None = None,
               progress: Progress | None = None) -> StudyResult:
-    """The study ``manifest`` names, into ``out`` (the module doc)."""
+    """The study ``manifest`` names, into ``out`` (the module doc).
+
+    Args:
+        manifest: the study (:func:`~posture_id.manifest.reading.read_manifest`).
+        out: the results folder (made; a study started again goes on there).
+        options: how the trials are read, the model and its per-condition parameters,
+            the FRFs, the paired tests, where the work runs (default
+            :class:`StudyOptions`).
+        progress: told each trial's FRF and each subject's fit as they finish.
+    Returns:
+        :class:`StudyResult`.
+    """
     options = options or StudyOptions()
     out = Path(out)
     keys = {e.key: e for e in manifest.trials}

@@ -284,9 +284,12 @@ def find_periodic(times_s: np.ndarray, tilt_rad: np.ndarray,
         kind=kind)
 
 
-def recognise_periodic(times_s: np.ndarray, tilt_rad: np.ndarray, name: str = "tilt"
+def recognise_periodic(times_s: np.ndarray, tilt_rad: np.ndarray
                        ) -> tuple[TiltProfile, PeriodicTilt] | None:
     """The tilt column as a periodic stimulus (:func:`find_periodic`), or None.
+
+    Args:
+        times_s: (S,) s, evenly sampled. tilt_rad: (S,) rad, the tilt column.
 
     Returns:
         (the column itself as a :class:`TiltProfile` carrying the period, the steady

@@ -172,7 +172,8 @@ def report(rows: list[dict], command: str) -> str:
              f"Made by `{command}` ({subjects} subjects per sway; the module doc of "
              "`benchmarks/joint_fit.py` says how). Two conditions (eyes open, eyes closed: "
              "W per condition, Kp, Kd, Δ, G and τ_f shared), three sinusoid trials each "
-             "(0.1, 0.2, 0.4 Hz, 2° peak to peak, 40 s); 7 parameters from 12 numbers.", "",
+             f"(0.1, 0.2, 0.4 Hz, 2° peak to peak, {TRIAL_S:g} s); 7 parameters from 12 "
+             "numbers.", "",
              "Intervals: the Gauss-Newton standard error of the joint weighted residual "
              "(scaled by χ²/(1.2·dof) where that exceeds 1: 1.2 is what the estimated noise "
              "levels make χ²/dof on average) times the joint fit's calibrated "
@@ -281,6 +282,7 @@ def _quantiles(z: list) -> list[float]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    global TRIAL_S
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--subjects", type=int, default=24)
     parser.add_argument("--sway", choices=SWAYS, action="append",
@@ -289,10 +291,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--calibrate", action="store_true",
                         help="print the quantiles of |error| / standard error on subjects of "
                              "another seed")
+    parser.add_argument("--trial-s", type=float, default=TRIAL_S,
+                        help="each sinusoid trial's length, s (default %(default)g)")
     parser.add_argument("--rows", type=Path, help="write the report of this rows.json "
                                                   "(measured before) instead of fitting")
     args = parser.parse_args(argv)
     from posture_id.fileio import atomic_write_text, json_text
+
+    TRIAL_S = args.trial_s
 
     if args.calibrate:
         calibrate(args.subjects)
@@ -304,7 +310,11 @@ def main(argv: list[str] | None = None) -> int:
     else:
         rows = run(args.subjects, SEED, tuple(args.sway or SWAYS))
     args.out.mkdir(parents=True, exist_ok=True)
-    command = f".venv/bin/python benchmarks/joint_fit.py --subjects {args.subjects}"
+    command = (f".venv/bin/python benchmarks/joint_fit.py --subjects {args.subjects}"
+               + (f" --trial-s {TRIAL_S:g}" if TRIAL_S != 40.0 else "")
+               + "".join(f" --sway {s}" for s in args.sway or ())
+               + (f" --out {args.out.relative_to(ROOT)}" if args.out.is_relative_to(ROOT)
+                  and args.out != ROOT / "docs/results/joint_fit" else ""))
     atomic_write_text(args.out / "report.md", report(rows, command))
     atomic_write_text(args.out / "rows.json", json_text(rows))
     print(report(rows, command))

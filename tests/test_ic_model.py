@@ -158,3 +158,19 @@ def test_the_design_predicts_the_fits_own_scatter(winter2):
     predicted_sd = predicted.widths[0] * span / (2 * 1.6448536269514722)
     ratio = predicted_sd / scatter
     assert np.all((ratio > 1 / 1.6) & (ratio < 1.6)), dict(zip(SHOWN, ratio, strict=True))
+
+
+def test_the_design_says_one_sinusoid_cannot_determine_the_ic_model(winter2):
+    """One sinusoid gives two numbers for the IC model's parameters: the design calls every
+    shown parameter undetermined (its width capped far beyond the search range) and ranks
+    it below three sines, which it does not; the pseudo-inverse said 0.000."""
+    from posture_id.design.ic import design_ic
+    from posture_id.simulation.protocols import SumOfSinesProtocol
+
+    one = SumOfSinesProtocol(frequencies_hz=(0.2,), amplitudes_deg=(1.0,), cycles=12)
+    three = SumOfSinesProtocol(frequencies_hz=(0.1, 0.3, 0.7), amplitudes_deg=(0.5, 0.3, 0.2),
+                               cycles=6)
+    result = design_ic(winter2, [one, three], draws=2, seed=1)
+    assert np.all(result.widths[0] >= 1.0)
+    assert np.all(result.widths[1] < 1.0)
+    assert result.scores[1] < result.scores[0]

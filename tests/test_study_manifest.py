@@ -95,3 +95,33 @@ def test_the_command_line_runs_a_study(study, tmp_path, capsys):
     assert main(["study", str(study), "--out", str(out), "--model", "none",
                  "--per-condition", "w", *flags]) == 2
     assert "--per-condition goes with a model" in capsys.readouterr().err
+
+
+def test_a_norm_of_sinusoid_trials_tests_a_sinusoid_recording_at_its_frequency(study,
+                                                                                tmp_path,
+                                                                                capsys):
+    """A norm built from the study's eyes-open FRFs (one frequency, no bands) tests an
+    eyes-closed trial's file directly: its FRF at the frequency its sinusoid drives, the
+    same answer as its FRF JSON's."""
+    from posture_id.cli import main
+
+    out = tmp_path / "out"
+    run_study(read_manifest(study), out, StudyOptions(layout=PLATE, model=None, workers=1))
+    members = sorted((out / "frf").glob("*eyes_open*.json"))
+    norm = tmp_path / "norm.json"
+    assert main(["norm", "build", *map(str, members), "--out", str(norm)]) == 0
+    closed = next(e for e in read_manifest(study).trials if e.condition == "eyes_closed")
+    body = tmp_path / "subject.urdf"
+    assert main(["body", "--height-m", str(closed.height_m), "--mass-kg", str(closed.mass_kg),
+                 "--segments", "1", "--out", str(body)]) == 0
+    capsys.readouterr()
+    from_file, from_json = tmp_path / "file.json", tmp_path / "json.json"
+    assert main(["norm", "test", str(closed.file), "--norm", str(norm), "--body", str(body),
+                 "--time-column", "Time", "--time-units", "ms", "--tilt-column", "Platform",
+                 "--cop-column", "COP AP", "--out",
+                 str(from_file)]) in (0, 1)
+    frf = out / "frf" / f"{closed.key}.json"
+    assert main(["norm", "test", str(frf), "--norm", str(norm),
+                 "--out", str(from_json)]) in (0, 1)
+    a, b = (json.loads(p.read_text()) for p in (from_file, from_json))
+    assert a["human_likeness"] == pytest.approx(b["human_likeness"], rel=1e-6)

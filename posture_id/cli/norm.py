@@ -201,14 +201,27 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
     from posture_id.frf.response import FrfOptions
     from posture_id.trials import prepare_trial
 
-    bands = norm_bands(args, norm)
+    import numpy as np
+
+    try:
+        options = FrfOptions.lab_convention(norm_bands(args, norm))
+    except PostureIdError:
+        if norm.lab_bands is not None or args.band_preset:
+            raise
+        options = None  # a norm at the frequencies a stimulus drives (sinusoids): its own
     body = recording_body(args, None)
     recording, stimulus = recording_and_stimulus(args, body)
-    options = FrfOptions.lab_convention(bands)
-    frf = frequency_response(prepare_trial(recording, stimulus, rate_hz=None), body, options)
+    trial = prepare_trial(recording, stimulus, rate_hz=None)
+    frf = frequency_response(trial, body, options)
     names = _channels(tuple(frf.channels), norm, args.channel, args.recording, recording=True)
     columns = [frf.channels.index(c) for c in names]
-    return frf.frequencies_hz, frf.response[:, columns], names
+    f, response = frf.frequencies_hz, frf.response[:, columns]
+    if options is None:
+        rows = [int(np.argmin(np.abs(f - x))) for x in norm.frequencies_hz]
+        if not _at(f[rows], norm.frequencies_hz, rtol=1e-5):
+            norm_bands(args, norm)  # says why: no bands, no preset, not the stimulus's own
+        f, response = f[rows], response[rows]
+    return f, response, names
 
 
 def norm_bands(args: argparse.Namespace, norm):
@@ -236,7 +249,8 @@ def norm_bands(args: argparse.Namespace, norm):
         if chosen is None:
             raise PostureIdError(f"{args.norm}: the norm does not say at which bands its FRFs "
                                  f"were computed and its frequencies ({_hz(f)} Hz) are no "
-                                 f"preset's points: give --band-preset "
+                                 f"preset's points, nor frequencies the recording's stimulus "
+                                 f"drives: give --band-preset "
                                  f"{'|'.join(sorted(BAND_PRESETS))} (its bands, reported at "
                                  "the norm's frequencies), or the recording's FRF JSON")
         return chosen

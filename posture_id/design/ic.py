@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from posture_id.design.information import covariance
 from posture_id.fileio import Result
 from posture_id.fitting.frequency import IcFitOptions
 from posture_id.frf.locked import LockedOptions, LockedProjection
@@ -188,8 +189,9 @@ def design_ic(body, protocols: list[Protocol], sensor_noise_deg: float = 0.05,
                 information += recording.repetitions * _recording_information(
                     body, plant, params, recording.profile(), free,
                     sensor_noise_deg, locked_share, seed + d, options.locked)
-            covariance = np.linalg.pinv(information)
-            se = np.sqrt(np.clip(np.diag(covariance), 0, None))[shown]
+            # ∞ where the protocol leaves a direction unseen (one sinusoid: 2 numbers for
+            # the model's parameters), as DEC's design says it
+            se = np.sqrt(np.clip(np.diag(covariance(information)), 0, None))[shown]
             per_subject.append(np.minimum(2 * z * se / span, 10.0))
             report(progress, i * draws + d + 1, total, "subject")
         widths[i] = np.median(per_subject, axis=0)

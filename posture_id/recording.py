@@ -369,19 +369,12 @@ def _time_unit(table: TextTable, columns: RecordingColumns) -> tuple[TimeUnit, b
     Raises:
         RecordingError: a header unit that is not a time's, or one the columns contradict.
     """
-    name = columns.time
-    stated = table.unit_of(name)
     given = columns.time_unit
+    stated = table.stated_unit(columns.time, (u.value for u in TimeUnit),
+                               None if given is None else given.value, "--time-units",
+                               "time column must be in s or ms", "time")
     if stated is None:
         return given or TimeUnit.SECONDS, False
-    if stated not in {u.value for u in TimeUnit}:
-        raise RecordingError(f"{table.path}: column {table.header[table.index(name)]!r} is in "
-                             f"{stated} by its header; the time column must be in s or ms")
-    if given is not None and given.value != stated:
-        raise RecordingError(
-            f"{table.path}: column {table.header[table.index(name)]!r} is in {stated} by its "
-            f"header, but the time unit given is {given.value} (--time-units "
-            f"{given.value}): leave the unit out or correct the header")
     return TimeUnit(stated), True
 
 
@@ -395,22 +388,14 @@ def _angle_units(table: TextTable, columns: RecordingColumns
             contradicts.
     """
     names = [c for c in (columns.tilt, *columns.angles) if c is not None]
-    angle_units = {u.value for u in AngleUnit}
     stated = {}
     for name in names:
-        unit = table.unit_of(name)
-        if unit is None:
-            continue
-        whole = table.header[table.index(name)]
-        if unit not in angle_units:
-            raise RecordingError(f"{table.path}: column {whole!r} is in {unit} by its header; "
-                                 "the tilt and angle columns must be angles (deg or rad)")
-        if columns.unit is not None and columns.unit.value != unit:
-            raise RecordingError(
-                f"{table.path}: column {whole!r} is in {unit} by its header, but the angle "
-                f"unit given is {columns.unit.value} (--units {columns.unit.value}): leave "
-                "the unit out or correct the header")
-        stated[name] = AngleUnit(unit)
+        unit = table.stated_unit(name, (u.value for u in AngleUnit),
+                                 None if columns.unit is None else columns.unit.value,
+                                 "--units", "tilt and angle columns must be angles (deg or "
+                                 "rad)", "angle")
+        if unit is not None:
+            stated[name] = AngleUnit(unit)
     return {name: (stated[name], "header") if name in stated
             else (columns.unit, "given") if columns.unit is not None
             else (AngleUnit.DEGREES, "default") for name in names}

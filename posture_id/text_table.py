@@ -169,6 +169,27 @@ class TextTable:
         :data:`UNIT_ALIASES`), None when it states none."""
         return self.units[self.index(name)]
 
+    def stated_unit(self, name: str, allowed: Iterable[str], given: str | None,
+                    flag: str, what: str, kind: str) -> str | None:
+        """The unit column ``name``'s header states (None: none), checked: one of
+        ``allowed`` (``what`` the column must be: "time column must be in s or ms"), and
+        the ``kind`` of unit ("time") ``given`` by the caller (None: none; its ``flag``
+        named) not contradicting it. Raises ``error`` naming the file, the column and
+        both units."""
+        stated = self.unit_of(name)
+        if stated is None:
+            return None
+        whole = self.header[self.index(name)]
+        if stated not in set(allowed):
+            raise self.error(f"{self.path}: column {whole!r} is in {stated} by its header; "
+                             f"the {what}")
+        if given is not None and given != stated:
+            raise self.error(
+                f"{self.path}: column {whole!r} is in {stated} by its header, but the {kind} "
+                f"unit given is {given} ({flag} {given}): leave the unit out or correct the "
+                "header")
+        return stated
+
     def line_of(self, row: int) -> int:
         """The file's line (1-based) of data row ``row`` (0-based)."""
         return int(self.row_lines[row])

@@ -197,11 +197,11 @@ def _channels(available: tuple[str, ...], norm, given: list[str] | None, where: 
 def _recording_frf(args: argparse.Namespace, norm) -> tuple:
     """A recording's FRF at the norm's points, by the labs' convention: (frequencies,
     H (F, M), the recording's channels tested)."""
+    import numpy as np
+
     from posture_id.frf.analysis import frequency_response
     from posture_id.frf.response import FrfOptions
     from posture_id.trials import prepare_trial
-
-    import numpy as np
 
     try:
         options = FrfOptions.lab_convention(norm_bands(args, norm))

@@ -83,31 +83,19 @@ class ForcePlateColumns:
 def _cop_unit(table, columns: ForcePlateColumns) -> CopUnit:
     """The COP column's unit: its header's, else the one given, else mm; a given one that
     contradicts the header, or a header unit that is not a length, refused."""
-    stated = table.unit_of(columns.cop)
-    whole = table.header[table.index(columns.cop)]
-    lengths = {u.value for u in CopUnit}
-    if stated is None:
-        return columns.cop_unit or CopUnit.MM
-    if stated not in lengths:
-        raise RecordingError(f"{table.path}: column {whole!r} is in {stated} by its header; "
-                             "the COP column must be a length (mm, cm or m)")
-    if columns.cop_unit is not None and columns.cop_unit.value != stated:
-        raise RecordingError(
-            f"{table.path}: column {whole!r} is in {stated} by its header, but the COP unit "
-            f"given is {columns.cop_unit.value} (--cop-units {columns.cop_unit.value}): leave "
-            "the unit out or correct the header")
-    return CopUnit(stated)
+    given = columns.cop_unit
+    stated = table.stated_unit(columns.cop, (u.value for u in CopUnit),
+                               None if given is None else given.value, "--cop-units",
+                               "COP column must be a length (mm, cm or m)", "COP")
+    return CopUnit(stated) if stated is not None else given or CopUnit.MM
 
 
 def _force(table, columns: ForcePlateColumns) -> np.ndarray | None:
     """(S,) N, the normal-force column (its header's unit: N or kN), or None."""
     if columns.force is None:
         return None
-    stated = table.unit_of(columns.force)
-    if stated is not None and stated not in FORCE_UNITS_N:
-        raise RecordingError(
-            f"{table.path}: column {table.header[table.index(columns.force)]!r} is in "
-            f"{stated} by its header; the normal force must be in N or kN")
+    stated = table.stated_unit(columns.force, FORCE_UNITS_N, None, "--force-column",
+                               "normal force must be in N or kN", "force")
     return table.column(columns.force) * FORCE_UNITS_N.get(stated or "N", 1.0)
 
 

@@ -125,3 +125,21 @@ def test_a_norm_of_sinusoid_trials_tests_a_sinusoid_recording_at_its_frequency(s
                  "--out", str(from_json)]) in (0, 1)
     a, b = (json.loads(p.read_text()) for p in (from_file, from_json))
     assert a["human_likeness"] == pytest.approx(b["human_likeness"], rel=1e-6)
+
+
+@pytest.mark.slow
+def test_a_study_on_a_dask_cluster_equals_a_local_run(study, tmp_path):
+    """Each task carries its file's bytes and its body's URDF: the cluster's FRFs are the
+    local ones."""
+    distributed = pytest.importorskip("distributed")
+    local, remote = tmp_path / "local", tmp_path / "remote"
+    run_study(read_manifest(study), local, StudyOptions(layout=PLATE, model=None, workers=1))
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
+        result = run_study(read_manifest(study), remote,
+                           StudyOptions(layout=PLATE, model=None,
+                                        scheduler=cluster.scheduler_address))
+    assert not result.failed
+    for path in (local / "frf").glob("*.json"):
+        a, b = (json.loads(p.read_text()) for p in (path, remote / "frf" / path.name))
+        assert a["channels"] == b["channels"]

@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet --upgrade pip
 	# torch first, pinned, so that nothing later resolves a CUDA build from the registry.
 	$(BIN)/pip install --quiet "torch==2.13.0"
-	$(BIN)/pip install --quiet -e ".[dev]"
+	$(BIN)/pip install --quiet -e ".[dev,robots]"
 	@if $(BIN)/pip list 2>/dev/null | grep -qi '^nvidia-'; then \
 	  echo "error: CUDA packages were installed on a CPU set-up; see README" >&2; exit 1; fi
 	# the simulator and the fit's model for 1-3 segments, compiled once here: a first

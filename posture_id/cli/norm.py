@@ -213,15 +213,14 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
     recording, stimulus = recording_and_stimulus(args, body)
     trial = prepare_trial(recording, stimulus, rate_hz=None)
     frf = frequency_response(trial, body, options)
+    rows = np.arange(len(frf.frequencies_hz))
+    if options is None:
+        rows = [int(np.argmin(np.abs(frf.frequencies_hz - x))) for x in norm.frequencies_hz]
+        if not _at(frf.frequencies_hz[rows], norm.frequencies_hz, rtol=1e-5):
+            norm_bands(args, norm)  # says why: no bands, no preset, not the stimulus's own
     names = _channels(tuple(frf.channels), norm, args.channel, args.recording, recording=True)
     columns = [frf.channels.index(c) for c in names]
-    f, response = frf.frequencies_hz, frf.response[:, columns]
-    if options is None:
-        rows = [int(np.argmin(np.abs(f - x))) for x in norm.frequencies_hz]
-        if not _at(f[rows], norm.frequencies_hz, rtol=1e-5):
-            norm_bands(args, norm)  # says why: no bands, no preset, not the stimulus's own
-        f, response = f[rows], response[rows]
-    return f, response, names
+    return frf.frequencies_hz[rows], frf.response[np.ix_(rows, columns)], names
 
 
 def norm_bands(args: argparse.Namespace, norm):

@@ -17,7 +17,7 @@ from posture_id.fileio import atomic_write
 
 __all__ = ["plot_trial", "plot_dataset_overview", "plot_images", "plot_fit", "plot_locked_sway",
            "plot_coverage", "plot_reliability", "plot_identifiability", "plot_intervals",
-           "plot_score_grid", "plot_marker_angles", "plot_condition_frfs"]
+           "plot_score_grid", "plot_marker_angles", "plot_condition_frfs", "plot_robot_check"]
 
 
 def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
@@ -895,6 +895,54 @@ def plot_study_conditions(result, path=None, ax=None):
     gains.legend(fontsize=7)
     gains.grid(alpha=0.3)
     fig.suptitle(f"study: {len(result.subjects)} subjects, {len(conditions)} conditions")
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
+def plot_robot_check(result, path=None, ax=None):
+    """A robot check (:class:`~posture_id.robots.check.RobotCheck`): the body COM sway of
+    the MuJoCo body and of the lumped model against time (top, degrees), and the Bode
+    gain (deg/deg, log) and phase (°) of both per segment and of the body COM (solid:
+    MuJoCo; dashed: lumped), 0.05-1 Hz."""
+    fig, axes = _axes(ax, 3, 1, (9, 10), gridspec_kw={"height_ratios": [1, 1.2, 1]})
+    ax_t, ax_g, ax_p = axes[:, 0]
+    com = len(result.channels) - 1
+    ax_t.plot(result.time, np.degrees(result.engine_sway[:, com]), lw=0.9,
+              label=result.engine_label)
+    ax_t.plot(result.time, np.degrees(result.lumped_sway[:, com]), "k--", lw=0.8,
+              label=result.lumped_label)
+    for fall, color in ((result.engine_fall_s, "r"), (result.lumped_fall_s, "m")):
+        if fall is not None:
+            ax_t.axvline(fall, color=color, lw=1)
+            ax_t.text(fall, 0, " fell", color=color)
+    ax_t.set_xlabel("time (s)")
+    ax_t.set_ylabel("body COM sway (°)")
+    ax_t.legend(fontsize=8, loc="upper right")
+    f = result.frequencies_hz
+    for m, name in enumerate(result.channels):
+        for gain, phase, style, label in (
+                (result.engine_gain, result.engine_phase_deg, "-", name),
+                (result.lumped_gain, result.lumped_phase_deg, "--", None)):
+            if gain is None:
+                continue
+            ax_g.plot(f, gain[:, m], style, color=f"C{m}", marker="o", ms=2.5, lw=1,
+                      label=label)
+            ax_p.plot(f, phase[:, m], style, color=f"C{m}", marker="o", ms=2.5, lw=1)
+    if result.engine_gain is None or result.lumped_gain is None:
+        ax_g.text(0.5, 0.5, "a body fell: no FRF of it", ha="center", transform=ax_g.transAxes)
+    for a in (ax_g, ax_p):
+        a.set_xscale("log")
+        a.grid(alpha=0.3, which="both")
+    ax_t.grid(alpha=0.3)
+    ax_g.set_yscale("log")
+    ax_g.set_ylabel("gain (deg/deg)")
+    ax_p.set_ylabel("phase (°)")
+    ax_p.set_xlabel("frequency (Hz)")
+    if len(f):
+        ax_g.legend(fontsize=8, title="solid: MuJoCo, dashed: lumped", title_fontsize=8)
+    fig.suptitle(f"robot check of {result.name}: {result.engine_label} vs "
+                 f"{result.lumped_label}", fontsize=10)
     fig.tight_layout()
     _save(fig, path)
     return fig

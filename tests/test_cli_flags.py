@@ -22,7 +22,7 @@ CHECKED = {positive_int: "≥ 1", positive_float: "> 0", non_negative_int: "≥ 
            nonzero_float: "other than 0"}
 #: Values that satisfy what every required option asks for, to reach the flag under test.
 REQUIRED = {"--out": "out.json", "--trials": "3", "--shards": "2", "--norm": "norm.json",
-            "--group": "a.json"}
+            "--group": "a.json", "--body": "talos"}
 
 
 def _commands(parser: argparse.ArgumentParser, prefix=()):

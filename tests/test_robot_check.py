@@ -3,9 +3,12 @@ import MuJoCo, and using it without MuJoCo stops with one line naming the extra.
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from posture_id.errors import PostureIdError
@@ -28,3 +31,218 @@ def test_without_mujoco_one_line_names_the_extra(monkeypatch, tip):
     assert isinstance(err.value, PostureIdError)
     assert "\n" not in message and ROBOTS_EXTRA in message
     assert ROBOTS_EXTRA == "pip install posture_id[robots]"
+
+
+# --- the checks themselves (MuJoCo needed from here on) ---------------------------------
+
+TIP_URDF = Path(__file__).resolve().parents[1] / "urdf" / "tip_default.urdf"
+
+
+def _mujoco():
+    return pytest.importorskip("mujoco")
+
+
+def _robots() -> None:
+    """Skip where example-robot-data (it ships files, no importable module) is missing."""
+    from posture_id.bodies.lumping import robots_dir
+
+    try:
+        robots_dir()
+    except PostureIdError as exc:
+        pytest.skip(str(exc))
+
+
+def _one_cycle():
+    from posture_id.simulation import prts
+
+    return prts(cycles=1)  # 60.5 s, 1° p-p
+
+
+def _weak(params):
+    """The same DEC with a tenth of the ankle's active and passive stiffness: less than the
+    body's m·g·h, so it cannot hold the body up."""
+    ankle = params.joints[0]
+    module = params.modules[ankle]
+    return params.replace(ankle, kp=0.1 * module.kp, kpas=0.1 * module.kpas, ki=0.0)
+
+
+def test_the_tip_chain_in_mujoco_agrees_with_the_compiled_simulator():
+    """The TIP URDF's chain (it *is* the lumped model) in MuJoCo (RK4, 1 ms) against the
+    compiled simulator (2 ms), one 60.5 s PRTS cycle, default DEC. Measured: gain within
+    0.7 %, phase within 0.7° at every FRF point 0.08-1 Hz, 100.0 % of each sway explained."""
+    _mujoco()
+    from posture_id.robots.check import BODY_COM, robot_check
+
+    result = robot_check(TIP_URDF, _one_cycle())
+    assert result.kind == "chain" and result.stays_up and result.lumped_fall_s is None
+    assert result.channels == ("shank", "thigh", "trunk", BODY_COM)
+    assert result.frequencies_hz.min() >= 0.05 - 1e-9 and result.frequencies_hz.max() <= 1.0
+    assert len(result.frequencies_hz) >= 20
+    assert np.max(np.abs(result.gain_difference_percent)) < 1.0
+    assert np.max(np.abs(result.phase_difference_deg)) < 1.0
+    assert np.all(result.variance_explained > 0.99)
+    # the FRF itself is a body's (a gain that is not ~1 and falls with frequency)
+    assert 0.3 < result.engine_gain[0, -1] < 3.0
+    assert result.engine_gain[-1, -1] < result.engine_gain[0, -1]
+
+
+@pytest.mark.slow
+def test_talos_whole_body_follows_its_lumped_chain_at_low_frequencies():
+    """TALOS (33 DoF, half-sitting) in MuJoCo, lumped to 3 segments, its lumped chain's
+    default DEC split between the two legs, the other joints servoed at 100× m·g·h, one 1°
+    PRTS cycle (~13 s here). Measured, body COM, whole body vs lumped: +1.2 %/−0.7° at
+    0.08 Hz, +2.3/−0.4 at 0.12, +3.5/−0.2 at 0.21, at most +5.0 %/−1.8° up to 0.3 Hz
+    (+3.9/−9.3 at 0.5 Hz, −19.6/−9.2 at 1 Hz: the servoed joints' compliance); variance
+    explained 99.1-100 % per segment, 99.8 % of the body COM. The bounds below leave about
+    1.5× that margin."""
+    _mujoco()
+    _robots()
+    from posture_id.robots.check import BODY_COM, CheckOptions, robot_check
+
+    result = robot_check("talos", _one_cycle(), options=CheckOptions(segments=3))
+    assert result.kind == "whole body" and result.stays_up and result.lumped_fall_s is None
+    assert result.channels == ("shank", "thigh", "trunk", BODY_COM)
+    low = result.frequencies_hz <= 0.3
+    assert low.sum() >= 5
+    gain = result.gain_difference_percent[low, -1]
+    phase = result.phase_difference_deg[low, -1]
+    assert np.max(np.abs(gain)) < 8.0, gain
+    assert np.max(np.abs(phase)) < 3.0, phase
+    assert np.all(result.variance_explained > 0.98), result.variance_explained
+    assert result.details["dofs"] > 30 and 90 < result.details["mass_kg"] < 100
+    held = {g["joint"]: g for g in result.details["held_joints"]}
+    assert held["leg_left_6_joint"]["locked"]  # the feet's roll joints: the support
+    assert not held["arm_left_4_joint"]["locked"] and held["arm_left_4_joint"][
+        "stiffness_nm_rad"] > 0
+
+
+@pytest.mark.slow
+def test_talos_at_two_segments_with_its_knees_servoed():
+    """Lumped to 2 segments, TALOS's knees are held by their servos (22.5 kN·m/rad at 100×),
+    whose damping on the knee's own light subtree (shank and foot, in MuJoCo's tree rooted
+    at the pelvis) was past RK4's reach at 1 ms: the body rang and only 60.6 / 13.5 / 47.5 %
+    (leg / trunk / body COM) of its sway was explained. With the servo's armature
+    (``WholeBodyOptions.max_step_rate``) measured: 100.0 / 99.5 / 99.9 %, body COM
+    +1.2 %/−0.7° at 0.08 Hz, +3.3/−0.2 at 0.21 Hz (~14 s here)."""
+    _mujoco()
+    _robots()
+    from posture_id.robots.check import BODY_COM, CheckOptions, robot_check
+
+    result = robot_check("talos", _one_cycle(), options=CheckOptions(segments=2))
+    assert result.stays_up and result.channels == ("leg", "trunk", BODY_COM)
+    assert np.all(result.variance_explained > 0.98), result.variance_explained
+    low = result.frequencies_hz <= 0.3
+    assert np.max(np.abs(result.gain_difference_percent[low, -1])) < 8.0
+    assert np.max(np.abs(result.phase_difference_deg[low, -1])) < 3.0
+    knee = {g["joint"]: g for g in result.details["held_joints"]}["leg_left_4_joint"]
+    assert knee["armature_kgm2"] > 0 and not knee["locked"]
+
+
+def test_a_chain_with_too_little_gain_is_reported_as_fallen(tmp_path):
+    """A tenth of the ankle's stiffness cannot hold the TIP: both engines report the fall,
+    with its time, in the result, its JSON and its summary; no FRF of a fallen body."""
+    _mujoco()
+    from posture_id.bodies.body import load_body
+    from posture_id.dec.parameters import default_parameters
+    from posture_id.robots.check import robot_check
+
+    tip = load_body(TIP_URDF)
+    result = robot_check(tip, _one_cycle(), _weak(default_parameters(tip)))
+    assert not result.stays_up
+    assert 0.0 < result.engine_fall_s < 60.5
+    assert result.lumped_fall_s is not None
+    assert abs(result.engine_fall_s - result.lumped_fall_s) < 0.5  # the same body falls
+    assert result.gain_difference_percent is None and result.engine_gain is None
+    saved = json.loads(result.to_json(tmp_path / "check.json"))
+    assert saved["stays_up"] is False and saved["engine_fall_s"] == result.engine_fall_s
+    summary = result.summary()
+    assert f"FELL at t = {result.engine_fall_s:.2f} s" in summary
+    assert "no FRF" in summary
+
+
+def test_the_whole_body_with_too_little_gain_falls():
+    """TALOS's whole body under the weak DEC falls in MuJoCo too (the run stops there)."""
+    _mujoco()
+    _robots()
+    from posture_id.dec.parameters import default_parameters
+    from posture_id.robots.check import CheckOptions, robot_check
+    from posture_id.robots.whole_body import WholeBodySpec, lumped_body
+
+    spec = WholeBodySpec.preset("talos")
+    weak = _weak(default_parameters(lumped_body(spec, 1)))
+    result = robot_check(spec, _one_cycle(), weak, CheckOptions(segments=1))
+    assert not result.stays_up and 0.0 < result.engine_fall_s < 60.5
+    # a fall of the body, not of the integration: near the lumped chain's (measured 5.97 s
+    # against 6.42 s)
+    assert result.lumped_fall_s is not None
+    assert abs(result.engine_fall_s - result.lumped_fall_s) < 1.5
+    assert f"FELL at t = {result.engine_fall_s:.2f} s" in result.summary()
+
+
+def test_the_robot_check_command_on_the_chain(tmp_path, capsys):
+    """``posture-id robot check --body CHAIN_URDF`` writes check.json and check.png, prints
+    the summary; exit 0 (it stays up)."""
+    _mujoco()
+    from posture_id.cli import main
+
+    out = tmp_path / "check"
+    assert main(["robot", "check", "--body", str(TIP_URDF), "--cycles", "1", "--states",
+                 "80", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "robot check of tip_default (chain)" in printed and "stays up" in printed
+    saved = json.loads((out / "check.json").read_text())
+    assert saved["kind"] == "chain" and saved["stays_up"] is True
+    assert saved["channels"] == ["shank", "thigh", "trunk", "body COM"]
+    assert (out / "check.png").stat().st_size > 10_000
+
+
+def test_the_robot_check_command_reports_a_fall(tmp_path, capsys):
+    """A DEC file with too little gain: exit 1 (doubtful), the fall in the summary."""
+    _mujoco()
+    from posture_id.bodies.body import load_body
+    from posture_id.cli import main
+    from posture_id.dec.parameters import default_parameters
+
+    tip = load_body(TIP_URDF)
+    params = tmp_path / "weak.json"
+    _weak(default_parameters(tip)).to_json(params)
+    out = tmp_path / "check"
+    assert main(["robot", "check", "--body", str(TIP_URDF), "--params", str(params),
+                 "--cycles", "1", "--states", "80", "--out", str(out)]) == 1
+    assert "FELL at t = " in capsys.readouterr().out
+    assert json.loads((out / "check.json").read_text())["engine_fall_s"] > 0
+
+
+@pytest.mark.parametrize("body, fragment", [
+    ("atlas", "'atlas' is neither a preset (talos, g1, human) nor a URDF file"),
+    ("missing.urdf", "neither a preset"),
+])
+def test_the_robot_check_command_refuses_in_one_line(tmp_path, capsys, body, fragment):
+    _mujoco()
+    from posture_id.cli import main
+
+    assert main(["robot", "check", "--body", body, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and fragment in err and err.startswith("posture-id: error: ")
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_robot_check_command_without_mujoco_names_the_extra(monkeypatch, tmp_path,
+                                                                capsys):
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco → ImportError
+    from posture_id.cli import main
+
+    assert main(["robot", "check", "--body", "talos", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and ROBOTS_EXTRA in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_check_options_are_refused_in_one_line():
+    from posture_id.robots.check import CheckOptions
+    from posture_id.robots.errors import RobotError
+
+    with pytest.raises(RobotError, match="low_hz < high_hz"):
+        CheckOptions(low_hz=1.0, high_hz=0.5)
+    with pytest.raises(RobotError, match="segments must be 1, 2 or 3"):
+        CheckOptions(segments=4)

@@ -29,7 +29,8 @@ from posture_id.bodies.urdf_writer import LinkSpec, chain_urdf
 from posture_id.errors import BodyError
 from posture_id.fileio import atomic_write_text
 
-__all__ = ["RobotPreset", "PRESETS", "robots_dir", "lump_robot", "LumpedBody", "preset_body"]
+__all__ = ["RobotPreset", "PRESETS", "robots_dir", "lump_robot", "LumpedBody", "preset_body",
+           "load_posture"]
 
 _PITCH_TOL = 1e-6
 
@@ -185,6 +186,64 @@ def _fmt3(v) -> str:
     return "(" + ", ".join(f"{x:.3f}" for x in v) + ")"
 
 
+def load_posture(
+    urdf: str | Path,
+    srdf: tuple[str | Path, str] | None = None,
+    base_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    posture: np.ndarray | None = None,
+) -> tuple[object, np.ndarray, str]:
+    """A whole-body URDF with a free-flyer base, in the posture it is lumped at.
+
+    Args:
+        urdf: the whole-body URDF.
+        srdf: (SRDF file, configuration name) to read the posture from.
+        base_rpy: base orientation applied on top of the posture (rad).
+        posture: (nq,) configuration (position, quaternion x y z w, joints); overrides
+            ``srdf``.
+    Returns:
+        (Pinocchio model, (nq,) configuration, a label saying which posture it is).
+    Raises:
+        BodyError: a missing or unreadable URDF or SRDF, an unknown configuration, a
+            posture of the wrong size (one line).
+    """
+    import pinocchio as pin
+
+    urdf = Path(urdf)
+    if not urdf.is_file():
+        raise BodyError(f"{urdf}: no such URDF file")
+    try:
+        model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
+    except Exception as exc:
+        raise BodyError(f"{urdf}: cannot be read as URDF ({' '.join(str(exc).split())})") from None
+    q = pin.neutral(model)
+    label = "zero configuration"
+    if srdf is not None:
+        srdf_path, config = Path(srdf[0]), srdf[1]
+        try:
+            pin.loadReferenceConfigurations(model, str(srdf_path), False)
+        except Exception as exc:
+            raise BodyError(f"{srdf_path}: cannot read reference configurations ({exc})") from None
+        if config not in model.referenceConfigurations:
+            known = ", ".join(model.referenceConfigurations.keys())
+            raise BodyError(f"{srdf_path}: no configuration '{config}' (has: {known})")
+        q = np.array(model.referenceConfigurations[config])
+        label = f"'{config}' from {srdf_path.name}"
+    if posture is not None:
+        posture = np.asarray(posture, dtype=float)
+        if posture.shape != (model.nq,):
+            raise BodyError(
+                f"{urdf}: posture has {posture.size} values; this model with a free-flyer "
+                f"base needs nq = {model.nq} (x y z, quaternion x y z w, {model.nq - 7} joints)"
+            )
+        q = posture.copy()
+        label = "given posture"
+    if any(base_rpy):
+        rot = pin.rpy.rpyToMatrix(*base_rpy) @ pin.Quaternion(q[6], *q[3:6]).matrix()
+        quat = pin.Quaternion(rot)
+        q[3:7] = [quat.x, quat.y, quat.z, quat.w]
+    return model, q, label
+
+
 def lump_robot(
     urdf: str | Path,
     ankle: tuple[str, str],
@@ -216,36 +275,7 @@ def lump_robot(
         raise BodyError(f"segments must be 1, 2 or 3, got {segments}")
     if segments == 3 and knee is None:
         raise BodyError("a 3-segment body needs the knee joints")
-    try:
-        model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
-    except Exception as exc:
-        raise BodyError(f"{urdf}: cannot be read as URDF ({' '.join(str(exc).split())})") from None
-    q = pin.neutral(model)
-    label = "zero configuration"
-    if srdf is not None:
-        srdf_path, config = Path(srdf[0]), srdf[1]
-        try:
-            pin.loadReferenceConfigurations(model, str(srdf_path), False)
-        except Exception as exc:
-            raise BodyError(f"{srdf_path}: cannot read reference configurations ({exc})") from None
-        if config not in model.referenceConfigurations:
-            known = ", ".join(model.referenceConfigurations.keys())
-            raise BodyError(f"{srdf_path}: no configuration '{config}' (has: {known})")
-        q = np.array(model.referenceConfigurations[config])
-        label = f"'{config}' from {srdf_path.name}"
-    if posture is not None:
-        posture = np.asarray(posture, dtype=float)
-        if posture.shape != (model.nq,):
-            raise BodyError(
-                f"{urdf}: posture has {posture.size} values; this model with a free-flyer "
-                f"base needs nq = {model.nq} (x y z, quaternion x y z w, {model.nq - 7} joints)"
-            )
-        q = posture.copy()
-        label = "given posture"
-    if any(base_rpy):
-        rot = pin.rpy.rpyToMatrix(*base_rpy) @ pin.Quaternion(q[6], *q[3:6]).matrix()
-        quat = pin.Quaternion(rot)
-        q[3:7] = [quat.x, quat.y, quat.z, quat.w]
+    model, q, label = load_posture(urdf, srdf=srdf, base_rpy=base_rpy, posture=posture)
 
     data = model.createData()
     pin.forwardKinematics(model, data, q)

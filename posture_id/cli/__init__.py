@@ -1,5 +1,6 @@
 """Command line: ``posture-id body | simulate | fit | frf | dataset | train | evaluate |
-calibration | identify | demo | benchmark | universal | design | stimulus | compare | norm``,
+calibration | identify | demo | benchmark | universal | design | stimulus | compare | norm
+| robot``,
 one module per command.
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
@@ -29,6 +30,7 @@ from posture_id.cli import (
     identify,
     norm,
     platform_command,
+    robot,
     simulate,
     study,
     train,
@@ -47,7 +49,7 @@ COMMAND_GROUPS = (
     ("identify and analyse a recording",
      ("identify", "fit", "compare", "frf", "norm", "study")),
     ("build bodies, stimuli and studies",
-     ("body", "simulate", "stimulus", "design")),
+     ("body", "simulate", "stimulus", "design", "robot")),
     ("train and evaluate networks",
      ("universal", "dataset", "train", "evaluate", "calibration", "benchmark")),
     ("try it", ("demo",)),
@@ -76,7 +78,7 @@ def build_parser() -> Parser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser,
                                 metavar="COMMAND", title="commands", prog="posture-id")
     for command in (identify, fit, compare, frf, norm, study, body, simulate, platform_command,
-                    design, universal, dataset, train, evaluate, calibration, benchmark,
+                    design, robot, universal, dataset, train, evaluate, calibration, benchmark,
                     demo):
         command.add_parser(sub)
     for command_parser in sub.choices.values():  # one meaning per exit status, said by all

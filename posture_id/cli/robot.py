@@ -1,0 +1,78 @@
+"""``posture-id robot check``: a body's DEC in MuJoCo against the lumped model posture_id
+simulates (docs/robots.md): a humanoid preset's whole body, or a chain URDF."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from posture_id.cli.arguments import positive_float, say
+from posture_id.cli.exit_status import answered
+from posture_id.cli.output_folder import OutputFolder
+from posture_id.cli.simulate import add_model_arguments, model_options
+from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
+
+__all__ = ["add_parser", "run_check", "CHECK_FILES"]
+
+#: What ``robot check --out DIR`` writes.
+CHECK_FILES = ("check.json", "check.png")
+
+
+def add_parser(sub) -> None:
+    robot = sub.add_parser("robot", help="check a robot's DEC in MuJoCo (optional extra: "
+                                         "pip install posture_id[robots])")
+    rsub = robot.add_subparsers(dest="robot_command", required=True, metavar="SUBCOMMAND")
+    check = rsub.add_parser(
+        "check", help="a humanoid's whole body (or a chain) in MuJoCo against the lumped "
+                      "model posture_id simulates: FRFs, variance explained, falls")
+    check.add_argument("--body", required=True, metavar="URDF_OR_PRESET",
+                       help="a preset (talos, g1, human: its whole body in MuJoCo against "
+                            "its lumped chain) or a chain URDF (the chain in MuJoCo against "
+                            "the compiled simulator)")
+    check.add_argument("--segments", type=int, choices=(1, 2, 3), default=3,
+                       help="segments a preset is lumped to (default %(default)d)")
+    check.add_argument("--params", type=Path,
+                       help="DEC parameter JSON of the (lumped) chain (default: its defaults)")
+    add_lab_stimulus_arguments(check, "tilt CSV (time_s,tilt_deg) instead of the PRTS")
+    add_model_arguments(check)
+    check.add_argument("--timestep-ms", type=positive_float, default=1.0,
+                       help="MuJoCo's step, ms (default %(default)g)")
+    check.add_argument("--out", type=Path, required=True,
+                       help="folder to write check.json and check.png into")
+    check.set_defaults(func=run_check)
+
+
+def run_check(args: argparse.Namespace) -> int:
+    from posture_id.robots.errors import RobotError, require_mujoco
+
+    require_mujoco()  # before anything else: one line naming the extra
+    from posture_id.bodies.body import load_body
+    from posture_id.bodies.lumping import PRESETS
+    from posture_id.dec.parameters import DecParameters
+    from posture_id.robots.check import CheckOptions, robot_check
+    from posture_id.robots.mujoco_model import MujocoOptions
+    from posture_id.robots.whole_body import WholeBodySpec, lumped_body
+    from posture_id.simulation.stimulus import prts
+
+    inputs = tuple(p for p in (args.params, args.tilt, args.protocol) if p is not None)
+    with OutputFolder(args.out, "--out", CHECK_FILES, inputs=inputs):
+        if args.body in PRESETS:
+            target = WholeBodySpec.preset(args.body)
+            chain = lumped_body(target, args.segments) if args.params else None
+        elif Path(args.body).is_file():
+            target = chain = load_body(Path(args.body))
+        else:
+            raise RobotError(f"--body: '{args.body}' is neither a preset ({', '.join(PRESETS)}) "
+                             "nor a URDF file")
+        params = DecParameters.from_json(args.params, chain) if args.params else None
+        stimulus = stimulus_from_args(args, default=prts())
+        result = robot_check(target, stimulus, params,
+                             CheckOptions(segments=args.segments),
+                             simulation_options=model_options(args),
+                             mujoco_options=MujocoOptions(timestep_s=args.timestep_ms / 1000))
+        args.out.mkdir(parents=True, exist_ok=True)
+        result.to_json(args.out / "check.json")
+        result.plot(args.out / "check.png")
+    print(result.summary())
+    say(f"wrote {args.out / 'check.json'} and {args.out / 'check.png'}")
+    return answered(not result.stays_up)

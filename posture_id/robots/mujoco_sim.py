@@ -40,7 +40,7 @@ from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.results import SimulationResult
 from posture_id.simulation.stimulus import TiltProfile, prts
 
-__all__ = ["simulate_mujoco", "DelayLine", "ChainSensors", "deadband"]
+__all__ = ["simulate_mujoco", "DelayLine", "DecController", "ChainSensors", "deadband"]
 
 
 def deadband(rate: float, width: float) -> float:
@@ -90,6 +90,57 @@ class DelayLine:
                 value += frac * (history[first + 1] - value)
             out.append(value)
         return out
+
+
+class DecController:
+    """DEC's modules as docs/model.md §2 writes them, stepped in a MuJoCo loop: the
+    support-tilt estimate (the shank's rate in space less the ankle's, through the
+    dead-band, integrated), each module's servo on its controlled variable (the COM above
+    it in space, or its joint), the integral of its error, the lumped delay
+    (:class:`DelayLine`), and the undelayed gravity term.
+
+    Args:
+        params: the N modules' DEC parameters. alpha_ref: (N,) rad, the COM-above angles
+        of the reference posture. hold: (N,) N·m, each servo's command at rest.
+        dt: s, the step. deadband_rad_s: the tilt estimator's dead-band.
+    """
+
+    def __init__(self, params: DecParameters, alpha_ref, hold, dt: float,
+                 deadband_rad_s: float) -> None:
+        self.kp, self.ki, self.kd = (params.array(n).tolist() for n in ("kp", "ki", "kd"))
+        self.mix = (0.5 + 0.5 * params.array("sign")).tolist()  # C = ±1: COM, joint
+        self.alpha_ref = [float(a) for a in alpha_ref]
+        self.dt, self.width = dt, deadband_rad_s
+        self.delays = DelayLine(params.array("delay_s") / dt, hold)
+        self.estimate = 0.0  # α̂_FS, rad
+        self.integral = [0.0] * len(self.kp)  # ∫ε dt, rad·s
+
+    def torques(self, q, qd, theta, omega, alpha, alpha_rate, platform_angle: float,
+                platform_rate: float) -> list[float]:
+        """(N,) N·m, each module's joint torque this step from the sensors: joint angles
+        q and rates qd, segment angles θ and rates ω in space, COM-above angles α and
+        rates (rad, rad/s), the platform's tilt and rate; the state advances one step."""
+        kp, ki, kd, mix, integral, dt = (self.kp, self.ki, self.kd, self.mix, self.integral,
+                                         self.dt)
+        est_rate = deadband(omega[0] - qd[0], self.width)
+        beta, beta_rate = self.estimate, est_rate  # β̂_0 = α̂_FS
+        below, below_rate = platform_angle, platform_rate  # θ_0 = α_FS
+        command = []
+        for i in range(len(kp)):
+            com = mix[i]
+            x = com * (alpha[i] - self.alpha_ref[i] - below + beta) + (1.0 - com) * q[i]
+            xd = com * (alpha_rate[i] - below_rate + beta_rate) + (1.0 - com) * qd[i]
+            command.append(kp[i] * x + kd[i] * xd + ki[i] * integral[i]
+                           + self.delays.hold[i])
+            integral[i] += dt * x
+            beta += q[i]
+            beta_rate += qd[i]
+            below, below_rate = theta[i], omega[i]
+        self.estimate += dt * est_rate
+        delayed = self.delays.push_and_read(command)
+        # τ = −servo(t − Δ) − PD on the gravity term sin α_S (undelayed)
+        return [-delayed[i] - kp[i] * math.sin(alpha[i])
+                - kd[i] * math.cos(alpha[i]) * alpha_rate[i] for i in range(len(kp))]
 
 
 class ChainSensors:
@@ -189,8 +240,7 @@ def simulate_mujoco(
     except SimulationError as exc:  # the sample period is not a multiple of the step
         raise RobotError(f"MuJoCo timestep_s {dt:g} s: {exc}") from None
     n = body.n_segments
-    kp, ki, kd = (params.array(name).tolist() for name in ("kp", "ki", "kd"))
-    mix = (0.5 + 0.5 * params.array("sign")).tolist()  # C = ±1: COM in space, joint
+    kp = params.array("kp").tolist()
     chain = ChainModel.build(body, mujoco_options, params.array("kpas"), params.array("bpas"))
     m = chain.model
     d = mujoco.MjData(m)
@@ -210,10 +260,7 @@ def simulate_mujoco(
     mujoco.mj_forward(m, d)
     alpha_ref = sense()[2]
     hold = [-float(d.qfrc_bias[jd[i]]) - kp[i] * math.sin(alpha_ref[i]) for i in range(n)]
-    delays = DelayLine(params.array("delay_s") / dt, hold)
-
-    estimate = 0.0  # α̂_FS, rad
-    integral = [0.0] * n  # ∫ε dt, rad·s
+    controller = DecController(params, alpha_ref, hold, dt, deadband_width)
     n_samples = n_steps // every + 1
     theta_out = np.full((n_samples, n), np.nan)
     alpha_out = np.full((n_samples, n), np.nan)
@@ -240,26 +287,10 @@ def simulate_mujoco(
             break
         q = [float(qpos[a]) for a in jq]  # proprioception: the hinges' angles and rates
         qd = [float(qvel[a]) for a in jd]
-        # the support-tilt estimate: vestibular shank rate less proprioceptive ankle rate
-        est_rate = deadband(omega[0] - qd[0], deadband_width)
-        beta, beta_rate = estimate, est_rate  # β̂_0 = α̂_FS
-        below, below_rate = platform_angle, platform_rate  # θ_0 = α_FS
-        command = []
-        for i in range(n):
-            com = mix[i]
-            x = (com * (alpha[i] - alpha_ref[i] - below + beta) + (1.0 - com) * q[i])
-            xd = com * (alpha_rate[i] - below_rate + beta_rate) + (1.0 - com) * qd[i]
-            command.append(kp[i] * x + kd[i] * xd + ki[i] * integral[i] + hold[i])
-            integral[i] += dt * x
-            beta += q[i]
-            beta_rate += qd[i]
-            below, below_rate = theta[i], omega[i]
-        estimate += dt * est_rate
-        delayed = delays.push_and_read(command)
-        # τ = −servo(t − Δ) − PD on the gravity term sin α_S (undelayed); passive: MuJoCo's
-        for i in range(n):
-            applied[jd[i]] = (-delayed[i] - kp[i] * math.sin(alpha[i])
-                              - kd[i] * math.cos(alpha[i]) * alpha_rate[i])
+        torques = controller.torques(q, qd, theta, omega, alpha, alpha_rate, platform_angle,
+                                     platform_rate)
+        for i in range(n):  # passive stiffness and damping: MuJoCo's own
+            applied[jd[i]] = torques[i]
         mujoco.mj_step(m, d)
 
     sample_time, sample_tilt = options.sampled(tilt)

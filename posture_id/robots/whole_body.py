@@ -691,7 +691,7 @@ def simulate_whole_body(
     from posture_id.errors import SimulationError
     from posture_id.provenance import body_identity
     from posture_id.robots.mujoco_model import MujocoOptions
-    from posture_id.robots.mujoco_sim import DelayLine, deadband
+    from posture_id.robots.mujoco_sim import DecController
     from posture_id.simulation.options import SimulationOptions
     from posture_id.simulation.results import SimulationResult
     from posture_id.simulation.stimulus import prts
@@ -714,8 +714,7 @@ def simulate_whole_body(
     except SimulationError as exc:
         raise RobotError(f"MuJoCo timestep_s {dt:g} s: {exc}") from None
     n = segments
-    kp, ki, kd = (params.array(name).tolist() for name in ("kp", "ki", "kd"))
-    mix = (0.5 + 0.5 * params.array("sign")).tolist()
+    kp = params.array("kp").tolist()
     body = WholeBodyModel.build(spec, segments, params.array("kpas"), params.array("bpas"),
                                 mujoco_options, whole_body_options)
     m = body.model
@@ -735,13 +734,11 @@ def simulate_whole_body(
     feedforward = static_torques(body, d, [-g for g in grav])
     held_dofs = body.held_dofs
     d.qfrc_applied[held_dofs] = feedforward
-    delays = DelayLine(params.array("delay_s") / dt, hold)
+    controller = DecController(params, alpha_ref, hold, dt, width)
     dofs = body.dec_dofs.tolist()
     signs = (0.5 * body.dec_sign).tolist()
     pq, pd = body.platform_qpos, body.platform_dof
 
-    estimate = 0.0
-    integral = [0.0] * n
     n_samples = n_steps // every + 1
     theta_out = np.full((n_samples, n), np.nan)
     alpha_out = np.full((n_samples, n), np.nan)
@@ -761,28 +758,13 @@ def simulate_whole_body(
             alpha_out[step // every] = alpha
         if step == n_steps:
             break
-        est_rate = deadband(omega[0] - qd[0], width)
-        beta, beta_rate = estimate, est_rate
-        below, below_rate = platform_angle, platform_rate
-        command = []
-        for i in range(n):
-            com = mix[i]
-            x = com * (alpha[i] - alpha_ref[i] - below + beta) + (1.0 - com) * q[i]
-            xd = com * (alpha_rate[i] - below_rate + beta_rate) + (1.0 - com) * qd[i]
-            command.append(kp[i] * x + kd[i] * xd + ki[i] * integral[i] + hold[i])
-            integral[i] += dt * x
-            beta += q[i]
-            beta_rate += qd[i]
-            below, below_rate = theta[i], omega[i]
-        estimate += dt * est_rate
-        delayed = delays.push_and_read(command)
-        for i in range(n):
-            torque = (-delayed[i] - kp[i] * math.sin(alpha[i])
-                      - kd[i] * math.cos(alpha[i]) * alpha_rate[i])
+        torques = controller.torques(q, qd, theta, omega, alpha, alpha_rate,
+                                     platform_angle, platform_rate)
+        for i in range(n):  # shared by the left and right joint of the lumped one
             left, right = dofs[i]
             sl, sr = signs[i]
-            applied[left] = sl * torque
-            applied[right] = sr * torque
+            applied[left] = sl * torques[i]
+            applied[right] = sr * torques[i]
         mujoco.mj_step(m, d)
 
     sample_time, sample_tilt = options.sampled(tilt)

@@ -63,7 +63,7 @@ def test_every_quoted_flag_and_choice_exists(where, command):
     commands = _subparsers(root)
     assert words[0] in commands, f"{where}: no command {words[0]!r}"
     parser = commands[words[0]]
-    if (words[0] in ("dataset", "universal", "norm") and len(words) > 1
+    if (words[0] in ("dataset", "universal", "norm", "robot") and len(words) > 1
             and not words[1].startswith("-")):
         parser = _subparsers(parser)[words[1]]
     flags = _flags(parser) | _flags(root)

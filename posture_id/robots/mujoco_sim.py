@@ -196,6 +196,57 @@ def _dot(v: list, w: list) -> float:
     return v[0] * w[0] + v[1] * w[1] + v[2] * w[2]
 
 
+def stepped_options(base: SimulationOptions, mujoco_options: MujocoOptions
+                    ) -> SimulationOptions:
+    """``base`` (sampling rate, sway limit, dead-band) at MuJoCo's step.
+
+    Raises:
+        RobotError: a sample period that is not a multiple of the step."""
+    dt = mujoco_options.timestep_s
+    try:
+        return SimulationOptions(dt=dt, sample_rate_hz=base.sample_rate_hz,
+                                 sway_limit_deg=base.sway_limit_deg,
+                                 deadband_rad_s=base.deadband_rad_s)
+    except SimulationError as exc:  # the sample period is not a multiple of the step
+        raise RobotError(f"MuJoCo timestep_s {dt:g} s: {exc}") from None
+
+
+def run_dec_loop(mujoco, m, d, tilt: np.ndarray, tilt_vel: np.ndarray,
+                 options: SimulationOptions, n: int, prescribe, sensors,
+                 controller: DecController, apply) -> tuple[np.ndarray, np.ndarray,
+                                                             float | None]:
+    """Step MuJoCo's model ``m``/``d`` through the stimulus on the step grid (``tilt``,
+    ``tilt_vel`` (K + 1,) rad, rad/s) under ``controller``: each step ``prescribe(angle,
+    rate)`` sets the platform, ``sensors()`` gives (θ, ω, α, α̇, platform angle and rate,
+    q, q̇) of the N modules, ``apply(torques)`` puts the N torques on the joints.
+
+    Returns:
+        (θ (S, N) rad, α (S, N) rad at the samples, NaN from a fall on; the fall's time,
+        s, or None).
+    """
+    n_steps, every, dt = len(tilt) - 1, options.sample_every, options.dt
+    limit = math.radians(options.sway_limit_deg)
+    n_samples = n_steps // every + 1
+    theta_out = np.full((n_samples, n), np.nan)
+    alpha_out = np.full((n_samples, n), np.nan)
+    tilt_list, tilt_vel_list = tilt.tolist(), tilt_vel.tolist()
+    for step in range(n_steps + 1):
+        prescribe(tilt_list[step], tilt_vel_list[step])
+        mujoco.mj_forward(m, d)
+        theta, omega, alpha, alpha_rate, platform_angle, platform_rate, q, qd = sensors()
+        if not all(abs(th) <= limit for th in theta):  # NaN too: a diverged body fell
+            return theta_out, alpha_out, step * dt
+        if step % every == 0:
+            theta_out[step // every] = theta
+            alpha_out[step // every] = alpha
+        if step == n_steps:
+            break
+        apply(controller.torques(q, qd, theta, omega, alpha, alpha_rate, platform_angle,
+                                 platform_rate))
+        mujoco.mj_step(m, d)
+    return theta_out, alpha_out, None
+
+
 def simulate_mujoco(
     body: Body,
     params: DecParameters | None = None,
@@ -232,22 +283,15 @@ def simulate_mujoco(
     if params.joints != body.joint_names:
         raise RobotError(f"parameters are for joints {', '.join(params.joints)}; body "
                          f"'{body.name}' has {', '.join(body.joint_names)}")
-    dt = mujoco_options.timestep_s
-    try:
-        options = SimulationOptions(dt=dt, sample_rate_hz=base.sample_rate_hz,
-                                    sway_limit_deg=base.sway_limit_deg,
-                                    deadband_rad_s=base.deadband_rad_s)
-    except SimulationError as exc:  # the sample period is not a multiple of the step
-        raise RobotError(f"MuJoCo timestep_s {dt:g} s: {exc}") from None
+    options = stepped_options(base, mujoco_options)
+    dt = options.dt
     n = body.n_segments
     kp = params.array("kp").tolist()
     chain = ChainModel.build(body, mujoco_options, params.array("kpas"), params.array("bpas"))
     m = chain.model
     d = mujoco.MjData(m)
     n_steps = options.n_steps(stimulus)
-    every = options.sample_every
     tilt, tilt_vel = stimulus.on_grid(dt, n_steps)
-    limit = math.radians(options.sway_limit_deg)
     deadband_width = options.deadband_rad_s
 
     jq = [int(a) for a in chain.joint_qpos]
@@ -261,38 +305,26 @@ def simulate_mujoco(
     alpha_ref = sense()[2]
     hold = [-float(d.qfrc_bias[jd[i]]) - kp[i] * math.sin(alpha_ref[i]) for i in range(n)]
     controller = DecController(params, alpha_ref, hold, dt, deadband_width)
-    n_samples = n_steps // every + 1
-    theta_out = np.full((n_samples, n), np.nan)
-    alpha_out = np.full((n_samples, n), np.nan)
-    abort_time = None
-    tilt_list, tilt_vel_list = tilt.tolist(), tilt_vel.tolist()
     qpos, qvel, applied = d.qpos, d.qvel, d.qfrc_applied
-    for step in range(n_steps + 1):
+
+    def prescribe(angle: float, rate: float) -> None:
         # the platform follows the stimulus exactly; the ankle coordinate takes the change
         # the other way, so the body's state in space is unchanged
-        angle, rate = tilt_list[step], tilt_vel_list[step]
         qpos[jq[0]] += qpos[pq] - angle
         qvel[jd[0]] += qvel[pd] - rate
         qpos[pq] = angle
         qvel[pd] = rate
-        mujoco.mj_forward(m, d)
-        theta, omega, alpha, alpha_rate, platform_angle, platform_rate = sense()
-        if not all(abs(th) <= limit for th in theta):
-            abort_time = step * dt
-            break
-        if step % every == 0:
-            theta_out[step // every] = theta
-            alpha_out[step // every] = alpha
-        if step == n_steps:
-            break
-        q = [float(qpos[a]) for a in jq]  # proprioception: the hinges' angles and rates
-        qd = [float(qvel[a]) for a in jd]
-        torques = controller.torques(q, qd, theta, omega, alpha, alpha_rate, platform_angle,
-                                     platform_rate)
+
+    def sensors() -> tuple:
+        # proprioception: the hinges' angles and rates
+        return (*sense(), [float(qpos[a]) for a in jq], [float(qvel[a]) for a in jd])
+
+    def apply(torques: list) -> None:
         for i in range(n):  # passive stiffness and damping: MuJoCo's own
             applied[jd[i]] = torques[i]
-        mujoco.mj_step(m, d)
 
+    theta_out, alpha_out, abort_time = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options,
+                                                    n, prescribe, sensors, controller, apply)
     sample_time, sample_tilt = options.sampled(tilt)
     return SimulationResult(
         time=sample_time,

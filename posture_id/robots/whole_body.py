@@ -688,10 +688,9 @@ def simulate_whole_body(
         sampling rate; the fall's time or None, :class:`WholeBodyModel`).
     """
     from posture_id.dec.parameters import default_parameters
-    from posture_id.errors import SimulationError
     from posture_id.provenance import body_identity
     from posture_id.robots.mujoco_model import MujocoOptions
-    from posture_id.robots.mujoco_sim import DecController
+    from posture_id.robots.mujoco_sim import DecController, run_dec_loop, stepped_options
     from posture_id.simulation.options import SimulationOptions
     from posture_id.simulation.results import SimulationResult
     from posture_id.simulation.stimulus import prts
@@ -706,13 +705,8 @@ def simulate_whole_body(
     if params.joints != lumped.joint_names:
         raise RobotError(f"parameters are for joints {', '.join(params.joints)}; the lumped "
                          f"'{lumped.name}' has {', '.join(lumped.joint_names)}")
-    dt = mujoco_options.timestep_s
-    try:
-        options = SimulationOptions(dt=dt, sample_rate_hz=base.sample_rate_hz,
-                                    sway_limit_deg=base.sway_limit_deg,
-                                    deadband_rad_s=base.deadband_rad_s)
-    except SimulationError as exc:
-        raise RobotError(f"MuJoCo timestep_s {dt:g} s: {exc}") from None
+    options = stepped_options(base, mujoco_options)
+    dt = options.dt
     n = segments
     kp = params.array("kp").tolist()
     body = WholeBodyModel.build(spec, segments, params.array("kpas"), params.array("bpas"),
@@ -721,9 +715,7 @@ def simulate_whole_body(
     d = mujoco.MjData(m)
     sense = WholeBodySensors(body, d)
     n_steps = options.n_steps(stimulus)
-    every = options.sample_every
     tilt, tilt_vel = stimulus.on_grid(dt, n_steps)
-    limit = math.radians(options.sway_limit_deg)
     width = options.deadband_rad_s
 
     mujoco.mj_forward(m, d)
@@ -739,34 +731,21 @@ def simulate_whole_body(
     signs = (0.5 * body.dec_sign).tolist()
     pq, pd = body.platform_qpos, body.platform_dof
 
-    n_samples = n_steps // every + 1
-    theta_out = np.full((n_samples, n), np.nan)
-    alpha_out = np.full((n_samples, n), np.nan)
-    abort_time = None
-    tilt_list, tilt_vel_list = tilt.tolist(), tilt_vel.tolist()
     qpos, qvel, applied = d.qpos, d.qvel, d.qfrc_applied
-    for step in range(n_steps + 1):
-        qpos[pq] = tilt_list[step]
-        qvel[pd] = tilt_vel_list[step]
-        mujoco.mj_forward(m, d)
-        theta, omega, alpha, alpha_rate, platform_angle, platform_rate, q, qd = sense()
-        if not all(abs(th) <= limit for th in theta):  # NaN too: a diverged body fell
-            abort_time = step * dt
-            break
-        if step % every == 0:
-            theta_out[step // every] = theta
-            alpha_out[step // every] = alpha
-        if step == n_steps:
-            break
-        torques = controller.torques(q, qd, theta, omega, alpha, alpha_rate,
-                                     platform_angle, platform_rate)
+
+    def prescribe(angle: float, rate: float) -> None:
+        qpos[pq] = angle
+        qvel[pd] = rate
+
+    def apply(torques: list) -> None:
         for i in range(n):  # shared by the left and right joint of the lumped one
             left, right = dofs[i]
             sl, sr = signs[i]
             applied[left] = sl * torques[i]
             applied[right] = sr * torques[i]
-        mujoco.mj_step(m, d)
 
+    theta_out, alpha_out, abort_time = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options,
+                                                    n, prescribe, sense, controller, apply)
     sample_time, sample_tilt = options.sampled(tilt)
     result = SimulationResult(
         time=sample_time, tilt=sample_tilt, theta=theta_out, alpha=alpha_out,

@@ -263,12 +263,14 @@ def run_study(manifest: StudyManifest, out: str | Path, options: StudyOptions | 
             if r.finished}
     frfs = {k.name.removesuffix(".trial"): json.loads(frf_journal.target(k).read_text())
             for k, r in zip(trial_keys, trial_rows, strict=True) if r.finished}
-    rows = _subject_summary(manifest, frfs, fits, subject_rows)
+    curves = {(s, c): _condition_frf(manifest, frfs, s, c)
+              for s in manifest.subjects for c in manifest.conditions}
+    rows = _subject_summary(manifest, curves, fits, subject_rows)
     fields = list(dict.fromkeys(k for r in rows for k in r))
     _write_csv(out / "summary.csv", rows, fields)
     write_summary(out / "trials.csv", list(trial_rows),
                   list(dict.fromkeys(k for r in trial_rows for k in r)))
-    paired = _paired_tests(manifest, frfs, fits, options, out)
+    paired = _paired_tests(manifest, curves, fits, options, out)
     result = StudyResult(out, manifest.subjects, manifest.conditions, tuple(trial_rows),
                          tuple(subject_rows), tuple(rows), paired, failed)
     result.to_json(out / "study.json")
@@ -313,10 +315,11 @@ def _condition_frf(manifest: StudyManifest, frfs: dict, subject: str, condition:
     return {f: complex(np.mean(v)) for f, v in sorted(points.items())}
 
 
-def _subject_summary(manifest: StudyManifest, frfs: dict, fits: dict,
+def _subject_summary(manifest: StudyManifest, curves: dict, fits: dict,
                      subject_rows) -> list[dict]:
     """summary.csv: per subject its fit's shared parameters and per condition its
-    per-condition parameters and its body-COM gain and phase at each frequency."""
+    per-condition parameters and its body-COM gain and phase at each frequency
+    (``curves``: {(subject, condition): :func:`_condition_frf`})."""
     status = {r.recording.removesuffix(".subject"): r.status for r in subject_rows}
     rows = []
     for subject in manifest.subjects:
@@ -336,7 +339,7 @@ def _subject_summary(manifest: StudyManifest, frfs: dict, fits: dict,
                     row.update({f"{name} [{condition}]": _sig(value),
                                 f"{name} low [{condition}]": _sig(low),
                                 f"{name} high [{condition}]": _sig(high)})
-            for f, h in _condition_frf(manifest, frfs, subject, condition).items():
+            for f, h in curves[subject, condition].items():
                 row[f"gain {f:g} Hz [{condition}]"] = _sig(abs(h))
                 row[f"phase {f:g} Hz [{condition}]"] = _sig(np.degrees(np.angle(h)))
         rows.append(row)
@@ -347,7 +350,7 @@ def _sig(x) -> float | None:
     return None if x is None or not np.isfinite(x) else float(f"{float(x):.5g}")
 
 
-def _paired_tests(manifest: StudyManifest, frfs: dict, fits: dict, options: StudyOptions,
+def _paired_tests(manifest: StudyManifest, curves: dict, fits: dict, options: StudyOptions,
                   out: Path) -> dict:
     """Each pair of conditions: the paired test of the subjects' body-COM FRFs (at the
     frequencies every subject has in both) and of their per-condition parameters;
@@ -361,17 +364,14 @@ def _paired_tests(manifest: StudyManifest, frfs: dict, fits: dict, options: Stud
     for i, a in enumerate(conditions):
         for b in conditions[i + 1:]:
             tests: dict = {}
-            both = [s for s in manifest.subjects
-                    if _condition_frf(manifest, frfs, s, a)
-                    and _condition_frf(manifest, frfs, s, b)]
+            both = [s for s in manifest.subjects if curves[s, a] and curves[s, b]]
             if len(both) >= 2:
-                curves = {c: [_condition_frf(manifest, frfs, s, c) for s in both]
-                          for c in (a, b)}
+                pair = {c: [curves[s, c] for s in both] for c in (a, b)}
                 common = sorted(set.intersection(*(set(h) for c in (a, b)
-                                                   for h in curves[c])))
+                                                   for h in pair[c])))
                 if common:
                     sets = [FrfSet(np.array(common), np.array([[[h[f]] for f in common]
-                                                                for h in curves[c]]),
+                                                                for h in pair[c]]),
                                    (COM_CHANNEL,), tuple(both)) for c in (a, b)]
                     tests["frf"] = compare_paired(*sets, names=(a, b),
                                                   permutations=options.permutations

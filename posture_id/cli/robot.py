@@ -11,6 +11,7 @@ from posture_id.cli.exit_status import answered
 from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.simulate import add_model_arguments, model_options
 from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
+from posture_id.robots.whole_body import HeldJoints, WholeBodyOptions
 
 __all__ = ["add_parser", "run_check", "CHECK_FILES"]
 
@@ -35,8 +36,18 @@ def add_parser(sub) -> None:
                        help="DEC parameter JSON of the (lumped) chain (default: its defaults)")
     add_lab_stimulus_arguments(check, "tilt CSV (time_s,tilt_deg) instead of the PRTS")
     add_model_arguments(check)
-    check.add_argument("--timestep-ms", type=positive_float, default=1.0,
-                       help="MuJoCo's step, ms (default %(default)g)")
+    check.add_argument("--timestep-ms", type=positive_float, default=None,
+                       help="MuJoCo's step, ms (default: 1 for a chain; for a whole body "
+                            "the largest of 1, 0.5, 0.25, 0.125 at which its step is "
+                            "stable)")
+    check.add_argument("--held", choices=[h.value for h in HeldJoints],
+                       default=HeldJoints.SERVOS.value,
+                       help="how a whole body's joints the lumping treats as rigid are "
+                            "held: stiff PD servos, or welded rigid (default %(default)s)")
+    check.add_argument("--servo-stiffness", type=positive_float,
+                       default=WholeBodyOptions().stiffness_factor, metavar="FACTOR",
+                       help="a held joint's servo stiffness over the m·g·h of the mass it "
+                            "carries (default %(default)g)")
     check.add_argument("--out", type=Path, required=True,
                        help="folder to write check.json and check.png into")
     check.set_defaults(func=run_check)
@@ -66,10 +77,14 @@ def run_check(args: argparse.Namespace) -> int:
                              "nor a URDF file")
         params = DecParameters.from_json(args.params, chain) if args.params else None
         stimulus = stimulus_from_args(args, default=prts())
+        step = None if args.timestep_ms is None else args.timestep_ms / 1000
         result = robot_check(target, stimulus, params,
                              CheckOptions(segments=args.segments),
                              simulation_options=model_options(args),
-                             mujoco_options=MujocoOptions(timestep_s=args.timestep_ms / 1000))
+                             mujoco_options=MujocoOptions(timestep_s=step),
+                             whole_body_options=WholeBodyOptions(
+                                 held=HeldJoints(args.held),
+                                 stiffness_factor=args.servo_stiffness))
         args.out.mkdir(parents=True, exist_ok=True)
         result.to_json(args.out / "check.json")
         result.plot(args.out / "check.png")

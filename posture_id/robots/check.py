@@ -176,6 +176,12 @@ class RobotCheck(Result):
                             (self.lumped_label, self.lumped_fall_s)):
             lines.append(f"  {label}: " + ("stays up" if fall is None
                                             else f"FELL at t = {fall:.2f} s"))
+        step = self.details.get("mujoco_timestep_s")
+        if step is not None:
+            how = self.details.get("step_choice_sentence")
+            held = self.details.get("held")
+            lines.append(f"  MuJoCo step {1000 * step:g} ms" + (f" ({how})" if how else "")
+                         + (f"; held joints: {held}" if held else ""))
         lines.append("  variance of the MuJoCo sway the lumped prediction explains: " + ", ".join(
             f"{name} {100 * v:.1f} %" for name, v in zip(self.channels, self.variance_explained,
                                                          strict=True)))
@@ -260,7 +266,12 @@ def robot_check(body_or_preset, stimulus=None, params=None, options: CheckOption
     from posture_id.bodies.body import load_body
     from posture_id.bodies.lumping import PRESETS
     from posture_id.robots.mujoco_sim import simulate_mujoco
-    from posture_id.robots.whole_body import WholeBodySpec, lumped_body, simulate_whole_body
+    from posture_id.robots.whole_body import (
+        WholeBodyOptions,
+        WholeBodySpec,
+        lumped_body,
+        simulate_whole_body,
+    )
     from posture_id.simulation import prts, simulate
 
     mujoco = require_mujoco()
@@ -297,7 +308,11 @@ def robot_check(body_or_preset, stimulus=None, params=None, options: CheckOption
                    "urdf": str(spec.urdf), "dofs": int(model.model.nv),
                    "mass_kg": model.total_mass,
                    "welds": "both feet welded to the platform; the base free",
+                   "held": (whole_body_options or WholeBodyOptions()).held.value,
                    "held_joints": [g.to_dict() for g in model.gains.values()]}
+        if model.step_choice is not None:
+            details["step_choice"] = model.step_choice.to_dict()
+            details["step_choice_sentence"] = model.step_choice.sentence()
     details["mujoco_version"] = mujoco.__version__
     e_sway, l_sway = _sway(engine), _sway(lumped)
     f_e, g_e, p_e = _frf(engine, stimulus, options)

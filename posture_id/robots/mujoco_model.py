@@ -47,8 +47,8 @@ import numpy as np
 from posture_id.bodies.body import Body
 from posture_id.robots.errors import RobotError, require_mujoco
 
-__all__ = ["MujocoOptions", "ChainModel", "chain_mjcf", "INTEGRATORS", "PLATFORM", "SITE",
-           "SEGMENT_SENSORS"]
+__all__ = ["MujocoOptions", "DEFAULT_STEP_S", "ChainModel", "chain_mjcf", "INTEGRATORS",
+           "PLATFORM", "SITE", "SEGMENT_SENSORS"]
 
 #: MuJoCo integrators by the names :class:`MujocoOptions` accepts.
 INTEGRATORS = ("rk4", "implicit", "implicitfast", "euler")
@@ -65,28 +65,49 @@ SITE = "_frame"
 SEGMENT_SENSORS = ("angvel", "anchorvel", "anchor", "com_above", "com_above_vel")
 
 
+#: s, a chain's step when none is given.
+DEFAULT_STEP_S = 0.001
+
+
 @dataclass(frozen=True)
 class MujocoOptions:
     """How MuJoCo steps the body on its platform.
 
     Attributes:
-        timestep_s: MuJoCo's step, s (default 1 ms); the DEC controller runs once per step.
+        timestep_s: MuJoCo's step, s; the DEC controller runs once per step. None (the
+            default): :data:`DEFAULT_STEP_S` for a chain; for a whole body the largest of
+            1, 1/2, 1/4 and 1/8 ms at which its step is stable
+            (:func:`~posture_id.robots.whole_body.choose_step`).
         integrator: MuJoCo's integrator, one of :data:`INTEGRATORS` (default ``"rk4"``:
             4th-order Runge-Kutta; the controller's torques are held over its stages).
         platform_armature: kg·m², armature of the platform's hinge, large enough that the
             body's reaction cannot accelerate it (the tilt is prescribed; see the module).
         inertia_floor: kg·m², added to every link's inertia in the plane normal to the
             joint axis (not about it), so that a slender rod's zero moment becomes positive.
+        solver_tolerance, solver_iterations: MuJoCo's constraint solver (the whole body's
+            welds; a chain has no constraint). Its own default tolerance, 1e-8, leaves
+            force errors that DEC's loop turns into sway: on TALOS about 0.01° of sway
+            with the platform level, different at every step, where 1e-15 leaves 0.001°,
+            the same at 1 and 0.25 ms (docs/robots.md, "The step").
     """
 
-    timestep_s: float = 0.001
+    timestep_s: float | None = None
     integrator: str = "rk4"
     platform_armature: float = 1e10
     inertia_floor: float = 1e-6
+    solver_tolerance: float = 1e-15
+    solver_iterations: int = 1000
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.timestep_s) and 0 < self.timestep_s <= 0.01):
+        if self.timestep_s is not None and not (
+                math.isfinite(self.timestep_s) and 0 < self.timestep_s <= 0.01):
             raise RobotError(f"MuJoCo timestep_s must be in (0, 0.01] s, got {self.timestep_s}")
+        if not (math.isfinite(self.solver_tolerance) and self.solver_tolerance > 0):
+            raise RobotError("MuJoCo solver_tolerance must be > 0, got "
+                             f"{self.solver_tolerance}")
+        if self.solver_iterations < 1:
+            raise RobotError("MuJoCo solver_iterations must be ≥ 1, got "
+                             f"{self.solver_iterations}")
         if self.integrator not in INTEGRATORS:
             raise RobotError(f"MuJoCo integrator must be one of {', '.join(INTEGRATORS)}, got "
                              f"'{self.integrator}'")
@@ -95,6 +116,11 @@ class MujocoOptions:
                              f"prescribed), got {self.platform_armature}")
         if not (math.isfinite(self.inertia_floor) and self.inertia_floor > 0):
             raise RobotError(f"MuJoCo inertia_floor must be > 0 kg·m², got {self.inertia_floor}")
+
+    @property
+    def step_s(self) -> float:
+        """The step, s: ``timestep_s``, or :data:`DEFAULT_STEP_S` when it is None."""
+        return DEFAULT_STEP_S if self.timestep_s is None else self.timestep_s
 
 
 def _vec(v) -> str:
@@ -151,7 +177,7 @@ def chain_mjcf(body: Body, options: MujocoOptions | None = None,
     lines = [
         f'<mujoco model="{body.name} on a tilting platform">',
         '  <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>',
-        f'  <option timestep="{options.timestep_s:.17g}" '
+        f'  <option timestep="{options.step_s:.17g}" '
         f'integrator="{_MJCF_INTEGRATOR[options.integrator]}" gravity="{_vec(gravity)}">',
         '    <flag contact="disable"/>',
         '  </option>',

@@ -202,7 +202,7 @@ def stepped_options(base: SimulationOptions, mujoco_options: MujocoOptions
 
     Raises:
         RobotError: a sample period that is not a multiple of the step."""
-    dt = mujoco_options.timestep_s
+    dt = mujoco_options.step_s
     try:
         return SimulationOptions(dt=dt, sample_rate_hz=base.sample_rate_hz,
                                  sway_limit_deg=base.sway_limit_deg,

@@ -40,8 +40,9 @@ Decisions (each stated in docs/robots.md):
 
 from __future__ import annotations
 
+import enum
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +51,7 @@ from posture_id.errors import BodyError
 from posture_id.robots.errors import RobotError, require_mujoco
 from posture_id.robots.mujoco_model import _quat, _vec
 
-__all__ = ["WholeBodySpec", "WholeBodyOptions", "ServoGain", "WholeBodyModel",
+__all__ = ["WholeBodySpec", "WholeBodyOptions", "HeldJoints", "ServoGain", "WholeBodyModel",
            "WholeBodySensors", "reference_configuration", "servo_gains", "ROLES",
            "simulate_whole_body", "lumped_body", "static_torques"]
 
@@ -97,11 +98,23 @@ class WholeBodySpec:
         return [getattr(self, role) for role in ROLES[segments]]
 
 
+class HeldJoints(enum.Enum):
+    """How the joints the lumping treats as rigid are held in MuJoCo."""
+
+    #: a stiff PD servo each (:func:`servo_gains`): a robot's joint controllers
+    SERVOS = "servos"
+    #: welded: the held joints are not joints at all, exactly as the lumping assumes
+    RIGID = "rigid"
+
+
 @dataclass(frozen=True)
 class WholeBodyOptions:
     """How the whole body is held together in MuJoCo.
 
     Attributes:
+        held: :class:`HeldJoints` (default servos): servos, or welded rigid (the lumping's
+            own assumption, no servo to integrate: it tells what the servos' compliance
+            adds from what the rest of the lumping leaves out).
         stiffness_factor: a held joint's stiffness over the m·g·h of the mass it carries.
         damping_ratio: of each held joint's servo (1: critically damped, with the
             inertia it carries about its axis).
@@ -121,6 +134,7 @@ class WholeBodyOptions:
             and rings or diverges.
     """
 
+    held: HeldJoints = HeldJoints.SERVOS
     stiffness_factor: float = 100.0
     damping_ratio: float = 1.0
     min_lever_m: float = 0.05
@@ -130,6 +144,12 @@ class WholeBodyOptions:
     max_step_rate: float = 1.0
 
     def __post_init__(self) -> None:
+        try:
+            object.__setattr__(self, "held", HeldJoints(self.held))
+        except ValueError:
+            raise RobotError(f"WholeBodyOptions.held must be one of "
+                             f"{', '.join(h.value for h in HeldJoints)}, got {self.held!r}"
+                             ) from None
         for name in ("stiffness_factor", "damping_ratio", "min_lever_m", "weld_timeconst_s",
                      "mass_floor_kg", "locked_below_kg", "max_step_rate"):
             value = getattr(self, name)
@@ -252,7 +272,8 @@ def servo_gains(model, data, q, dec_joints: set[int], ankles: tuple[int, int],
             inertia += float(axis @ tensor @ axis) + m * float(r_perp @ r_perp)
         mass *= share
         inertia *= share
-        if j in feet or mass < options.locked_below_kg:  # the feet are the support
+        if (j in feet or mass < options.locked_below_kg  # the feet are the support
+                or options.held is HeldJoints.RIGID):
             gains[j] = ServoGain(name, mass, 0.0, 0.0, inertia, 0.0, locked=True)
             continue
         r = first * share / mass - anchor
@@ -280,6 +301,8 @@ class WholeBodyModel:
         held_dofs, held_feedforward: qvel addresses and static torques (N·m) of the held
         joints (applied as constant forces; their PD is MuJoCo's joint stiffness and
         damping).
+        step_choice: :class:`~posture_id.robots.stability.StepChoice` when the step was
+            chosen (``MujocoOptions.timestep_s`` None), else None.
     """
 
     spec: WholeBodySpec
@@ -299,6 +322,7 @@ class WholeBodyModel:
     held_dofs: np.ndarray = field(repr=False)
     held_feedforward: np.ndarray = field(repr=False)
     ankle_point: np.ndarray = field(repr=False)
+    step_choice: object = None
 
     @classmethod
     def build(cls, spec: WholeBodySpec, segments: int = 3, kpas=None, bpas=None,
@@ -352,13 +376,16 @@ class WholeBodyModel:
                 passive[j] = (kpas[k] / 2.0, bpas[k] / 2.0)
 
         size = 0.3
-        weld_tc = max(options.weld_timeconst_s, 2.0 * mujoco_options.timestep_s)
+        step = mujoco_options.step_s
+        weld_tc = max(options.weld_timeconst_s, 2.0 * step)
         lines = [
             f'<mujoco model="{spec.name} whole body on a tilting platform">',
             '  <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>',
-            f'  <option timestep="{mujoco_options.timestep_s:.17g}" '
+            f'  <option timestep="{step:.17g}" '
             f'integrator="{_MJCF_INTEGRATOR[mujoco_options.integrator]}" '
-            f'gravity="{_vec(gravity)}" jacobian="dense">',
+            f'gravity="{_vec(gravity)}" jacobian="dense" '
+            f'tolerance="{mujoco_options.solver_tolerance:.17g}" '
+            f'iterations="{mujoco_options.solver_iterations}">',
             '    <flag contact="disable"/>',
             '  </option>',
             '  <worldbody>',
@@ -459,7 +486,7 @@ class WholeBodyModel:
                              "axis y in the reference posture")
         held = [(mujoco.mj_name2id(mj, obj.mjOBJ_JOINT, g.joint), g)
                 for g in gains.values() if not g.locked]
-        held = _stabilise(mujoco, mj, held, mujoco_options.timestep_s, options.max_step_rate)
+        held = _stabilise(mujoco, mj, held, step, options.max_step_rate)
         by_name = {g.joint: g for _, g in held}
         gains = {j: by_name.get(g.joint, g) for j, g in gains.items()}
         platform = mujoco.mj_name2id(mj, obj.mjOBJ_JOINT, PLATFORM)
@@ -484,8 +511,6 @@ def _stabilise(mujoco, mj, held: list, dt: float, rate: float) -> list:
     """Add to each held joint the armature (kg·m²) that brings B·dt/I and √(K/I)·dt to at
     most ``rate`` (I: the joint's diagonal of the mass matrix at the reference posture);
     returns ``held`` with each :class:`ServoGain`'s ``armature`` set."""
-    from dataclasses import replace
-
     data = mujoco.MjData(mj)
     mujoco.mj_forward(mj, data)
     full = np.zeros((mj.nv, mj.nv))
@@ -691,6 +716,7 @@ def simulate_whole_body(
     from posture_id.provenance import body_identity
     from posture_id.robots.mujoco_model import MujocoOptions
     from posture_id.robots.mujoco_sim import DecController, run_dec_loop, stepped_options
+    from posture_id.robots.stability import choose_step
     from posture_id.simulation.options import SimulationOptions
     from posture_id.simulation.results import SimulationResult
     from posture_id.simulation.stimulus import prts
@@ -705,12 +731,26 @@ def simulate_whole_body(
     if params.joints != lumped.joint_names:
         raise RobotError(f"parameters are for joints {', '.join(params.joints)}; the lumped "
                          f"'{lumped.name}' has {', '.join(lumped.joint_names)}")
+    kpas, bpas = params.array("kpas"), params.array("bpas")
+    step_choice = None
+    if mujoco_options.timestep_s is None:
+        built = {}
+
+        def build(step: float):
+            built[step] = WholeBodyModel.build(spec, segments, kpas, bpas, replace(
+                mujoco_options, timestep_s=step), whole_body_options)
+            return built[step].model
+
+        step_choice = choose_step(build)
+        mujoco_options = replace(mujoco_options, timestep_s=step_choice.step_s)
+        body = replace(built[step_choice.step_s], step_choice=step_choice)
+    else:
+        body = WholeBodyModel.build(spec, segments, kpas, bpas, mujoco_options,
+                                    whole_body_options)
     options = stepped_options(base, mujoco_options)
     dt = options.dt
     n = segments
     kp = params.array("kp").tolist()
-    body = WholeBodyModel.build(spec, segments, params.array("kpas"), params.array("bpas"),
-                                mujoco_options, whole_body_options)
     m = body.model
     d = mujoco.MjData(m)
     sense = WholeBodySensors(body, d)
@@ -726,7 +766,6 @@ def simulate_whole_body(
     feedforward = static_torques(body, d, [-g for g in grav])
     held_dofs = body.held_dofs
     d.qfrc_applied[held_dofs] = feedforward
-    controller = DecController(params, alpha_ref, hold, dt, width)
     dofs = body.dec_dofs.tolist()
     signs = (0.5 * body.dec_sign).tolist()
     pq, pd = body.platform_qpos, body.platform_dof
@@ -744,6 +783,7 @@ def simulate_whole_body(
             applied[left] = sl * torques[i]
             applied[right] = sr * torques[i]
 
+    controller = DecController(params, alpha_ref, hold, dt, width)
     theta_out, alpha_out, abort_time = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options,
                                                     n, prescribe, sense, controller, apply)
     sample_time, sample_tilt = options.sampled(tilt)

@@ -170,6 +170,8 @@ def _one(task: tuple) -> dict:
                 "method_used": result.method.value,
                 "p_com": None if result.class_probability is None
                 else [float(x) for x in result.class_probability],
+                "joints": list(body.joint_names),
+                "unpinned": list(result.verdict.unpinned),
                 "notices": [n for n in result.notices if "refined" in n or "stimulus" in n],
                 **{k: fields[k] for k in ("noise_ratio", "relative_residual",
                                           "noise_relative")},
@@ -187,6 +189,7 @@ def _one(task: tuple) -> dict:
         row.update({
             "classes_right": [result.parameters[j].controls == truth[j].controls
                               for j in body.joint_names],
+            "truth_com": [truth[j].sign > 0 for j in body.joint_names],
             "kp_error": (found[:, 0] / truth_si[:, 0] - 1).tolist(),
             "inside": inside.tolist(),
             "kp_far": (np.abs(found[:, 0] - truth_si[:, 0]) > 2 * half[:, 0]).tolist(),
@@ -221,6 +224,100 @@ def _judged(row: dict) -> str:
     if not all(row["classes_right"]) or any(row["kp_far"]):
         return "wrong"
     return "right" if all(all(r) for r in row["inside"]) else "neither"
+
+
+def _truth_com(row: dict) -> list[bool] | None:
+    """Each module's true class (COM in space), from the row's ``truth_com``, or, for an
+    answer whose classes are the network's (``method_used`` cnn), from its P(com) and
+    whether its class is right; None when neither tells."""
+    if row.get("truth_com") is not None:
+        return row["truth_com"]
+    if row.get("method_used") != "cnn" or row.get("p_com") is None:
+        return None
+    return [(p >= 0.5) == right for p, right in zip(row["p_com"], row["classes_right"],
+                                                    strict=True)]
+
+
+def _names_class(row: dict, module: int) -> bool:
+    """The answer's verdict names ``module``'s class as what the recording does not pin
+    (its ``unpinned`` list when the row has it; else the network's P(com) inside
+    :data:`~posture_id.identify.verdict.UNSURE_CLASS`, the rule that names it)."""
+    from posture_id.identify.verdict import UNSURE_CLASS
+
+    if row.get("unpinned") is not None and row.get("joints") is not None:
+        joint = row["joints"][module]
+        return any(f"the {joint}'s class" in u for u in row["unpinned"])
+    low, high = UNSURE_CLASS
+    return row.get("p_com") is not None and low < row["p_com"][module] < high
+
+
+def class_lines(people: list[dict]) -> list[str]:
+    """The report's section on the class probabilities of people-like answers: their
+    calibration (ECE, the share right of those given ≥ 0.9, the reliability table) and
+    how the verdict treats a wrong class and the right answers."""
+    from posture_id.uncertainty.coverage import expected_calibration_error, reliability
+
+    known = [(r, t) for r in people if (t := _truth_com(r)) is not None]
+    if not known:
+        return []
+    p = np.concatenate([r["p_com"] for r, _ in known])
+    truth = np.concatenate([t for _, t in known]).astype(bool)
+    confidence = np.maximum(p, 1 - p)
+    right = (p >= 0.5) == truth
+    sure = confidence >= 0.9
+    lines = ["", "## Class probabilities", "",
+             f"People-like modules: {len(p)}. Expected calibration error of P(com) against "
+             f"the true class (10 bins): {expected_calibration_error(p, truth):.3f}. Of the "
+             f"{int(sure.sum())} modules given a class with probability ≥ 0.9, "
+             f"{100 * right[sure].mean():.1f} % are right.", "",
+             "| P(com) bin | modules | mean P(com) | share COM |", "|---|---|---|---|"]
+    mean_p, freq, count = reliability(p, truth)
+    for k in range(len(count)):
+        if count[k]:
+            lines.append(f"| {k / 10:.1f}–{(k + 1) / 10:.1f} | {count[k]} | {mean_p[k]:.3f} "
+                         f"| {freq[k]:.3f} |")
+    wrong = [(r, t) for r, t in known if not all(r["classes_right"])]
+    flagged = [r for r, _ in wrong if r["level"] == "doubtful" or any(
+        _names_class(r, m) for m, ok in enumerate(r["classes_right"]) if not ok)]
+    lines += ["", f"People-like answers with a class wrong: {len(wrong)}; doubtful or "
+                  f"imprecise naming that module's class: {len(flagged)} of {len(wrong)}."]
+    good = [r for r in people if _judged(r) == "right"]
+    doubted = [r for r in good if r["level"] == "doubtful"]
+    lines += ["", f"Right answers (every class right, every truth inside its interval) "
+                  f"called doubtful: {len(doubted)} of {len(good)}"
+                  + ("" if not doubted else ", each for:")]
+    lines += [f"- {r['kind']} #{r['index']}: " + "; ".join(r["reasons"]) for r in doubted]
+    return lines
+
+
+def reliability_figure(rows: list[dict], path: Path) -> None:
+    """The reliability diagram of the people-like answers' P(com) (``reliability.png``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from posture_id.uncertainty.coverage import reliability
+
+    known = [(r, t) for r in rows if r["group"] == "people-like" and not r.get("skipped")
+             and (t := _truth_com(r)) is not None]
+    p = np.concatenate([r["p_com"] for r, _ in known])
+    truth = np.concatenate([t for _, t in known]).astype(float)
+    mean_p, freq, count = reliability(p, truth)
+    used = count > 0
+    fig, ax = plt.subplots(figsize=(4.5, 4.5))
+    ax.plot([0, 1], [0, 1], color="0.6", lw=1, label="calibrated")
+    ax.scatter(mean_p[used], freq[used], s=12 + 2 * np.sqrt(count[used]) * 4, zorder=3,
+               label="people-like modules (area: count)")
+    ax.set_xlabel("the network's P(com)")
+    ax.set_ylabel("share whose true class is COM")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.legend(loc="lower right", fontsize=8)
+    ax.set_title("Class probabilities on people-like sway", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
 
 
 def report(rows: list[dict], subjects: int, model: str | None = None) -> str:
@@ -280,6 +377,7 @@ def report(rows: list[dict], subjects: int, model: str | None = None) -> str:
                       f"wrong, {sum(closer['right'])} of {len(closer['right'])} right. Such a "
                       "wrong answer explains the recording as well as the truth does: no "
                       "check of the fit can doubt it without doubting the truth."]
+    lines += class_lines(people)
     lines += ["", "## Mistakes", "", "| mistake | recordings | good | imprecise | doubtful |",
               "|---|---|---|---|---|"]
     for kind in MISTAKES:
@@ -336,6 +434,8 @@ def main() -> None:
                                                          "seed": SEED, "model": model,
                                                          "rows": rows}))
     text = report(rows, args.subjects, model)
+    if any(r["group"] == "people-like" for r in rows):
+        reliability_figure(rows, args.out / "reliability.png")
     atomic_write_text(args.out / "report.md", text)
     (args.out / "journal.jsonl").unlink(missing_ok=True)  # rows.json holds every row
     print(text)

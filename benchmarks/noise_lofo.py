@@ -35,6 +35,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from posture_id.fileio import atomic_write_text
 from posture_id.simulation.noise_families import NoiseFamily
 
@@ -91,6 +93,31 @@ def _judge(model: Path | None, families: list[str], groups: list[str], subjects:
     return json.loads((out / "rows.json").read_text(encoding="utf-8"))["rows"]
 
 
+def _oracle(folder: Path) -> tuple[dict, dict] | None:
+    """Median |Kp error| per family of the oracle's fits without and with the prior
+    (``benchmarks/recording_limit.py``'s rows), or None when they are not there."""
+    from recording_limit import oracle_medians
+
+    file = folder / "rows.json"
+    if not file.is_file():
+        return None
+    rows = json.loads(file.read_text(encoding="utf-8"))["rows"]
+    return oracle_medians(rows), oracle_medians(rows, prior=True)
+
+
+def _against(oracle: tuple[dict, dict] | None, rows: list[dict], family: str) -> str:
+    """The oracle's cells of a row: its median |Kp error| (with the prior), and the
+    network's median over each."""
+    if oracle is None or family not in oracle[0]:
+        return " | "
+    plain, prior = oracle[0][family], oracle[1][family]
+    kp = np.median(np.abs(np.concatenate([
+        r["kp_error"] for r in rows if r["group"] == "people-like" and r["kind"] == family
+        and not r.get("skipped")])))
+    return (f"{100 * plain:.1f} % ({100 * prior:.1f} %) | {kp / plain:.2f} "
+            f"({kp / prior:.2f})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", type=Path, default=Path("data/universal_families"))
@@ -113,8 +140,14 @@ def main() -> None:
                         help="judge each fine-tune in one model with the base, gated by the "
                              "noise (the bundled recipe)")
     parser.add_argument("--out", type=Path, default=Path("docs/results/noise_lofo"))
+    parser.add_argument("--oracle", type=Path, default=Path("docs/results/recording_limit"),
+                        help="benchmarks/recording_limit.py's output: the error of the "
+                             "locked fit started at the truth on the same subjects, the "
+                             "table's last columns (default %(default)s; left out when "
+                             "missing)")
     args = parser.parse_args()
-    if not (args.base / "model.json").is_file():
+    if (not (args.base / "model.json").is_file()
+            and not (args.out / "base" / "rows.json").is_file()):
         raise SystemExit(f"{args.base}: no universal model there (make universal-model "
                          "trains it; or name one trained on the low-pass noise with --base)")
     base = _judge(args.base, [f.value for f in NoiseFamily], ["people-like"], args.subjects,
@@ -138,8 +171,10 @@ def main() -> None:
              + ("; that fine-tune in one model with the base, gated by the recording's "
                 "noise, as the bundled model is" if args.gated else "") + ".", "",
              "| held-out family | network | modules: every class right | median \\|Kp error\\| "
-             "| 90 % intervals holding the true Kp | all parameters |",
-             "|---|---|---|---|---|---|"]
+             "| 90 % intervals holding the true Kp | all parameters | the oracle's median "
+             "\\|Kp error\\| (with the prior) | network / oracle (with the prior) |",
+             "|---|---|---|---|---|---|---|---|"]
+    oracle = _oracle(args.oracle)
     for family in args.held_out:
         model = args.models / f"without_{family}"
         if not (args.out / family / "rows.json").exists():  # judged already: no model needed
@@ -149,8 +184,10 @@ def main() -> None:
             if args.gated:
                 model = _gated([*args.beside, args.set], model, args.base)
         rows = _judge(model, [family], ["people-like"], args.subjects, args.out / family)
-        lines.append(f"| {family} | base | {family_cells(base, family)} |")
-        lines.append(f"| {family} | {fine} | {family_cells(rows, family)} |")
+        lines.append(f"| {family} | base | {family_cells(base, family)} | "
+                     f"{_against(oracle, base, family)} |")
+        lines.append(f"| {family} | {fine} | {family_cells(rows, family)} | "
+                     f"{_against(oracle, rows, family)} |")
     if list(args.held_out) == HELD_OUT:  # the bundled network: every family seen
         bundled = _judge(None, [f.value for f in NoiseFamily], ["people-like"],
                          args.subjects, args.out / "bundled")
@@ -158,8 +195,17 @@ def main() -> None:
                   "every family, beside the first fifth of its own five sets, gated with the "
                   "base by the noise; each row's family seen):", "",
                   "| family | modules: every class right | median \\|Kp error\\| | 90 % "
-                  "intervals holding the true Kp | all parameters |", "|---|---|---|---|---|"]
-        lines += [f"| {f.value} | {family_cells(bundled, f.value)} |" for f in NoiseFamily]
+                  "intervals holding the true Kp | all parameters | the oracle's median "
+                  "\\|Kp error\\| (with the prior) | network / oracle (with the prior) |",
+                  "|---|---|---|---|---|---|---|"]
+        lines += [f"| {f.value} | {family_cells(bundled, f.value)} | "
+                  f"{_against(oracle, bundled, f.value)} |" for f in NoiseFamily]
+        if oracle is not None:
+            lines += ["", "The oracle: the locked least-squares fit started at the truth "
+                      "with the true classes, on the same subjects, without a prior (and "
+                      "with docs/model.md §5's, `--prior-sd 0.5`): what an estimator that "
+                      "knew the answer would still miss "
+                      f"(`benchmarks/recording_limit.py`, {args.oracle}/report.md)."]
     atomic_write_text(args.out / "report.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 

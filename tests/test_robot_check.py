@@ -13,6 +13,15 @@ import pytest
 
 from posture_id.errors import PostureIdError
 from posture_id.robots import ROBOTS_EXTRA, MissingExtraError, simulate_mujoco
+from posture_id.robots.mujoco_model import MujocoOptions
+from posture_id.robots.stability import GROWTH_SLACK, choose_step, one_step_radius
+from posture_id.robots.whole_body import (
+    HeldJoints,
+    WholeBodyModel,
+    WholeBodyOptions,
+    WholeBodySpec,
+    simulate_whole_body,
+)
 
 
 def test_importing_the_robot_checks_does_not_import_mujoco():
@@ -121,13 +130,6 @@ def test_talos_at_two_segments_has_its_knees_servoed_with_an_armature():
     (``WholeBodyOptions.max_step_rate``); rigid, the knee is no joint at all."""
     _mujoco()
     _robots()
-    from posture_id.robots.mujoco_model import MujocoOptions
-    from posture_id.robots.whole_body import (
-        HeldJoints,
-        WholeBodyModel,
-        WholeBodyOptions,
-        WholeBodySpec,
-    )
 
     spec = WholeBodySpec.preset("talos")
     step = MujocoOptions(timestep_s=0.001)
@@ -149,14 +151,6 @@ def test_the_step_is_the_largest_at_which_the_whole_body_is_stable():
     (an inverted pendulum without DEC) is no reason to shorten it: ρ(dt) = ρ(dt/2)²."""
     _mujoco()
     _robots()
-    from posture_id.robots.mujoco_model import MujocoOptions
-    from posture_id.robots.stability import GROWTH_SLACK, choose_step, one_step_radius
-    from posture_id.robots.whole_body import (
-        HeldJoints,
-        WholeBodyModel,
-        WholeBodyOptions,
-        WholeBodySpec,
-    )
 
     spec = WholeBodySpec.preset("g1")
 
@@ -185,13 +179,6 @@ def test_the_constraint_solver_is_tight_enough_for_the_step_to_converge():
     under 0.3 % (measured 0.06–0.2 % over 60.5 s; ~12 s here)."""
     _mujoco()
     _robots()
-    from posture_id.robots.mujoco_model import MujocoOptions
-    from posture_id.robots.whole_body import (
-        HeldJoints,
-        WholeBodyOptions,
-        WholeBodySpec,
-        simulate_whole_body,
-    )
 
     spec = WholeBodySpec.preset("talos")
     stimulus = _one_cycle().spanning(20.0)

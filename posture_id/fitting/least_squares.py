@@ -272,11 +272,14 @@ def _search_offset(run: FitRun, result: FitResult) -> FitResult:
         stages.extend(fitted.stages)
         return fitted
 
+    # a candidate's cycles are counted from where its stimulus starts (a second's shift
+    # later must not analyse a second of lead-in as the first cycle's start)
     candidates = [result] + [
-        fit_shifted(run.trial.shifted(offset), result)
+        fit_shifted(shifted, result)
         for offset in projection.best_offsets(np.degrees(result.fitted), measured, limit,
                                               OFFSET_TRIES)
-        if abs(offset) >= OFFSET_SETTLED_S]
+        if abs(offset) >= OFFSET_SETTLED_S
+        and (shifted := run.trial.shifted_whole(offset)) is not None]
     fit = min(candidates, key=lambda f: f.cost)
     trial = fit.trial
     for _ in range(OFFSET_ROUNDS):

@@ -357,38 +357,98 @@ class Identifier:
     def _onset(self, answer: IdentificationResult, trial: PreparedTrial,
                progress: Progress | None, start: float
                ) -> tuple[IdentificationResult, PreparedTrial, str | None]:
-        """A stimulus that was named or rebuilt rather than recorded (:attr:`PreparedTrial.
-        tilt_recorded` False) and leaves more than the noise: the offset (within half a
-        cycle) that best aligns the answer's locked sway with the recorded one, and the
-        network again on the trial shifted by it; kept when its residual is smaller. The
-        answer, the trial it is for, and the notice of a move (None without one)."""
-        if trial.tilt_recorded or not answer.verdict.beyond_noise or answer.fell:
+        """The stimulus's timing, when the answer leaves more than the noise: the offset
+        (within half a cycle) that best aligns the answer's locked sway with the recorded
+        one, and the network again on the trial shifted by it. A stimulus that was named or
+        rebuilt (:attr:`PreparedTrial.tilt_recorded` False) moves when the shift leaves a
+        smaller residual; a tilt read from a column (a lab's commanded tilt, or a platform
+        on its own clock) is searched within a quarter cycle (half a cycle on, a PRTS or a
+        sinusoid is its own negative, and a negated column is a mistake the verdict
+        names) and moves only when the shift leaves at most
+        1/:data:`RECORDED_SHIFT_GAIN` of the residual or brings it within the noise: a
+        mistake in the recording (a negated tilt, an angle step, a change of control) is
+        not explained by a shift and is not moved. The answer, the trial it is for, and
+        the notice of a move (None without one)."""
+        if not answer.verdict.beyond_noise or answer.fell:
             return answer, trial, None
         period = trial.stimulus.period_s
         projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
         if projection is None or period is None:
             return answer, trial, None
         rec = np.degrees(trial.recording.theta)
-        offsets = projection.best_offsets(np.degrees(answer.resimulated), rec, period / 2,
+        # a tilt column is searched within a quarter cycle: half a cycle later a PRTS (and
+        # a sinusoid) is its own negative, and a negated column is a mistake to doubt
+        reach = period / 4 if trial.tilt_recorded else period / 2
+        offsets = projection.best_offsets(np.degrees(answer.resimulated), rec, reach,
                                           count=3, step_s=0.01)
         candidates = [shifted for offset in offsets if abs(offset) >= 0.02
-                      and (shifted := _shifted_whole(trial, offset)) is not None]
+                      and (shifted := trial.shifted_whole(offset)) is not None]
         # each candidate judged by the network's residual alone; the best identified once
         judged = [(self._network_check(shifted, self.body).ratio, shifted)
                   for shifted in candidates]
-        better = [(r, shifted) for r, shifted in judged if r < answer.verdict.noise.ratio]
+        ratio = answer.verdict.noise.ratio
+        enough = (max(ratio / RECORDED_SHIFT_GAIN, NOISE_RATIO_LIMIT) if trial.tilt_recorded
+                  else ratio)
+        better = [(r, shifted) for r, shifted in judged
+                  if (r <= enough if trial.tilt_recorded else r < ratio)]
         if not better:
+            if trial.tilt_recorded:
+                return answer, trial, None  # the verdict's suggestion names the search
             return replace(answer, notices=(*answer.notices, (
                 f"{trial.name}: the stimulus was named, not recorded, and the answer leaves "
                 "more than the noise; no shift of it within half a cycle did better: check "
                 "its onset (--onset-s) and --max-offset-s"))), trial, None
-        shifted = min(better, key=lambda t: t[0])[1]
+        best, shifted = min(better, key=lambda t: t[0])
         moved = self._identify(shifted, Step(Method.CNN, self.fit_options), progress, start)
-        return moved, shifted, (
-            f"{trial.name}: the stimulus was named, not recorded, and the answer on it left "
-            f"more than the noise: the sway says it ran {shifted.time_offset_s:+.2f} s from "
-            "where it was named; identified there (--method auto; name the onset with "
-            "--onset-s, or search it with --max-offset-s)")
+        moved, shifted = self._settle_offset(moved, shifted, progress, start)
+        best = moved.verdict.noise.ratio
+        if trial.tilt_recorded:
+            said = (f"{trial.name}: on the tilt as its column has it the network's answer "
+                    f"left {ratio:.2f}× the noise; the sway says the stimulus ran "
+                    f"{shifted.time_offset_s:+.2f} s from there ({best:.2f}× the noise): "
+                    "identified there (--method auto; check the tilt column's timing, or "
+                    "search it with --max-offset-s)")
+        else:
+            said = (f"{trial.name}: the stimulus was named, not recorded, and the answer on "
+                    f"it left more than the noise: the sway says it ran "
+                    f"{shifted.time_offset_s:+.2f} s from where it was named; identified there "
+                    "(--method auto; name the onset with --onset-s, or search it with "
+                    "--max-offset-s)")
+        return moved, shifted, said
+
+
+    def _settle_offset(self, answer: IdentificationResult, trial: PreparedTrial,
+                       progress: Progress | None, start: float
+                       ) -> tuple[IdentificationResult, PreparedTrial]:
+        """The network's ``answer`` on a shifted ``trial``, its offset refined: the best
+        offset of its own locked sway against the recorded one (the first shift was
+        measured with the answer on the unshifted trial), the network again there, while
+        the offset moves by at least 20 ms and the residual shrinks (at most
+        :data:`OFFSET_ROUNDS` times)."""
+        for _ in range(OFFSET_ROUNDS):
+            projection = LockedProjection.for_periodic_trial(trial,
+                                                             LockedOptions(weighted=False))
+            if projection is None or answer.fell:
+                break
+            step = projection.best_offset(np.degrees(answer.resimulated),
+                                          np.degrees(trial.recording.theta), 0.5,
+                                          step_s=0.005)
+            again = None if abs(step) < 0.02 else trial.shifted_whole(step)
+            if again is None:
+                break
+            moved = self._identify(again, Step(Method.CNN, self.fit_options), progress,
+                                   start)
+            if moved.fell or moved.verdict.noise.ratio >= answer.verdict.noise.ratio:
+                break
+            answer, trial = moved, again
+        return answer, trial
+
+
+#: Rounds of :meth:`Identifier._settle_offset`.
+OFFSET_ROUNDS = 3
+#: A tilt read from a column is moved in time only where the shift divides the network's
+#: residual (in units of the noise) by at least this (or brings it within the noise).
+RECORDED_SHIFT_GAIN = 2.0
 
 
 @dataclass(frozen=True)
@@ -477,18 +537,6 @@ def _network_floor(options: FitOptions, scales, cnn) -> dict:
 #: The least SD of the network's prior on a normalised parameter (its intervals can be
 #: narrow where the network has seen much of the same).
 MIN_PRIOR_SD = 0.05
-
-
-def _shifted_whole(trial: PreparedTrial, offset_s: float) -> PreparedTrial | None:
-    """``trial`` with its stimulus ``offset_s`` later, its periodic part counted from where
-    it now starts when that is later (so that the cycles analysed hold the stimulus's
-    cycles only); None when less than one whole cycle is left."""
-    shifted = trial.shifted(offset_s)
-    stimulus = shifted.stimulus
-    if offset_s > 0:
-        stimulus = replace(stimulus, periodic_from_s=stimulus.periodic_from_s + offset_s)
-        shifted = replace(shifted, stimulus=stimulus)
-    return None if shifted.whole_cycle_shortfall() is not None else shifted
 
 
 def _unreadable_by_network(trial: PreparedTrial) -> str | None:
@@ -629,4 +677,6 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
     return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,
                                                   options.prior_sd is not None,
                                                   reads_people_like,
-                                                  _unreadable_by_network(trial) is None))
+                                                  _unreadable_by_network(trial) is None,
+                                                  trial.stimulus.period_s,
+                                                  locked_fit and options.locked.max_offset_s > 0))

@@ -100,6 +100,11 @@ CLASSES_RIGHT_AT_LEAST = 0.8
 FITTED_NOISE_LIMIT = 3.0
 
 
+#: A residual (in units of the recording's noise) above which least squares' doubtful
+#: answer is sent to the stimulus's timing rather than to a longer recording.
+TIMING_RATIO = 2.0
+
+
 #: What suits people-like sway (docs/real_recordings.md, docs/results/real_like.md).
 LOCKED_FLAGS = "--method fit --locked --prior-sd 0.5"
 
@@ -261,7 +266,8 @@ class TrustVerdict:
 def suggestion(method: Method, locked: bool, locked_share: float | None,
                on_bounds: tuple[str, ...], noise: NoiseCheck | None,
                prior: bool = False, network_reads_people_like: bool = False,
-               whole_cycles: bool = True) -> str:
+               whole_cycles: bool = True, period_s: float | None = None,
+               offset_searched: bool = False) -> str:
     """What suits a recording whose answer is doubtful, by the documented rule:
 
     - people-like sway (locked share below :data:`PEOPLE_LIKE_SHARE`) identified without
@@ -285,6 +291,12 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     - the hybrid or a locked fit left more than the noise: ``--locked --max-offset-s 1
       --prior-sd 0.5`` (a stimulus that is not where the lab's clock says, and the prior).
 
+    And least squares that leaves more than :data:`TIMING_RATIO` times the
+    noise on a periodic tilt (``period_s``) without having searched the stimulus's timing
+    (``offset_searched``): ``--locked --max-offset-s`` a quarter cycle (a longer recording
+    averages noise away, not a residual that large: a tilt column, or a named onset, off
+    the sway's clock leaves one; beside a bound's suggestion when one is on a bound).
+
     Without ``whole_cycles`` (a tilt that is not periodic, or less than one whole cycle of
     it) neither the network, nor the hybrid, nor the locked fit can read the recording:
     what would need them suggests a recording they can read instead.
@@ -299,9 +311,17 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
     people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
     if people_like and not locked and not (method is Method.CNN and network_reads_people_like):
         return LOCKED_FLAGS
+    timing = (period_s is not None and method is not Method.CNN and not offset_searched
+              and noise is not None and not noise.acceptable and noise.ratio > TIMING_RATIO)
+    timing_flags = "" if not timing else (f"--locked --max-offset-s {period_s / 4:.3g}"
+                                          + ("" if prior else " --prior-sd 0.5"))
+    timing_why = "" if not timing else (f"the stimulus's timing: {noise.ratio:.1f}× the "
+                                        "noise is more than a longer recording would "
+                                        "average away")
     # the network's answer on one cycle (no locked share: the network reads whole cycles
     # of a periodic tilt): least squares did worse there on motor-noisy sway
     if (noise is not None and not noise.acceptable and noise.noise_relative > CLOSE_ENOUGH
+            and not timing
             and (method is not Method.CNN or (locked_share is None and noise.unchecked))):
         return ("a longer recording (more stimulus cycles to average): its noise alone "
                 f"leaves {100 * noise.noise_relative:.0f} % of the locked sway, so no answer "
@@ -313,10 +333,15 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
         return "--method hybrid" + (" --locked --prior-sd 0.5" if people_like
                                     else " --locked" if unchecked else "")
     if any(b.split()[1] in DOUBTFUL_ON_BOUND for b in on_bounds):
+        timed = "" if not timing else (f"; or, if the stimulus's timing is off "
+                                       f"({noise.ratio:.1f}× the noise), {timing_flags}")
         if locked and not prior:
-            return "--prior-sd 0.5 (or a wider --gain-range / --delay-range)"
+            return "--prior-sd 0.5 (or a wider --gain-range / --delay-range)" + timed
         return ("a wider --gain-range MIN MAX / --delay-range MIN MAX"
-                + ("" if locked else ", or --locked --prior-sd 0.5 for a noisy recording"))
+                + ("" if locked else ", or --locked --prior-sd 0.5 for a noisy recording")
+                + timed)
+    if timing:
+        return f"{timing_flags} ({timing_why})"
     if noise is not None and not noise.acceptable:
         if method is Method.FIT and not locked:
             return "--method hybrid"

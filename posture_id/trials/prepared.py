@@ -85,6 +85,17 @@ class PreparedTrial:
         return replace(self, recording=recording, stimulus=stimulus,
                        time_offset_s=self.time_offset_s + offset_s)
 
+    def shifted_whole(self, offset_s: float) -> PreparedTrial | None:
+        """:meth:`shifted`, its periodic part counted from where it now starts when that is
+        later (so that the cycles analysed hold the stimulus's cycles only, not the
+        ``offset_s`` of lead-in before it); None when less than one whole cycle is left."""
+        shifted = self.shifted(offset_s)
+        if offset_s > 0:
+            stimulus = replace(shifted.stimulus,
+                               periodic_from_s=shifted.stimulus.periodic_from_s + offset_s)
+            shifted = replace(shifted, stimulus=stimulus)
+        return None if shifted.whole_cycle_shortfall() is not None else shifted
+
     def require_segments(self, segments: tuple[str, ...]) -> None:
         """Refuse a trial whose segment columns are not ``segments`` (a body's)."""
         self.recording.check_segments(segments)

@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
-from posture_id.dec.parameters import TARGET_FIELDS, DecParameters
+from posture_id.dec.parameters import TARGET_FIELDS, DecParameters, default_parameters
 from posture_id.dec.prior import sample_parameters
 from posture_id.errors import PostureIdError
 from posture_id.executors import LocalExecutor
@@ -84,10 +84,10 @@ def _clean(body, truth, stimulus, seed) -> tuple[Recording, object] | None:
     return None if not sim.stable else (sim.to_recording().with_sensor_noise(0.02, seed), sim)
 
 
-def _recording(group: str, kind: str, index: int):
+def _recording(group: str, kind: str, index: int, seed: int = SEED):
     """(recording, body it is identified with, truth, note) of one task, or None when
     the subject falls (drawn again by the caller)."""
-    rng = np.random.default_rng([SEED, zlib.crc32(f'{group}/{kind}'.encode()), index])
+    rng = np.random.default_rng([seed, zlib.crc32(f'{group}/{kind}'.encode()), index])
     name = BODIES[index % len(BODIES)]
     if group == "mistakes" and kind == "columns exchanged" and name == "Winter 1-seg":
         name = "Winter 2-seg"  # two columns to exchange
@@ -151,10 +151,10 @@ def _recording(group: str, kind: str, index: int):
 
 
 def _one(task: tuple) -> dict:
-    group, kind, index, model = task
+    group, kind, index, model, seed = task
     from posture_id.identify import Identifier
 
-    made = _recording(group, kind, index)
+    made = _recording(group, kind, index, seed)
     row = {"group": group, "kind": kind, "index": index}
     if made is None:
         return {**row, "skipped": True}
@@ -184,6 +184,8 @@ def _one(task: tuple) -> dict:
                              for j in body.joint_names])
         found = np.array([[getattr(result.parameters[j], f) for f in TARGET_FIELDS]
                           for j in body.joint_names])
+        defaults = np.array([[getattr(default_parameters(body)[j], f) for f in TARGET_FIELDS]
+                             for j in body.joint_names])
         inside = (iv.lower_si <= truth_si) & (truth_si <= iv.upper_si)
         half = (iv.upper_si - iv.lower_si) / 2
         row.update({
@@ -193,6 +195,11 @@ def _one(task: tuple) -> dict:
             "kp_error": (found[:, 0] / truth_si[:, 0] - 1).tolist(),
             "inside": inside.tolist(),
             "kp_far": (np.abs(found[:, 0] - truth_si[:, 0]) > 2 * half[:, 0]).tolist(),
+            # normalised p/p_default − 1: the answer, the truth and the interval, so that
+            # another rule for the intervals can be judged on these rows
+            "estimate": (found / defaults - 1).tolist(),
+            "truth_normalised": (truth_si / defaults - 1).tolist(),
+            "lower": np.asarray(iv.lower).tolist(), "upper": np.asarray(iv.upper).tolist(),
             "relative_half_width": (half / np.abs(found)).tolist()})
         # how well the truth itself explains the recording, judged as the answer is: an
         # answer that leaves no more than the truth does cannot be told wrong by its fit
@@ -397,6 +404,9 @@ def main() -> None:
     parser.add_argument("--subjects", type=int, default=12,
                         help="recordings per noise family, for clean sway and per mistake")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=SEED,
+                        help="the draws' seed (default %(default)s, the benchmark's; another "
+                             "gives other subjects, e.g. to calibrate on)")
     parser.add_argument("--out", type=Path, default=Path("docs/results/honest_verdict"))
     parser.add_argument("--model", type=Path,
                         help="a universal model directory (default: the bundled one)")
@@ -407,7 +417,7 @@ def main() -> None:
                         help="the people-like group's noise families")
     args = parser.parse_args()
     model = None if args.model is None else str(args.model)
-    header = {"format": "posture_id-honest-verdict", "subjects": args.subjects, "seed": SEED,
+    header = {"format": "posture_id-honest-verdict", "subjects": args.subjects, "seed": args.seed,
               "model": model}
     book = Journal(args.out / "journal.jsonl", header,
                    lambda r: (r["group"], r["kind"], int(r["index"])))
@@ -419,7 +429,7 @@ def main() -> None:
         tasks += [("people-like", f, i) for f in args.families for i in range(args.subjects)]
     if "mistakes" in args.groups:
         tasks += [("mistakes", m, i) for m in MISTAKES for i in range(args.subjects)]
-    tasks = [(*t, model) for t in tasks if t not in done]
+    tasks = [(*t, model, args.seed) for t in tasks if t not in done]
     rows = list(done.values())
     print(f"{len(rows)} done, {len(tasks)} to do", flush=True)
     with LocalExecutor(args.workers, processes=True) as pool:
@@ -431,7 +441,7 @@ def main() -> None:
     rows.sort(key=lambda r: (r["group"], r["kind"], r["index"]))
     args.out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(args.out / "rows.json", json_text({"subjects": args.subjects,
-                                                         "seed": SEED, "model": model,
+                                                         "seed": args.seed, "model": model,
                                                          "rows": rows}))
     text = report(rows, args.subjects, model)
     if any(r["group"] == "people-like" for r in rows):

@@ -203,9 +203,14 @@ class Identifier:
         locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
         checked = _resimulate(body, trial, parameters, options.simulation, locked)
         body_share = checked.pop("locked_share")  # the verdict's, not a result field
-        verdict = _verdict(method, options, trial, checked, body_share, cnn, fit, locked,
+        noise = noise_check(trial, checked["resimulated"],
+                            body_sway=(checked["sway_recorded"], checked["sway_resimulated"]),
+                            projection=locked)
+        if fit is None and cnn is not None:
+            intervals = _widened(network, cnn, intervals, body_share, noise)
+        verdict = _verdict(method, options, trial, noise, body_share, cnn, fit, locked,
                            network is not None and network.reads_people_like,
-                           body, intervals, parameters)
+                           body, intervals, parameters, checked["resimulated"])
         verdict = self._alternatives(trial, verdict, cnn, locked, step)
         return IdentificationResult(
             method=method, parameters=parameters, normalised=np.asarray(normalised),
@@ -634,16 +639,37 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
             else body_share}
 
 
-def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked: dict,
+def _widened(network, cnn, intervals, share: float | None, noise: NoiseCheck):
+    """The network's ``intervals`` widened for a people-like recording (locked ``share``
+    below :data:`PEOPLE_LIKE_SHARE`) by the network's recording widening
+    (:mod:`posture_id.uncertainty.widening`) at the share of its locked sway its own noise
+    leaves (``noise.noise_relative``); as they are otherwise."""
+    widening = getattr(network, "widening", None)
+    relative = noise.noise_relative
+    if (widening is None or intervals is None or share is None
+            or share >= PEOPLE_LIKE_SHARE or not math.isfinite(relative)):
+        return intervals
+    factor = widening.factor(relative)
+    if np.all(factor <= 1.0):
+        return intervals
+    defaults = np.array([[getattr(network.defaults[j], f) for f in TARGET_FIELDS]
+                         for j in intervals.joints])
+    return intervals.widened(
+        np.asarray(cnn.normalised, dtype=float)[:, :4], factor, defaults,
+        "widened ×" + "/".join(f"{v:.2f}" for v in factor) + " (Kp/Ki/Kd/delay) for the "
+        f"noise this people-like recording shows ({100 * relative:.0f} % of its locked "
+        "sway; docs/uncertainty.md)")
+
+
+def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, noise: NoiseCheck,
              share: float | None, cnn, fit, locked: LockedProjection | None,
-             reads_people_like: bool, body: Body, intervals, parameters) -> TrustVerdict:
+             reads_people_like: bool, body: Body, intervals, parameters,
+             resimulated: np.ndarray) -> TrustVerdict:
     """The trust verdict (:mod:`posture_id.identify.verdict`) of one identification;
-    ``share``: the recorded body sway's locked share; ``reads_people_like``: the network
-    was trained on people-like sway (the universal model); ``intervals`` (or None) and
-    ``parameters``: the answer's."""
-    noise = noise_check(trial, checked["resimulated"],
-                        body_sway=(checked["sway_recorded"], checked["sway_resimulated"]),
-                        projection=locked)
+    ``noise``: its check against the recording's noise; ``share``: the recorded body
+    sway's locked share; ``reads_people_like``: the network was trained on people-like
+    sway (the universal model); ``intervals`` (or None) and ``parameters``: the answer's;
+    ``resimulated``: its sway re-simulated (S, N) rad."""
     locked_fit = options.locked is not None
     people_like = share is not None and share < PEOPLE_LIKE_SHARE
     outside = list(cnn.outside) if method is Method.CNN and cnn is not None else []
@@ -655,7 +681,7 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, checked:
         outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked: "
                        "least squares on the raw sway fits the subject's own sway too")
     on_bounds = () if fit is None else fit.on_bounds
-    mistakes = find_mistakes(trial, body, checked["resimulated"], locked)
+    mistakes = find_mistakes(trial, body, resimulated, locked)
     estimate = np.array([[getattr(parameters[j], f) for f in TARGET_FIELDS]
                          for j in body.joint_names])
     unpinned = unpinned_parameters(intervals, estimate)

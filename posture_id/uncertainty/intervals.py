@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -58,6 +58,20 @@ class ParameterIntervals:
         return cls(level, method, lower, upper, defaults * (1 + lower), defaults * (1 + upper),
                    ratio, float(noise_deg), tuple(joints),
                    None if imprecise is None else np.asarray(imprecise, bool), precision)
+
+    def widened(self, estimate: np.ndarray, factor: np.ndarray, defaults: np.ndarray,
+                why: str) -> ParameterIntervals:
+        """Each side's half-width about ``estimate`` ((N, 4) normalised) times ``factor``
+        ((4,) or (N, 4), ≥ 1), cut at p̃ = −1; ``defaults`` (N, 4) the SI defaults;
+        ``why`` is added to :attr:`method`."""
+        estimate = np.asarray(estimate, dtype=float)
+        factor = np.broadcast_to(np.asarray(factor, dtype=float), estimate.shape)
+        lower = np.maximum(estimate - factor * (estimate - self.lower), -1.0)
+        upper = estimate + factor * (self.upper - estimate)
+        ratio, _ = determination(upper - lower, self.level)
+        return replace(self, method=f"{self.method}; {why}", lower=lower, upper=upper,
+                       lower_si=defaults * (1 + lower), upper_si=defaults * (1 + upper),
+                       ratio=ratio)
 
     @property
     def words(self) -> np.ndarray:

@@ -52,6 +52,7 @@ from posture_id.simulation.stimulus import LAB_STATE_RANGE_S
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
+from posture_id.uncertainty.widening import RecordingWidening
 
 __all__ = ["UniversalIdentifier", "BUNDLED_DIR", "is_universal_model", "stimulus_outside"]
 
@@ -96,6 +97,10 @@ class UniversalIdentifier:
         if calibration is None:
             self.notices += (f"{model.path}: the model has no calibration, so its answer has "
                              "no intervals",)
+        self.widening = self._own(
+            RecordingWidening.load(model.path) if model.path else None,
+            "its recording widening was made for other weights and is not used: "
+            "python -m posture_id.studies.widening makes it again")
         self.typicality = self._own(
             TypicalityReference.load(model.path) if model.path else None,
             "its typicality reference was made for other weights and is not used")

@@ -1,0 +1,119 @@
+"""Class probabilities on noise the network never saw: the leave-one-family-out answers.
+
+Run:  .venv/bin/python benchmarks/class_calibration.py [--runs docs/results/noise_lofo_gated48]
+                                                       [--out docs/results/class_calibration]
+
+Reads the people-like answers of a leave-one-family-out run (``benchmarks/noise_lofo.py``'s
+``--out`` folder: one folder per held-out family, each answered by the network fine-tuned
+without that family; by default the bundled recipe's, 48 subjects a family) and of the
+bundled network (``docs/results/honest_verdict``, every family seen), and reports how
+well the network's P(com) says how often a module controls the COM: the expected
+calibration error (10 bins) per family and pooled, the share right of the modules given a
+class with probability ≥ 0.9, and the reliability diagram of both (``reliability.png``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from posture_id.fileio import atomic_write_text
+from posture_id.simulation.noise_families import NoiseFamily
+from posture_id.uncertainty.coverage import expected_calibration_error, reliability
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from honest_verdict import _truth_com  # noqa: E402  (a sibling script)
+
+COMMAND = ".venv/bin/python benchmarks/class_calibration.py"
+
+
+def _modules(rows: list[dict], family: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(P(com), true class is COM) of every people-like module whose truth is known."""
+    p, truth = [], []
+    for row in rows:
+        if row.get("group") != "people-like" or row.get("skipped"):
+            continue
+        if family is not None and row["kind"] != family:
+            continue
+        known = _truth_com(row)
+        if known is not None:
+            p += row["p_com"]
+            truth += known
+    return np.asarray(p, dtype=float), np.asarray(truth, dtype=bool)
+
+
+def _cells(p: np.ndarray, truth: np.ndarray) -> str:
+    sure = np.maximum(p, 1 - p) >= 0.9
+    right = (p >= 0.5) == truth
+    return (f"{len(p)} | {expected_calibration_error(p, truth):.3f} | {int(sure.sum())} | "
+            f"{100 * right[sure].mean():.1f} %")
+
+
+def _rows(folder: Path) -> list[dict]:
+    return json.loads((folder / "rows.json").read_text(encoding="utf-8"))["rows"]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=Path, default=Path("docs/results/noise_lofo_gated48"))
+    parser.add_argument("--seen", type=Path, default=Path("docs/results/honest_verdict"))
+    parser.add_argument("--out", type=Path, default=Path("docs/results/class_calibration"))
+    args = parser.parse_args()
+    held = {f.value: _rows(args.runs / f.value) for f in NoiseFamily
+            if (args.runs / f.value / "rows.json").is_file()}
+    seen = _rows(args.seen)
+    lines = ["# Class probabilities on noise the network never saw", "",
+             f"Made by `{COMMAND} --runs {args.runs} --seen {args.seen}` (what it reads: the "
+             "script's docstring). Expected calibration error of P(com) against the true "
+             "class (10 bins); the modules given a class with probability ≥ 0.9 and the "
+             "share of them right.", "",
+             "| family | answered by | modules | ECE | given ≥ 0.9 | of them right |",
+             "|---|---|---|---|---|---|"]
+    for family, rows in held.items():
+        lines.append(f"| {family} | fine-tuned without it | {_cells(*_modules(rows, family))} |")
+    pooled = [np.concatenate(x) for x in zip(*(_modules(rows, f) for f, rows in held.items()),
+                                              strict=True)]
+    lines.append(f"| every held-out family | fine-tuned without it | {_cells(*pooled)} |")
+    for family in NoiseFamily:
+        p, truth = _modules(seen, family.value)
+        if len(p):
+            lines.append(f"| {family.value} | the bundled network (seen) | {_cells(p, truth)} |")
+    lines.append(f"| every family | the bundled network (seen) | {_cells(*_modules(seen))} |")
+    args.out.mkdir(parents=True, exist_ok=True)
+    _figure(pooled, _modules(seen), args.out / "reliability.png")
+    lines += ["", "![Reliability diagram](reliability.png)"]
+    atomic_write_text(args.out / "report.md", "\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+def _figure(held: list[np.ndarray], seen: tuple[np.ndarray, np.ndarray], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(4.8, 4.8))
+    ax.plot([0, 1], [0, 1], color="0.6", lw=1, label="calibrated")
+    for (p, truth), label, marker in ((held, "held-out families (fine-tuned without)", "o"),
+                                      (seen, "every family seen (bundled)", "s")):
+        mean_p, freq, count = reliability(p, truth)
+        used = count > 0
+        ax.scatter(mean_p[used], freq[used], s=10 + 6 * np.sqrt(count[used]), marker=marker,
+                   alpha=0.7, label=f"{label}, {len(p)} modules")
+    ax.set_xlabel("the network's P(com)")
+    ax.set_ylabel("share whose true class is COM")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.legend(loc="lower right", fontsize=7)
+    ax.set_title("Class probabilities on people-like sway (area: count)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()

@@ -248,13 +248,13 @@ def _truth_com(row: dict) -> list[bool] | None:
 def _names_class(row: dict, module: int) -> bool:
     """The answer's verdict names ``module``'s class as what the recording does not pin
     (its ``unpinned`` list when the row has it; else the network's P(com) inside
-    :data:`~posture_id.identify.verdict.UNSURE_CLASS`, the rule that names it)."""
-    from posture_id.identify.verdict import UNSURE_CLASS
+    :data:`~posture_id.identify.verdict.NAMED_CLASS`, the rule that names it)."""
+    from posture_id.identify.verdict import NAMED_CLASS
 
     if row.get("unpinned") is not None and row.get("joints") is not None:
         joint = row["joints"][module]
         return any(f"the {joint}'s class" in u for u in row["unpinned"])
-    low, high = UNSURE_CLASS
+    low, high = NAMED_CLASS
     return row.get("p_com") is not None and low < row["p_com"][module] < high
 
 

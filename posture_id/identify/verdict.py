@@ -62,8 +62,8 @@ from posture_id.models.protocol import TrustLevel
 from posture_id.uncertainty.intervals import LABELS
 
 __all__ = ["TrustVerdict", "TrustLevel", "PEOPLE_LIKE_SHARE", "PINNED_FIELDS", "PINNED_TO",
-           "CLASSES_RIGHT_AT_LEAST", "UNSURE_CLASS", "FITTED_NOISE_LIMIT", "suggestion",
-           "unpinned_parameters", "class_doubts"]
+           "CLASSES_RIGHT_AT_LEAST", "UNSURE_CLASS", "NAMED_CLASS", "FITTED_NOISE_LIMIT",
+           "suggestion", "unpinned_parameters", "class_doubts"]
 
 #: Body sway whose noise-corrected stimulus-locked share is below this is people-like:
 #: the subject's own sway dominates (docs/real_recordings.md: 10–40 % in people).
@@ -82,9 +82,16 @@ PINNED_FIELDS = ("kp", "kd", "delay_s")
 #: Pinned: the interval's half-width is at most this share of the value.
 PINNED_TO = 0.10
 
-#: The network is said to be unsure of a class when P(C = +1) is inside this band; such a
-#: class is named as what the recording does not pin.
+#: The network is said to be unsure of a class when P(C = +1) is inside this band: the
+#: hybrid then lets least squares decide it (``identify.core._refine``).
 UNSURE_CLASS = (0.05, 0.95)
+#: A class whose P(C = +1) is inside this band is named as what the recording does not pin
+#: (the answer imprecise, naming the module's class): a chance of 1 in 50 or more that the
+#: class is wrong. The network's probabilities are calibrated on noise it never saw too
+#: (docs/uncertainty.md, "Class probabilities on noise never seen"); at (0.05, 0.95) the
+#: verdict named or doubted 17 of the 22 wrong classes of the leave-one-family-out answers,
+#: at (0.02, 0.98) 19 (docs/identify.md, "Trust").
+NAMED_CLASS = (0.02, 0.98)
 #: Below this probability that every class the network chose is right (the product of
 #: max(P, 1 − P) over the modules), the answer is doubtful: more than one chance in five
 #: that a controlled variable is wrong (docs/identify.md, "Trust", measured there).
@@ -351,12 +358,12 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
 
 def class_doubts(joints: tuple[str, ...], probability_com) -> tuple[tuple[str, ...], str]:
     """What the network's class probabilities ``probability_com`` (N,) P(C = +1, COM) of
-    ``joints`` say of its answer: the classes it is unsure of (:data:`UNSURE_CLASS`),
+    ``joints`` say of its answer: the classes it is unsure of (:data:`NAMED_CLASS`),
     named as unpinned ("the hip's class (P(com) 0.62)"), and, when the chance that every
     chosen class is right is below :data:`CLASSES_RIGHT_AT_LEAST`, the sentence that
     makes the answer doubtful ("" otherwise)."""
     p = np.asarray(probability_com, dtype=float)
-    low, high = UNSURE_CLASS
+    low, high = NAMED_CLASS
     unsure = tuple(f"the {j}'s class (P(com) {q:.2f})" for j, q in zip(joints, p, strict=True)
                    if low < q < high)
     right = float(np.prod(np.maximum(p, 1 - p)))

@@ -188,17 +188,9 @@ class Identifier:
             calibration = (network.calibration if method is Method.HYBRID
                            and network.trained_on_this_body else None)
             scales = None if calibration is None else calibration.least_squares
-            intervals = fit.intervals_at(self.level, scales, **_network_floor(
-                options, scales, cnn))
-            if scales is not None and scales.beyond(intervals.noise_deg):
-                notices.append(f"{trial.name}: its sensor noise (about "
-                               f"{intervals.noise_deg:.3f}°) is above the "
-                               f"{scales.noise_deg[-1]:.3f}° the hybrid's intervals were "
-                               "calibrated for: they are likely too narrow")
             trial = fit.trial  # with a fitted stimulus offset: the shifted trial
         else:
             parameters, normalised = cnn.parameters, cnn.normalised
-            intervals = cnn.intervals
             notices += trial.notices
         locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
         checked = _resimulate(body, trial, parameters, options.simulation, locked)
@@ -206,8 +198,20 @@ class Identifier:
         noise = noise_check(trial, checked["resimulated"],
                             body_sway=(checked["sway_recorded"], checked["sway_resimulated"]),
                             projection=locked)
-        if fit is None and cnn is not None:
-            intervals = _widened(network, cnn, intervals, body_share, noise)
+        # the network's intervals, widened for a people-like recording's own noise: the
+        # network's answer's, and the floor of a fit from its prior
+        network_intervals = (None if cnn is None
+                             else _widened(network, cnn, cnn.intervals, body_share, noise))
+        if fit is None:
+            intervals = network_intervals
+        else:
+            intervals = fit.intervals_at(self.level, scales, **_network_floor(
+                options, scales, network_intervals))
+            if scales is not None and scales.beyond(intervals.noise_deg):
+                notices.append(f"{trial.name}: its sensor noise (about "
+                               f"{intervals.noise_deg:.3f}°) is above the "
+                               f"{scales.noise_deg[-1]:.3f}° the hybrid's intervals were "
+                               "calibrated for: they are likely too narrow")
         verdict = _verdict(method, options, trial, noise, body_share, cnn, fit, locked,
                            network is not None and network.reads_people_like,
                            body, intervals, parameters, checked["resimulated"])
@@ -523,18 +527,19 @@ def network_prior(answer: IdentificationResult, level: float) -> dict:
             "prior_centre": tuple(float(v) for v in centre.T.ravel())}
 
 
-def _network_floor(options: FitOptions, scales, cnn) -> dict:
+def _network_floor(options: FitOptions, scales, network_intervals) -> dict:
     """``intervals_at`` keywords for a fit whose prior is the network's answer
     (:func:`network_prior`) and whose standard errors have no calibrated scale: its
     intervals are no narrower than the network's calibrated ones. Two cycles of
     people-like sway pin the fit less than its Gauss-Newton errors say (they assume the
     residual is white; on people-like sway it is the noise's, coloured), and a prior
     narrows a posterior only as far as the data inform it: the network's calibrated spread
-    is the checked statement of what the recording pins (``docs/identify.md``)."""
-    if (options.prior_centre is None or scales is not None or cnn is None
-            or cnn.intervals is None):
+    is the checked statement of what the recording pins (``docs/identify.md``).
+    ``network_intervals``: the network's, widened for a people-like recording's own noise
+    (:func:`_widened`), or None."""
+    if options.prior_centre is None or scales is not None or network_intervals is None:
         return {}
-    network = cnn.intervals
+    network = network_intervals
     return {"at_least": (network.upper - network.lower) / 2,
             "at_least_from": "the network's calibrated intervals"}
 

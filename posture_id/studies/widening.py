@@ -72,8 +72,8 @@ def main(argv: list[str] | None = None) -> None:
     calibration = people_rows(args.calibration)
     check = people_rows(args.check) if args.check else calibration
     families = sorted({r["kind"] for r in calibration})
-    command = ("python -m posture_id.studies.widening " + " ".join(sys.argv[1:] if argv is None
-                                                                    else argv))
+    given = sys.argv[1:] if argv is None else argv
+    command = ".venv/bin/python -m posture_id.studies.widening " + " ".join(given)
     lines = ["# The recording widening, checked on noise families it never saw", "",
              f"Made by `{command}`. Calibration: {len(calibration)} people-like answers; "
              f"check: {len(check)} others. True values inside the {100 * args.level:g} % "

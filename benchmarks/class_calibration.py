@@ -91,28 +91,15 @@ def main() -> None:
 
 
 def _figure(held: list[np.ndarray], seen: tuple[np.ndarray, np.ndarray], path: Path) -> None:
-    import matplotlib
+    from posture_id.plotting import plot_reliability
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(4.8, 4.8))
-    ax.plot([0, 1], [0, 1], color="0.6", lw=1, label="calibrated")
-    for (p, truth), label, marker in ((held, "held-out families (fine-tuned without)", "o"),
-                                      (seen, "every family seen (bundled)", "s")):
+    diagrams = {}
+    for (p, truth), label in ((held, "held-out families, fine-tuned without"),
+                              (seen, "every family seen, bundled")):
         mean_p, freq, count = reliability(p, truth)
-        used = count > 0
-        ax.scatter(mean_p[used], freq[used], s=10 + 6 * np.sqrt(count[used]), marker=marker,
-                   alpha=0.7, label=f"{label}, {len(p)} modules")
-    ax.set_xlabel("the network's P(com)")
-    ax.set_ylabel("share whose true class is COM")
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0, 1)
-    ax.legend(loc="lower right", fontsize=7)
-    ax.set_title("Class probabilities on people-like sway (area: count)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+        diagrams[f"{label} ({len(p)} modules)"] = {"mean_probability": mean_p,
+                                                  "frequency": freq, "count": count}
+    plot_reliability(diagrams, path)
 
 
 if __name__ == "__main__":

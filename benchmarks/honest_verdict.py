@@ -299,32 +299,16 @@ def class_lines(people: list[dict]) -> list[str]:
 
 def reliability_figure(rows: list[dict], path: Path) -> None:
     """The reliability diagram of the people-like answers' P(com) (``reliability.png``)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    from posture_id.plotting import plot_reliability
     from posture_id.uncertainty.coverage import reliability
 
     known = [(r, t) for r in rows if r["group"] == "people-like" and not r.get("skipped")
              and (t := _truth_com(r)) is not None]
     p = np.concatenate([r["p_com"] for r, _ in known])
-    truth = np.concatenate([t for _, t in known]).astype(float)
+    truth = np.concatenate([t for _, t in known])
     mean_p, freq, count = reliability(p, truth)
-    used = count > 0
-    fig, ax = plt.subplots(figsize=(4.5, 4.5))
-    ax.plot([0, 1], [0, 1], color="0.6", lw=1, label="calibrated")
-    ax.scatter(mean_p[used], freq[used], s=12 + 2 * np.sqrt(count[used]) * 4, zorder=3,
-               label="people-like modules (area: count)")
-    ax.set_xlabel("the network's P(com)")
-    ax.set_ylabel("share whose true class is COM")
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0, 1)
-    ax.legend(loc="lower right", fontsize=8)
-    ax.set_title("Class probabilities on people-like sway", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    plot_reliability({f"people-like modules ({len(p)})": {
+        "mean_probability": mean_p, "frequency": freq, "count": count}}, path)
 
 
 def report(rows: list[dict], subjects: int, model: str | None = None) -> str:

@@ -26,7 +26,7 @@ from posture_id.simulation.noise_families import NoiseFamily
 from posture_id.uncertainty.coverage import expected_calibration_error, reliability
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from honest_verdict import _truth_com  # noqa: E402  (a sibling script)
+from honest_verdict import _judged, _names_class, _truth_com  # noqa: E402  (a sibling script)
 
 COMMAND = ".venv/bin/python benchmarks/class_calibration.py"
 
@@ -51,6 +51,20 @@ def _cells(p: np.ndarray, truth: np.ndarray) -> str:
     right = (p >= 0.5) == truth
     return (f"{len(p)} | {expected_calibration_error(p, truth):.3f} | {int(sure.sum())} | "
             f"{100 * right[sure].mean():.1f} %")
+
+
+def _verdict_line(rows: list[dict]) -> str:
+    """How the verdict treats the answers with a class wrong (doubtful, or imprecise naming
+    that module's class) and the right ones (every class right, every truth inside its
+    interval: doubtful)."""
+    wrong = [r for r in rows if not all(r["classes_right"])]
+    flagged = [r for r in wrong if r["level"] == "doubtful" or any(
+        _names_class(r, m) for m, ok in enumerate(r["classes_right"]) if not ok)]
+    right = [r for r in rows if _judged(r) == "right"]
+    doubted = [r for r in right if r["level"] == "doubtful"]
+    return (f"of {len(wrong)} answers with a class wrong, {len(flagged)} doubtful or "
+            f"imprecise naming that module's class; of {len(right)} right answers, "
+            f"{len(doubted)} doubtful")
 
 
 def _rows(folder: Path) -> list[dict]:
@@ -83,6 +97,9 @@ def main() -> None:
         if len(p):
             lines.append(f"| {family.value} | the bundled network (seen) | {_cells(p, truth)} |")
     lines.append(f"| every family | the bundled network (seen) | {_cells(*_modules(seen))} |")
+    lines += ["", "The verdict on the held-out families' answers: " + _verdict_line(
+        [r for rows in held.values() for r in rows if r.get("group") == "people-like"
+         and not r.get("skipped")]) + "."]
     args.out.mkdir(parents=True, exist_ok=True)
     _figure(pooled, _modules(seen), args.out / "reliability.png")
     lines += ["", "![Reliability diagram](reliability.png)"]

@@ -89,8 +89,8 @@ UNSURE_CLASS = (0.05, 0.95)
 #: (the answer imprecise, naming the module's class): a chance of 1 in 50 or more that the
 #: class is wrong. The network's probabilities are calibrated on noise it never saw too
 #: (docs/uncertainty.md, "Class probabilities on noise never seen"); at (0.05, 0.95) the
-#: verdict named or doubted 17 of the 22 wrong classes of the leave-one-family-out answers,
-#: at (0.02, 0.98) 19 (docs/identify.md, "Trust").
+#: verdict named or doubted 18 of the 23 wrong classes of the leave-one-family-out answers,
+#: at (0.02, 0.98) 20 (benchmarks/class_calibration.py; docs/identify.md, "Trust").
 NAMED_CLASS = (0.02, 0.98)
 #: Below this probability that every class the network chose is right (the product of
 #: max(P, 1 − P) over the modules), the answer is doubtful: more than one chance in five

@@ -40,7 +40,8 @@ from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.results import SimulationResult
 from posture_id.simulation.stimulus import TiltProfile, prts
 
-__all__ = ["simulate_mujoco", "DelayLine", "DecController", "ChainSensors", "deadband"]
+__all__ = ["simulate_mujoco", "DelayLine", "DecController", "ChainSensors", "deadband",
+           "run_dec_loop", "loop_result", "stepped_options"]
 
 
 def deadband(rate: float, width: float) -> float:
@@ -323,20 +324,21 @@ def simulate_mujoco(
         for i in range(n):  # passive stiffness and damping: MuJoCo's own
             applied[jd[i]] = torques[i]
 
-    theta_out, alpha_out, abort_time = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options,
-                                                    n, prescribe, sensors, controller, apply)
+    looped = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options, n, prescribe, sensors,
+                          controller, apply)
+    return loop_result(options, tilt, looped, body, params,
+                       f"{stimulus.description}; MuJoCo {mujoco.__version__} "
+                       f"{mujoco_options.integrator} {dt * 1000:g} ms")
+
+
+def loop_result(options: SimulationOptions, tilt: np.ndarray, looped: tuple, body: Body,
+                params: DecParameters, description: str) -> SimulationResult:
+    """The :class:`SimulationResult` of a :func:`run_dec_loop` run (``looped``: its θ, α
+    and fall time) on the tilt ``tilt`` (K + 1,) rad of the step grid, for ``body`` (the
+    chain, or the lumped body of a whole one) under ``params``."""
+    theta, alpha, abort_time = looped
     sample_time, sample_tilt = options.sampled(tilt)
     return SimulationResult(
-        time=sample_time,
-        tilt=sample_tilt,
-        theta=theta_out,
-        alpha=alpha_out,
-        abort_time=abort_time,
-        segments=body.segment_names,
-        joints=body.joint_names,
-        parameters=params,
-        description=(f"{stimulus.description}; MuJoCo {mujoco.__version__} "
-                     f"{mujoco_options.integrator} {dt * 1000:g} ms"),
-        options=options,
-        body_identity=body_identity(body),
-    )
+        time=sample_time, tilt=sample_tilt, theta=theta, alpha=alpha, abort_time=abort_time,
+        segments=body.segment_names, joints=body.joint_names, parameters=params,
+        description=description, options=options, body_identity=body_identity(body))

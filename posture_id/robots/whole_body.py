@@ -298,9 +298,9 @@ class WholeBodyModel:
         gains: the held joints' servos (:class:`ServoGain`), by joint name.
         total_mass: kg of the robot (the feet included).
         axis, up, fwd: (3,) world axes.
-        held_dofs, held_feedforward: qvel addresses and static torques (N·m) of the held
-        joints (applied as constant forces; their PD is MuJoCo's joint stiffness and
-        damping).
+        held_dofs: qvel addresses of the held joints (their PD is MuJoCo's joint stiffness
+        and damping; their static torques, :func:`static_torques`, are applied as constant
+        forces).
         step_choice: :class:`~posture_id.robots.stability.StepChoice` when the step was
             chosen (``MujocoOptions.timestep_s`` None), else None.
     """
@@ -320,7 +320,6 @@ class WholeBodyModel:
     up: np.ndarray = field(repr=False)
     fwd: np.ndarray = field(repr=False)
     held_dofs: np.ndarray = field(repr=False)
-    held_feedforward: np.ndarray = field(repr=False)
     ankle_point: np.ndarray = field(repr=False)
     step_choice: object = None
 
@@ -501,7 +500,6 @@ class WholeBodyModel:
             total_mass=float(sum(model.inertias[j].mass for j in range(1, model.njoints))),
             axis=lateral, up=up, fwd=fwd,
             held_dofs=np.array([mj.jnt_dofadr[i] for i, _ in held], dtype=int),
-            held_feedforward=np.zeros(len(held)),
             ankle_point=ankle_point,
         )
         return built
@@ -713,12 +711,15 @@ def simulate_whole_body(
         sampling rate; the fall's time or None, :class:`WholeBodyModel`).
     """
     from posture_id.dec.parameters import default_parameters
-    from posture_id.provenance import body_identity
     from posture_id.robots.mujoco_model import MujocoOptions
-    from posture_id.robots.mujoco_sim import DecController, run_dec_loop, stepped_options
+    from posture_id.robots.mujoco_sim import (
+        DecController,
+        loop_result,
+        run_dec_loop,
+        stepped_options,
+    )
     from posture_id.robots.stability import choose_step
     from posture_id.simulation.options import SimulationOptions
-    from posture_id.simulation.results import SimulationResult
     from posture_id.simulation.stimulus import prts
 
     mujoco = require_mujoco()
@@ -732,18 +733,17 @@ def simulate_whole_body(
         raise RobotError(f"parameters are for joints {', '.join(params.joints)}; the lumped "
                          f"'{lumped.name}' has {', '.join(lumped.joint_names)}")
     kpas, bpas = params.array("kpas"), params.array("bpas")
-    step_choice = None
     if mujoco_options.timestep_s is None:
-        built = {}
+        built = []  # the last one built is the step chosen (choose_step stops there)
 
         def build(step: float):
-            built[step] = WholeBodyModel.build(spec, segments, kpas, bpas, replace(
-                mujoco_options, timestep_s=step), whole_body_options)
-            return built[step].model
+            built.append(WholeBodyModel.build(spec, segments, kpas, bpas, replace(
+                mujoco_options, timestep_s=step), whole_body_options))
+            return built[-1].model
 
         step_choice = choose_step(build)
         mujoco_options = replace(mujoco_options, timestep_s=step_choice.step_s)
-        body = replace(built[step_choice.step_s], step_choice=step_choice)
+        body = replace(built[-1], step_choice=step_choice)
     else:
         body = WholeBodyModel.build(spec, segments, kpas, bpas, mujoco_options,
                                     whole_body_options)
@@ -784,18 +784,12 @@ def simulate_whole_body(
             applied[right] = sr * torques[i]
 
     controller = DecController(params, alpha_ref, hold, dt, width)
-    theta_out, alpha_out, abort_time = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options,
-                                                    n, prescribe, sense, controller, apply)
-    sample_time, sample_tilt = options.sampled(tilt)
-    result = SimulationResult(
-        time=sample_time, tilt=sample_tilt, theta=theta_out, alpha=alpha_out,
-        abort_time=abort_time, segments=lumped.segment_names, joints=lumped.joint_names,
-        parameters=params,
-        description=(f"{stimulus.description}; {spec.name} whole body in MuJoCo "
-                     f"{mujoco.__version__} {mujoco_options.integrator} {dt * 1000:g} ms"),
-        options=options, body_identity=body_identity(lumped),
-    )
-    return result, body
+    looped = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options, n, prescribe, sense,
+                          controller, apply)
+    return loop_result(options, tilt, looped, lumped, params,
+                       f"{stimulus.description}; {spec.name} whole body in MuJoCo "
+                       f"{mujoco.__version__} {mujoco_options.integrator} {dt * 1000:g} ms"
+                       ), body
 
 
 def lumped_body(spec: WholeBodySpec, segments: int = 3):

@@ -98,6 +98,16 @@ def main(argv: list[str] | None = None) -> None:
                   f"written (noise-share edges {', '.join(f'{e:.3f}' for e in widening.edges)}"
                   "; factors Kp, Ki, Kd, delay per bin: " + "; ".join(
                       ", ".join(f"{v:.2f}" for v in row) for row in widening.factors) + ")."]
+    edges = (-np.inf, *widening.edges, np.inf)
+    by_bin = []
+    for low, high in zip(edges[:-1], edges[1:], strict=True):
+        chosen = [r for r in check if low <= r["noise_relative"] < high]
+        span = (f"below {high:.3f}" if low == -np.inf else f"from {low:.3f}"
+                if high == np.inf else f"{low:.3f}–{high:.3f}")
+        by_bin.append(f"noise share {span}: {len(chosen)} answers, "
+                      f"{cell(coverage_with(chosen, None))} as they are, "
+                      f"{cell(coverage_with(chosen, widening))} widened")
+    lines += ["", "By the widening's bins: " + "; ".join(by_bin) + "."]
     widening.save(args.model)
     text = "\n".join(lines) + "\n"
     if args.out:

@@ -764,8 +764,14 @@ def simulate_whole_body(
     grav = sense.gravity_torques(gravity)  # gravity's torque on the mass above each joint
     hold = [grav[i] - kp[i] * math.sin(alpha_ref[i]) for i in range(n)]
     feedforward = static_torques(body, d, [-g for g in grav])
-    held_dofs = body.held_dofs
-    d.qfrc_applied[held_dofs] = feedforward
+    d.qfrc_applied[body.held_dofs] = feedforward
+    # each held joint's servo reports the static torque it is given (held_dofs follow the
+    # unlocked servos in their order)
+    gains = dict(body.gains)
+    held = [name for name, g in gains.items() if not g.locked]
+    for name, torque in zip(held, feedforward, strict=True):
+        gains[name] = replace(gains[name], feedforward=float(torque))
+    body = replace(body, gains=gains)
     dofs = body.dec_dofs.tolist()
     signs = (0.5 * body.dec_sign).tolist()
     pq, pd = body.platform_qpos, body.platform_dof

@@ -47,6 +47,9 @@ HELD_OUT = [f.value for f in NoiseFamily if f is not NoiseFamily.LOW_PASS]
 HERE = Path(__file__).resolve().parent
 #: The network trained on the low-pass noise alone (``make universal-model``'s first stage).
 BASE = Path("data/models/universal")
+#: The seed of the subjects a held-out family's widening is fitted on (``make
+#: recording-widening``'s for the bundled model).
+WIDENING_SEED = 777
 
 
 def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: int,
@@ -83,14 +86,54 @@ def _gated(data: list[Path], fine: Path, base: Path) -> Path:
 
 
 def _judge(model: Path | None, families: list[str], groups: list[str], subjects: int,
-           out: Path) -> list[dict]:
+           out: Path, seed: int | None = None) -> list[dict]:
     if not (out / "report.md").exists():
         command = [sys.executable, str(HERE / "honest_verdict.py"), "--subjects", str(subjects),
                    "--groups", *groups, "--families", *families, "--out", str(out)]
+        if seed is not None:
+            command += ["--seed", str(seed)]
         if model is not None:
-            command += ["--network", str(model)]
+            command += ["--model", str(model)]
         subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
     return json.loads((out / "rows.json").read_text(encoding="utf-8"))["rows"]
+
+
+def _widen(model: Path, family: str, subjects: int) -> None:
+    """Fit ``model``'s recording widening (:mod:`posture_id.uncertainty.widening`) on its
+    own answers to ``subjects`` people-like subjects of each family but ``family``, drawn
+    with :data:`WIDENING_SEED` (others than the judged ones, as ``make recording-widening``
+    draws the bundled model's), and write it beside the model: the held-out family is
+    then judged with intervals widened by a widening that never saw it."""
+    from posture_id.learning.universal.model import UniversalModel
+    from posture_id.studies.widening import people_rows, stack_rows
+    from posture_id.uncertainty.widening import WIDENING_FILE, fit_widening
+
+    if (model / WIDENING_FILE).exists():
+        return
+    others = [f.value for f in NoiseFamily if f.value != family]
+    calibration = model / "widening_calibration"
+    _judge(model, others, ["people-like"], subjects, calibration, WIDENING_SEED)
+    sha = str(UniversalModel.load(model).sidecar.get("weights_sha256"))
+    made_by = (f"benchmarks/noise_lofo.py: {subjects} people-like subjects of each family "
+               f"but {family}, seed {WIDENING_SEED}")
+    fit_widening(*stack_rows(people_rows(calibration / "rows.json")), 0.9, sha,
+                 made_by=made_by).save(model)
+
+
+def _bundled_base(out: Path) -> None:
+    """Write the base (``make universal-model``'s first stage) at ``out`` as the bundled
+    model holds it: its white-noise member, checked byte for byte against the SHA-256 its
+    sidecar names."""
+    from posture_id.learning.universal.identifier import BUNDLED_DIR
+    from posture_id.learning.universal.model import UniversalModel
+
+    bundled = UniversalModel.load(BUNDLED_DIR)
+    base = bundled.member(0)
+    base.save(out)
+    if base.sidecar["weights_sha256"] != bundled.member_sha256(0):
+        raise SystemExit(f"{out}: the bundled model's first member is not the base its "
+                         "sidecar names (another SHA-256)")
+    print(f"{out}: the base, the bundled model's white-noise member", flush=True)
 
 
 def _oracle(folder: Path) -> tuple[dict, dict] | None:
@@ -139,6 +182,11 @@ def main() -> None:
     parser.add_argument("--gated", action="store_true",
                         help="judge each fine-tune in one model with the base, gated by the "
                              "noise (the bundled recipe)")
+    parser.add_argument("--widen", type=int, metavar="SUBJECTS", default=0,
+                        help="with --gated: before judging a held-out family, fit the model's "
+                             "recording widening on its answers to SUBJECTS people-like "
+                             f"subjects of each other family (seed {WIDENING_SEED}), as the "
+                             "bundled model's is fitted (default 0: none)")
     parser.add_argument("--out", type=Path, default=Path("docs/results/noise_lofo"))
     parser.add_argument("--oracle", type=Path, default=Path("docs/results/recording_limit"),
                         help="benchmarks/recording_limit.py's output: the error of the "
@@ -146,10 +194,14 @@ def main() -> None:
                              "table's last columns (default %(default)s; left out when "
                              "missing)")
     args = parser.parse_args()
+    if args.widen and not args.gated:
+        parser.error("--widen fits the gated model's widening: give --gated too")
     if (not (args.base / "model.json").is_file()
             and not (args.out / "base" / "rows.json").is_file()):
-        raise SystemExit(f"{args.base}: no universal model there (make universal-model "
-                         "trains it; or name one trained on the low-pass noise with --base)")
+        if args.base != BASE:
+            raise SystemExit(f"{args.base}: no universal model there (name one trained on "
+                             "the low-pass noise alone with --base)")
+        _bundled_base(args.base)
     base = _judge(args.base, [f.value for f in NoiseFamily], ["people-like"], args.subjects,
                   args.out / "base")
     tilt = (f" --motor-noise-tilt {args.motor_noise_tilt:g}" if args.motor_noise_tilt
@@ -158,6 +210,7 @@ def main() -> None:
     beside = "".join(f" {p}" for p in args.beside)
     beside = f" --beside{beside}" if beside else ""
     gated = " --gated" if args.gated else ""
+    gated += f" --widen {args.widen}" if args.widen else ""
     fine = "fine-tuned without it" + (", gated with the base" if args.gated else "")
     lines = ["# Noise the network never saw: leave one family out", "",
              f"Made by `.venv/bin/python benchmarks/noise_lofo.py --set {args.set}{beside} --base "
@@ -169,7 +222,11 @@ def main() -> None:
              "low-pass noise alone), and with it fine-tuned on the set's other families "
              "(the family never simulated for it)"
              + ("; that fine-tune in one model with the base, gated by the recording's "
-                "noise, as the bundled model is" if args.gated else "") + ".", "",
+                "noise, as the bundled model is" if args.gated else "")
+             + (f"; its intervals widened by the recording's own noise, the widening fitted "
+                f"on its answers to {args.widen} people-like subjects of each other family "
+                f"(seed {WIDENING_SEED}), as the bundled model's is" if args.widen else "")
+             + ".", "",
              "| held-out family | network | modules: every class right | median \\|Kp error\\| "
              "| 90 % intervals holding the true Kp | all parameters | the oracle's median "
              "\\|Kp error\\| (with the prior) | network / oracle (with the prior) |",
@@ -183,6 +240,8 @@ def main() -> None:
                        args.learning_rate, args.base, args.motor_noise_tilt)
             if args.gated:
                 model = _gated([*args.beside, args.set], model, args.base)
+            if args.widen:
+                _widen(model, family, args.widen)
         rows = _judge(model, [family], ["people-like"], args.subjects, args.out / family)
         lines.append(f"| {family} | base | {family_cells(base, family)} | "
                      f"{_against(oracle, base, family)} |")

@@ -26,7 +26,7 @@ import numpy as np
 from posture_id.fileio import atomic_write_text
 from posture_id.uncertainty.widening import RecordingWidening, fit_widening, scores_of
 
-__all__ = ["people_rows", "coverage_with", "main"]
+__all__ = ["people_rows", "stack_rows", "coverage_with", "main"]
 
 
 def people_rows(path: str | Path) -> list[dict]:
@@ -37,7 +37,7 @@ def people_rows(path: str | Path) -> list[dict]:
             and r.get("estimate") is not None and r.get("noise_relative") is not None]
 
 
-def _stack(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+def stack_rows(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     """(M, 4) scores and (M,) noise shares of every module of ``rows``."""
     scores = np.concatenate([scores_of(r["estimate"], r["truth_normalised"], r["lower"],
                                        r["upper"]) for r in rows])
@@ -49,7 +49,7 @@ def coverage_with(rows: list[dict], widening: RecordingWidening | None
                   ) -> tuple[float, float]:
     """(Kp, every parameter) shares of the truths inside the intervals of ``rows``, each
     widened by ``widening`` (None: as they are)."""
-    scores, share = _stack(rows)
+    scores, share = stack_rows(rows)
     factor = (np.ones_like(scores) if widening is None
               else np.stack([widening.factor(s) for s in share]))
     inside = scores <= factor
@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> None:
              "intervals of the check's answers, Kp / every parameter:", "",
              "| family | as they are | widened, the family left out of the widening | "
              "widened by the widening written (every family) |", "|---|---|---|---|"]
-    widening = fit_widening(*_stack(calibration), args.level, sha, made_by=command)
+    widening = fit_widening(*stack_rows(calibration), args.level, sha, made_by=command)
 
     def cell(share: tuple[float, float]) -> str:
         return f"{100 * share[0]:.1f} % / {100 * share[1]:.1f} %"
@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> None:
     for family in families:
         others = [r for r in calibration if r["kind"] != family]
         mine = [r for r in check if r["kind"] == family]
-        left_out = fit_widening(*_stack(others), args.level, sha)
+        left_out = fit_widening(*stack_rows(others), args.level, sha)
         lines.append(f"| {family} | {cell(coverage_with(mine, None))} | "
                      f"{cell(coverage_with(mine, left_out))} | "
                      f"{cell(coverage_with(mine, widening))} |")

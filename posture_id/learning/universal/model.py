@@ -133,6 +133,53 @@ class UniversalModel:
                              lc - np.logaddexp(0, coloured.logit))
         return UniversalPrediction(mean, sd, log_p - log_q)
 
+    def member(self, index: int) -> UniversalModel:
+        """The model an ensemble (:func:`ensemble_of`) took its member ``index`` from: that
+        network alone with the ensemble's standardisation, its sidecar the ensemble's less
+        the gate and the members, with that model's training and fine-tune origin. Saved,
+        its weights are byte for byte the model's it came from when that model was one
+        network (:meth:`member_sha256` names their hash).
+
+        Raises:
+            ModelError: not an ensemble, or no such member.
+        """
+        made_of = self.sidecar.get("ensemble_of")
+        members = self.network.config.members
+        if not made_of or members < 2:
+            raise ModelError(f"{self.path or 'this model'}: one network, not an ensemble")
+        if not 0 <= index < members:
+            raise ModelError(f"{self.path or 'this model'}: no member {index} (it has "
+                             f"{members})")
+        network = UniversalNetwork(replace(self.network.config, members=1))
+        network.members[0].load_state_dict(self.network.members[index].state_dict())
+        network.eval()
+        source = self._member_source(index)
+        sidecar = {k: v for k, v in self.sidecar.items()
+                   if k not in ("weights_sha256", "ensemble_of", "gate", "calibration",
+                                "training", "fine_tuned_from")}
+        sidecar["training"] = source.get("training")
+        if source.get("fine_tuned_from"):
+            sidecar["fine_tuned_from"] = source["fine_tuned_from"]
+        return UniversalModel(network, self.input_mean.copy(), self.input_std.copy(),
+                              self.target_mean.copy(), self.target_std.copy(), sidecar)
+
+    def member_sha256(self, index: int) -> str | None:
+        """The SHA-256 of the weights of the model member ``index`` came from (None when
+        that model was itself several networks)."""
+        source = self._member_source(index)
+        return source.get("weights_sha256") if source.get("members", 1) == 1 else None
+
+    def _member_source(self, index: int) -> dict:
+        """The ``ensemble_of`` entry member ``index`` came from."""
+        first = 0
+        for entry in self.sidecar.get("ensemble_of") or []:
+            count = int(entry.get("members", 1))
+            if first <= index < first + count:
+                return entry
+            first += count
+        raise ModelError(f"{self.path or 'this model'}: its sidecar does not say where "
+                         f"member {index} came from")
+
     def tensors(self) -> dict[str, torch.Tensor]:
         out = {f"network.{k}": v.detach().contiguous()
                for k, v in self.network.state_dict().items()}

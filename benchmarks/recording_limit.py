@@ -1,6 +1,6 @@
 """What the recording allows: an estimator that knew the answer, on people-like sway.
 
-Run:  .venv/bin/python benchmarks/recording_limit.py [--subjects 24] [--workers 2]
+Run:  .venv/bin/python benchmarks/recording_limit.py [--subjects 24] [--workers 2] [--clean]
                                                      [--out docs/results/recording_limit]
 
 The people-like subjects of every noise family that ``benchmarks/honest_verdict.py``
@@ -13,8 +13,11 @@ project recommends the locked fit). Its error is what the recording's own noise 
 an estimator that needs no search and no class decision: a proxy for the recording's
 limit, beside which a network's error reads as a ratio (the leave-one-family-out table's
 last columns). Writes ``rows.json`` (per subject: the family, the body, the locked share,
-each fit's relative error per module and parameter) and ``report.md`` (the median |Kp
-error| per family); resumable (a journal, removed once ``rows.json`` is written).
+each fit's relative error per module and parameter, its normalised estimate, the truth and
+its standard errors as reported and as Gauss-Newton's alone) and ``report.md`` (the median
+|Kp error| per family, and how often the fits' own 90 % intervals hold the truth, per
+family; ``--clean``: on the clean subjects too); resumable (a journal, removed once
+``rows.json`` is written).
 """
 
 from __future__ import annotations
@@ -37,6 +40,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from honest_verdict import _recording  # noqa: E402  (a sibling script: the same subjects)
 
 COMMAND = ".venv/bin/python benchmarks/recording_limit.py"
+#: The task family of honest_verdict.py's clean subjects (sensor noise alone).
+CLEAN = "clean"
+#: z of a 90 % interval.
+Z90 = 1.6448536269514722
 
 
 def _one(task: tuple[str, int]) -> dict:
@@ -48,7 +55,8 @@ def _one(task: tuple[str, int]) -> dict:
 
     family, index = task
     row = {"family": family, "index": index}
-    made = _recording("people-like", family, index)
+    made = _recording(*(("clean", "clean") if family == CLEAN else ("people-like", family)),
+                      index)
     if made is None:
         return {**row, "skipped": True}
     recording, body, truth, stimulus, extra = made
@@ -56,7 +64,7 @@ def _one(task: tuple[str, int]) -> dict:
     trial = prepare_trial(recording, stimulus)
     truth_si = np.array([[getattr(truth[j], f) for f in TARGET_FIELDS]
                          for j in body.joint_names])
-    row.update(segments=body.n_segments, locked_share=extra["locked_share"])
+    row.update(segments=body.n_segments, locked_share=extra.get("locked_share"))
     for name, prior in (("", None), ("prior_", 0.5)):
         options = FitOptions(locked=LockedOptions(), classes=FixedClasses(), prior_sd=prior)
         try:
@@ -68,6 +76,13 @@ def _one(task: tuple[str, int]) -> dict:
                           for j in body.joint_names])
         row[f"{name}kp_error"] = (found[:, 0] / truth_si[:, 0] - 1).tolist()
         row[f"{name}errors"] = (found / np.where(truth_si == 0, np.nan, truth_si) - 1).tolist()
+        defaults = np.array([[getattr(fit.defaults[j], f) for f in TARGET_FIELDS]
+                             for j in body.joint_names])
+        row[f"{name}intervals"] = {
+            "estimate": fit.normalised[:, :4].tolist(),
+            "truth": (truth_si / defaults - 1).tolist(),
+            "se": fit.standard_errors_normalised.tolist(),
+            "white_se": fit.white_standard_errors_normalised.tolist()}
     return {**row, "seconds": time.perf_counter() - began}
 
 
@@ -84,10 +99,59 @@ def oracle_medians(rows: list[dict], prior: bool = False) -> dict[str, float]:
     return out
 
 
-def report(rows: list[dict], subjects: int) -> str:
+def interval_coverage(rows: list[dict], prior: bool, white: bool) -> tuple[float, float, int]:
+    """(Kp, every parameter) shares of the truths inside the fits' 90 % intervals
+    (estimate ± z·SE, normalised, cut at −1), and the modules: with the standard errors
+    as the fit reports them (the cluster-robust ones where larger), or ``white``: the
+    Gauss-Newton ones of independent residuals alone."""
+    key = "prior_intervals" if prior else "intervals"
+    inside = []
+    for row in rows:
+        if key not in row:
+            continue
+        part = row[key]
+        estimate, truth = np.asarray(part["estimate"]), np.asarray(part["truth"])
+        se = np.asarray(part["white_se" if white else "se"], dtype=float)
+        lower = np.maximum(estimate - Z90 * se, -1.0)
+        inside.append((truth >= lower) & (truth <= estimate + Z90 * se))
+    if not inside:
+        return np.nan, np.nan, 0
+    inside = np.concatenate(inside)
+    return float(inside[:, 0].mean()), float(inside.mean()), len(inside)
+
+
+def coverage_lines(rows: list[dict]) -> list[str]:
+    """The report's section on the fits' own intervals, when the rows carry them."""
+    families = list(dict.fromkeys(r["family"] for r in rows if "intervals" in r))
+    if not families:
+        return []
+    lines = ["", "The fits' own 90 % intervals (estimate ± 1.645·SE): the truth inside, Kp / "
+             "every parameter, with the Gauss-Newton standard errors of independent "
+             "residuals, and as the fit reports them (the cluster-robust ones where larger: "
+             "the noise each harmonic shares between channels, read from the residual; "
+             "docs/fit.md):", "",
+             "| family | modules | no prior: independent | no prior: as reported | with the "
+             "prior: independent | with the prior: as reported |", "|---|---|---|---|---|---|"]
+
+    def cell(family_rows, prior, white):
+        kp, every, _ = interval_coverage(family_rows, prior, white)
+        return f"{100 * kp:.0f} % / {100 * every:.0f} %"
+
+    for family in [*families, None]:
+        chosen = [r for r in rows if family is None and r["family"] != CLEAN
+                  or r["family"] == family]
+        modules = interval_coverage(chosen, False, False)[2]
+        label = family or "every noise family"
+        lines.append(f"| {label} | {modules} | {cell(chosen, False, True)} | "
+                     f"{cell(chosen, False, False)} | {cell(chosen, True, True)} | "
+                     f"{cell(chosen, True, False)} |")
+    return lines
+
+
+def report(rows: list[dict], command: str) -> str:
     plain, prior = oracle_medians(rows), oracle_medians(rows, prior=True)
     lines = ["# What the recording allows", "",
-             f"Made by `{COMMAND} --subjects {subjects}` (what it does: the script's "
+             f"Made by `{command}` (what it does: the script's "
              "docstring): the locked least-squares fit started at the truth with the true "
              "classes, on the people-like subjects of each noise family that the honest "
              "verdict and the leave-one-family-out table judge; without a prior and with "
@@ -104,6 +168,7 @@ def report(rows: list[dict], subjects: int) -> str:
         lines.append(f"| {family} | {len(group)} | {len(kp)} | {100 * median:.1f} % | "
                      f"{100 * np.percentile(kp, 90):.1f} % | {100 * prior[family]:.1f} % | "
                      f"{100 * np.percentile(with_prior, 90):.1f} % |")
+    lines += coverage_lines(rows)
     failed = [r for r in rows if "failed" in r or "prior_failed" in r]
     if failed:
         lines += ["", f"{len(failed)} subjects with a fit that failed: " + "; ".join(
@@ -119,10 +184,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--subjects", type=int, default=24)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--clean", action="store_true",
+                        help="the honest verdict's clean subjects too (sensor noise alone): "
+                             "the intervals' coverage where the noise is what the fit assumes")
     parser.add_argument("--out", type=Path, default=Path("docs/results/recording_limit"))
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     tasks = [(f.value, i) for f in NoiseFamily for i in range(args.subjects)]
+    if args.clean:
+        tasks += [(CLEAN, i) for i in range(args.subjects)]
+    command = (f"{COMMAND} --subjects {args.subjects}" + (" --clean" if args.clean else "")
+               + ("" if args.out == Path("docs/results/recording_limit")
+                  else f" --out {args.out}"))
     book = Journal(args.out / "journal.jsonl",
                    {"format": "posture_id-recording-limit", "subjects": args.subjects},
                    lambda r: (r["family"], int(r["index"])))
@@ -139,9 +212,10 @@ def main() -> None:
     rows = [done[t] for t in tasks]
     atomic_write_text(args.out / "rows.json", json_text({"subjects": args.subjects,
                                                          "rows": rows}))
-    atomic_write_text(args.out / "report.md", report(rows, args.subjects))
+    text = report(rows, command)
+    atomic_write_text(args.out / "report.md", text)
     (args.out / "journal.jsonl").unlink(missing_ok=True)  # rows.json holds every row
-    print(report(rows, args.subjects))
+    print(text)
 
 
 if __name__ == "__main__":

@@ -47,6 +47,12 @@ class SwayResidual:
         """(S, N, P) ∂θ/∂q (deg) → (R, P) Jacobian of :meth:`values`."""
         return jacobian_deg.reshape(-1, jacobian_deg.shape[-1])
 
+    def clusters(self) -> np.ndarray | None:
+        """(R,) the group of each residual row whose noise may be shared
+        (:mod:`~posture_id.fitting.structure`), or None: every sample of the raw sway
+        compared, whose noise is correlated in time, not in groups."""
+        return None
+
 
 class LockedResidual(SwayResidual):
     """Compare the weighted stimulus-locked harmonics
@@ -65,6 +71,13 @@ class LockedResidual(SwayResidual):
 
     def columns(self, jacobian_deg):
         return self.projection.apply(jacobian_deg).reshape(-1, jacobian_deg.shape[-1])
+
+    def clusters(self):
+        """The harmonic of each row: its real and imaginary part of every channel, one
+        group (rows: real parts then imaginary parts, harmonic by harmonic, channels
+        innermost, as :meth:`values` ravels them)."""
+        harmonics, channels = self.projection.noise.shape
+        return np.tile(np.repeat(np.arange(harmonics), channels), 2)
 
 
 class Evaluator:

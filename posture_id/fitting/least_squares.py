@@ -52,6 +52,7 @@ from posture_id.fitting.evaluators import (
 from posture_id.fitting.options import FitError, FitOptions, FixedClasses
 from posture_id.fitting.problem import FitProblem
 from posture_id.fitting.result import FitResult, StageResult
+from posture_id.fitting.structure import cluster_robust_covariance
 from posture_id.fitting.symbolic import step_inputs
 from posture_id.fitting.unknowns import (
     UnknownLayout,
@@ -214,12 +215,13 @@ class FitRun:
     def _result(self, best: StageResult, seconds: float) -> FitResult:
         defaults, body = self.problem.defaults, self.body
         params = parameters_from_qs(best.q[None], defaults).trial(0, body.joint_names)
-        se_norm, se_phys, poorly, residual_sd = _standard_errors(best, params, defaults,
-                                                                 self.options, self.layout)
+        se_norm, se_phys, poorly, residual_sd, white = _standard_errors(
+            best, params, defaults, self.options, self.layout, self.target.clusters())
         rms = np.sqrt(np.mean((self.exact.simulated(best.q) - self.measured) ** 2))
         return FitResult(
             parameters=params, normalised=targets_from_q(best.q), standard_errors=se_phys,
-            standard_errors_normalised=se_norm, poorly_determined=poorly,
+            standard_errors_normalised=se_norm, white_standard_errors_normalised=white,
+            poorly_determined=poorly,
             converged=best.converged, iterations=sum(s.iterations for s in self.stages),
             evaluations=sum(s.evaluations for s in self.stages), wall_time_s=seconds,
             cost=best.cost, rms_deg=float(np.degrees(rms)), stages=tuple(self.stages),
@@ -304,9 +306,13 @@ def _target(trial: PreparedTrial, options: FitOptions) -> SwayResidual:
 
 
 def _standard_errors(best: StageResult, params: DecParameters, defaults: DecParameters,
-                     options: FitOptions, layout: UnknownLayout):
-    """Gauss-Newton standard errors (N, 4) normalised and physical, the flags, and the
-    residual SD before the floor."""
+                     options: FitOptions, layout: UnknownLayout,
+                     clusters: np.ndarray | None = None):
+    """Standard errors (N, 4) normalised and physical, the flags, the residual SD before
+    the floor, and the Gauss-Newton standard errors (N, 4) normalised of a residual of
+    independent rows. The standard errors are those, or with ``clusters`` (the group of
+    each data row: :meth:`~posture_id.fitting.evaluators.SwayResidual.clusters`) the
+    cluster-robust ones (:mod:`.structure`) where they are larger."""
     jac = best.jacobian
     r = best.residual
     dof = max(len(r) - jac.shape[1], 1)
@@ -318,13 +324,17 @@ def _standard_errors(best: StageResult, params: DecParameters, defaults: DecPara
             se_z = np.sqrt(np.clip(np.diag(cov), 0, None))
         except np.linalg.LinAlgError:
             se_z = np.full(jac.shape[1], np.inf)
+    white = se_z[layout.gains_delays].reshape(4, layout.n).T
+    robust = None if clusters is None else cluster_robust_covariance(jac, r, clusters)
+    if robust is not None:
+        se_z = np.maximum(se_z, np.sqrt(np.clip(np.diag(robust), 0, None)))
     se_norm = se_z[layout.gains_delays].reshape(4, layout.n).T  # the passive terms follow
     default_values = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
     se_phys = se_norm * default_values
     values = np.column_stack([params.array(f) for f in TARGET_FIELDS])
     with np.errstate(divide="ignore", invalid="ignore"):
         poorly = ~(1.96 * se_phys <= options.precision_rel * np.abs(values))
-    return se_norm, se_phys, poorly, residual_sd
+    return se_norm, se_phys, poorly, residual_sd, white
 
 
 def search_bounds(options: FitOptions, layout: UnknownLayout) -> tuple[np.ndarray, np.ndarray]:

@@ -60,7 +60,11 @@ class FitResult(Result):
     Attributes:
         parameters: physical units. normalised: (N, 5) [K̃p, K̃i, K̃d, Δ̃, C].
         standard_errors: (N, 4) SE of Kp, Ki, Kd, Δ in physical units;
-        standard_errors_normalised: (N, 4) the same relative to the defaults.
+        standard_errors_normalised: (N, 4) the same relative to the defaults. For a locked
+        fit they are the Gauss-Newton ones or, where larger, the cluster-robust ones
+        (:mod:`~posture_id.fitting.structure`: the noise each harmonic shares between
+        channels, read from the residual); white_standard_errors_normalised (N, 4), or
+        None: the Gauss-Newton ones alone, as if every residual were independent.
         poorly_determined: (N, 4) bool. converged: the last stage met its tolerance.
         iterations: Jacobian evaluations in all. evaluations: residual evaluations.
         wall_time_s: s. cost: ½Σr² (deg² comparing every sample; in
@@ -109,6 +113,7 @@ class FitResult(Result):
     defaults: DecParameters | None = field(default=None, repr=False, compare=False)
     on_bounds: tuple[str, ...] = ()
     precision_rel: float = 0.05
+    white_standard_errors_normalised: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def classes(self) -> tuple[str, ...]:

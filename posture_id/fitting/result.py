@@ -184,25 +184,35 @@ class FitResult(Result):
     def intervals_at(self, level: float = 0.9, scales: ConformalCalibration | None = None,
                      at_least: np.ndarray | None = None, at_least_from: str = ""
                      ) -> ParameterIntervals:
-        """Intervals of Kp, Ki, Kd, Δ at ``level``: ±z·SE (Gauss-Newton) or, with the
-        ``scales`` of a calibration (:mod:`posture_id.studies.calibration`), ±scale·SE,
-        where scale is the conformal one at the recording's estimated sensor noise and
-        never below :func:`noise_allows`: a calibrated interval is never narrower than the
-        Gauss-Newton interval of the fit's own residual noise. ``at_least``: (N, 4)
-        normalised half-widths no interval is narrower than (``at_least_from`` says
-        whose, for the intervals' method line)."""
+        """Intervals of Kp, Ki, Kd, Δ at ``level``: ±z·SE (the standard errors as
+        reported: for a locked fit, widened where the residual's structure asks,
+        :mod:`~posture_id.fitting.structure`) or, with the ``scales`` of a calibration
+        (:mod:`posture_id.studies.calibration`, made of Gauss-Newton standard errors),
+        ±scale·SE_GN, where scale is the conformal one at the recording's estimated sensor
+        noise and never below :func:`noise_allows`, and never narrower than ±z·SE: a
+        calibrated interval is never narrower than the interval of the fit's own residual
+        noise. ``at_least``: (N, 4) normalised half-widths no interval is narrower than
+        (``at_least_from`` says whose, for the intervals' method line)."""
         if self.defaults is None:
             raise ValueError("intervals need the body's defaults (FitResult.defaults)")
         defaults = self.defaults
         z = NormalDist().inv_cdf((1 + level) / 2)
         noise = sensor_noise_deg(self.recorded)
-        factor, method = z, "Gauss-Newton ±z·SE (coverage not checked)"
+        se = self.standard_errors_normalised
+        white = se if self.white_standard_errors_normalised is None else \
+            self.white_standard_errors_normalised
+        structured = bool(np.any(se > white))
+        method = "Gauss-Newton ±z·SE" + (
+            ", widened by the residual's structure" if structured else "") + \
+            " (coverage not checked)"
+        half_width = z * se
         if scales is not None:
             least = noise_allows(level, self.residual_sd, self.noise_floor_deg)
             factor = np.maximum(scales.scale(level, noise), least)
-            method = "Gauss-Newton SE × calibrated scale"
+            half_width = np.maximum(factor * white, half_width)
+            method = "Gauss-Newton SE × calibrated scale" + (
+                ", no narrower than the residual's structure allows" if structured else "")
         si = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])
-        half_width = factor * self.standard_errors_normalised
         if at_least is not None:
             half_width = np.maximum(half_width, at_least)
             method += f", no narrower than {at_least_from or 'given'}"

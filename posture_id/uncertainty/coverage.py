@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["coverage", "coverage_interval", "reliability", "expected_calibration_error",
-           "fit_temperature"]
+           "calibrated_ece", "fit_temperature"]
 
 
 def coverage(truth: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -52,6 +52,18 @@ def expected_calibration_error(probability: np.ndarray, outcome: np.ndarray,
     mean_p, freq, count = reliability(probability, outcome, bins)
     used = count > 0
     return float(np.sum(count[used] * np.abs(mean_p[used] - freq[used])) / count.sum())
+
+
+def calibrated_ece(probability: np.ndarray, bins: int = 10, draws: int = 2000,
+                   seed: int = 0) -> np.ndarray:
+    """(draws,) the ECE of ``probability`` against outcomes drawn from it (each outcome
+    true with its own probability): what the ECE of perfectly calibrated probabilities
+    reads on this many samples (its sampling floor; the share of draws at or above an
+    observed ECE is the chance of one that large from calibrated probabilities)."""
+    p = np.ravel(probability).astype(float)
+    rng = np.random.default_rng(seed)
+    return np.array([expected_calibration_error(p, rng.random(len(p)) < p, bins)
+                     for _ in range(draws)])
 
 
 def confidence_calibration_error(probability: np.ndarray, outcome: np.ndarray,

@@ -259,3 +259,20 @@ def test_the_folded_normal_quantiles_are_scipys():
         for q in (0.001, 0.05, 0.25, 0.5, 0.9, 0.999):
             expected = foldnorm(1.0 / sigma, scale=sigma).ppf(q)
             assert folded_normal_quantile(q, 1.0, sigma) == pytest.approx(expected, rel=1e-12)
+
+
+def test_the_ece_of_calibrated_probabilities_is_its_sampling_floor():
+    """``calibrated_ece``: the ECE that perfectly calibrated probabilities read on so many
+    samples. Outcomes drawn from the probabilities sit inside its spread; outcomes of a
+    network sure of itself and wrong 10 % of the time at P 0.99 sit far above it."""
+    from posture_id.uncertainty.coverage import calibrated_ece, expected_calibration_error
+
+    rng = np.random.default_rng(7)
+    p = np.clip(rng.beta(0.3, 0.3, 400), 0.001, 0.999)
+    floor = calibrated_ece(p, draws=500, seed=1)
+    assert 0 < floor.mean() < 0.06
+    honest = expected_calibration_error(p, rng.random(len(p)) < p)
+    assert np.mean(floor >= honest) > 0.01
+    sure = np.full(400, 0.99)
+    wrong = rng.random(400) < 0.9
+    assert expected_calibration_error(sure, wrong) > calibrated_ece(sure, draws=500).max()

@@ -984,6 +984,40 @@ def test_a_model_gated_by_the_noise_answers_white_noise_by_its_first_network(tmp
             UniversalModel.load(tmp_path / "gated")
 
 
+def test_an_ensemble_member_saved_alone_is_the_model_it_came_from(tmp_path):
+    """``UniversalModel.member(i)``: the network an ensemble took from a model, saved
+    alone, has that model's weights byte for byte (the SHA-256 its ``ensemble_of`` entry
+    names) and answers as it did; a model of one network, or a member it lacks, is
+    refused."""
+    import torch
+
+    from posture_id.learning.universal.model import ModelError, UniversalModel, ensemble_of
+    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+
+    torch.manual_seed(5)
+    config = UniversalNetworkConfig(inputs=6, hidden=(4,))
+    std = (np.zeros(6), np.full(6, 2.0), np.zeros(4), np.array([2.0, 1.0, 1.0, 1.0]))
+    for name in ("white", "coloured"):
+        UniversalModel(UniversalNetwork(config).eval(), *std,
+                       {"scope": {"segments": [1, 2, 3]}}).save(tmp_path / name)
+    white, coloured = (UniversalModel.load(tmp_path / n) for n in ("white", "coloured"))
+    ensemble_of([white, coloured], by_noise=True).save(tmp_path / "gated")
+    gated = UniversalModel.load(tmp_path / "gated")
+    x = np.random.default_rng(2).normal(size=(3, 6))
+    for index, original in enumerate((white, coloured)):
+        alone = gated.member(index)
+        alone.save(tmp_path / f"member{index}")
+        assert alone.sidecar["weights_sha256"] == original.sidecar["weights_sha256"]
+        assert gated.member_sha256(index) == original.sidecar["weights_sha256"]
+        assert alone.gate is None and "ensemble_of" not in alone.sidecar
+        got, want = alone.predict(x), original.predict(x)
+        assert np.allclose(got.mean, want.mean) and np.allclose(got.logit, want.logit)
+    with pytest.raises(ModelError, match="no member 2"):
+        gated.member(2)
+    with pytest.raises(ModelError, match="one network, not an ensemble"):
+        white.member(0)
+
+
 def test_the_scope_s_bodies_are_inside_and_a_small_robot_is_not(tmp_path):
     """What docs/universal.md says of the body check: every corner of the Winter scope,
     the TIP and the lumped presets are inside what the network was trained on; iCub

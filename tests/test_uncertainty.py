@@ -276,3 +276,27 @@ def test_the_ece_of_calibrated_probabilities_is_its_sampling_floor():
     sure = np.full(400, 0.99)
     wrong = rng.random(400) < 0.9
     assert expected_calibration_error(sure, wrong) > calibrated_ece(sure, draws=500).max()
+
+
+def test_a_calibrated_scale_multiplies_gauss_newton_s_errors_floored_by_the_structure(tip):
+    """A locked fit whose reported standard errors are wider than Gauss-Newton's (the
+    residual's structure, posture_id/fitting/structure.py): the calibrated scale, made of
+    Gauss-Newton standard errors, multiplies those; the interval is never narrower than z
+    times the reported ones; without a calibration it is ±z times the reported ones."""
+    from dataclasses import replace
+
+    white = np.full((3, 4), 0.02)
+    reported = white.copy()
+    reported[0, 0] = 0.05  # the ankle's Kp widened by the structure
+    fit = replace(_fit_result(tip, reported, 0.05, residual_sd=0.05),
+                  white_standard_errors_normalised=white)
+    z = norm.ppf(0.95)
+    plain = fit.intervals_at(0.9)
+    np.testing.assert_allclose(plain.upper, z * reported)
+    assert "widened by the residual's structure" in plain.method
+    calibrated = fit.intervals_at(0.9, _calibration([2.0, 2.0]))
+    expected = np.maximum(2.0 * white, z * reported)
+    np.testing.assert_allclose(calibrated.upper, expected)
+    assert calibrated.upper[0, 0] == pytest.approx(z * 0.05)
+    assert calibrated.upper[1, 0] == pytest.approx(2.0 * 0.02)
+    assert "no narrower than the residual's structure allows" in calibrated.method

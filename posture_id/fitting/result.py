@@ -189,9 +189,10 @@ class FitResult(Result):
         :mod:`~posture_id.fitting.structure`) or, with the ``scales`` of a calibration
         (:mod:`posture_id.studies.calibration`, made of Gauss-Newton standard errors),
         ±scale·SE_GN, where scale is the conformal one at the recording's estimated sensor
-        noise and never below :func:`noise_allows`, and never narrower than ±z·SE: a
-        calibrated interval is never narrower than the interval of the fit's own residual
-        noise. ``at_least``: (N, 4) normalised half-widths no interval is narrower than
+        noise, never below :func:`noise_allows`, and the interval never narrower than
+        that least scale times the reported SE: a calibrated interval is never narrower
+        than the interval of the fit's own residual noise and its structure.
+        ``at_least``: (N, 4) normalised half-widths no interval is narrower than
         (``at_least_from`` says whose, for the intervals' method line)."""
         if self.defaults is None:
             raise ValueError("intervals need the body's defaults (FitResult.defaults)")
@@ -209,7 +210,7 @@ class FitResult(Result):
         if scales is not None:
             least = noise_allows(level, self.residual_sd, self.noise_floor_deg)
             factor = np.maximum(scales.scale(level, noise), least)
-            half_width = np.maximum(factor * white, half_width)
+            half_width = np.maximum(factor * white, least * se)
             method = "Gauss-Newton SE × calibrated scale" + (
                 ", no narrower than the residual's structure allows" if structured else "")
         si = np.column_stack([defaults.array(f) for f in TARGET_FIELDS])

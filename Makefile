@@ -48,8 +48,9 @@ examples: $(STAMP)
 	  --analog-per-frame 2 --marker-noise-mm 0.3 --marker-gap LHIP 40 0.12 \
 	  --height-m 1.75 --mass-kg 70
 
+# The suite on every core (pytest-xdist: one worker a core, tests handed out as they end).
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto
 	$(MAKE) docs
 
 # The documentation site (MkDocs Material; the API and command-line references are made
@@ -64,7 +65,7 @@ figures: $(STAMP)
 	$(BIN)/python docs/config/architecture_figure.py --out docs/images/architecture.png
 
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q -n auto -m "not slow"
 
 lint: $(STAMP)
 	$(BIN)/ruff check posture_id tests benchmarks docs/tutorials docs/config

@@ -196,8 +196,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.widen and not args.gated:
         parser.error("--widen fits the gated model's widening: give --gated too")
-    if (not (args.base / "model.json").is_file()
-            and not (args.out / "base" / "rows.json").is_file()):
+    if not (args.base / "model.json").is_file():
         if args.base != BASE:
             raise SystemExit(f"{args.base}: no universal model there (name one trained on "
                              "the low-pass noise alone with --base)")

@@ -4,7 +4,8 @@ report on the one left out.
 Run:  .venv/bin/python benchmarks/noise_lofo.py [--set data/universal_families]
           [--beside SET ...] [--base data/models/universal] [--epochs 6]
           [--learning-rate 3e-4] [--motor-noise-tilt 0]
-          [--held-out F ...] [--subjects 24] [--gated] [--out docs/results/noise_lofo]
+          [--held-out F ...] [--subjects 24] [--gated [--widen 24]]
+          [--out docs/results/noise_lofo]
 
 The set: ``make noise-families`` (``posture-id universal data --out
 data/universal_families --shards 900 --seed 11 --clean-share 0.1 --locked-share 0.1 0.6
@@ -21,10 +22,15 @@ universal-fifth``), and judged on 24 people-like subjects of F
 made outside any set (``benchmarks/honest_verdict.py --model ... --groups people-like
 --families F``; ``--gated``: each fine-tune first put in one model with the base, gated
 by the noise, as the bundled model is: ``posture-id universal ensemble BASE FINE
---by-noise``, then calibrated). With all five held out in turn, the bundled model (the
+--by-noise``, then calibrated; ``--widen N``: then given its recording widening, fitted on
+its own answers to N people-like subjects of each family it saw, drawn with another seed,
+as ``make recording-widening`` fits the bundled model's, so that F is judged with intervals
+widened by a widening that never saw F). With all five held out in turn, the bundled model (the
 base fine-tuned on every family) is judged on all six beside them. Writes ``report.md`` (the
 leave-one-family-out table beside the base network's) and each run's folder; every stage
 is skipped when its output is there (resumable; a family judged already needs no model).
+Without ``data/models/universal``, the base is written there from the bundled model: its
+white-noise member, checked byte for byte against the SHA-256 the bundled sidecar names.
 """
 
 from __future__ import annotations

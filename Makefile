@@ -281,7 +281,8 @@ noise-lofo: noise-families
 	$(LOFO_RECIPE) --subjects 48 --out docs/results/noise_lofo_recipe48
 	$(LOFO_RECIPE) --subjects 24 --gated --out docs/results/noise_lofo_gated
 	$(LOFO_RECIPE) --subjects 48 --gated --out docs/results/noise_lofo_gated48
-	$(LOFO_RECIPE) --subjects 48 --gated --widen 24 --out docs/results/noise_lofo_widened
+	$(LOFO_RECIPE) --subjects 48 --gated --widen 24 --no-bundled \
+	  --out docs/results/noise_lofo_widened
 
 # The simulator's throughput, then its kernel beside the kernel before issue 44's work
 # (BENCH_BEFORE, a temporary worktree), child processes taking turns (docs/performance.md).

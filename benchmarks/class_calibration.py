@@ -1,6 +1,6 @@
 """Class probabilities on noise the network never saw: the leave-one-family-out answers.
 
-Run:  .venv/bin/python benchmarks/class_calibration.py [--runs docs/results/noise_lofo_gated48]
+Run:  .venv/bin/python benchmarks/class_calibration.py [--runs docs/results/noise_lofo_widened]
                                                        [--out docs/results/class_calibration]
 
 Reads the people-like answers of a leave-one-family-out run (``benchmarks/noise_lofo.py``'s
@@ -129,7 +129,7 @@ def _rows(folder: Path) -> list[dict]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=Path, default=Path("docs/results/noise_lofo_gated48"))
+    parser.add_argument("--runs", type=Path, default=Path("docs/results/noise_lofo_widened"))
     parser.add_argument("--seen", type=Path, default=Path("docs/results/honest_verdict"))
     parser.add_argument("--out", type=Path, default=Path("docs/results/class_calibration"))
     args = parser.parse_args()

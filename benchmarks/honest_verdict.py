@@ -54,6 +54,9 @@ from posture_id.simulation.subjects import people_like
 from posture_id.studies.journal import Journal
 
 SEED = 4141
+#: The groups of recordings judged, and the report's default folder.
+GROUPS = ("clean", "people-like", "mistakes")
+DEFAULT_OUT = Path("docs/results/honest_verdict")
 BODIES = ("TIP", "Winter 1-seg", "Winter 2-seg", "Winter 3-seg")
 MISTAKES = ("other body", "columns exchanged", "tilt negated", "angle step",
             "control change")
@@ -184,7 +187,8 @@ def _one(task: tuple) -> dict:
                              for j in body.joint_names])
         found = np.array([[getattr(result.parameters[j], f) for f in TARGET_FIELDS]
                           for j in body.joint_names])
-        defaults = np.array([[getattr(default_parameters(body)[j], f) for f in TARGET_FIELDS]
+        body_defaults = default_parameters(body)
+        defaults = np.array([[getattr(body_defaults[j], f) for f in TARGET_FIELDS]
                              for j in body.joint_names])
         inside = (iv.lower_si <= truth_si) & (truth_si <= iv.upper_si)
         half = (iv.upper_si - iv.lower_si) / 2
@@ -311,11 +315,29 @@ def reliability_figure(rows: list[dict], path: Path) -> None:
         "mean_probability": mean_p, "frequency": freq, "count": count}}, path)
 
 
-def report(rows: list[dict], subjects: int, model: str | None = None) -> str:
+def made_by(subjects: int, seed: int = SEED, model: str | None = None,
+            groups: list[str] | None = None, families: list[str] | None = None,
+            out: Path | None = None) -> str:
+    """The command that makes a report: its flags where they are not the defaults."""
+    command = f".venv/bin/python benchmarks/honest_verdict.py --subjects {subjects}"
+    if seed != SEED:
+        command += f" --seed {seed}"
+    if model is not None:
+        command += f" --model {model}"
+    if groups is not None and list(groups) != list(GROUPS):
+        command += " --groups " + " ".join(groups)
+    if families is not None and list(families) != [f.value for f in NoiseFamily]:
+        command += " --families " + " ".join(families)
+    if out is not None and out != DEFAULT_OUT:
+        command += f" --out {out}"
+    return command
+
+
+def report(rows: list[dict], command: str, model: str | None = None) -> str:
     rows = [r for r in rows if not r.get("skipped")]
     network = "the bundled universal network" if model is None else f"the model {model}"
     lines = ["# Real sway answered honestly", "",
-             f"Made by `.venv/bin/python benchmarks/honest_verdict.py --subjects {subjects}`: "
+             f"Made by `{command}`: "
              f"every recording through the default method (`auto`, {network}; about 4 min "
              "for the three groups of 24 here); what the groups, families and mistakes "
              "are: the script's docstring.",
@@ -391,11 +413,10 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=SEED,
                         help="the draws' seed (default %(default)s, the benchmark's; another "
                              "gives other subjects, e.g. to calibrate on)")
-    parser.add_argument("--out", type=Path, default=Path("docs/results/honest_verdict"))
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     parser.add_argument("--model", type=Path,
                         help="a universal model directory (default: the bundled one)")
-    parser.add_argument("--groups", nargs="+", default=["clean", "people-like", "mistakes"],
-                        choices=["clean", "people-like", "mistakes"])
+    parser.add_argument("--groups", nargs="+", default=list(GROUPS), choices=GROUPS)
     parser.add_argument("--families", nargs="+", default=[f.value for f in NoiseFamily],
                         choices=[f.value for f in NoiseFamily],
                         help="the people-like group's noise families")
@@ -427,7 +448,8 @@ def main() -> None:
     atomic_write_text(args.out / "rows.json", json_text({"subjects": args.subjects,
                                                          "seed": args.seed, "model": model,
                                                          "rows": rows}))
-    text = report(rows, args.subjects, model)
+    text = report(rows, made_by(args.subjects, args.seed, model, args.groups, args.families,
+                                args.out), model)
     if any(r["group"] == "people-like" for r in rows):
         reliability_figure(rows, args.out / "reliability.png")
     atomic_write_text(args.out / "report.md", text)

@@ -110,20 +110,17 @@ def _widen(model: Path, family: str, subjects: int) -> None:
     with :data:`WIDENING_SEED` (others than the judged ones, as ``make recording-widening``
     draws the bundled model's), and write it beside the model: the held-out family is
     then judged with intervals widened by a widening that never saw it."""
-    from posture_id.learning.universal.model import UniversalModel
-    from posture_id.studies.widening import people_rows, stack_rows
-    from posture_id.uncertainty.widening import WIDENING_FILE, fit_widening
+    from posture_id.studies.widening import people_rows, widening_for
+    from posture_id.uncertainty.widening import WIDENING_FILE
 
     if (model / WIDENING_FILE).exists():
         return
     others = [f.value for f in NoiseFamily if f.value != family]
     calibration = model / "widening_calibration"
     _judge(model, others, ["people-like"], subjects, calibration, WIDENING_SEED)
-    sha = str(UniversalModel.load(model).sidecar.get("weights_sha256"))
     made_by = (f"benchmarks/noise_lofo.py: {subjects} people-like subjects of each family "
                f"but {family}, seed {WIDENING_SEED}")
-    fit_widening(*stack_rows(people_rows(calibration / "rows.json")), 0.9, sha,
-                 made_by=made_by).save(model)
+    widening_for(model, people_rows(calibration / "rows.json"), made_by=made_by).save(model)
 
 
 def _bundled_base(out: Path) -> None:

@@ -26,6 +26,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from statistics import NormalDist
 
 import numpy as np
 
@@ -35,6 +36,7 @@ from posture_id.executors import LocalExecutor
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.simulation.noise_families import NoiseFamily
 from posture_id.studies.journal import Journal
+from posture_id.uncertainty.coverage import coverage
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from honest_verdict import _recording  # noqa: E402  (a sibling script: the same subjects)
@@ -43,7 +45,7 @@ COMMAND = ".venv/bin/python benchmarks/recording_limit.py"
 #: The task family of honest_verdict.py's clean subjects (sensor noise alone).
 CLEAN = "clean"
 #: z of a 90 % interval.
-Z90 = 1.6448536269514722
+Z90 = NormalDist().inv_cdf(0.95)
 
 
 def _one(task: tuple[str, int]) -> dict:
@@ -105,19 +107,13 @@ def interval_coverage(rows: list[dict], prior: bool, white: bool) -> tuple[float
     as the fit reports them (the cluster-robust ones where larger), or ``white``: the
     Gauss-Newton ones of independent residuals alone."""
     key = "prior_intervals" if prior else "intervals"
-    inside = []
-    for row in rows:
-        if key not in row:
-            continue
-        part = row[key]
-        estimate, truth = np.asarray(part["estimate"]), np.asarray(part["truth"])
-        se = np.asarray(part["white_se" if white else "se"], dtype=float)
-        lower = np.maximum(estimate - Z90 * se, -1.0)
-        inside.append((truth >= lower) & (truth <= estimate + Z90 * se))
-    if not inside:
+    parts = [row[key] for row in rows if key in row]
+    if not parts:
         return np.nan, np.nan, 0
-    inside = np.concatenate(inside)
-    return float(inside[:, 0].mean()), float(inside.mean()), len(inside)
+    estimate, truth, se = (np.concatenate([p[k] for p in parts]).astype(float)
+                           for k in ("estimate", "truth", "white_se" if white else "se"))
+    share = coverage(truth, np.maximum(estimate - Z90 * se, -1.0), estimate + Z90 * se)
+    return float(share[0]), float(share.mean()), len(truth)
 
 
 def coverage_lines(rows: list[dict]) -> list[str]:
@@ -133,18 +129,14 @@ def coverage_lines(rows: list[dict]) -> list[str]:
              "| family | modules | no prior: independent | no prior: as reported | with the "
              "prior: independent | with the prior: as reported |", "|---|---|---|---|---|---|"]
 
-    def cell(family_rows, prior, white):
-        kp, every, _ = interval_coverage(family_rows, prior, white)
-        return f"{100 * kp:.0f} % / {100 * every:.0f} %"
-
     for family in [*families, None]:
         chosen = [r for r in rows if family is None and r["family"] != CLEAN
                   or r["family"] == family]
-        modules = interval_coverage(chosen, False, False)[2]
-        label = family or "every noise family"
-        lines.append(f"| {label} | {modules} | {cell(chosen, False, True)} | "
-                     f"{cell(chosen, False, False)} | {cell(chosen, True, True)} | "
-                     f"{cell(chosen, True, False)} |")
+        cells = [interval_coverage(chosen, prior, white)
+                 for prior, white in ((False, True), (False, False), (True, True),
+                                      (True, False))]
+        lines.append(f"| {family or 'every noise family'} | {cells[1][2]} | " + " | ".join(
+            f"{100 * kp:.0f} % / {100 * every:.0f} %" for kp, every, _ in cells) + " |")
     return lines
 
 

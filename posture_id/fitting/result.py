@@ -200,12 +200,11 @@ class FitResult(Result):
         z = NormalDist().inv_cdf((1 + level) / 2)
         noise = sensor_noise_deg(self.recorded)
         se = self.standard_errors_normalised
-        white = se if self.white_standard_errors_normalised is None else \
-            self.white_standard_errors_normalised
+        white = self.white_standard_errors_normalised
+        white = se if white is None else white
         structured = bool(np.any(se > white))
-        method = "Gauss-Newton ±z·SE" + (
-            ", widened by the residual's structure" if structured else "") + \
-            " (coverage not checked)"
+        widened = ", widened by the residual's structure" if structured else ""
+        method = f"Gauss-Newton ±z·SE{widened} (coverage not checked)"
         half_width = z * se
         if scales is not None:
             least = noise_allows(level, self.residual_sd, self.noise_floor_deg)

@@ -539,8 +539,7 @@ def _network_floor(options: FitOptions, scales, network_intervals) -> dict:
     (:func:`_widened`), or None."""
     if options.prior_centre is None or scales is not None or network_intervals is None:
         return {}
-    network = network_intervals
-    return {"at_least": (network.upper - network.lower) / 2,
+    return {"at_least": (network_intervals.upper - network_intervals.lower) / 2,
             "at_least_from": "the network's calibrated intervals"}
 
 

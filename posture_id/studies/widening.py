@@ -26,7 +26,7 @@ import numpy as np
 from posture_id.fileio import atomic_write_text
 from posture_id.uncertainty.widening import RecordingWidening, fit_widening, scores_of
 
-__all__ = ["people_rows", "stack_rows", "coverage_with", "main"]
+__all__ = ["people_rows", "stack_rows", "widening_for", "coverage_with", "main"]
 
 
 def people_rows(path: str | Path) -> list[dict]:
@@ -43,6 +43,16 @@ def stack_rows(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
                                        r["upper"]) for r in rows])
     share = np.concatenate([[r["noise_relative"]] * len(r["estimate"]) for r in rows])
     return scores, share
+
+
+def widening_for(model: str | Path, rows: list[dict], level: float = 0.9,
+                 made_by: str = "") -> RecordingWidening:
+    """The widening of the universal model in ``model`` fitted on its people-like answers
+    ``rows`` (:func:`people_rows`), naming the model's weights."""
+    from posture_id.learning.universal.model import UniversalModel
+
+    sha = str(UniversalModel.load(model).sidecar.get("weights_sha256"))
+    return fit_widening(*stack_rows(rows), level, sha, made_by=made_by)
 
 
 def coverage_with(rows: list[dict], widening: RecordingWidening | None
@@ -66,9 +76,6 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--level", type=float, default=0.9)
     parser.add_argument("--out", type=Path, help="write the report here too")
     args = parser.parse_args(argv)
-    from posture_id.learning.universal.model import UniversalModel
-
-    sha = str(UniversalModel.load(args.model).sidecar.get("weights_sha256"))
     calibration = people_rows(args.calibration)
     check = people_rows(args.check) if args.check else calibration
     families = sorted({r["kind"] for r in calibration})
@@ -80,7 +87,8 @@ def main(argv: list[str] | None = None) -> None:
              "intervals of the check's answers, Kp / every parameter:", "",
              "| family | as they are | widened, the family left out of the widening | "
              "widened by the widening written (every family) |", "|---|---|---|---|"]
-    widening = fit_widening(*stack_rows(calibration), args.level, sha, made_by=command)
+    widening = widening_for(args.model, calibration, args.level, made_by=command)
+    sha = widening.weights_sha256
 
     def cell(share: tuple[float, float]) -> str:
         return f"{100 * share[0]:.1f} % / {100 * share[1]:.1f} %"

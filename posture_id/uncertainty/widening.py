@@ -2,11 +2,11 @@
 people-like sway, conditioned on the noise the recording itself shows.
 
 The network's conformal intervals (:mod:`posture_id.learning.universal.calibration`) hold
-on the noise families it was calibrated on. On people-like sway of other shapes their
-coverage falls with how much of the recording's stimulus-locked sway its own noise
-leaves: on the honest verdict's people-like subjects, 79 % of the true Kps inside their
-90 % intervals where the least sway is locked, 91–92 % elsewhere. That share is measured
-on the recording itself, from the scatter of its locked response between cycles
+on the noise families it was calibrated on. On people-like sway of other shapes they may
+not: on the honest verdict's people-like subjects two families had their true Kp inside
+the 90 % intervals for 83 % of modules (``docs/results/widening/report.md``). What the
+recording's own noise leaves of its stimulus-locked sway is measured on the recording
+itself, from the scatter of its locked response between cycles
 (:attr:`~posture_id.identify.noise_check.NoiseCheck.noise_relative`), so an interval can
 widen with it.
 

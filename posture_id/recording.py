@@ -119,6 +119,9 @@ class Recording:
             rests on the lab's word alone).
         source: how the angles were derived when not read from columns (a motion-capture
             trial's markers, axes and channels: JSON-ready), or None.
+        notices: what reading the file noticed that a reader may want to know (an
+            encoding other than UTF-8, title lines skipped, a rate given against the time
+            column, a force's sign), each naming the file.
 
     Raises:
         RecordingError: shapes that disagree, fewer than 2 samples, a time column that
@@ -132,6 +135,7 @@ class Recording:
     name: str = "recording"
     tilt_recorded: bool = True
     source: dict | None = field(default=None, compare=False, repr=False)
+    notices: tuple[str, ...] = field(default=(), compare=False, repr=False)
 
     def __post_init__(self) -> None:
         time = np.asarray(self.time, dtype=float)
@@ -251,9 +255,9 @@ class Recording:
                 f"{path}: {len(columns.angles)} angle column(s) "
                 f"({','.join(columns.angles)}) for a body of {len(segments)} segment(s) "
                 f"({','.join(segments)}): give one per segment, support upward")
-        time, tilt, theta = lab_columns(table, columns, tilt_of)
+        time, tilt, theta, notices = lab_columns(table, columns, tilt_of)
         return cls(time, tilt, theta, tuple(segments), str(path),
-                   tilt_recorded=columns.tilt is not None)
+                   tilt_recorded=columns.tilt is not None, notices=notices)
 
     @classmethod
     def from_csv(cls, path: str | Path, segments: tuple[str, ...] | None = None,
@@ -313,10 +317,12 @@ class Recording:
 
 def lab_columns(table: TextTable, columns: RecordingColumns,
                 tilt_of: Callable[[np.ndarray], np.ndarray] | None = None
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(time (S,) s from 0, tilt (S,) rad, angles (S, A) rad) of a lab's ``table`` read by
-    ``columns`` (:meth:`Recording.from_lab_csv`; A may be 0: the sway comes from other
-    columns); the tilt from ``tilt_of`` where no tilt column is named.
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...]]:
+    """(time (S,) s from 0, tilt (S,) rad, angles (S, A) rad, notices) of a lab's
+    ``table`` read by ``columns`` (:meth:`Recording.from_lab_csv`; A may be 0: the sway
+    comes from other columns); the tilt from ``tilt_of`` where no tilt column is named.
+    The notices: the table's (its encoding, lines skipped, decimal commas), and a sample
+    rate given that is not the time column's.
 
     Raises:
         RecordingError: naming the file and the column (missing, a unit contradicted or
@@ -326,8 +332,16 @@ def lab_columns(table: TextTable, columns: RecordingColumns,
     wanted = [c for c in (columns.time, columns.tilt, *columns.angles) if c is not None]
     table.require(wanted)
     column = {name: table.column(name) for name in wanted}
+    notices = list(table.notices)
     if columns.sample_rate_hz is not None:
         time = np.arange(table.n_rows) / columns.sample_rate_hz
+        stated = _time_column_rate(table, columns, column)
+        rate = columns.sample_rate_hz
+        if stated is not None and abs(stated - rate) > 0.01 * rate:
+            notices.append(f"{path}: the sample rate given (--sample-rate-hz {rate:g}) "
+                           f"replaces the time column '{columns.time}''s {stated:.4g} Hz: "
+                           f"every time is {stated / rate:.3g}× and every frequency "
+                           f"{rate / stated:.3g}× what the time column says")
     else:
         unit, stated = _time_unit(table, columns)
         seconds = column[columns.time] / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
@@ -352,7 +366,19 @@ def lab_columns(table: TextTable, columns: RecordingColumns,
         raise RecordingError(f"{path}: no tilt column named; name the stimulus the "
                              "recording was made with (the PRTS flags, or --tilt FILE)")
     _check_angle_units(path, column, units, angle_names, columns)
-    return time, tilt, theta
+    return time, tilt, theta, tuple(notices)
+
+
+def _time_column_rate(table: TextTable, columns: RecordingColumns,
+                      column: dict[str, np.ndarray]) -> float | None:
+    """Hz, the rate of a named time column (in its unit) when it increases, else None."""
+    if columns.time is None:
+        return None
+    unit, _ = _time_unit(table, columns)
+    steps = np.diff(column[columns.time]) / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
+    if not len(steps) or not np.all(steps > 0):
+        return None
+    return float(1.0 / np.median(steps))
 
 
 def _check_segment_names(names, segments, name: str) -> None:

@@ -3,7 +3,8 @@ posture_id takes (tilt profiles, recordings, a lab's exports).
 
 A file is read as it is. Detected, in this order:
 
-- the encoding: UTF-8 (a byte-order mark allowed), UTF-16 with its byte-order mark, else
+- the encoding: UTF-8 (a byte-order mark allowed), UTF-16 with its byte-order mark or
+  without one (told by the NUL byte of every character pair), else
   Windows Latin-1 (cp1252; ISO Latin-1 where cp1252 cannot decode), said in a notice;
 - blank lines and comment lines (starting with ``#`` or ``%``) anywhere: skipped;
 - the delimiter, from the last lines (the data, not a title): tab, then ``;``, then ``,``,
@@ -39,7 +40,7 @@ import numpy as np
 
 from posture_id.errors import PostureIdError
 
-__all__ = ["TextTable", "read_text_table", "split_unit", "UNIT_ALIASES"]
+__all__ = ["TextTable", "read_text_table", "decode_text", "split_unit", "UNIT_ALIASES"]
 
 #: Unit spellings read from a header (lower case) → the unit's one spelling.
 UNIT_ALIASES = {
@@ -213,7 +214,7 @@ def read_text_table(path: str | Path, error: type[Exception] = PostureIdError,
             number.
     """
     path = Path(path)
-    text, encoding, notices = _decode(path, error, what)
+    text, encoding, notices = decode_text(path, error, what)
     text = text.replace("\r\n", "\n").replace("\r", "\n")
     lines = text.split("\n")
     content = _content_lines(text, len(lines))
@@ -277,8 +278,28 @@ def _content_lines(text: str, n_lines: int) -> list[int]:
     return np.flatnonzero(keep).tolist()
 
 
-def _decode(path: Path, error: type[Exception], what: str) -> tuple[str, str, list[str]]:
-    """The file's text, its encoding and the notice of one other than UTF-8."""
+def _utf16_without_mark(raw: bytes) -> tuple[str, str] | None:
+    """(codec, its name) when ``raw`` reads as UTF-16 text with no byte-order mark: an even
+    number of bytes, and one byte of nearly every pair NUL (ASCII and Latin text), the
+    other of nearly none; else None (binary data)."""
+    if len(raw) < 4 or len(raw) % 2:
+        return None
+    even, odd = raw[0::2], raw[1::2]
+    zeros_even, zeros_odd = even.count(0) / len(even), odd.count(0) / len(odd)
+    if zeros_odd > 0.9 and zeros_even < 0.05:
+        return "utf-16-le", "little-endian"
+    if zeros_even > 0.9 and zeros_odd < 0.05:
+        return "utf-16-be", "big-endian"
+    return None
+
+
+def decode_text(path: Path, error: type[Exception], what: str) -> tuple[str, str, list[str]]:
+    """A text file's text, its encoding and the notice of one other than UTF-8 (the
+    module doc), for every file a user brings (tables, manifests).
+
+    Raises:
+        ``error``: naming the file: missing, a folder, unreadable, binary data.
+    """
     try:
         raw = path.read_bytes()
     except FileNotFoundError:
@@ -296,7 +317,15 @@ def _decode(path: Path, error: type[Exception], what: str) -> tuple[str, str, li
                         f"{exc.start})") from None
     nul = raw.find(b"\x00")
     if nul >= 0:
-        raise error(f"{path}: binary data (byte {nul} is NUL), not a {what} (text)")
+        order = _utf16_without_mark(raw)
+        if order is None:
+            raise error(f"{path}: binary data (byte {nul} is NUL), not a {what} (text)")
+        codec, said = order
+        try:
+            return raw.decode(codec), codec, [
+                f"{path}: read as UTF-16 ({said}, no byte-order mark)"]
+        except UnicodeDecodeError as exc:
+            raise error(f"{path}: neither text nor UTF-16 {said} (byte {exc.start})") from None
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -36,8 +36,37 @@ __all__ = [
 ]
 
 
+class _StoredOnce(argparse._StoreAction):
+    """A flag's value, refused when the flag is given again with another value (argparse
+    keeps the last without a word: ``--height-m 1.8 --height-m 1.7``, or an old spelling
+    beside the new one)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if option_string is not None:
+            given = namespace.__dict__.setdefault("_given_flags", {})
+            if self.dest in given and given[self.dest] != values:
+                parser.error(f"{self.option_strings[-1]} given twice, "
+                             f"{_shown(given[self.dest])} and then {_shown(values)} (an old "
+                             "spelling of it counts too): give it once")
+            given[self.dest] = values
+        super().__call__(parser, namespace, values, option_string)
+
+
+def _shown(values) -> str:
+    """A flag's value as typed."""
+    if isinstance(values, list | tuple):
+        return " ".join(str(v) for v in values)
+    return str(values)
+
+
 class Parser(argparse.ArgumentParser):
-    """An ArgumentParser whose errors are one line (``prog: error: message``), exit 2."""
+    """An ArgumentParser whose errors are one line (``prog: error: message``), exit 2, and
+    whose flags take one value each (a flag given twice with two values is refused)."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.register("action", None, _StoredOnce)
+        self.register("action", "store", _StoredOnce)
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message}\n")

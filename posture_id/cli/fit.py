@@ -14,6 +14,7 @@ from posture_id.cli.arguments import (
     non_negative_int,
     positive_float,
     positive_int,
+    say,
     write_result,
 )
 from posture_id.cli.exit_status import answered
@@ -221,6 +222,7 @@ def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
     from posture_id.models import model_named
     from posture_id.models.protocol import TrustLevel
 
+    _each_trial_once(recordings)
     inputs = (*recordings, args.body, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
@@ -269,10 +271,42 @@ def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
         recording, stimulus = recording_and_stimulus(one, body)
         recording.check_segments(body.segment_names)
         trials.append(prepare_trial(recording, stimulus))
+        for notice in trials[-1].notices:
+            say(notice)
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
         result = fit_joint(model, trials, body, labels, per, options, progress=progress)
+    if not per:
+        say(f"no --per-trial: every parameter is shared by the {len(trials)} trials, so "
+            "nothing differs between them (one fit of them all); name what changes with the "
+            "condition, e.g. --per-trial w")
+    elif len(set(labels)) == 1:
+        say(f"every trial is condition {labels[0]!r}: one condition, so nothing differs "
+            f"between the trials ({', '.join(per)} take one value, as the shared ones); give "
+            "each trial its condition (--conditions)")
     write_result(result, args.out, args.plot)
     return answered(result.trust_level is TrustLevel.DOUBTFUL)
+
+
+def _each_trial_once(recordings: list[Path]) -> None:
+    """Refuse a file given twice (by any path) and two files of the same bytes: a joint
+    fit would count one trial twice."""
+    import hashlib
+
+    seen: dict[Path, Path] = {}
+    contents: dict[str, Path] = {}
+    for path in recordings:
+        key = path.resolve()
+        if key in seen:
+            raise PostureIdError(f"{path}: given twice (as {seen[key]} and {path}): a joint "
+                                 "fit counts each trial once")
+        seen[key] = path
+        if path.is_file():
+            digest = hashlib.sha256(path.read_bytes()).hexdigest()
+            if digest in contents:
+                raise PostureIdError(f"{path}: the same bytes as {contents[digest]}: the same "
+                                     "trial twice (a copied file?); a joint fit counts each "
+                                     "trial once")
+            contents[digest] = path
 
 
 def ic_answer(args: argparse.Namespace, options) -> int:
@@ -284,7 +318,10 @@ def ic_answer(args: argparse.Namespace, options) -> int:
     body = recording_body(args, DEFAULT_URDF)
     recording, stimulus = recording_and_stimulus(args, body)
     recording.check_segments(body.segment_names)
-    result = fit_ic(prepare_trial(recording, stimulus), body, options)
+    trial = prepare_trial(recording, stimulus)
+    for notice in trial.notices:  # what was found on the way in
+        say(notice)
+    result = fit_ic(trial, body, options)
     write_result(result, args.out, args.plot)
     return answered(result.trust_level == "doubtful")
 

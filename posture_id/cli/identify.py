@@ -101,6 +101,10 @@ def _no_search_for_the_network_alone(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     _no_search_for_the_network_alone(args)
+    if args.network is not None and args.method == "fit":
+        raise PostureIdError("--network names the network, and --method fit runs none (least "
+                             "squares from the defaults): use --method cnn, hybrid or auto, "
+                             "or leave out --network")
     if is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)

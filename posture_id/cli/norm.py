@@ -33,14 +33,28 @@ def _mat_arguments(p: argparse.ArgumentParser) -> None:
                    help=".mat: its frequencies, Hz")
 
 
+#: The pseudo-impulse responses' rate, Hz, and the bootstrap's resamples, unless given.
+DEFAULT_RATE_HZ, DEFAULT_BOOTSTRAP = 22.0, 1000
+
+
+def _defaults_filled(args: argparse.Namespace) -> None:
+    """--rate-hz and --bootstrap as given, else their defaults (None until here, so that
+    a flag the command does not use can be told from its default)."""
+    if args.rate_hz is None:
+        args.rate_hz = DEFAULT_RATE_HZ
+    if args.bootstrap is None:
+        args.bootstrap = DEFAULT_BOOTSTRAP
+
+
 def _sources(p: argparse.ArgumentParser) -> None:
     p.add_argument("--channel", nargs="+", help="FRF JSONs: the channels to use (default: "
                                                 "all of the first file's)")
     _mat_arguments(p)
-    p.add_argument("--rate-hz", type=positive_float, default=22.0,
-                   help="the pseudo-impulse responses' sampling rate (default %(default)g)")
-    p.add_argument("--bootstrap", type=positive_int, default=1000,
-                   help="bootstrap resamples (default %(default)d)")
+    p.add_argument("--rate-hz", type=positive_float,
+                   help=f"the pseudo-impulse responses' sampling rate (default "
+                        f"{DEFAULT_RATE_HZ:g})")
+    p.add_argument("--bootstrap", type=positive_int,
+                   help=f"bootstrap resamples (default {DEFAULT_BOOTSTRAP})")
     p.add_argument("--level", type=positive_float, default=0.95,
                    help="the bands' level (default %(default)g)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed (default 0)")
@@ -106,6 +120,7 @@ def add_parser(sub) -> None:
 
 
 def run_build(args: argparse.Namespace) -> int:
+    _defaults_filled(args)
     check_output_file(args.out, "--out", tuple(args.files))
     from posture_id.norms.norm import build_norm
     from posture_id.norms.readers import read_frfs
@@ -293,6 +308,14 @@ def _hz(values) -> str:
 
 
 def run_compare(args: argparse.Namespace) -> int:
+    unused = [flag for flag, value in (("--bootstrap", args.bootstrap),
+                                       ("--rate-hz", args.rate_hz)) if value is not None]
+    if args.paired and unused:
+        raise PostureIdError(f"{', '.join(unused)}: unused by --paired (a sign-flip "
+                             "permutation test of the within-subject differences, with "
+                             "t-based intervals: give --permutations), leave "
+                             f"{'them' if len(unused) > 1 else 'it'} out")
+    _defaults_filled(args)
     if len(args.group) != 2:
         raise PostureIdError(f"--group: give two groups (got {len(args.group)})")
     first = {p.resolve() for p in args.group[0]}

@@ -10,6 +10,7 @@ import numpy as np
 
 from posture_id.cli.arguments import check_output_file, command_rate, positive_int, say
 from posture_id.cli.stimulus import protocol_profile
+from posture_id.errors import PostureIdError
 
 __all__ = ["add_parser"]
 
@@ -33,6 +34,13 @@ def run(args: argparse.Namespace) -> int:
 
     protocol = read_protocol(args.protocol)
     profile = protocol_profile(protocol, args.part, args.protocol)
+    frequencies = getattr(protocol.recordings[(args.part or 1) - 1], "frequencies_hz", None)
+    if frequencies is not None and max(frequencies) >= args.rate_hz / 2 - 1e-9:
+        raise PostureIdError(f"{args.protocol}: --rate-hz {args.rate_hz:g}: the protocol's "
+                             f"{max(frequencies):g} Hz is at or above the command file's "
+                             f"Nyquist frequency ({args.rate_hz / 2:g} Hz; a sine there is "
+                             "sampled at its zeros): give a rate above twice its highest "
+                             "frequency")
     steps = int(np.floor(profile.duration * args.rate_hz + 1e-9))
     t = np.arange(steps + 1) / args.rate_hz
     tilt = np.degrees(profile.angle(t))

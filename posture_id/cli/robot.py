@@ -11,6 +11,7 @@ from posture_id.cli.exit_status import answered
 from posture_id.cli.output_folder import OutputFolder
 from posture_id.cli.simulate import add_model_arguments, model_options
 from posture_id.cli.stimulus import add_lab_stimulus_arguments, stimulus_from_args
+from posture_id.errors import PostureIdError
 from posture_id.robots.whole_body import HeldJoints, WholeBodyOptions
 
 __all__ = ["add_parser", "run_check", "CHECK_FILES"]
@@ -30,8 +31,9 @@ def add_parser(sub) -> None:
                        help="a preset (talos, g1, human: its whole body in MuJoCo against "
                             "its lumped chain) or a chain URDF (the chain in MuJoCo against "
                             "the compiled simulator)")
-    check.add_argument("--segments", type=int, choices=(1, 2, 3), default=3,
-                       help="segments a preset is lumped to (default %(default)d)")
+    check.add_argument("--segments", type=int, choices=(1, 2, 3),
+                       help="segments a preset is lumped to (default 3; a chain URDF has "
+                            "its own)")
     check.add_argument("--params", type=Path,
                        help="DEC parameter JSON of the (lumped) chain (default: its defaults)")
     add_lab_stimulus_arguments(check, "tilt CSV (time_s,tilt_deg) instead of the PRTS")
@@ -41,16 +43,38 @@ def add_parser(sub) -> None:
                             "the largest of 1, 0.5, 0.25, 0.125 at which its step is "
                             "stable)")
     check.add_argument("--held", choices=[h.value for h in HeldJoints],
-                       default=HeldJoints.SERVOS.value,
-                       help="how a whole body's joints the lumping treats as rigid are "
-                            "held: stiff PD servos, or welded rigid (default %(default)s)")
-    check.add_argument("--servo-stiffness", type=positive_float,
-                       default=WholeBodyOptions().stiffness_factor, metavar="FACTOR",
+                       help="how a preset's joints the lumping treats as rigid are held: "
+                            f"stiff PD servos, or welded rigid (default "
+                            f"{HeldJoints.SERVOS.value}; a chain has none)")
+    check.add_argument("--servo-stiffness", type=positive_float, metavar="FACTOR",
                        help="a held joint's servo stiffness over the m·g·h of the mass it "
-                            "carries (default %(default)g)")
+                            f"carries (default {WholeBodyOptions().stiffness_factor:g}; with "
+                            "--held servos)")
     check.add_argument("--out", type=Path, required=True,
                        help="folder to write check.json and check.png into")
     check.set_defaults(func=run_check)
+
+
+def _whole_body_flags(args: argparse.Namespace, preset: bool) -> WholeBodyOptions:
+    """How a preset's whole body is held, from --held and --servo-stiffness; refused where
+    they do nothing (a chain URDF holds no joints; welded joints have no servo), as is
+    --segments on a chain (it has its own)."""
+    if not preset:
+        given = [flag for flag, value in (("--held", args.held),
+                                          ("--servo-stiffness", args.servo_stiffness),
+                                          ("--segments", args.segments)) if value is not None]
+        if given:
+            raise PostureIdError(f"{', '.join(given)}: a preset's whole body only; the chain "
+                                 f"URDF {args.body} is simulated as it is (its own segments, "
+                                 "no joints held)")
+        return WholeBodyOptions()
+    held = HeldJoints(args.held or HeldJoints.SERVOS.value)
+    if held is HeldJoints.RIGID and args.servo_stiffness is not None:
+        raise PostureIdError("--servo-stiffness sets the held joints' servos, and --held rigid "
+                             "welds them: give one")
+    if args.servo_stiffness is None:
+        return WholeBodyOptions(held=held)
+    return WholeBodyOptions(held=held, stiffness_factor=args.servo_stiffness)
 
 
 def run_check(args: argparse.Namespace) -> int:
@@ -66,25 +90,24 @@ def run_check(args: argparse.Namespace) -> int:
     from posture_id.simulation.stimulus import prts
 
     inputs = tuple(p for p in (args.params, args.tilt, args.protocol) if p is not None)
+    if args.body not in PRESETS and not Path(args.body).is_file():
+        raise RobotError(f"--body: '{args.body}' is neither a preset ({', '.join(PRESETS)}) "
+                         "nor a URDF file")
+    whole = _whole_body_flags(args, args.body in PRESETS)
+    segments = args.segments or 3
     with OutputFolder(args.out, "--out", CHECK_FILES, inputs=inputs):
         if args.body in PRESETS:
             target = WholeBodySpec.preset(args.body)
-            chain = lumped_body(target, args.segments) if args.params else None
-        elif Path(args.body).is_file():
-            target = chain = load_body(Path(args.body))
+            chain = lumped_body(target, segments) if args.params else None
         else:
-            raise RobotError(f"--body: '{args.body}' is neither a preset ({', '.join(PRESETS)}) "
-                             "nor a URDF file")
+            target = chain = load_body(Path(args.body))
         params = DecParameters.from_json(args.params, chain) if args.params else None
         stimulus = stimulus_from_args(args, default=prts())
         step = None if args.timestep_ms is None else args.timestep_ms / 1000
-        result = robot_check(target, stimulus, params,
-                             CheckOptions(segments=args.segments),
+        result = robot_check(target, stimulus, params, CheckOptions(segments=segments),
                              simulation_options=model_options(args),
                              mujoco_options=MujocoOptions(timestep_s=step),
-                             whole_body_options=WholeBodyOptions(
-                                 held=HeldJoints(args.held),
-                                 stiffness_factor=args.servo_stiffness))
+                             whole_body_options=whole)
         args.out.mkdir(parents=True, exist_ok=True)
         result.to_json(args.out / "check.json")
         result.plot(args.out / "check.png")

@@ -14,6 +14,8 @@ from posture_id.cli.arguments import (
     positive_int,
     say,
 )
+from posture_id.cli.exit_status import answered
+from posture_id.cli.output_folder import LEDGER, OutputFolder, written_by_posture_id
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import add_column_arguments, columns_from_args
 from posture_id.errors import PostureIdError
@@ -30,8 +32,10 @@ def add_parser(sub) -> None:
     p.add_argument("manifest", type=Path, help="the manifest CSV (files relative to it)")
     p.add_argument("--out", type=Path, required=True,
                    help="results folder: frf/, fits/, paired/, summary.csv (a row per "
-                        "subject, the conditions as columns), trials.csv, study.json; a "
-                        "study started again goes on where it stopped")
+                        "subject, the conditions as columns), trials.csv, study.json; an "
+                        "empty folder, or this study's own: a study started again goes on "
+                        "where it stopped (a file posture-id did not write is never "
+                        "overwritten)")
     p.add_argument("--model", choices=("ic", "dec", "none"), default="ic",
                    help="the model fitted to each subject's trials (default %(default)s; "
                         "none: FRFs only)")
@@ -66,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out.exists() and not args.out.is_dir():
         raise PostureIdError(f"{args.out}: --out is a file; give a folder")
     manifest = read_manifest(args.manifest)
+    folder = OutputFolder(args.out, "--out", STUDY_FILES, inputs=(args.manifest,))
     model = None if args.model == "none" else args.model
     per_condition = args.per_condition
     if per_condition is None:
@@ -82,10 +87,49 @@ def run(args: argparse.Namespace) -> int:
                                           max_frequency_hz=args.max_frequency_hz),
                            permutations=args.permutations, workers=args.workers,
                            scheduler=args.scheduler)
-    with TerminalProgress("study") as progress:
-        result = run_study(manifest, args.out, options, progress)
+    with folder:
+        replaced = _study_folder(args.out, folder)
+        for notice in manifest.notices:
+            say(notice)
+        with TerminalProgress("study") as progress:
+            result = run_study(manifest, args.out, options, progress)
+    for notice in result.notices[len(manifest.notices):]:
+        say(notice)
+    for notice in result.trial_notices:
+        say(notice)
+    if replaced:
+        say(f"{args.out}: this study's own folder: the run replaces {replaced} (made again "
+            "from every trial); FRFs and fits whose trials and options still hold are kept")
     print(result.summary())
     if args.plot:
         result.plot(args.plot)
         say(f"wrote {args.plot}")
-    return 1 if result.failed else 0
+    return answered(result.answered_doubtfully)
+
+
+#: What ``study --out DIR`` writes (glob patterns in the folder).
+STUDY_FILES = ("summary.csv", "trials.csv", "study.json", "frf/*.json", "fits/*.json",
+               "paired/*.json")
+
+
+def _study_folder(out: Path, folder: OutputFolder) -> str:
+    """Refuse an ``--out`` that holds files and is not a study's own (an empty folder, or
+    one whose study.json posture-id wrote); for a study's own, the files the run replaces
+    (to say so), else ""."""
+    if not out.is_dir():
+        return ""
+    present = sorted(p.relative_to(out).as_posix() for p in out.rglob("*")
+                     if p.is_file() and p.name != LEDGER)
+    if not present:
+        return ""
+    study = out / "study.json"
+    if not (study.is_file() and written_by_posture_id(study, out)):
+        listed = ", ".join(present[:4]) + (f" and {len(present) - 4} more"
+                                           if len(present) > 4 else "")
+        raise PostureIdError(f"{out}: --out holds {listed}, not a study's own results: give "
+                             "an empty folder, or the folder of this study's earlier run")
+    remade = [name for name in ("summary.csv", "trials.csv", "study.json")
+              if (out / name).is_file()]
+    if (out / "paired").is_dir():
+        remade.append("paired/")
+    return ", ".join(remade)

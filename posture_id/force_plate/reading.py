@@ -113,7 +113,7 @@ def read_force_plate(path: str | Path, columns: ForcePlateColumns, body: Body,
     path = Path(path)
     table = read_text_table(path, RecordingError, "force-plate recording")
     table.require([c for c in (columns.cop, columns.force) if c is not None])
-    time, tilt, _ = lab_columns(table, columns.recording_columns, tilt_of)
+    time, tilt, _, notices = lab_columns(table, columns.recording_columns, tilt_of)
     steps = np.diff(time)
     if len(steps) and np.any(np.abs(steps - np.median(steps)) > 0.01 * np.median(steps)):
         bad = int(np.argmax(np.abs(steps - np.median(steps)) > 0.01 * np.median(steps)))
@@ -122,8 +122,16 @@ def read_force_plate(path: str | Path, columns: ForcePlateColumns, body: Body,
     unit = _cop_unit(table, columns)
     load = BodyLoad.of(body)
     rate = 1.0 / float(np.median(steps))
-    com = com_angle_from_cop(table.column(columns.cop), rate, load, tilt,
-                             _force(table, columns), columns.cop_options(unit), str(path))
+    cop = table.column(columns.cop)
+    _check_cop_span(path, columns, cop, unit)
+    force = _force(table, columns)
+    notices = list(notices)
+    if force is not None and float(np.median(force)) < 0:
+        notices.append(f"{path}: column '{columns.force}': the normal force is negative "
+                       f"(median {float(np.median(force)):.4g} N: the plate's vertical axis "
+                       "points down); its magnitude is used")
+    com = com_angle_from_cop(cop, rate, load, tilt, force, columns.cop_options(unit),
+                             str(path))
     single = one_segment_body(body)
     source = {"force_plate": {**columns.to_dict(), "cop_unit": unit.value,
                               "body": body.name, "mass_kg": load.mass_kg,
@@ -134,4 +142,34 @@ def read_force_plate(path: str | Path, columns: ForcePlateColumns, body: Body,
                               "method": "the COP's ankle torque through the body as one "
                                         "rigid segment about the ankle (docs/force_plates.md)"}}
     return Recording(time, tilt, com[:, None], single.segment_names, str(path),
-                     tilt_recorded=columns.tilt is not None, source=source)
+                     tilt_recorded=columns.tilt is not None, source=source,
+                     notices=tuple(notices))
+
+
+#: The peak-to-peak a standing person's COP spans, m: more than the sway of a quiet
+#: stance, less than the length of the feet.
+COP_SPAN_M = (5e-4, 0.4)
+
+
+def _check_cop_span(path: Path, columns: ForcePlateColumns, cop: np.ndarray,
+                    unit: CopUnit) -> None:
+    """Refuse a COP column that is constant, or whose span read in ``unit`` is not a
+    standing person's (:data:`COP_SPAN_M`): another unit, or another column."""
+    finite = cop[np.isfinite(cop)]
+    span = float(np.ptp(finite)) if len(finite) else 0.0
+    said = f"{path}: column '{columns.cop}'"
+    if span == 0:
+        value = f"{finite[0]:g} throughout" if len(finite) else "no value"
+        raise RecordingError(f"{said}: the COP is constant ({value}): nobody on the plate, "
+                             "or not the COP column")
+    metres = span * unit.metres
+    low, high = COP_SPAN_M
+    if low <= metres <= high:
+        return
+    fits = [u.value for u in CopUnit if low <= span * u.metres <= high]
+    advice = (f"is it in {' or '.join(fits)}? (--cop-units; a header such as 'COP [mm]' "
+              "states it)") if fits else "is it the COP column?"
+    raise RecordingError(
+        f"{said}: the COP spans {span:.4g} {unit.value} ({metres:.3g} m) peak to peak, "
+        f"{'more' if metres > high else 'less'} than a standing person's "
+        f"({low * 1e3:g} mm to {high:g} m) read in {unit.value}: {advice}")

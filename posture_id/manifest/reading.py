@@ -7,7 +7,8 @@ subject's body (a URDF, or the height and mass its Winter body is made from).
 
 Files and URDFs are relative to the manifest's folder (or absolute). The columns are found
 by name in any order (a ``body`` column, or ``height_m`` and ``mass_kg``); comma,
-semicolon or tab separated; UTF-8 or Latin-1. Every refusal is one line naming the
+semicolon or tab separated; UTF-8, UTF-16 or Windows Latin-1 (said). A row with both a body
+and a height and mass uses the body (said). Every refusal is one line naming the
 manifest, the line and the column.
 """
 
@@ -57,10 +58,12 @@ class TrialEntry:
 
 @dataclass(frozen=True)
 class StudyManifest:
-    """The trials of a study (in the manifest's order) and where it was read from."""
+    """The trials of a study (in the manifest's order), where it was read from and what
+    its reading noticed (an encoding, a row's body chosen over its height and mass)."""
 
     path: Path
     trials: tuple[TrialEntry, ...]
+    notices: tuple[str, ...] = ()
 
     @property
     def subjects(self) -> tuple[str, ...]:
@@ -76,19 +79,16 @@ class StudyManifest:
         return tuple(t for t in self.trials if t.subject == subject)
 
 
-def _text(path: Path) -> str:
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise PostureIdError(f"{path}: no such manifest") from None
-    except IsADirectoryError:
-        raise PostureIdError(f"{path}: is a folder, expected a manifest (CSV)") from None
-    for encoding in ("utf-8-sig", "cp1252", "latin-1"):
-        try:
-            return raw.decode(encoding)
-        except UnicodeDecodeError:
-            continue
-    raise PostureIdError(f"{path}: not text")  # pragma: no cover (latin-1 decodes anything)
+def _text(path: Path) -> tuple[str, list[str]]:
+    """The manifest's text and the notice of its encoding (one other than UTF-8)."""
+    from posture_id.text_table import decode_text
+
+    if not path.exists():
+        raise PostureIdError(f"{path}: no such manifest")
+    if path.is_dir():
+        raise PostureIdError(f"{path}: is a folder, expected a manifest (CSV)")
+    text, _, notices = decode_text(path, PostureIdError, "manifest (CSV)")
+    return text, notices
 
 
 def _number(path: Path, line: int, column: str, cell: str, span: tuple[float, float],
@@ -115,10 +115,11 @@ def read_manifest(path: str | Path) -> StudyManifest:
         PostureIdError: one line naming the manifest, the line and the column: a column
             missing, an empty cell, a file or URDF that does not exist, a height or mass
             that is not a person's, a subject whose body differs between its rows, the
-            same file twice, no trials.
+            same file twice, two subjects or conditions that differ only in case, no
+            trials.
     """
     path = Path(path)
-    text = _text(path)
+    text, notices = _text(path)
     lines = [line for line in text.splitlines() if line.strip() and not line.startswith("#")]
     if not lines:
         raise PostureIdError(f"{path}: an empty manifest (a header "
@@ -136,7 +137,8 @@ def read_manifest(path: str | Path) -> StudyManifest:
         raise PostureIdError(f"{path}: no column {', '.join(wanted)} (the header is "
                              f"{delimiter.join(numbered[0][1])})")
     folder = path.parent
-    trials, bodies, files = [], {}, {}
+    trials, bodies, files, both = [], {}, {}, []
+    spelled: dict[str, dict[str, tuple[str, int]]] = {"subject": {}, "condition": {}}
     for line, row in numbered[1:]:
         if len(row) < len(header):
             raise PostureIdError(f"{path}: line {line}: {len(row)} fields, the header has "
@@ -159,12 +161,22 @@ def read_manifest(path: str | Path) -> StudyManifest:
             if not body.is_file():
                 raise PostureIdError(f"{path}: line {line}, column 'body': no such URDF "
                                      f"{cell['body']} (relative to {folder})")
+            if has_size and (cell["height_m"] or cell["mass_kg"]):
+                both.append(line)
         elif has_size:
             height = _number(path, line, "height_m", cell["height_m"], _HEIGHT_M, "m")
             mass = _number(path, line, "mass_kg", cell["mass_kg"], _MASS_KG, "kg")
         else:
             raise PostureIdError(f"{path}: line {line}, column 'body': empty (give the "
                                  "subject's URDF, or height_m and mass_kg columns)")
+        for column in spelled:  # one spelling of each name: 'closed' is not 'Closed'
+            name = cell[column]
+            first_name, first_line = spelled[column].setdefault(name.casefold(), (name, line))
+            if first_name != name:
+                raise PostureIdError(
+                    f"{path}: line {line}, column '{column}': {name!r} and {first_name!r} "
+                    f"(line {first_line}) differ only in case: write one {column} the same "
+                    "way in every row (or name two apart)")
         subject = cell["subject"]
         identity = (body, height, mass)
         first = bodies.setdefault(subject, (identity, line))
@@ -174,4 +186,9 @@ def read_manifest(path: str | Path) -> StudyManifest:
         trials.append(TrialEntry(subject, cell["condition"], file, line, body, height, mass))
     if not trials:
         raise PostureIdError(f"{path}: a header and no trials")
-    return StudyManifest(path, tuple(trials))
+    if both:
+        lines_said = ", ".join(map(str, both[:5])) + (" ..." if len(both) > 5 else "")
+        notices.append(f"{path}: line {lines_said}: both a "
+                       "body and height_m and mass_kg: the body URDF is used, the height "
+                       "and mass are ignored")
+    return StudyManifest(path, tuple(trials), tuple(notices))

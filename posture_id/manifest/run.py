@@ -65,10 +65,13 @@ class StudyOptions:
         """What a trial's FRF is made with (its JSON's ``cohort_options``)."""
         return jsonable({"layout": self.layout, "frf": self.frf, "segments": self.segments})
 
-    def fit_record(self) -> dict:
-        """What a subject's joint fit is made with (its JSON's ``cohort_options``)."""
+    def fit_record(self, trials: tuple[TrialEntry, ...] = ()) -> dict:
+        """What a subject's joint fit is made with (its JSON's ``cohort_options``): the
+        options and the subject's ``trials`` (file and condition each: a trial added to
+        or dropped from the manifest makes the fit again)."""
         return jsonable({**self.frf_record(), "model": self.model,
-                         "per_condition": list(self.per_condition)})
+                         "per_condition": list(self.per_condition),
+                         "trials": [f"{t.file.name} [{t.condition}]" for t in trials]})
 
 
 def _body_file(entry: TrialEntry, segments: int) -> Path:
@@ -112,6 +115,8 @@ def _trial_frf(task: dict) -> dict | str:
         result = frequency_response(trial, body, task["frf"]).to_dict()
     except PostureIdError as exc:
         return str(exc)
+    except Exception as exc:  # noqa: BLE001 - one trial's bug must not stop the study
+        return _bug(task["name"], exc)
     return {**result, "subject": task["subject"], "condition": task["condition"],
             "file": task["name"], "notices": list(trial.notices)}
 
@@ -128,7 +133,16 @@ def _subject_fit(task: dict) -> dict | str:
                         [t["condition"] for t in task["trials"]], task["per_condition"])
     except PostureIdError as exc:
         return str(exc)
+    except Exception as exc:  # noqa: BLE001 - one subject's bug must not stop the study
+        return _bug(f"subject {task['subject']}", exc)
     return {**fit.to_dict(), "subject": task["subject"]}
+
+
+def _bug(what: str, exc: Exception) -> str:
+    """Why a trial or subject failed with an internal error, in one line that names it."""
+    detail = " ".join(str(exc).split())[:300]
+    return (f"{what}: internal error (a bug; please report it with this file): "
+            f"{type(exc).__name__}: {detail}")
 
 
 def _task(entry: TrialEntry, options: StudyOptions) -> dict:
@@ -154,7 +168,10 @@ class StudyResult(Result):
         condition the per-condition ones and the body-COM gain and phase).
         paired: {"A vs B": {"frf": the FRF test's JSON, "parameters": the per-condition
         parameters' test's JSON}} for each pair of conditions every subject has.
-        failed: {trial or subject: why}.
+        failed: {trial or subject: why}. doubtful: the subjects whose fit's verdict is
+        doubtful. notices: what the study assumed, left out or did again (a manifest's
+        encoding, a subject without a condition, a fit made again, a trial no longer
+        named). frfs: each trial's FRF JSON (as a dict), in the manifest's order.
     """
 
     out: Path
@@ -165,6 +182,21 @@ class StudyResult(Result):
     summary_rows: tuple[dict, ...] = ()
     paired: dict = field(default_factory=dict)
     failed: dict = field(default_factory=dict)
+    doubtful: tuple[str, ...] = ()
+    notices: tuple[str, ...] = ()
+    frfs: tuple[dict, ...] = field(default=(), repr=False)
+
+    @property
+    def trial_notices(self) -> tuple[str, ...]:
+        """What reading each trial with an FRF noticed (its stimulus, encoding, a drop-out),
+        in the manifest's order (each names its file)."""
+        return tuple(n for data in self.frfs for n in data.get("notices", ()))
+
+    @property
+    def answered_doubtfully(self) -> bool:
+        """Whether the study should not be used as it stands: a trial or subject without
+        an answer, or a subject whose fit is doubtful (the exit status 1)."""
+        return bool(self.failed or self.doubtful)
 
     def to_dict(self) -> dict:
         return {"out": str(self.out), "subjects": list(self.subjects),
@@ -174,7 +206,8 @@ class StudyResult(Result):
                                "parameters": {p["parameter"]: p["p_value"] for p in
                                               v.get("parameters", {}).get("parameters", [])}}
                            for k, v in self.paired.items()},
-                "failed": self.failed}
+                "failed": self.failed, "doubtful": list(self.doubtful),
+                "notices": list(self.notices)}
 
     def summary(self) -> str:
         done = sum(r.finished for r in self.trial_rows)
@@ -192,6 +225,9 @@ class StudyResult(Result):
                              f"{p['mean_b']:.4g} (difference {p['difference']:.4g}), p = "
                              f"{p['p_value']:.4f}")
         lines += [f"  {k}: {v}" for k, v in self.failed.items()]
+        if self.doubtful:
+            lines.append(f"  doubtful: the fit of {', '.join(self.doubtful)} (its verdict in "
+                         "fits/<subject>.json): do not use as it stands")
         return "\n".join(lines)
 
     def plot(self, path=None, ax=None):
@@ -243,11 +279,13 @@ def run_study(manifest: StudyManifest, out: str | Path, options: StudyOptions | 
     _run(frf_journal, trial_keys, tasks, _trial_frf, options, progress, "trial FRF")
     trial_rows = frf_journal.rows(trial_keys)
     failed = dict(frf_journal.failed)
+    notices = [*manifest.notices, *_left_out(out, keys, manifest.subjects),
+               *_missing_conditions(manifest)]
     subject_rows = ()
     fits = {}
     if options.model is not None:
-        fit_journal = Journal(out / "fits", CohortTask("shared", lambda _: options.fit_record(),
-                                                       _fit_row))
+        fit_journal = Journal(out / "fits", CohortTask(
+            "shared", lambda key: options.fit_record(manifest.of(key.stem)), _fit_row))
         subject_keys = [Path(f"{s}.subject") for s in manifest.subjects]
         subject_tasks = {
             f"{s}.subject": {"key": f"{s}.subject", "subject": s, "model": options.model,
@@ -258,6 +296,9 @@ def run_study(manifest: StudyManifest, out: str | Path, options: StudyOptions | 
              "subject fit")
         subject_rows = tuple(fit_journal.rows(subject_keys))
         failed.update(fit_journal.failed)
+        notices += [f"{out / 'fits' / (k.removesuffix('.subject') + '.json')}: "
+                    f"{', '.join(why)} changed since that fit: {k.removesuffix('.subject')} "
+                    "fitted again" for k, why in fit_journal.changed.items()]
         fits = {r.recording.removesuffix(".subject"): json.loads(
             fit_journal.target(Path(r.recording)).read_text()) for r in subject_rows
             if r.finished}
@@ -271,10 +312,41 @@ def run_study(manifest: StudyManifest, out: str | Path, options: StudyOptions | 
     write_summary(out / "trials.csv", list(trial_rows),
                   list(dict.fromkeys(k for r in trial_rows for k in r)))
     paired = _paired_tests(manifest, curves, fits, options, out)
+    doubtful = tuple(subject for subject, fit in fits.items()
+                     if (fit.get("trust") or {}).get("level") == "doubtful")
     result = StudyResult(out, manifest.subjects, manifest.conditions, tuple(trial_rows),
-                         tuple(subject_rows), tuple(rows), paired, failed)
+                         tuple(subject_rows), tuple(rows), paired, failed, doubtful,
+                         tuple(notices), tuple(frfs.values()))
     result.to_json(out / "study.json")
     return result
+
+
+def _left_out(out: Path, keys: dict, subjects: tuple[str, ...]) -> list[str]:
+    """The notices of results in ``out`` of trials or subjects the manifest no longer
+    names (kept on disk, left out of the summary and the tests)."""
+    said = []
+    for folder, named, what in (("frf", set(keys), "trial"), ("fits", set(subjects),
+                                                              "subject")):
+        stale = sorted(p.name for p in (out / folder).glob("*.json") if p.stem not in named)
+        if stale:
+            listed = ", ".join(stale[:4]) + (f" and {len(stale) - 4} more"
+                                             if len(stale) > 4 else "")
+            said.append(f"{out / folder}: {listed}: of a {what} the manifest no longer names; "
+                        "kept, left out of the summary and the paired tests")
+    return said
+
+
+def _missing_conditions(manifest: StudyManifest) -> list[str]:
+    """A notice per subject without a trial in one of the conditions."""
+    said = []
+    for subject in manifest.subjects:
+        has = {t.condition for t in manifest.of(subject)}
+        missing = [c for c in manifest.conditions if c not in has]
+        if missing and len(manifest.conditions) > 1:
+            said.append(f"{manifest.path}: subject {subject} has no "
+                        f"{' and no '.join(missing)} trial: left out of the paired tests "
+                        f"with {', '.join(missing)}")
+    return said
 
 
 def _trial_row(data: dict) -> dict:

@@ -16,7 +16,9 @@ How (:func:`recognise_periodic`):
    sample or two of it. Two whole cycles of motion at least.
 3. **The steady part**: the longest run of samples whose next cycle repeats them: the
    difference from the next cycle, averaged over a twentieth of a cycle, within four
-   times its noise and :data:`STEADY_TOLERANCE` of the tilt's peak at every sample. The
+   times its noise and :data:`STEADY_TOLERANCE` of the tilt's peak at every sample, and
+   each cycle moving (its peak-to-peak at least :data:`MOVING_SHARE` of the moving
+   span's: a level stretch repeats itself too). The
    period is refined on the roughly steady part, then on the steady part (a fade-in
    shifts the first estimate by a few samples). A fade-in and a
    fade-out (an amplitude ramping up or down) do not repeat and are left out; the
@@ -43,7 +45,7 @@ import numpy as np
 from posture_id.simulation.stimulus import TiltProfile, tilt_from_array
 
 __all__ = ["PeriodicTilt", "recognise_periodic", "find_periodic", "REPEAT_LEVEL",
-           "STEADY_TOLERANCE", "SINUSOID_SHARE", "DISTORTION_SHARE"]
+           "STEADY_TOLERANCE", "SINUSOID_SHARE", "DISTORTION_SHARE", "MOVING_SHARE"]
 
 #: The normalised difference below which a lag counts as a repeat of the tilt.
 REPEAT_LEVEL = 0.1
@@ -53,6 +55,9 @@ STEADY_TOLERANCE = 0.01
 SINUSOID_SHARE = 0.95
 #: A multiple of a driven harmonic weaker than this share of it is distortion.
 DISTORTION_SHARE = 0.05
+#: A steady cycle spans at least this share of the moving span's peak-to-peak (a level
+#: stretch repeats itself, but does not move).
+MOVING_SHARE = 0.25
 #: Harmonics weaker than this share of the strongest are not driven, whatever the noise.
 _SMALLEST_SHARE = 2e-3
 
@@ -154,7 +159,7 @@ def _steady_run(x: np.ndarray, p: int, tolerance: float) -> tuple[int, int] | No
     """(first, end): the steady part x[first:end], the longest run of samples t whose
     next cycle repeats them: |x[t+p] − x[t]| ≤ ``tolerance`` for every sample of the
     cycle from t."""
-    from scipy.ndimage import maximum_filter1d
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
     n = len(x) - p
     if n < p:
@@ -165,7 +170,10 @@ def _steady_run(x: np.ndarray, p: int, tolerance: float) -> tuple[int, int] | No
     e = np.abs(np.convolve(x[p:] - x[:-p], np.ones(width) / width, mode="same"))
     # the largest difference over [t, t+p), t = 0..n−p
     worst = maximum_filter1d(e, size=p, origin=-(p // 2), mode="nearest")[: n - p + 1]
-    good = worst <= tolerance
+    # a cycle that moves: a level stretch (at any level) repeats itself too
+    top = maximum_filter1d(x, size=p, origin=-(p // 2), mode="nearest")[: n - p + 1]
+    bottom = minimum_filter1d(x, size=p, origin=-(p // 2), mode="nearest")[: n - p + 1]
+    good = (worst <= tolerance) & (top - bottom >= MOVING_SHARE * float(np.ptp(x)))
     if not good.any():
         return None
     edges = np.diff(np.concatenate([[0], good.astype(np.int8), [0]]))
@@ -192,6 +200,8 @@ def _driven(amplitude: np.ndarray, noise: float) -> tuple[list[int], list[int]]:
     a[0] = 0.0
     strongest = float(a.max())
     above = np.flatnonzero(a > max(6.0 * noise, _SMALLEST_SHARE * strongest))
+    if not above.size:  # nothing above the noise: no driven frequency
+        return [], []
     power = a[above] ** 2
     order = above[np.argsort(-a[above], kind="stable")]
     if power.max() >= SINUSOID_SHARE * power.sum():

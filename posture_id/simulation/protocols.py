@@ -58,11 +58,21 @@ def _count(name: str, value) -> int:
 
 #: The largest peak-to-peak tilt a protocol may ask of a posture platform, degrees.
 MAX_PLATFORM_DEG = 20.0
-#: The highest tilt frequency a protocol may hold, Hz: the Nyquist frequency of the 50 Hz
+#: A protocol's frequencies lie below this, Hz: the Nyquist frequency of the 50 Hz
 #: recordings (and far above what a posture platform follows).
 MAX_FREQUENCY_HZ = KNOT_RATE_HZ / 8
 #: The longest protocol, every recording and repetition, s: a subject's session.
 MAX_SESSION_S = 2 * 3600.0
+
+
+def _below_nyquist(name: str, highest_hz: float) -> None:
+    """Refuse a protocol frequency at or above :data:`MAX_FREQUENCY_HZ` (a sine at the
+    Nyquist frequency of the 50 Hz recordings is sampled at its zeros: it vanishes)."""
+    if highest_hz >= MAX_FREQUENCY_HZ - 1e-9:
+        raise StimulusError(f"protocol {name} reach {highest_hz:g} Hz: at or above "
+                            f"{MAX_FREQUENCY_HZ:g} Hz, the 50 Hz recordings' Nyquist "
+                            "frequency (a sine there is sampled at its zeros); keep every "
+                            "frequency below it")
 
 
 def _amplitude(name: str, value: float, limit: float = MAX_PLATFORM_DEG) -> float:
@@ -233,9 +243,7 @@ class MultisineProtocol(_Single):
             if name == "weights" and (min(value) < 0 or max(value) <= 0):
                 raise StimulusError("protocol weights must be ≥ 0, not all 0")
             object.__setattr__(self, name, value)
-        if max(h) / self.period_s > MAX_FREQUENCY_HZ:
-            raise StimulusError(f"protocol harmonics reach {max(h) / self.period_s:g} Hz: "
-                                f"above {MAX_FREQUENCY_HZ:g} Hz")
+        _below_nyquist("harmonics", max(h) / self.period_s)
         self._check_session()
 
     @property
@@ -293,10 +301,7 @@ class SumOfSinesProtocol(_Single):
             object.__setattr__(self, "phases_rad", p)
         _count("cycles", self.cycles)
         _count("repetitions", self.repetitions)
-        if max(f) > MAX_FREQUENCY_HZ:
-            raise StimulusError(f"protocol frequencies_hz reach {max(f):g} Hz: above "
-                                f"{MAX_FREQUENCY_HZ:g} Hz, the 50 Hz recordings' Nyquist "
-                                "frequency")
+        _below_nyquist("frequencies_hz", max(f))
         self.period_s  # noqa: B018 (checks the frequencies are commensurate)
         self._check_session()
 

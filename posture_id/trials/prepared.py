@@ -166,7 +166,7 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
                              "a simulated body that fell stops there: cut the recording")
     if not recording.evenly_sampled():
         raise RecordingError(f"{name}: samples are not evenly spaced in time")
-    notices: list[str] = []
+    notices: list[str] = list(recording.notices)
     hint = None
     if stimulus is not None:
         try:
@@ -201,6 +201,7 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
                            "spans the steady cycles (level stretches and any fade left out)")
             if found.distortion_note() is not None:
                 notices.append(f"{name}: {found.distortion_note()}")
+            notices += _motion_left_out(recording, found)
         else:
             stimulus = tilt_from_array(recording.time, recording.tilt, description=name)
             notices.append(f"{name}: the tilt is neither a PRTS at the rate its time "
@@ -223,6 +224,43 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
         if not np.array_equal(exact, resampled.tilt):
             resampled = replace(resampled, tilt=exact)
     return PreparedTrial(resampled, stimulus, tuple(notices), original, rate_hint=hint)
+
+
+#: Motion outside the steady cycles longer than this many cycles is said (a fade is
+#: shorter), s per cycle.
+_LEFT_OUT_CYCLES = 1.5
+#: A tilt that holds one value this long within the motion is a drop-out, s.
+_HELD_S = 0.2
+
+
+def _motion_left_out(recording: Recording, found) -> list[str]:
+    """Notices of the motion a periodic tilt's analysis leaves out beyond its fades
+    (``found``: :class:`~posture_id.simulation.periodic.PeriodicTilt`): where the tilt
+    stops repeating its cycle, and a stretch where the tilt column holds one value within
+    the motion (a sensor's drop-out)."""
+    name, period = recording.name, found.period_s
+    end = found.start_s + found.cycles * period
+    before, after = found.start_s - found.moving_from_s, found.moving_until_s - end
+    said = []
+    t, tilt = recording.time, recording.tilt
+    inside = (t >= found.moving_from_s) & (t <= found.moving_until_s)
+    same = np.concatenate([[False], np.diff(tilt) == 0]) & inside
+    edges = np.diff(np.concatenate([[0], same.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    held = [(int(a) - 1, int(b) - 1) for a, b in zip(starts, stops, strict=True)
+            if t[int(b) - 1] - t[int(a) - 1] >= _HELD_S]
+    for a, b in held[:3]:
+        said.append(f"{name}: the tilt holds still at {np.degrees(tilt[a]):.4g}° from "
+                    f"{t[a]:.2f} to {t[b]:.2f} s within the platform's motion (a sensor's "
+                    "drop-out?)")
+    if max(before, after) > _LEFT_OUT_CYCLES * period or held:
+        parts = [f"{found.moving_from_s:.2f}–{found.start_s:.2f} s" if before > 0.05 else "",
+                 f"{end:.2f}–{found.moving_until_s:.2f} s" if after > 0.05 else ""]
+        said.append(f"{name}: the tilt repeats its cycle from {found.start_s:.2f} to {end:.2f} "
+                    f"s only ({found.cycles} cycles): the motion at "
+                    f"{' and '.join(p for p in parts if p)} does not repeat it and is left out "
+                    "(a fade, a drop-out, another stimulus)")
+    return said
 
 
 def _lab_states(stimulus: TiltProfile) -> bool:

@@ -177,3 +177,20 @@ def test_a_labs_sinusoid_trial_as_written_gives_the_frf_at_its_one_frequency(tmp
     channel = frf["channels"]["COM"]
     assert channel["gain"][0] == pytest.approx(0.8, rel=0.01)
     assert channel["phase_deg"][0] == pytest.approx(-360 * 0.2 * 0.3, abs=1.0)
+
+
+@pytest.mark.parametrize("noise_deg", [0.0, 0.0005])
+def test_a_platform_resting_at_another_level_after_the_sine_is_not_taken_for_cycles(noise_deg):
+    """A real plate's trial: level at 0° for 60 s, ±3.9° at 0.4 Hz for 60 s, then at rest
+    at −0.1° for 60 s (longer than it moved), the column rounded to 0.001°. The rest at the
+    other level repeats itself but does not move: the sinusoid's cycles are found, and the
+    motion ends where the platform comes to rest."""
+    t = np.arange(18001) / 100.0
+    tilt = np.where((t >= 60) & (t < 120), 3.9 * np.sin(2 * np.pi * 0.4 * (t - 60)), 0.0)
+    tilt[t >= 120] = -0.1
+    tilt = np.round(tilt + noise_deg * np.random.default_rng(3).standard_normal(len(t)), 3)
+    found = find_periodic(t, np.radians(tilt))
+    assert found is not None and found.kind == "sinusoid"
+    assert found.frequencies_hz == pytest.approx((0.4,), rel=1e-3)
+    assert 60 <= found.start_s < 62.5 and found.cycles >= 22
+    assert found.moving_until_s == pytest.approx(120, abs=0.1)

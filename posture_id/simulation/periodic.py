@@ -4,10 +4,10 @@ before and after the oscillation and a fade-in or fade-out left out.
 
 How (:func:`recognise_periodic`):
 
-1. **The moving span.** The column's level (its median over the samples where it is
-   still) is subtracted; the platform moves where it leaves the level by more than five
+1. **The moving span.** The platform moves from where it leaves its first level until it
+   last leaves the level it comes to rest at (not always the first), by more than five
    times the column's noise (estimated from its second differences) and 0.1 % of its
-   peak-to-peak.
+   peak-to-peak; the first level is subtracted.
 2. **The period**, a whole number of samples: the difference function
    d(P) = mean_t (x[t+P] − x[t])² over the moving span, normalised by its running mean
    (the cumulative-mean normalisation of de Cheveigné and Kawahara's YIN estimator, so
@@ -234,14 +234,19 @@ def find_periodic(times_s: np.ndarray, tilt_rad: np.ndarray,
     dt = float(np.median(np.diff(t)))
     noise = _column_noise(a)
     span = float(np.ptp(a))
-    level_guess = float(np.median(a[: max(len(a) // 20, 2)]))
+    edge = max(len(a) // 20, 2)
+    level_guess = float(np.median(a[:edge]))
+    end_guess = float(np.median(a[-edge:]))  # a platform may come to rest at another level
     still = max(5.0 * noise, 1e-3 * span)
-    moving = np.flatnonzero(np.abs(a - level_guess) > still)
-    if len(moving) < 16:
+    leaves = np.flatnonzero(np.abs(a - level_guess) > still)
+    returns = np.flatnonzero(np.abs(a - end_guess) > still)
+    if len(leaves) < 16 or len(returns) < 16:
         return None
-    first, last = int(moving[0]), int(moving[-1])
-    resting = np.concatenate([a[:first], a[last + 1:]])
-    level = float(np.median(resting)) if len(resting) else 0.0
+    first, last = int(leaves[0]), int(returns[-1])
+    if last - first < 16:
+        return None
+    before = a[:first]
+    level = float(np.median(before)) if len(before) else level_guess
     x = a[first: last + 1] - level
     p = _period(x, max(int(round(min_period_s / dt)), 2))
     if p is None:

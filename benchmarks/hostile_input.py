@@ -1,16 +1,8 @@
 """Hostile input for the newer commands: protocol files, a lab's columns, cohorts,
 design, stimulus, frf, the universal tools and evaluate, and (``hostile_newest.py``) C3D
 trials, the IC model, compare and norms, each tried as a new user tries them, and each
-outcome sorted into one of
-
-- **clear**: exit status 2 and one line that names the file or flag and the problem;
-- **handled**: an answer (exit 0 or 1) with a notice that says what was done about it;
-- **unclear**: exit status 2, but the line does not name the problem;
-- **traceback**: an internal error (exit 3) or an exception that escaped;
-- **silent**: an answer with no word about what was wrong;
-- **data loss**: a file of the user's (or an input) changed, vanished, or a failed run
-  left a new file behind;
-- **hang**: still running after the case's time limit.
+outcome sorted by :func:`posture_id.testing.run_case` (clear, handled, unclear, traceback,
+silent, data loss, hang: :mod:`posture_id.testing`).
 
 Run:  .venv/bin/python benchmarks/hostile_input.py [--out docs/results/hostile_input]
                                                    [--only SUBSTRING] [--before ROWS_JSON]

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.errors import RecordingError
-from posture_id.fileio import atomic_write_text, check_time_column, read_numeric_csv
+from posture_id.fileio import atomic_write_text, check_time_column
 from posture_id.text_table import TextTable, read_text_table, split_unit
 
 __all__ = ["Recording", "RecordingColumns", "lab_columns", "AngleUnit", "TimeUnit",
@@ -273,7 +273,8 @@ class Recording:
             RecordingError: naming the file, the line or column, and the problem.
         """
         path = Path(path)
-        header, values = read_numeric_csv(path, RecordingError, "recording")
+        table = read_text_table(path, RecordingError, "recording")
+        header, values = list(table.header), table.values
         recorded = True
         if header[:1] == ["time_s"] and header[1:2] != ["tilt_deg"] and tilt_of is not None:
             values = np.insert(values, 1, np.degrees(tilt_of(values[:, 0] - values[0, 0])),
@@ -312,6 +313,7 @@ class Recording:
             segments=tuple(names),
             name=str(path),
             tilt_recorded=recorded,
+            notices=table.notices,
         )
 
 

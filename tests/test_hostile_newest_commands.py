@@ -103,6 +103,9 @@ def make_material(root: Path) -> dict[str, str]:
     middle = (first + last) // 2
     dropout[middle: middle + 150, 1] = dropout[middle, 1]
     variants["plate_dropout"] = (title, header, dropout)
+    step_off = values.copy()  # the subject steps off the plate for a second
+    step_off[middle: middle + 100, 3] = 40.0
+    variants["plate_step_off"] = (title, header, step_off)
     rng = np.random.default_rng(5)  # a COP that sways but does not follow the tilt
     wander = np.convolve(rng.standard_normal(len(values) + 99), np.ones(100) / 10, "valid")
     variants["plate_noise"] = (title, header, np.column_stack(
@@ -141,6 +144,15 @@ def make_material(root: Path) -> dict[str, str]:
         zip(recording.time[every], recording.tilt[every], recording.theta[every, 0],
             strict=True))
     (root / "lab50.csv").write_text(lab, encoding="utf-8")
+    tilt = "time_s,tilt_deg\n" + "".join(f"{t:.3f},{np.degrees(a):.5f}\n" for t, a in zip(
+        recording.time[every], recording.tilt[every], strict=True))
+    for name, data in {"tilt_latin": ("Plattform Müller\n" + tilt).encode("cp1252"),
+                       "tilt_wide": tilt.encode("utf-16-le")}.items():
+        (root / f"{name}.csv").write_bytes(data)
+        paths[name] = str(root / f"{name}.csv")
+    standard = "time_s,tilt_deg,body_deg\n" + lab.split("\n", 1)[1]  # the project's columns
+    (root / "standard_wide.csv").write_bytes(standard.encode("utf-16-le"))
+    paths["standard_wide"] = str(root / "standard_wide.csv")
     paths["lab50"] = str(root / "lab50.csv")
     for name, data in {"lab_wide_le": lab.encode("utf-16-le"),
                        "lab_latin": ("Labor Müller;Ärztin\n" + lab).encode("cp1252")}.items():
@@ -189,6 +201,8 @@ def _replace_file(row: int, name: str):
 
 
 STUDY = ("study", "manifest.csv", "--out", "o", "--workers", "1", *PLATE)
+#: The same with FRFs only (no joint fits): for what the fits do not change.
+FRFS = (*STUDY, "--model", "none")
 #: The study's trials (under s/) and its manifest.
 TRIALS = {"s": "@study", "manifest.csv": _manifest()}
 #: The study's trial files, as make_study names them.
@@ -212,7 +226,7 @@ def _study_cases() -> list[Case]:
              ("S01.json", "did not write"), {**TRIALS, "o/fits/S01.json": '{"mine": 1}'}),
         Case("--out holds files that are not a study's", "study", STUDY,
              ("o", "notes.txt", "not a study's"), {**TRIALS, "o/notes.txt": "my notes\n"}),
-        Case("--out is a study's own: what it replaces is said", "study", STUDY,
+        Case("--out is a study's own: what it replaces is said", "study", FRFS,
              ("replaces",), {**TRIALS, "o": "@study_out"}, handled=True, kept=("o",)),
         Case("a resumed study whose manifest lost a row", "study", STUDY,
              ("S02", "fitted again"), {**TRIALS, "o": "@study_out", "manifest.csv": three},
@@ -220,10 +234,10 @@ def _study_cases() -> list[Case]:
         Case("a resumed study whose manifest lost a row names the FRF left out", "study",
              STUDY, ("no longer names",), {**TRIALS, "o": "@study_out", "manifest.csv": three},
              handled=True, kept=("o",)),
-        Case("a subject with one of the conditions", "study", STUDY,
+        Case("a subject with one of the conditions", "study", FRFS,
              ("S02", "no eyes_closed trial"), {**TRIALS, "manifest.csv": three},
              handled=True, kept=("o",)),
-        Case("a row with both a body and a height", "study", STUDY,
+        Case("a row with both a body and a height", "study", FRFS,
              ("line 2", "body", "height_m and mass_kg", "ignored"),
              {**TRIALS, "b.urdf": "@urdf", "manifest.csv": _manifest(
                  lambda rows: [r + (["b.urdf"] if k < 2 else [""]) for k, r in enumerate(rows)],
@@ -239,24 +253,43 @@ def _study_cases() -> list[Case]:
         Case("a study whose fits are doubtful exits 1 and says so", "study", STUDY,
              ("doubtful",), {**TRIALS, **{f: "@plate_noise" for f in STUDY_FILES}},
              handled=True, kept=("o",)),
-        Case("a trial whose platform rests at another level after the sine", "study", STUDY,
+        Case("a trial whose platform rests at another level after the sine", "study", FRFS,
              ("late.txt", "sinusoid"), {**TRIALS, "s/late.txt": "@plate_other_rest",
                                         "manifest.csv": _manifest(_replace_file(0,
                                                                                 "s/late.txt"))},
              handled=True, kept=("o",)),
-        Case("a trial with a constant COP", "study", STUDY,
+        Case("a trial with a constant COP", "study", FRFS,
              ("flat.txt", "constant"), {**TRIALS, "s/flat.txt": "@plate_constant_cop",
                                         "manifest.csv": _manifest(_replace_file(0,
                                                                                 "s/flat.txt"))},
              handled=True, kept=("o",)),
-        Case("a manifest in Windows Latin-1", "study", STUDY, ("manifest.csv", "cp1252"),
+        Case("a manifest in Windows Latin-1", "study", FRFS, ("manifest.csv", "cp1252"),
              {**TRIALS, "manifest.csv": _manifest(
                  lambda rows: [[r[0], r[1].replace("eyes", "Augen_für"), *r[2:]]
                                for r in rows], encoding="cp1252")},
              handled=True, kept=("o",)),
-        Case("a manifest in UTF-16 without a byte-order mark", "study", STUDY,
+        Case("a manifest in UTF-16 without a byte-order mark", "study", FRFS,
              ("manifest.csv", "UTF-16"), {**TRIALS, "manifest.csv": _manifest(
                  encoding="utf-16-le")}, handled=True, kept=("o",)),
+        Case("--segments with a force plate's trials", "study", (*STUDY, "--segments", "3"),
+             ("--segments 3", "one segment"), TRIALS),
+        Case("--segments with every row a URDF", "study", (*STUDY, "--segments", "2"),
+             ("--segments 2", "URDF"), {**TRIALS, "b.urdf": "@urdf", "manifest.csv": _manifest(
+                 lambda rows: [[*r[:3], "", "", "b.urdf"] for r in rows],
+                 lambda h: h + ",body")}),
+        Case("--workers with --scheduler", "study",
+             ("study", "manifest.csv", "--out", "o", "--workers", "2", "--scheduler",
+              "tcp://127.0.0.1:9", *PLATE), ("--workers", "--scheduler"), TRIALS),
+        Case("--per-condition not the model's", "study", (*STUDY, "--per-condition", "gain"),
+             ("'gain'", "IC", "per-condition"), TRIALS),
+        Case("--per-condition w with --model dec", "study",
+             (*STUDY, "--model", "dec", "--per-condition", "w"), ("'w'", "DEC"), TRIALS),
+        Case("a manifest column twice in the header", "study", STUDY,
+             ("manifest.csv", "'file'", "twice"), {**TRIALS, "manifest.csv": _manifest(
+                 lambda rows: [[*r, r[2]] for r in rows], lambda h: h + ",file")}),
+        Case("a manifest row with more fields than the header", "study", STUDY,
+             ("manifest.csv", "line 3", "6 fields", "5"), {**TRIALS, "manifest.csv": _manifest(
+                 lambda rows: [rows[0], [*rows[1], "retest"], *rows[2:]])}),
         Case("--cop-units m on a COP in mm (study)", "study",
              ("study", "manifest.csv", "--out", "o", "--workers", "1", *BARE,
               "--cop-units", "m"), ("--cop-units", "m"),
@@ -277,6 +310,9 @@ def _fit_cases() -> list[Case]:
         Case("a file and its copy", "fit: joint", ("fit", "a.txt", "b.txt", *ic),
              ("b.txt", "a.txt", "same"), {"a.txt": "@trial_eyes_open",
                                           "b.txt": "@trial_eyes_open"}),
+        Case("condition labels that differ only in case", "fit: joint",
+             ("fit", "a.txt", "b.txt", *ic, "--conditions", "open", "Open", "--per-trial", "w"),
+             ("'open'", "'Open'", "only in case"), two),
         Case("a joint fit of one condition", "fit: joint",
              ("fit", "a.txt", "b.txt", *ic, "--conditions", "open", "open", "--per-trial",
               "w"), ("one condition", "nothing differs"), two, handled=True,
@@ -313,17 +349,22 @@ def _plate_cases() -> list[Case]:
                  kept=("r.json",)),
             Case(f"a tilt drop-out ({command})", name, (*argv, "{plate_dropout}", *PLATE),
                  ("holds still", "left out"), handled=True, kept=("r.json",)),
+            Case(f"a step off the plate ({command})", name,
+                 (*argv, "{plate_step_off}", *PLATE, "--force-column", "Fz"),
+                 ("Fz", "below half the body's weight"), handled=True, kept=("r.json",)),
             Case(f"--sample-rate-hz against the time column ({command})", name,
                  (*argv, "{plate}", *PLATE, "--sample-rate-hz", "200"),
                  ("--sample-rate-hz 200", "100 Hz"), handled=True, kept=("r.json",)),
-            Case(f"UTF-16 without a byte-order mark ({command})", name,
+            Case(f"a force plate's file in UTF-16 without a byte-order mark ({command})", name,
                  (*argv, "{plate_wide_le}", *PLATE), ("plate_wide_le.txt", "UTF-16"),
                  handled=True, kept=("r.json",)),
-            Case(f"Windows Latin-1 ({command})", name, (*argv, "{plate_latin}", *PLATE),
+            Case(f"a force plate's file in Windows Latin-1 ({command})", name,
+                 (*argv, "{plate_latin}", *PLATE),
                  ("plate_latin.txt", "cp1252"), handled=True, kept=("r.json",)),
         ]
     cases += [
-        Case("UTF-16 big-endian without a byte-order mark (frf)", "force plate: frf",
+        Case("a force plate's file in UTF-16 big-endian without a byte-order mark (frf)",
+             "force plate: frf",
              (*frf, "{plate_wide_be}", *PLATE), ("plate_wide_be.txt", "UTF-16"),
              handled=True, kept=("r.json",)),
         Case("a negative normal force (identify --model ic)", "force plate: identify",
@@ -355,10 +396,11 @@ def _lab_text_cases() -> list[Case]:
             Case(f"--sample-rate-hz 100 on a 50 Hz time column ({command})", name,
                  (*argv, "{lab50}", *LAB, "--sample-rate-hz", "100"),
                  ("--sample-rate-hz 100", "50 Hz"), handled=True, kept=("r.json",)),
-            Case(f"UTF-16 without a byte-order mark ({command})", name,
+            Case(f"a lab's export in UTF-16 without a byte-order mark ({command})", name,
                  (*argv, "{lab_wide_le}", *LAB), ("lab_wide_le.csv", "UTF-16"),
                  handled=True, kept=("r.json",)),
-            Case(f"Windows Latin-1 ({command})", name, (*argv, "{lab_latin}", *LAB),
+            Case(f"a lab's export in Windows Latin-1 ({command})", name,
+                 (*argv, "{lab_latin}", *LAB),
                  ("lab_latin.csv", "cp1252"), handled=True, kept=("r.json",)),
         ]
     cases += [
@@ -367,9 +409,19 @@ def _lab_text_cases() -> list[Case]:
              ("identify", "{lab50}", "--model", "ic", *body, *LAB, "--sample-rate-hz", "100",
               "--out", "r.json"), ("--sample-rate-hz 100", "50 Hz"), handled=True,
              kept=("r.json",)),
-        Case("UTF-16 without a byte-order mark (identify --model ic)", "lab text: identify",
+        Case("a lab's export in UTF-16 without a byte-order mark (identify --model ic)",
+             "lab text: identify",
              ("identify", "{lab_wide_le}", "--model", "ic", *body, *LAB, "--out", "r.json"),
              ("lab_wide_le.csv", "UTF-16"), handled=True, kept=("r.json",)),
+        Case("the project's columns in UTF-16 without a byte-order mark (frf)",
+             "lab text: frf", ("frf", "{standard_wide}", "--out", "r.json"),
+             ("standard_wide.csv", "UTF-16"), handled=True, kept=("r.json",)),
+        Case("a tilt file in Windows Latin-1 (simulate --tilt)", "lab text: simulate",
+             ("simulate", "--tilt", "{tilt_latin}", "--out", "s.csv"),
+             ("tilt_latin.csv", "cp1252"), handled=True, kept=("s.csv",)),
+        Case("a tilt file in UTF-16 without a byte-order mark (simulate --tilt)",
+             "lab text: simulate", ("simulate", "--tilt", "{tilt_wide}", "--out", "s.csv"),
+             ("tilt_wide.csv", "UTF-16"), handled=True, kept=("s.csv",)),
         Case("a lab file in UTF-16 named by a wrong column", "lab text: frf",
              (*frf, "{lab_wide_le}", "--time-column", "Time", "--tilt-column", "Plate",
               "--angle-columns", "COM"), ("lab_wide_le.csv", "'Plate'")),
@@ -422,6 +474,10 @@ def _flag_cases() -> list[Case]:
              (*paired, "--bootstrap", "500"), ("--bootstrap", "--paired")),
         Case("norm compare --paired --rate-hz", "flags: norm compare",
              (*paired, "--rate-hz", "30"), ("--rate-hz", "--paired")),
+        Case("norm compare --paired, both groups of one name", "flags: norm compare",
+             (*paired, "--names", "open", "open"), ("--names", "'open'")),
+        Case("norm compare, both groups of one name", "flags: norm compare",
+             (*paired[:2], *paired[3:], "--names", "A", "A"), ("--names", "'A'")),
         Case("robot check --held on a chain", "flags: robot check",
              (*robot, "--body", "{tip_urdf}", "--held", "rigid"), ("--held", "chain")),
         Case("robot check --held servos on a chain", "flags: robot check",

@@ -271,10 +271,10 @@ def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
         recording, stimulus = recording_and_stimulus(one, body)
         recording.check_segments(body.segment_names)
         trials.append(prepare_trial(recording, stimulus))
-        for notice in trials[-1].notices:
-            say(notice)
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
         result = fit_joint(model, trials, body, labels, per, options, progress=progress)
+    for notice in (n for trial in trials for n in trial.notices):  # a refusal says its own
+        say(notice)
     if not per:
         say(f"no --per-trial: every parameter is shared by the {len(trials)} trials, so "
             "nothing differs between them (one fit of them all); name what changes with the "
@@ -319,9 +319,9 @@ def ic_answer(args: argparse.Namespace, options) -> int:
     recording, stimulus = recording_and_stimulus(args, body)
     recording.check_segments(body.segment_names)
     trial = prepare_trial(recording, stimulus)
-    for notice in trial.notices:  # what was found on the way in
-        say(notice)
     result = fit_ic(trial, body, options)
+    for notice in trial.notices:  # what was found on the way in (a refusal says its own)
+        say(notice)
     write_result(result, args.out, args.plot)
     return answered(result.trust_level == "doubtful")
 

@@ -316,6 +316,9 @@ def run_compare(args: argparse.Namespace) -> int:
                              "t-based intervals: give --permutations), leave "
                              f"{'them' if len(unused) > 1 else 'it'} out")
     _defaults_filled(args)
+    if args.names[0] == args.names[1]:
+        raise PostureIdError(f"--names: the two groups are both called {args.names[0]!r}; "
+                             "give each its own name")
     if len(args.group) != 2:
         raise PostureIdError(f"--group: give two groups (got {len(args.group)})")
     first = {p.resolve() for p in args.group[0]}

@@ -12,6 +12,7 @@ from posture_id.cli.arguments import (
     non_negative_float,
     positive_float,
     positive_int,
+    say,
 )
 from posture_id.cli.markers import add_marker_arguments, mapping_from_args, write_marker_plot
 from posture_id.errors import PostureIdError
@@ -101,7 +102,12 @@ def stimulus_from_args(args: argparse.Namespace, default: TiltProfile | None
     if getattr(args, "tilt", None):
         if given:
             raise PostureIdError(f"--tilt replaces the PRTS: {', '.join(given)} do not apply")
-        return tilt_from_csv(args.tilt)
+        profile = tilt_from_csv(args.tilt)
+        from posture_id.text_table import read_text_table
+
+        for notice in read_text_table(args.tilt, PostureIdError, "tilt file").notices:
+            say(notice)  # its encoding, title lines skipped, decimal commas
+        return profile
     if given:
         return prts(**prts_arguments(args))
     return default

@@ -19,6 +19,7 @@ from posture_id.cli.output_folder import LEDGER, OutputFolder, written_by_postur
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import add_column_arguments, columns_from_args
 from posture_id.errors import PostureIdError
+from posture_id.force_plate.reading import ForcePlateColumns
 from posture_id.frf.response import FrfOptions
 
 __all__ = ["add_parser", "run"]
@@ -77,11 +78,23 @@ def run(args: argparse.Namespace) -> int:
         per_condition = ["w"] if model == "ic" else []
     if model is None and args.per_condition:
         raise PostureIdError("--per-condition goes with a model (--model ic or dec)")
+    if args.scheduler and args.workers is not None:
+        raise PostureIdError("--workers sets the local processes, and --scheduler runs the "
+                             "study on the cluster's workers: give one")
+    if args.segments != 1 and all(t.body is not None for t in manifest.trials):
+        raise PostureIdError(f"--segments {args.segments}: every row of {args.manifest} names "
+                             "its body's URDF, which has its own segments; --segments makes "
+                             "the Winter body of a row given by height_m and mass_kg")
+    layout = columns_from_args(args)
+    if isinstance(layout, ForcePlateColumns) and args.segments != 1:
+        raise PostureIdError(f"--segments {args.segments}: a force plate's COP is the sway of "
+                             "the body as one segment, whatever its URDF; leave --segments "
+                             "out")
     if args.scheduler:
         from posture_id.executors import check_scheduler_address
 
         check_scheduler_address(args.scheduler)
-    options = StudyOptions(layout=columns_from_args(args), model=model,
+    options = StudyOptions(layout=layout, model=model,
                            per_condition=tuple(per_condition), segments=args.segments,
                            frf=FrfOptions(skip_cycles=args.skip_cycles,
                                           max_frequency_hz=args.max_frequency_hz),
@@ -89,11 +102,9 @@ def run(args: argparse.Namespace) -> int:
                            scheduler=args.scheduler)
     with folder:
         replaced = _study_folder(args.out, folder)
-        for notice in manifest.notices:
-            say(notice)
         with TerminalProgress("study") as progress:
             result = run_study(manifest, args.out, options, progress)
-    for notice in result.notices[len(manifest.notices):]:
+    for notice in result.notices:  # the manifest's, then the study's (a refusal says its own)
         say(notice)
     for notice in result.trial_notices:
         say(notice)

@@ -365,9 +365,15 @@ def _condition_indices(conditions: Sequence[str], trials: list[PreparedTrial]
         raise PostureIdError(f"{len(conditions)} condition label(s) for {len(trials)} "
                              "trial(s): give one label per trial")
     labels: list[str] = []
+    folded: dict[str, str] = {}
     for label in conditions:
         if not isinstance(label, str) or not label.strip():
             raise PostureIdError(f"condition labels must be non-empty text, got {label!r}")
+        first = folded.setdefault(label.casefold(), label)
+        if first != label:
+            raise PostureIdError(f"condition labels {first!r} and {label!r} differ only in "
+                                 "case: write one condition the same way for every trial "
+                                 "(or name two apart)")
         if label not in labels:
             labels.append(label)
     return tuple(labels), [labels.index(c) for c in conditions]

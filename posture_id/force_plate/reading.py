@@ -130,6 +130,8 @@ def read_force_plate(path: str | Path, columns: ForcePlateColumns, body: Body,
         notices.append(f"{path}: column '{columns.force}': the normal force is negative "
                        f"(median {float(np.median(force)):.4g} N: the plate's vertical axis "
                        "points down); its magnitude is used")
+    if force is not None:
+        notices += _off_the_plate(path, columns, time, np.abs(force), load)
     com = com_angle_from_cop(cop, rate, load, tilt, force, columns.cop_options(unit),
                              str(path))
     single = one_segment_body(body)
@@ -144,6 +146,20 @@ def read_force_plate(path: str | Path, columns: ForcePlateColumns, body: Body,
     return Recording(time, tilt, com[:, None], single.segment_names, str(path),
                      tilt_recorded=columns.tilt is not None, source=source,
                      notices=tuple(notices))
+
+
+def _off_the_plate(path: Path, columns: ForcePlateColumns, time: np.ndarray,
+                   force: np.ndarray, load: BodyLoad) -> list[str]:
+    """A notice of where the normal force falls below half the body's weight (a foot
+    lifted, a step off the plate: the COP there is not the body's), or none."""
+    low = force < 0.5 * load.mass_kg * load.gravity_m_s2
+    if not low.any():
+        return []
+    where = np.flatnonzero(low)
+    return [f"{path}: column '{columns.force}': the normal force falls below half the "
+            f"body's weight in {len(where)} sample(s) from {time[where[0]]:.2f} to "
+            f"{time[where[-1]]:.2f} s (a foot lifted, a step off the plate?): the COP there "
+            "is not the standing body's; cut the trial to where the subject stands"]
 
 
 #: The peak-to-peak a standing person's COP spans, m: more than the sway of a quiet

@@ -26,6 +26,8 @@ __all__ = ["TrialEntry", "StudyManifest", "read_manifest", "REQUIRED_COLUMNS"]
 
 #: The columns every manifest has.
 REQUIRED_COLUMNS = ("subject", "condition", "file")
+#: The delimiters by name.
+_NAMES = {",": "comma", ";": "semicolon", "\t": "tab"}
 #: A person's height (m) and mass (kg).
 _HEIGHT_M, _MASS_KG = (1.0, 2.5), (20.0, 250.0)
 
@@ -129,6 +131,11 @@ def read_manifest(path: str | Path) -> StudyManifest:
     numbered = [(n, r) for n, r in enumerate(rows, start=1)
                 if any(c.strip() for c in r) and not r[0].startswith("#")]
     header = [h.strip().lower() for h in numbered[0][1]]
+    twice = sorted({h for h in header if h and header.count(h) > 1})
+    if twice:
+        raise PostureIdError(f"{path}: line {numbered[0][0]}: column "
+                             f"{', '.join(repr(h) for h in twice)} appears twice in the header "
+                             "(one column each)")
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     has_body = "body" in header
     has_size = "height_m" in header and "mass_kg" in header
@@ -140,9 +147,11 @@ def read_manifest(path: str | Path) -> StudyManifest:
     trials, bodies, files, both = [], {}, {}, []
     spelled: dict[str, dict[str, tuple[str, int]]] = {"subject": {}, "condition": {}}
     for line, row in numbered[1:]:
-        if len(row) < len(header):
+        extra = row[len(header):]
+        if len(row) < len(header) or any(c.strip() for c in extra):
             raise PostureIdError(f"{path}: line {line}: {len(row)} fields, the header has "
-                                 f"{len(header)}")
+                                 f"{len(header)} (a {_NAMES.get(delimiter, delimiter)} "
+                                 "inside a cell? quote it)")
         cell = {h: row[k].strip() for k, h in enumerate(header)}
         for column in REQUIRED_COLUMNS:
             if not cell[column]:

@@ -138,6 +138,27 @@ def _subject_fit(task: dict) -> dict | str:
     return {**fit.to_dict(), "subject": task["subject"]}
 
 
+def _check_per_condition(manifest: StudyManifest, options: StudyOptions) -> None:
+    """Refuse, before any work, per-condition parameters the model's joint fit does not
+    identify (for the study's first body: a DEC module's parameters are named by its
+    joints)."""
+    from posture_id.bodies.body import load_body
+    from posture_id.bodies.one_segment import one_segment_body
+    from posture_id.fitting.joint_conditions import resolve_parameter
+    from posture_id.force_plate.reading import ForcePlateColumns
+    from posture_id.models import model_named
+
+    body = load_body(_body_file(manifest.trials[0], options.segments))
+    if isinstance(options.layout, ForcePlateColumns):
+        body = one_segment_body(body)
+    model = model_named(options.model)
+    for name in options.per_condition:
+        try:
+            resolve_parameter(model, body, name)
+        except PostureIdError as exc:
+            raise PostureIdError(f"the per-condition parameter {exc}") from None
+
+
 def _bug(what: str, exc: Exception) -> str:
     """Why a trial or subject failed with an internal error, in one line that names it."""
     detail = " ".join(str(exc).split())[:300]
@@ -269,6 +290,8 @@ def run_study(manifest: StudyManifest, out: str | Path, options: StudyOptions | 
     """
     options = options or StudyOptions()
     out = Path(out)
+    if options.model is not None and options.per_condition:
+        _check_per_condition(manifest, options)
     keys = {e.key: e for e in manifest.trials}
     trial_keys = [Path(f"{k}.trial") for k in keys]
     frf_journal = Journal(out / "frf", CohortTask("frequencies_hz",

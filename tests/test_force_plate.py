@@ -21,7 +21,7 @@ from posture_id.force_plate import (
     cop_of_motion,
 )
 from posture_id.frf import frequency_response
-from posture_id.recording import Recording
+from posture_id.recording import Recording, TimeUnit
 from posture_id.simulation import simulate
 from posture_id.simulation.noise import MotorNoise
 from posture_id.simulation.options import SimulationOptions
@@ -231,3 +231,44 @@ def test_the_command_line_reads_a_force_plate_trial_as_a_lab_wrote_it(tmp_path, 
                        "--out", str(out)], "go with --cop-column")):
         assert main(bad) == 2
         assert why in capsys.readouterr().err
+
+
+def test_a_cop_that_is_not_a_standing_persons_is_refused_and_a_negative_force_said(tmp_path):
+    """A COP column read in the wrong unit (mm as m: gains 1000 times too large; m as mm)
+    or constant is refused, naming the unit that fits; a force whose sign is negative is
+    used by its magnitude and said, as is one that falls below half the weight."""
+    from dataclasses import replace
+
+    from posture_id.force_plate.reading import ForcePlateColumns, read_force_plate
+
+    path, body, _ = _lab_file(tmp_path, segments=1)
+    lines = path.read_text().splitlines()
+    bare = tmp_path / "bare.txt"  # the header without its units
+    bare.write_text("\n".join([lines[0], "Time\tPlatform\tCOP AP\tFz", *lines[2:]]) + "\n")
+    columns = ForcePlateColumns(cop="COP AP", time="Time", tilt="Platform",
+                                time_unit=TimeUnit.MILLISECONDS)
+    with pytest.raises(RecordingError, match=r"'COP AP'.*spans .* m\).*more than a standing "
+                                             r"person's.*is it in mm"):
+        read_force_plate(bare, replace(columns, cop_unit=CopUnit.M), body)
+    read = read_force_plate(bare, replace(columns, cop_unit=CopUnit.MM), body)
+    assert not any("COP" in n or "force" in n for n in read.notices)
+
+    def edited(name, column, change):
+        rows = [line.split("\t") for line in lines[2:]]
+        for k, row in enumerate(rows):
+            row[column] = change(k, float(row[column]))
+        out = tmp_path / name
+        out.write_text("\n".join(lines[:2] + ["\t".join(r) for r in rows]) + "\n")
+        return out
+
+    with pytest.raises(RecordingError, match="the COP is constant"):
+        read_force_plate(edited("flat.txt", 2, lambda k, v: "3.5"), columns, body)
+    negative = read_force_plate(edited("down.txt", 3, lambda k, v: f"{-v:.1f}"),
+                                replace(columns, force="Fz"), body)
+    upward = read_force_plate(path, replace(columns, force="Fz"), body)
+    np.testing.assert_allclose(negative.theta, upward.theta)
+    assert any("normal force is negative" in n for n in negative.notices)
+    off = read_force_plate(edited("off.txt", 3, lambda k, v: "20" if 3000 <= k < 3050
+                                  else f"{v:.1f}"), replace(columns, force="Fz"), body)
+    assert any("below half the body's weight in 50 sample(s) from 30.00" in n
+               for n in off.notices)

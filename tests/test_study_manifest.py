@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import csv
 import json
+from pathlib import Path
 
 import pytest
 
+from posture_id.bodies.anthropometry import winter_body_file
 from posture_id.errors import PostureIdError
 from posture_id.force_plate.reading import ForcePlateColumns
 from posture_id.manifest import StudyOptions, read_manifest, run_study
@@ -143,3 +145,62 @@ def test_a_study_on_a_dask_cluster_equals_a_local_run(study, tmp_path):
     for path in (local / "frf").glob("*.json"):
         a, b = (json.loads(p.read_text()) for p in (path, remote / "frf" / path.name))
         assert a["channels"] == b["channels"]
+
+
+def _cell(row: str, k: int, value: str) -> str:
+    cells = row.split(",")
+    cells[k] = value
+    return ",".join(cells)
+
+
+def test_a_manifests_names_in_two_cases_and_malformed_rows_are_refused_and_choices_said(
+        study, tmp_path):
+    text = study.read_text().splitlines()
+    header, rows = text[0], text[1:]
+    bad = study.parent / "bad.csv"
+    cases = {
+        r"line 5, column 'condition': 'Eyes_closed' and 'eyes_closed' \(line 3\) differ "
+        "only in case": [header, *rows[:3], _cell(rows[3], 1, "Eyes_closed")],
+        r"line 5, column 'subject': 'S02' and 's02' \(line 4\)": [header, *rows[:2], _cell(rows[2], 0, "s02"),
+                                             rows[3]],
+        "column 'file' appears twice": [header + ",file", *(r + ",x" for r in rows)],
+        "line 3: 6 fields, the header has 5": [header, rows[0], rows[1] + ",retest"],
+    }
+    for why, lines in cases.items():
+        bad.write_text("\n".join(lines) + "\n")
+        with pytest.raises(PostureIdError, match=why):
+            read_manifest(bad)
+    # a body beside a height: the body is used, said; UTF-16 without a mark: read, said
+    urdf = study.parent / "S01.urdf"
+    urdf.write_text(Path(winter_body_file(1.77, 70.4, 1)).read_text())
+    bad.write_text("\n".join([header + ",body", *(r + (",S01.urdf" if r.startswith("S01")
+                                                       else ",") for r in rows)]) + "\n")
+    both = read_manifest(bad)
+    assert both.trials[0].body == urdf.resolve() and both.trials[0].height_m is None
+    assert any("line 2, 3: both a body and height_m and mass_kg: the body URDF is used" in n
+               for n in both.notices)
+    bad.write_bytes(study.read_text().encode("utf-16-le"))
+    assert read_manifest(bad).trials == read_manifest(study).trials
+    assert any("UTF-16" in n for n in read_manifest(bad).notices)
+
+
+@pytest.mark.slow
+def test_a_study_run_again_on_fewer_rows_fits_again_and_says_what_it_left_out(study,
+                                                                              tmp_path):
+    out = tmp_path / "out"
+    first = run_study(read_manifest(study), out, StudyOptions(layout=PLATE, workers=1))
+    assert not first.notices and not first.answered_doubtfully
+    fewer = study.parent / "fewer.csv"
+    lines = study.read_text().splitlines()
+    fewer.write_text("\n".join(line for line in lines
+                               if not line.startswith("S02,eyes_closed")) + "\n")
+    again = run_study(read_manifest(fewer), out, StudyOptions(layout=PLATE, workers=1))
+    said = "\n".join(again.notices)
+    assert "S02 fitted again" in said and "trials" in said
+    assert "no longer names" in said and "S02__S02_eyes_closed" in said
+    assert "subject S02 has no eyes_closed trial" in said
+    status = {r.recording: r.status for r in again.subject_rows}
+    assert status["S01.subject"] == "skipped" and status["S02.subject"] != "skipped"
+    with pytest.raises(PostureIdError, match="per-condition parameter 'gain'"):
+        run_study(read_manifest(study), out, StudyOptions(layout=PLATE,
+                                                          per_condition=("gain",)))

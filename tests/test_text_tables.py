@@ -348,3 +348,51 @@ def test_the_unit_flags_go_with_the_columns(tmp_path, capsys):
                          "--units and --time-units go with --angle-columns")):
         assert main(["frf", str(path), *flags, "--out", str(tmp_path / "f.json")]) == 2
         assert said in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("codec, order", [("utf-16-le", "little-endian"),
+                                          ("utf-16-be", "big-endian")])
+def test_utf16_without_a_byte_order_mark_is_read_and_said(tmp_path, codec, order):
+    """A Windows export in UTF-16 with no byte-order mark: one byte of every character
+    pair NUL. Read as the same table, said; a file with other NUL bytes stays binary."""
+    table = _read(tmp_path, EXPORT.encode(codec))
+    same = _read(tmp_path, EXPORT, "utf8.txt")
+    np.testing.assert_array_equal(table.values, same.values)
+    assert table.header == same.header and table.encoding == codec
+    assert any(f"read as UTF-16 ({order}, no byte-order mark)" in n for n in table.notices)
+    _refused(tmp_path, EXPORT.encode(codec)[:-1], "binary data")  # an odd number of bytes
+    _refused(tmp_path, b"t,x\n" + b"0,1\x00\x00\x002\n" * 4, "binary data")
+
+
+def test_a_recordings_reading_notices_reach_its_trial(tmp_path):
+    """What the reader noticed (an encoding, lines skipped) is the recording's and its
+    prepared trial's notice, for a lab's columns and the project's own."""
+    from posture_id.bodies.body import load_body
+    from posture_id.trials import prepare_trial
+
+    recording = simulate(load_body()).to_recording()
+    rows = "".join(f"{t:.3f},{np.degrees(a):.6f},{np.degrees(s):.6f}\n" for t, a, s in
+                   zip(recording.time, recording.tilt, recording.theta[:, 0], strict=True))
+    lab = tmp_path / "lab.csv"
+    lab.write_bytes(("Messung Müller\nT,P,S\n" + rows).encode("cp1252"))
+    read = Recording.read(lab, ("shank",), None, RecordingColumns("T", "P", ("S",)))
+    assert any("cp1252" in n for n in read.notices)
+    assert any("above the header" in n for n in read.notices)
+    own = tmp_path / "own.csv"
+    own.write_bytes(("time_s,tilt_deg,shank_deg\n" + rows).encode("utf-16-le"))
+    trial = prepare_trial(Recording.read(own), None)
+    assert any("UTF-16" in n for n in trial.notices)
+
+
+def test_a_sample_rate_given_against_the_time_column_is_said(tmp_path):
+    path = tmp_path / "lab.csv"
+    path.write_text("T,P,S\n" + "".join(f"{k / 50:.3f},0.{k % 7},1.{k % 5}\n"
+                                         for k in range(200)))
+    columns = RecordingColumns("T", "P", ("S",), sample_rate_hz=100.0)
+    read = Recording.read(path, ("body",), None, columns)
+    assert read.sample_rate_hz == pytest.approx(100.0)
+    said = " ".join(read.notices)
+    assert "100" in said and "50 Hz" in said and "every frequency 2×" in said
+    matching = Recording.read(path, ("body",), None, RecordingColumns(
+        "T", "P", ("S",), sample_rate_hz=50.0))
+    assert not any("sample rate" in n for n in matching.notices)

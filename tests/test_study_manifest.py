@@ -161,8 +161,8 @@ def test_a_manifests_names_in_two_cases_and_malformed_rows_are_refused_and_choic
     cases = {
         r"line 5, column 'condition': 'Eyes_closed' and 'eyes_closed' \(line 3\) differ "
         "only in case": [header, *rows[:3], _cell(rows[3], 1, "Eyes_closed")],
-        r"line 5, column 'subject': 'S02' and 's02' \(line 4\)": [header, *rows[:2], _cell(rows[2], 0, "s02"),
-                                             rows[3]],
+        r"line 5, column 'subject': 'S02' and 's02' \(line 4\)": [
+            header, *rows[:2], _cell(rows[2], 0, "s02"), rows[3]],
         "column 'file' appears twice": [header + ",file", *(r + ",x" for r in rows)],
         "line 3: 6 fields, the header has 5": [header, rows[0], rows[1] + ",retest"],
     }

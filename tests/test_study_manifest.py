@@ -204,3 +204,20 @@ def test_a_study_run_again_on_fewer_rows_fits_again_and_says_what_it_left_out(st
     with pytest.raises(PostureIdError, match="per-condition parameter 'gain'"):
         run_study(read_manifest(study), out, StudyOptions(layout=PLATE,
                                                           per_condition=("gain",)))
+
+
+def test_a_trials_internal_error_is_named_with_its_file_and_the_study_goes_on(study,
+                                                                             monkeypatch):
+    """A bug met on one trial (the periodic finder's crash on a real plate's trial) is
+    that trial's failure, naming its file, not the study's end."""
+    import posture_id.frf as frf
+    from posture_id.manifest import run as study_run
+
+    def broken(*args, **kwargs):
+        raise ValueError("zero-size array to reduction operation maximum")
+
+    monkeypatch.setattr(frf, "frequency_response", broken)
+    entry = read_manifest(study).trials[0]
+    why = study_run._trial_frf(study_run._task(entry, StudyOptions(layout=PLATE)))
+    assert isinstance(why, str) and why.startswith(str(entry.file))
+    assert "internal error (a bug" in why and "ValueError: zero-size array" in why

@@ -331,6 +331,17 @@ def lab_columns(table: TextTable, columns: RecordingColumns,
             not an angle's or a time's, angles that look like the other unit).
     """
     path = table.path
+    if columns.tilt is not None and not table.has(columns.tilt):
+        others = [c for c in (columns.time, *columns.angles) if c is not None]
+        if all(table.has(c) for c in others):  # the tilt column alone is missing
+            way = ("give --tilt-column none to take the tilt from the stimulus named"
+                   if tilt_of is not None else "give --tilt-column none and the stimulus "
+                   "the recording was made with (the PRTS flags, --tilt FILE or --protocol "
+                   "FILE)")
+            raise RecordingError(
+                f"{path}: no tilt column {columns.tilt!r} (the header is "
+                f"{','.join(table.header)}): name the file's tilt column (--tilt-column "
+                f"NAME), or, if it has none, {way}")
     wanted = [c for c in (columns.time, columns.tilt, *columns.angles) if c is not None]
     table.require(wanted)
     column = {name: table.column(name) for name in wanted}
@@ -366,7 +377,8 @@ def lab_columns(table: TextTable, columns: RecordingColumns,
         tilt = tilt_of(time)
     else:
         raise RecordingError(f"{path}: no tilt column named; name the stimulus the "
-                             "recording was made with (the PRTS flags, or --tilt FILE)")
+                             "recording was made with (the PRTS flags, --tilt FILE or "
+                             "--protocol FILE)")
     _check_angle_units(path, column, units, angle_names, columns)
     return time, tilt, theta, tuple(notices)
 

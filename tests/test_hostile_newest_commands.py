@@ -106,10 +106,9 @@ def make_material(root: Path) -> dict[str, str]:
     step_off = values.copy()  # the subject steps off the plate for a second
     step_off[middle: middle + 100, 3] = 40.0
     variants["plate_step_off"] = (title, header, step_off)
-    rng = np.random.default_rng(5)  # a COP that sways but does not follow the tilt
-    wander = np.convolve(rng.standard_normal(len(values) + 99), np.ones(100) / 10, "valid")
-    variants["plate_noise"] = (title, header, np.column_stack(
-        [values[:, :2], 10 * wander, values[:, 3]]))
+    flipped = values.copy()  # the sway the other way: no body of one controller does both
+    flipped[:, 2] = 2 * values[:, 2].mean() - values[:, 2]
+    variants["plate_flipped"] = (title, header, flipped)
     # level at 0.001° before the sine and at -0.05° after it, for longer than it moved, as
     # a real plate rests
     step = values[1, 0] - values[0, 0]
@@ -150,6 +149,10 @@ def make_material(root: Path) -> dict[str, str]:
                        "tilt_wide": tilt.encode("utf-16-le")}.items():
         (root / f"{name}.csv").write_bytes(data)
         paths[name] = str(root / f"{name}.csv")
+    com_only = "Time,COM\n" + "".join(  # a lab's COM-only export: no tilt column
+        f"{line.split(',')[0]},{line.split(',')[2]}\n" for line in lab.splitlines()[1:])
+    (root / "com_only.csv").write_text(com_only, encoding="utf-8")
+    paths["com_only"] = str(root / "com_only.csv")
     standard = "time_s,tilt_deg,body_deg\n" + lab.split("\n", 1)[1]  # the project's columns
     (root / "standard_wide.csv").write_bytes(standard.encode("utf-16-le"))
     paths["standard_wide"] = str(root / "standard_wide.csv")
@@ -251,7 +254,10 @@ def _study_cases() -> list[Case]:
              {**TRIALS, "manifest.csv": _manifest(
                  lambda rows: rows[:2] + [["s02", *rows[2][1:]], rows[3]])}),
         Case("a study whose fits are doubtful exits 1 and says so", "study", STUDY,
-             ("doubtful",), {**TRIALS, **{f: "@plate_noise" for f in STUDY_FILES}},
+             ("doubtful", "S01"), {**TRIALS, "s/flipped.txt": "@plate_flipped",
+                                   "manifest.csv": _manifest(lambda rows: [
+                                       rows[0], [rows[0][0], rows[0][1], "s/flipped.txt",
+                                                 *rows[0][3:]], *rows[2:]])},
              handled=True, kept=("o",)),
         Case("a trial whose platform rests at another level after the sine", "study", FRFS,
              ("late.txt", "sinusoid"), {**TRIALS, "s/late.txt": "@plate_other_rest",
@@ -422,6 +428,14 @@ def _lab_text_cases() -> list[Case]:
         Case("a tilt file in UTF-16 without a byte-order mark (simulate --tilt)",
              "lab text: simulate", ("simulate", "--tilt", "{tilt_wide}", "--out", "s.csv"),
              ("tilt_wide.csv", "UTF-16"), handled=True, kept=("s.csv",)),
+        Case("a COM-only file without a tilt column (identify)", "lab text: identify",
+             ("identify", "{com_only}", "--model", "ic", *body, "--time-column", "Time",
+              "--angle-columns", "COM", "--out", "r.json"),
+             ("com_only.csv", "no tilt column 'tilt_deg'", "--tilt-column NAME",
+              "--tilt-column none", "--tilt FILE")),
+        Case("a COM-only file with --tilt-column none and no stimulus (frf)", "lab text: frf",
+             (*frf, "{com_only}", "--time-column", "Time", "--tilt-column", "none",
+              "--angle-columns", "COM"), ("com_only.csv", "the PRTS flags", "--protocol FILE")),
         Case("a lab file in UTF-16 named by a wrong column", "lab text: frf",
              (*frf, "{lab_wide_le}", "--time-column", "Time", "--tilt-column", "Plate",
               "--angle-columns", "COM"), ("lab_wide_le.csv", "'Plate'")),
@@ -523,6 +537,9 @@ def all_cases() -> list[Case]:
             + _nyquist_cases() + _flag_cases())
 
 
+#: The answers whose exit status is part of the good answer (1: answered, doubtful).
+EXIT_STATUS = {"a study whose fits are doubtful exits 1 and says so": 1,
+               "a trial with a constant COP": 1}
 #: The commands whose cases run a whole fit or study (over 5 s here).
 SLOW_COMMANDS = ("study", "fit", "identify")
 CASES = all_cases()
@@ -551,6 +568,8 @@ def test_every_bad_input_is_refused_clearly_or_handled(case, tmp_path):
     outcome = run_case(case, material, tmp_path / "case", shipped=SHIPPED, root=ROOT)
     wanted = "handled" if case.handled else "clear"
     assert outcome.outcome == wanted, (outcome.outcome, outcome.status, outcome.line)
+    if case.name in EXIT_STATUS:
+        assert outcome.status == EXIT_STATUS[case.name], (outcome.status, outcome.line)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -46,7 +46,8 @@ import numpy as np
 from posture_id.simulation.stimulus import TiltProfile, tilt_from_array
 
 __all__ = ["PeriodicTilt", "recognise_periodic", "find_periodic", "REPEAT_LEVEL",
-           "STEADY_TOLERANCE", "PLATFORM_TOLERANCE", "SINUSOID_SHARE", "DISTORTION_SHARE", "MOVING_SHARE"]
+           "STEADY_TOLERANCE", "PLATFORM_TOLERANCE", "SINUSOID_SHARE", "DISTORTION_SHARE",
+           "MOVING_SHARE"]
 
 #: The normalised difference below which a lag counts as a repeat of the tilt.
 REPEAT_LEVEL = 0.1

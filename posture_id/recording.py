@@ -21,8 +21,8 @@ from posture_id.errors import RecordingError
 from posture_id.fileio import atomic_write_text, check_time_column
 from posture_id.text_table import TextTable, read_text_table, split_unit
 
-__all__ = ["Recording", "RecordingColumns", "lab_columns", "AngleUnit", "TimeUnit",
-           "RADIANS_SUSPECT_DEG"]
+__all__ = ["Recording", "RecordingColumns", "on_even_time", "JITTER_SHARE", "lab_columns",
+           "AngleUnit", "TimeUnit", "RADIANS_SUSPECT_DEG"]
 
 #: A recording whose every angle (tilt and segments, "degrees") stays below this is taken
 #: to be in radians by mistake: 0.1° of sway and tilt at most is below any stimulus used.
@@ -249,7 +249,7 @@ class Recording:
         path = Path(path)
         if not columns.angles:
             raise RecordingError(f"{path}: name the angle columns (one per body segment)")
-        table = read_text_table(path, RecordingError, "recording")
+        table = on_even_time(read_text_table(path, RecordingError, "recording"), columns)
         if len(columns.angles) != len(segments):
             raise RecordingError(
                 f"{path}: {len(columns.angles)} angle column(s) "
@@ -315,6 +315,57 @@ class Recording:
             tilt_recorded=recorded,
             notices=table.notices,
         )
+
+
+#: Time stamps that jitter by less than this share of their mean interval are an even
+#: rate's, resampled onto it (a headset's or tracker's clock); a larger step is a gap.
+JITTER_SHARE = 0.25
+#: Steps within this share of the mean interval are even as they are (rounding).
+_EVEN_SHARE = 0.01
+
+
+def on_even_time(table: TextTable, columns: RecordingColumns) -> TextTable:
+    """``table`` with its rows on an even time grid: itself where the time column's steps
+    are even (within 1 %), no time column is named or a sample rate is given; the rows
+    linearly interpolated onto the mean rate where the stamps only jitter (every step
+    within :data:`JITTER_SHARE` of the mean interval), said in a notice.
+
+    Raises:
+        RecordingError: naming the line: time that does not increase, or a step beyond the
+            jitter (a gap, a dropped or doubled sample).
+    """
+    if columns.time is None or columns.sample_rate_hz is not None or table.n_rows < 3:
+        return table
+    table.require([columns.time])
+    unit, _ = _time_unit(table, columns)
+    seconds = table.column(columns.time) / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
+    steps = np.diff(seconds)
+    if not np.all(steps > 0):
+        return table  # said by the time column's check, naming the line
+    mean = float((seconds[-1] - seconds[0]) / (len(seconds) - 1))
+    off = np.abs(steps - mean)
+    if np.all(off <= _EVEN_SHARE * mean):
+        return table
+    worst = int(np.argmax(off))
+    if off[worst] > JITTER_SHARE * mean:
+        raise RecordingError(
+            f"{table.path}: line {table.row_lines[worst + 1]}: a step of "
+            f"{steps[worst] * 1e3:.4g} ms in column '{columns.time}', the mean interval "
+            f"{mean * 1e3:.4g} ms: a gap or a doubled sample, not the jitter of a clock "
+            f"(within {100 * JITTER_SHARE:g} % of the interval); cut the recording there")
+    index = np.arange(len(seconds))
+    interval, intercept = np.polyfit(index, seconds, 1)  # the clock's rate, its jitter out
+    jitter = float(np.abs(seconds - (intercept + interval * index)).max())
+    grid = seconds[0] + interval * index
+    k = table.index(columns.time)
+    values = np.column_stack([grid * (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
+                              if j == k else np.interp(grid, seconds, table.values[:, j])
+                              for j in range(table.values.shape[1])])
+    notice = (f"{table.path}: column '{columns.time}': the time stamps jitter by up to "
+              f"{jitter * 1e3:.2g} ms about an even {1 / interval:.5g} Hz clock "
+              f"({100 * jitter / interval:.2g} % of its {interval * 1e3:.4g} ms interval): "
+              "every column resampled onto that clock by linear interpolation")
+    return replace(table, values=values, notices=(*table.notices, notice))
 
 
 def lab_columns(table: TextTable, columns: RecordingColumns,

@@ -149,6 +149,18 @@ def make_material(root: Path) -> dict[str, str]:
                        "tilt_wide": tilt.encode("utf-16-le")}.items():
         (root / f"{name}.csv").write_bytes(data)
         paths[name] = str(root / f"{name}.csv")
+    # a headset's clock: the stamps jitter by up to 1 ms (a twentieth of the interval)
+    stamps = recording.time[every] + np.random.default_rng(9).uniform(-1e-3, 1e-3, len(
+        recording.time[every]))
+    stamps[0] = 0.0
+    jittered = "Time,Platform,COM\n" + "".join(
+        f"{t:.4f},{np.degrees(a):.5f},{np.degrees(c):.5f}\n" for t, a, c in
+        zip(stamps, recording.tilt[every], recording.theta[every, 0], strict=True))
+    (root / "lab_jitter.csv").write_text(jittered, encoding="utf-8")
+    lines = jittered.splitlines(keepends=True)
+    (root / "lab_gap.csv").write_text("".join(lines[:2001] + lines[2003:]), encoding="utf-8")
+    paths["lab_jitter"], paths["lab_gap"] = str(root / "lab_jitter.csv"), str(
+        root / "lab_gap.csv")
     com_only = "Time,COM\n" + "".join(  # a lab's COM-only export: no tilt column
         f"{line.split(',')[0]},{line.split(',')[2]}\n" for line in lab.splitlines()[1:])
     (root / "com_only.csv").write_text(com_only, encoding="utf-8")
@@ -428,6 +440,14 @@ def _lab_text_cases() -> list[Case]:
         Case("a tilt file in UTF-16 without a byte-order mark (simulate --tilt)",
              "lab text: simulate", ("simulate", "--tilt", "{tilt_wide}", "--out", "s.csv"),
              ("tilt_wide.csv", "UTF-16"), handled=True, kept=("s.csv",)),
+        Case("time stamps that jitter (frf)", "lab text: frf", (*frf, "{lab_jitter}", *LAB),
+             ("lab_jitter.csv", "jitter by up to", "Hz clock"), handled=True,
+             kept=("r.json",)),
+        Case("time stamps that jitter (fit)", "lab text: fit", (*fit, "{lab_jitter}", *LAB),
+             ("lab_jitter.csv", "jitter by up to", "Hz clock"), handled=True,
+             kept=("r.json",)),
+        Case("time stamps with a gap (frf)", "lab text: frf", (*frf, "{lab_gap}", *LAB),
+             ("lab_gap.csv", "line 2002", "gap")),
         Case("a COM-only file without a tilt column (identify)", "lab text: identify",
              ("identify", "{com_only}", "--model", "ic", *body, "--time-column", "Time",
               "--angle-columns", "COM", "--out", "r.json"),

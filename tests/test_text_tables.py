@@ -7,6 +7,7 @@ Recording.from_lab_csv and the command line, time in milliseconds included."""
 from __future__ import annotations
 
 import json
+import re
 import time
 
 import numpy as np
@@ -396,3 +397,44 @@ def test_a_sample_rate_given_against_the_time_column_is_said(tmp_path):
     matching = Recording.read(path, ("body",), None, RecordingColumns(
         "T", "P", ("S",), sample_rate_hz=50.0))
     assert not any("sample rate" in n for n in matching.notices)
+
+
+def test_jittered_time_stamps_are_resampled_onto_their_even_rate_and_gaps_refused(tmp_path):
+    """A headset's export: 90 Hz stamps that jitter by up to 0.5 ms (a twentieth of the
+    interval), each sample the sway at its own stamp. Read onto an even 90 Hz grid, said,
+    the sway within 0.2 % of the even trial's; a dropped sample (a step of two intervals)
+    and time that goes back are refused, naming the line."""
+    rng = np.random.default_rng(4)
+    n, rate = 5400, 90.0
+    even = np.arange(n) / rate
+    stamps = even + rng.uniform(-5e-4, 5e-4, n)
+    stamps[0] = 0.0
+
+    def sway(t):
+        return 0.8 * np.sin(2 * np.pi * 0.3 * t) + 0.2 * np.sin(2 * np.pi * 1.1 * t)
+
+    def tilt(t):
+        return np.sin(2 * np.pi * 0.1 * t)
+
+    def write(name, times):
+        path = tmp_path / name
+        path.write_text("Time [s];Tilt [deg];COM [deg]\n" + "".join(
+            f"{t:.4f};{tilt(t):.6f};{sway(t):.6f}\n" for t in times))
+        return path
+
+    columns = RecordingColumns("Time", "Tilt", ("COM",))
+    read = Recording.read(write("vr.csv", stamps), ("body",), None, columns)
+    assert read.evenly_sampled() and read.sample_rate_hz == pytest.approx(rate, rel=1e-5)
+    said = " ".join(read.notices)
+    assert re.search(r"jitter by up to 0\.5\d? ms about an even 90 Hz clock", said)
+    assert "linear interpolation" in said
+    error = np.degrees(read.theta[:, 0]) - sway(read.time)
+    assert np.sqrt(np.mean(error**2)) < 2e-3 * np.std(sway(read.time))
+    dropped = np.delete(stamps, 2000)
+    with pytest.raises(RecordingError, match=r"vr_gap.csv: line 2002: a step of 22.*gap"):
+        Recording.read(write("vr_gap.csv", dropped), ("body",), None, columns)
+    back = stamps.copy()
+    back[3000] = back[2998]
+    with pytest.raises(RecordingError, match=r"vr_back.csv: line 3002: Time does not "
+                                             r"increase"):
+        Recording.read(write("vr_back.csv", back), ("body",), None, columns)

@@ -15,7 +15,14 @@ from posture_id.bodies.body import Body
 from posture_id.bodies.one_segment import one_segment_body
 from posture_id.errors import RecordingError
 from posture_id.force_plate.cop import BodyLoad, CopOptions, CopUnit, com_angle_from_cop
-from posture_id.recording import AngleUnit, Recording, RecordingColumns, TimeUnit, lab_columns
+from posture_id.recording import (
+    AngleUnit,
+    Recording,
+    RecordingColumns,
+    TimeUnit,
+    lab_columns,
+    on_even_time,
+)
 from posture_id.text_table import read_text_table
 
 __all__ = ["ForcePlateColumns", "read_force_plate", "FORCE_UNITS_N"]
@@ -111,7 +118,8 @@ def read_force_plate(path: str | Path, columns: ForcePlateColumns, body: Body,
             body's).
     """
     path = Path(path)
-    table = read_text_table(path, RecordingError, "force-plate recording")
+    table = on_even_time(read_text_table(path, RecordingError, "force-plate recording"),
+                         columns.recording_columns)
     table.require([c for c in (columns.cop, columns.force) if c is not None])
     time, tilt, _, notices = lab_columns(table, columns.recording_columns, tilt_of)
     steps = np.diff(time)

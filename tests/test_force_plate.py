@@ -272,3 +272,37 @@ def test_a_cop_that_is_not_a_standing_persons_is_refused_and_a_negative_force_sa
                                   else f"{v:.1f}"), replace(columns, force="Fz"), body)
     assert any("below half the body's weight in 50 sample(s) from 30.00" in n
                for n in off.notices)
+
+
+def test_the_subjects_mass_is_what_the_plate_weighs_while_it_rests_level(tmp_path):
+    """Four load cells in kg (a real plate's ``Capteur (Kg)(...)``), the subject shifting
+    weight while the platform tilts and a lab's tare drifting at rest: the mass is the
+    median of the cells' sum where the platform rests level; a force in N is divided by
+    g; a column of another unit, no unit, or a sum that is no person's is refused."""
+    from posture_id.force_plate.load import LoadColumns, LoadUnit, standing_mass
+
+    rng = np.random.default_rng(2)
+    t = np.arange(6000) / 100.0
+    tilt = np.where((t > 20) & (t < 40), 3.0 * np.sin(2 * np.pi * 0.2 * (t - 20)), 0.0)
+    weight = 64.3 + 0.1 * rng.standard_normal(len(t)) + np.where(tilt != 0, 4 * tilt, 0)
+    shares = (0.3, 0.2, 0.27, 0.23)
+    names = [f"Capteur (Kg)({c})" for c in ("NO", "NE", "SO", "SE")]
+    path = tmp_path / "plate.txt"
+    path.write_text("\t".join(["temps (en ms)", "Angle(degre)", *names, "Fz [N]"]) + "\n"
+                    + "".join("\t".join([f"{10 * k}", f"{a:.3f}",
+                                         *(f"{w * s:.3f}" for s in shares), f"{9.81 * w:.2f}"])
+                              + "\n" for k, (a, w) in enumerate(zip(tilt, weight, strict=True))))
+    cells = standing_mass(path, LoadColumns(tuple(names)), "Angle(degre)")
+    assert cells.unit is LoadUnit.KG and cells.mass_kg == pytest.approx(64.3, abs=0.02)
+    assert cells.samples == int(np.sum(np.abs(tilt) <= 0.05))
+    assert "64.3 kg" in cells.notice and "rests level" in cells.notice
+    force = standing_mass(path, LoadColumns(("Fz",)), "Angle(degre)")
+    assert force.unit is LoadUnit.N and force.mass_kg == pytest.approx(64.3, abs=0.02)
+    everything = standing_mass(path, LoadColumns(tuple(names)))  # no tilt: every sample
+    assert everything.samples == len(t)
+    with pytest.raises(RecordingError, match="plate.txt: the load columns' headers state no unit"):
+        standing_mass(path, LoadColumns(("Angle(degre)",)))
+    with pytest.raises(RecordingError, match="by their headers, not N"):
+        standing_mass(path, LoadColumns(tuple(names), LoadUnit.N))
+    with pytest.raises(RecordingError, match="sum to 19.*not a person's"):
+        standing_mass(path, LoadColumns((names[0],)), "Angle(degre)")

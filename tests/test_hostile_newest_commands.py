@@ -118,6 +118,10 @@ def make_material(root: Path) -> dict[str, str]:
     resting[:first, 1] = 0.001
     resting[last + 1:, 1] = -0.05
     variants["plate_other_rest"] = (title, header, resting)
+    cells = values[:, 3:4] / 9.81 * [[0.3, 0.2, 0.28, 0.22]]  # four load cells, in kg
+    variants["plate_cells"] = (title, header + [f"Cell {c} (Kg)" for c in ("NW", "NE", "SW",
+                                                                        "SE")],
+                               np.column_stack([values, cells]))
     for name, (t, h, v) in variants.items():
         path = root / f"{name}.txt"
         path.write_text(_plate_text(t, h, v), encoding="utf-8")
@@ -223,6 +227,11 @@ TRIALS = {"s": "@study", "manifest.csv": _manifest()}
 #: The study's trial files, as make_study names them.
 STUDY_FILES = tuple(f"s/S0{k}_{c}_0.2Hz.txt" for k in (1, 2)
                     for c in ("eyes_open", "eyes_closed"))
+CELLS = ("--load-columns", "Cell NW (Kg)", "Cell NE (Kg)", "Cell SW (Kg)", "Cell SE (Kg)")
+#: The study's trials with the plate's load cells, and a manifest without masses.
+WEIGHED = {"s": "@study", **{f: "@plate_cells" for f in STUDY_FILES},
+           "manifest.csv": _manifest(lambda rows: [[*r[:4], ""] for r in rows])}
+
 
 
 def _study_cases() -> list[Case]:
@@ -308,6 +317,12 @@ def _study_cases() -> list[Case]:
         Case("a manifest row with more fields than the header", "study", STUDY,
              ("manifest.csv", "line 3", "6 fields", "5"), {**TRIALS, "manifest.csv": _manifest(
                  lambda rows: [rows[0], [*rows[1], "retest"], *rows[2:]])}),
+        Case("a manifest without masses, weighed by the plate", "study", (*FRFS, *CELLS),
+             ("subject S01's mass is", "Cell NW (Kg)"), WEIGHED, handled=True, kept=("o",)),
+        Case("a manifest without masses and no load columns", "study", FRFS,
+             ("manifest.csv", "line 2", "mass_kg", "--load-columns"), WEIGHED),
+        Case("--load-columns where every row gives its mass", "study", (*FRFS, *CELLS),
+             ("--load-columns", "every row"), TRIALS),
         Case("--cop-units m on a COP in mm (study)", "study",
              ("study", "manifest.csv", "--out", "o", "--workers", "1", *BARE,
               "--cop-units", "m"), ("--cop-units", "m"),
@@ -380,7 +395,32 @@ def _plate_cases() -> list[Case]:
                  (*argv, "{plate_latin}", *PLATE),
                  ("plate_latin.txt", "cp1252"), handled=True, kept=("r.json",)),
         ]
+    frf_h = ("frf", "--out", "r.json", *PLATE, "--height-m", "{height}")
     cases += [
+        Case("frf weighing the subject on the plate (--height-m)", "force plate: frf",
+             (*frf_h, "{plate_cells}", *CELLS), ("the subject's mass is", "Winter's tables"),
+             handled=True, kept=("r.json",)),
+        Case("frf --height-m without load columns", "force plate: frf",
+             (*frf_h, "{plate_cells}"), ("--height-m", "--load-columns")),
+        Case("frf --load-columns without --height-m", "force plate: frf",
+             ("frf", "{plate_cells}", "--out", "r.json", *PLATE, "--body", "{urdf}", *CELLS),
+             ("--load-columns", "--height-m")),
+        Case("a load column that is a length", "force plate: frf",
+             (*frf_h, "{plate_cells}", "--load-columns", "COP AP"),
+             ("plate_cells.txt", "'COP AP'", "mm", "not a load")),
+        Case("load columns without a unit", "force plate: frf",
+             (*frf_h, "{plate_bare}", "--time-units", "ms", "--load-columns", "Fz"),
+             ("plate_bare.txt", "no unit", "--load-units")),
+        Case("body --mass-from a plate's trial", "force plate: body",
+             ("body", "--height-m", "{height}", "--mass-from", "{plate_cells}", *CELLS,
+              "--tilt-column", "Platform", "--segments", "1", "--out", "b.urdf"),
+             ("the subject's mass is",), handled=True, kept=("b.urdf",)),
+        Case("body --mass-from and --mass-kg", "force plate: body",
+             ("body", "--height-m", "{height}", "--mass-kg", "70", "--mass-from",
+              "{plate_cells}", *CELLS, "--out", "b.urdf"), ("--mass-kg", "--mass-from")),
+        Case("body --load-columns without --mass-from", "force plate: body",
+             ("body", "--height-m", "{height}", "--mass-kg", "70", *CELLS, "--out", "b.urdf"),
+             ("--load-columns", "--mass-from")),
         Case("a force plate's file in UTF-16 big-endian without a byte-order mark (frf)",
              "force plate: frf",
              (*frf, "{plate_wide_be}", *PLATE), ("plate_wide_be.txt", "UTF-16"),

@@ -14,6 +14,7 @@ from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.bodies.lumping import PRESETS, lump_robot, preset_body
 from posture_id.bodies.urdf_writer import write_chain_urdf
 from posture_id.cli.arguments import check_output_file, positive_float, say
+from posture_id.cli.plate_mass import add_load_arguments, load_columns_from_args
 from posture_id.dec.parameters import default_parameters
 from posture_id.errors import PostureIdError
 from posture_id.fileio import json_text
@@ -38,6 +39,14 @@ def add_parser(sub) -> None:
                       help="write the Winter body of the subject a motion-capture trial's "
                            "metadata describe (height and mass)")
     body.add_argument("--mass-kg", type=positive_float, help="write a Winter body: mass, kg")
+    body.add_argument("--mass-from", type=Path, metavar="TRIAL",
+                      help="write a Winter body: the mass a force plate's trial weighs (its "
+                           "--load-columns while the platform rests level), in place of "
+                           "--mass-kg")
+    body.add_argument("--tilt-column", metavar="NAME",
+                      help="--mass-from: the trial's tilt column, to weigh where the platform "
+                           "rests level (default: every sample)")
+    add_load_arguments(body, "with --mass-from: the columns that weigh the subject")
     body.add_argument("--segments", type=int, default=3, choices=(1, 2, 3),
                       help="written body: 3 shank+thigh+trunk, 2 leg+trunk, 1 whole body")
     body.add_argument("--ankle-joints", nargs=2, metavar=("LEFT", "RIGHT"),
@@ -56,6 +65,7 @@ def _write(args: argparse.Namespace) -> Path | None:
     """Write the body the flags ask for; its path, or None when only describing."""
     if args.mass_kg is not None and args.height_m is None:
         raise PostureIdError("--mass-kg goes with --height-m (a Winter body)")
+    _weighed(args)
     if args.from_trial is not None:
         from posture_id.cli.markers import trial_subject
 
@@ -82,7 +92,7 @@ def _write(args: argparse.Namespace) -> Path | None:
     if args.out is None:
         raise PostureIdError("--out is required to write a body URDF")
     check_output_file(args.out, "--out", inputs=(args.urdf, args.lump, args.srdf,
-                                                  args.from_trial))
+                                                  args.from_trial, args.mass_from))
     if args.urdf is not None:
         raise PostureIdError("give either a URDF to describe or flags to write one, not both")
     if args.from_robot:
@@ -120,6 +130,30 @@ def _write(args: argparse.Namespace) -> Path | None:
             f"({args.mass_kg - modelled:.2f} kg, Winter's tables) are the support on the "
             "platform, not a segment that sways (docs/model.md)")
     return path
+
+
+def _weighed(args: argparse.Namespace) -> None:
+    """``--mass-from TRIAL``: the mass the trial's load columns give, as --mass-kg."""
+    load = load_columns_from_args(args)
+    if args.mass_from is None:
+        given = [f for f, v in (("--load-columns", load), ("--tilt-column", args.tilt_column))
+                 if v is not None]
+        if given:
+            raise PostureIdError(f"{', '.join(given)} go with --mass-from TRIAL (the subject "
+                                 "weighed by a force plate)")
+        return
+    if args.height_m is None:
+        raise PostureIdError("--mass-from goes with --height-m (a Winter body)")
+    if args.mass_kg is not None:
+        raise PostureIdError("--mass-kg and --mass-from are two masses: give one")
+    if load is None:
+        raise PostureIdError(f"--mass-from {args.mass_from}: name the plate's load columns "
+                             "(--load-columns NAME ...: its load cells, or its vertical force)")
+    from posture_id.force_plate.load import standing_mass
+
+    mass = standing_mass(args.mass_from, load, args.tilt_column)
+    say(mass.notice)
+    args.mass_kg = mass.mass_kg
 
 
 def run(args: argparse.Namespace) -> int:

@@ -14,6 +14,7 @@ from posture_id.cli.arguments import (
     write_result,
 )
 from posture_id.cli.markers import recording_body
+from posture_id.cli.plate_mass import add_load_arguments
 from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
@@ -35,6 +36,10 @@ def add_parser(sub) -> None:
                    help="URDF whose segments the recording's columns must be; adds the body "
                         "COM (default: none, every angle column as it is, e.g. a COM-only "
                         "recording)")
+    p.add_argument("--height-m", type=positive_float,
+                   help="a force plate's trial: the subject's height, m; the body is Winter's "
+                        "one segment of that height and the mass the plate weighs "
+                        "(--load-columns), in place of --body")
     p.add_argument("--out", type=Path, required=True, help="FRF JSON to write")
     p.add_argument("--plot", type=Path, help="gain, phase and coherence against frequency (PNG)")
     p.add_argument("--period-s", type=positive_float,
@@ -68,6 +73,8 @@ def add_parser(sub) -> None:
     add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with; "
                                   "give --period-s with it")
     add_column_arguments(p)
+    add_load_arguments(p, "with --height-m and --cop-column: the mass of the subject's body "
+                          "from the trial's own load (docs/force_plates.md)")
     p.set_defaults(func=run)
 
 
@@ -75,6 +82,12 @@ def run(args: argparse.Namespace) -> int:
     inputs = (args.recording, args.body, args.tilt)
     check_output_file(args.out, "--out", inputs)
     check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    if (args.height_m is not None or args.load_columns) and not args.cop_column:
+        raise PostureIdError("--height-m and --load-columns weigh the subject on a force "
+                             "plate: they go with --cop-column")
+    if args.load_columns and args.height_m is None:
+        raise PostureIdError("--load-columns weighs the subject for the body --height-m makes: "
+                             "give the height too (or --body URDF, without them)")
     body = recording_body(args, None)
     recording, stimulus = recording_and_stimulus(args, body)
     options = _options(args)

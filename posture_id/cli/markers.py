@@ -149,16 +149,41 @@ def _force_plate_body(args: argparse.Namespace):
     from posture_id.bodies.body import load_body
     from posture_id.bodies.one_segment import one_segment_body
 
+    if args.body is None and getattr(args, "height_m", None) is not None:
+        return _plate_weighed_body(args)
     if args.body is None:
         raise PostureIdError("--cop-column: the COP is turned into the body's sway through the "
                              "subject's body: give it (--body URDF; posture-id body --height-m "
-                             "H --mass-kg M --segments 1 writes one)")
+                             "H --mass-kg M --segments 1 writes one; or --height-m H with the "
+                             "plate's --load-columns)")
     body = load_body(args.body)
     single = one_segment_body(body)
     if single is not body:
         say(f"{args.body}: the force plate gives the body COM alone: the body as one segment "
             f"(its mass, COM height and inertia about the ankle; {single.urdf_path})")
     return single
+
+
+def _plate_weighed_body(args: argparse.Namespace):
+    """``--height-m H --load-columns ...``: the one-segment Winter body of the subject's
+    height and the mass the trial's own load columns give (said on stderr)."""
+    from posture_id.bodies.anthropometry import winter_body_file
+    from posture_id.bodies.body import load_body
+    from posture_id.cli.plate_mass import load_columns_from_args
+    from posture_id.force_plate.load import standing_mass
+
+    if args.body is not None:
+        raise PostureIdError("--body and --height-m are two bodies: give one")
+    load = load_columns_from_args(args)
+    if load is None:
+        raise PostureIdError("--height-m makes the subject's body with the mass the plate "
+                             "weighs: name its load columns (--load-columns NAME ...)")
+    tilt = None if str(args.tilt_column).lower() == "none" else args.tilt_column
+    mass = standing_mass(args.recording, load, tilt)
+    say(mass.notice)
+    say(f"{args.recording}: the subject's body: Winter's tables for {args.height_m:.3g} m and "
+        f"{mass.mass_kg:.4g} kg, one segment (the force plate gives the body COM)")
+    return load_body(winter_body_file(args.height_m, mass.mass_kg, 1))
 
 
 def recording_body(args: argparse.Namespace, default: Path | None):

@@ -16,6 +16,7 @@ from posture_id.cli.arguments import (
 )
 from posture_id.cli.exit_status import answered
 from posture_id.cli.output_folder import LEDGER, OutputFolder, written_by_posture_id
+from posture_id.cli.plate_mass import add_load_arguments, load_columns_from_args
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import add_column_arguments, columns_from_args
 from posture_id.errors import PostureIdError
@@ -61,6 +62,8 @@ def add_parser(sub) -> None:
     p.add_argument("--plot", type=Path,
                    help="the per-condition parameters and FRF gains of every subject (PNG)")
     add_column_arguments(p)
+    add_load_arguments(p, "the mass of a subject whose rows give a height and no mass: the "
+                          "median of what the plate weighs in its trials")
     p.set_defaults(func=run)
 
 
@@ -94,7 +97,12 @@ def run(args: argparse.Namespace) -> int:
         from posture_id.executors import check_scheduler_address
 
         check_scheduler_address(args.scheduler)
-    options = StudyOptions(layout=layout, model=model,
+    load = load_columns_from_args(args)
+    if load is not None and all(t.body is not None or t.mass_kg is not None
+                                for t in manifest.trials):
+        raise PostureIdError(f"--load-columns weighs a subject whose rows give a height and no "
+                             f"mass, and every row of {args.manifest} gives its mass or body")
+    options = StudyOptions(layout=layout, model=model, load=load,
                            per_condition=tuple(per_condition), segments=args.segments,
                            frf=FrfOptions(skip_cycles=args.skip_cycles,
                                           max_frequency_hz=args.max_frequency_hz),

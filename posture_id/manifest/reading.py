@@ -6,7 +6,8 @@ subject's body (a URDF, or the height and mass its Winter body is made from).
     S01,eyes_closed,S01_ec_0.1Hz.txt,1.77,70.4
 
 Files and URDFs are relative to the manifest's folder (or absolute). The columns are found
-by name in any order (a ``body`` column, or ``height_m`` and ``mass_kg``); comma,
+by name in any order (a ``body`` column, or ``height_m`` and ``mass_kg``; a row with a
+height and no mass is weighed by the plate's load columns); comma,
 semicolon or tab separated; UTF-8, UTF-16 or Windows Latin-1 (said). A row with both a body
 and a height and mass uses the body (said). Every refusal is one line naming the
 manifest, the line and the column.
@@ -39,7 +40,8 @@ class TrialEntry:
     Attributes:
         subject, condition: as written. file: the trial's file (resolved).
         line: its line in the manifest. body: the subject's URDF (resolved), or None.
-        height_m, mass_kg: the subject's, for a Winter body (None with a URDF).
+        height_m, mass_kg: the subject's, for a Winter body (None with a URDF; a mass of
+            None: the force plate weighs the subject, ``StudyOptions.load``).
     """
 
     subject: str
@@ -138,7 +140,8 @@ def read_manifest(path: str | Path) -> StudyManifest:
                              "(one column each)")
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     has_body = "body" in header
-    has_size = "height_m" in header and "mass_kg" in header
+    has_size = "height_m" in header  # a mass_kg column, or the plate weighs the subject
+    has_mass = "mass_kg" in header
     if missing or not (has_body or has_size):
         wanted = missing + ([] if has_body or has_size else ["body (or height_m and mass_kg)"])
         raise PostureIdError(f"{path}: no column {', '.join(wanted)} (the header is "
@@ -170,11 +173,12 @@ def read_manifest(path: str | Path) -> StudyManifest:
             if not body.is_file():
                 raise PostureIdError(f"{path}: line {line}, column 'body': no such URDF "
                                      f"{cell['body']} (relative to {folder})")
-            if has_size and (cell["height_m"] or cell["mass_kg"]):
+            if has_size and (cell["height_m"] or cell.get("mass_kg")):
                 both.append(line)
         elif has_size:
             height = _number(path, line, "height_m", cell["height_m"], _HEIGHT_M, "m")
-            mass = _number(path, line, "mass_kg", cell["mass_kg"], _MASS_KG, "kg")
+            mass = (_number(path, line, "mass_kg", cell["mass_kg"], _MASS_KG, "kg")
+                    if has_mass and cell["mass_kg"] else None)  # None: the plate weighs
         else:
             raise PostureIdError(f"{path}: line {line}, column 'body': empty (give the "
                                  "subject's URDF, or height_m and mass_kg columns)")

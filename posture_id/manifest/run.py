@@ -26,6 +26,7 @@ import numpy as np
 from posture_id.cohorts import CohortRow, CohortTask, Journal, write_summary
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result, atomic_write_text, jsonable
+from posture_id.force_plate.load import LoadColumns
 from posture_id.frf.response import FrfOptions
 from posture_id.manifest.reading import StudyManifest, TrialEntry
 from posture_id.progress import Progress, report
@@ -49,7 +50,8 @@ class StudyOptions:
         segments: the Winter body's segments for a subject given by height and mass.
         frf: the FRF options. permutations: of the paired tests. level: the intervals'.
         workers: local processes (None: every core). scheduler: a Dask scheduler's
-        address (None: local).
+        address (None: local). load: the plate's load columns that weigh a subject whose
+        rows give a height and no mass (None: every row gives its mass or body).
     """
 
     layout: RecordingLayout = None
@@ -60,16 +62,22 @@ class StudyOptions:
     permutations: int = 2000
     workers: int | None = None
     scheduler: str | None = None
+    load: LoadColumns | None = None
 
-    def frf_record(self) -> dict:
-        """What a trial's FRF is made with (its JSON's ``cohort_options``)."""
-        return jsonable({"layout": self.layout, "frf": self.frf, "segments": self.segments})
+    def frf_record(self, entry: TrialEntry | None = None) -> dict:
+        """What a trial's FRF is made with (its JSON's ``cohort_options``): the options
+        and the trial's body (its URDF, or its height and mass: a subject weighed again
+        makes its FRFs again)."""
+        body = None if entry is None else (str(entry.body) if entry.body is not None
+                                           else f"{entry.height_m:g} m, {entry.mass_kg:g} kg")
+        return jsonable({"layout": self.layout, "frf": self.frf, "segments": self.segments,
+                         "body": body})
 
     def fit_record(self, trials: tuple[TrialEntry, ...] = ()) -> dict:
         """What a subject's joint fit is made with (its JSON's ``cohort_options``): the
         options and the subject's ``trials`` (file and condition each: a trial added to
         or dropped from the manifest makes the fit again)."""
-        return jsonable({**self.frf_record(), "model": self.model,
+        return jsonable({**self.frf_record(trials[0] if trials else None), "model": self.model,
                          "per_condition": list(self.per_condition),
                          "trials": [f"{t.file.name} [{t.condition}]" for t in trials]})
 
@@ -136,6 +144,40 @@ def _subject_fit(task: dict) -> dict | str:
     except Exception as exc:  # noqa: BLE001 - one subject's bug must not stop the study
         return _bug(f"subject {task['subject']}", exc)
     return {**fit.to_dict(), "subject": task["subject"]}
+
+
+def weighed(manifest: StudyManifest, options: StudyOptions) -> StudyManifest:
+    """``manifest`` with the mass of every subject whose rows give a height and no mass:
+    the median of its trials' plate masses (:func:`~posture_id.force_plate.load.
+    standing_mass`, over the level stretches of the layout's tilt column), said.
+
+    Raises:
+        PostureIdError: such a row without ``options.load`` (naming the line), and what
+            weighing refuses (naming the file).
+    """
+    unweighed = [t for t in manifest.trials if t.body is None and t.mass_kg is None]
+    if not unweighed:
+        return manifest
+    if options.load is None:
+        raise PostureIdError(f"{manifest.path}: line {unweighed[0].line}, column 'mass_kg': "
+                             "no mass: give it, or weigh the subjects on the plate (its load "
+                             "columns: --load-columns NAME ...)")
+    from posture_id.force_plate.load import standing_mass
+    from posture_id.force_plate.reading import ForcePlateColumns
+
+    tilt = options.layout.tilt if isinstance(options.layout, ForcePlateColumns) else None
+    masses, notices = {}, []
+    for subject in dict.fromkeys(t.subject for t in unweighed):
+        readings = [standing_mass(t.file, options.load, tilt).mass_kg
+                    for t in manifest.of(subject)]
+        masses[subject] = round(float(np.median(readings)), 2)
+        notices.append(f"{manifest.path}: subject {subject}'s mass is {masses[subject]:.4g} kg, "
+                       f"the median of what the plate weighs in its {len(readings)} trial(s) "
+                       f"({min(readings):.4g}–{max(readings):.4g} kg, "
+                       f"{', '.join(options.load.columns)})")
+    trials = tuple(replace(t, mass_kg=masses[t.subject]) if t.body is None and
+                   t.mass_kg is None else t for t in manifest.trials)
+    return replace(manifest, trials=trials, notices=(*manifest.notices, *notices))
 
 
 def _check_per_condition(manifest: StudyManifest, options: StudyOptions) -> None:
@@ -290,12 +332,14 @@ def run_study(manifest: StudyManifest, out: str | Path, options: StudyOptions | 
     """
     options = options or StudyOptions()
     out = Path(out)
+    manifest = weighed(manifest, options)
     if options.model is not None and options.per_condition:
         _check_per_condition(manifest, options)
     keys = {e.key: e for e in manifest.trials}
     trial_keys = [Path(f"{k}.trial") for k in keys]
     frf_journal = Journal(out / "frf", CohortTask("frequencies_hz",
-                                                  lambda _: options.frf_record(),
+                                                  lambda key: options.frf_record(
+                                                      keys[key.stem]),
                                                   _trial_row))
     tasks = {f"{k}.trial": {**_task(e, options), "key": f"{k}.trial"}
              for k, e in keys.items()}

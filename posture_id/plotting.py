@@ -873,6 +873,8 @@ def plot_study_conditions(result, path=None, ax=None):
         cell.set_ylabel(name)
         cell.set_title(f"{name} per condition (a line per subject)")
         cell.grid(alpha=0.3)
+        if cell.get_legend_handles_labels()[0]:
+            cell.legend(fontsize=7, title="subject", ncol=max(1, len(rows) // 12))
     gains = axes[-1]
     for k, c in enumerate(conditions):
         curves = []
@@ -882,10 +884,11 @@ def plot_study_conditions(result, path=None, ax=None):
                             and v is not None)
             if points:
                 f, g = zip(*points, strict=True)
-                gains.plot(f, g, color=f"C{k}", alpha=0.25, lw=0.8)
+                gains.plot(f, g, "o-" if len(f) == 1 else "-", color=f"C{k}", alpha=0.35,
+                           lw=0.8, label=None if curves else f"{c} (each subject)")
                 curves.append(dict(points))
         common = sorted(set.intersection(*(set(p) for p in curves))) if curves else []
-        if common:
+        if common:  # every condition is drawn; its median where its subjects share points
             gains.plot(common, [np.median([p[f] for p in curves]) for f in common], "o-",
                        color=f"C{k}", lw=2, label=f"{c} (median)")
     gains.set_xscale("log")

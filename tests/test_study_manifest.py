@@ -82,6 +82,12 @@ def test_a_study_fits_every_subject_jointly_and_compares_the_conditions_weights(
     tests = result.paired["eyes_open vs eyes_closed"]
     assert tests["parameters"]["parameters"][0]["parameter"] == "w"
     assert tests["parameters"]["parameters"][0]["difference"] < 0
+    # the plot: every subject in the parameters' legend, every condition in the gains'
+    figure = result.plot()
+    weights, gains = figure.axes[0], figure.axes[-1]
+    assert [t.get_text() for t in weights.get_legend().get_texts()] == ["S01", "S02", "S03"]
+    labels = " ".join(t.get_text() for t in gains.get_legend().get_texts())
+    assert "eyes_open" in labels and "eyes_closed" in labels
 
 
 def test_the_command_line_runs_a_study(study, tmp_path, capsys):

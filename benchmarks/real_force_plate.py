@@ -62,6 +62,28 @@ def _trials(data: Path) -> list[dict]:
     return trials
 
 
+def _cycle_difference(path: Path) -> float | None:
+    """The largest difference between one analysed cycle of the tilt and the next, % of
+    its peak: the finder's own measure (the difference averaged over a twentieth of a
+    cycle, :mod:`posture_id.simulation.periodic`), the platform's irregularity."""
+    import numpy as np
+
+    from posture_id.errors import RecordingError
+    from posture_id.simulation.periodic import find_periodic
+    from posture_id.text_table import read_text_table
+
+    table = read_text_table(path, RecordingError, "trial")
+    tilt = np.radians(table.column(COLUMNS[5]))
+    found = find_periodic(table.column(COLUMNS[1]) / 1000.0, tilt)
+    if found is None:
+        return None
+    p = found.period_samples
+    x = tilt[found.start: found.start + found.cycles * p]
+    width = max(p // 20, 1)
+    smoothed = np.abs(np.convolve(x[p:] - x[:-p], np.ones(width) / width, mode="valid"))
+    return float(100 * smoothed.max() / np.abs(x - np.median(tilt[:found.start])).max())
+
+
 def _channel(data: dict) -> dict:
     return data["channels"].get("body COM") or next(iter(data["channels"].values()))
 
@@ -97,7 +119,8 @@ def main(argv: list[str] | None = None) -> int:
                             "coherence": channel["coherence"][0],
                             "locked_share": channel.get("locked_share"),
                             "mass_kg": float(mass[1]) if mass else None,
-                            "cycles": int(cycles[1]) if cycles else None})
+                            "cycles": int(cycles[1]) if cycles else None,
+                            "cycle_difference_pct": _cycle_difference(t["file"])})
             else:
                 row["refusal"] = said.strip().splitlines()[-1][:200]
             rows.append(row)
@@ -151,18 +174,22 @@ def _report(result: dict, args: argparse.Namespace) -> str:
              "`--period-s`, no cropping), each at the frequency its tilt drove"
              + (f"; {', '.join(misnamed)} drove another than its name says" if misnamed
                 else "") + ".", "",
-             "| trial | subject | condition | nominal Hz | driven Hz | cycles | mass kg | "
-             "gain | phase ° | coherence | locked |", "|---|---|---|---|---|---|---|---|---|"
-             "---|---|"]
+             "Cycle difference: the largest difference between one analysed cycle of the "
+             "tilt and the next, % of its peak (the platform's own irregularity; the finder "
+             "analyses cycles within 2 %).", "",
+             "| trial | subject | condition | nominal Hz | driven Hz | cycles | cycle "
+             "difference | mass kg | gain | phase ° | coherence | locked |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if r["status"] != 0:
             lines.append(f"| {r['trial']} | {r['subject']} | {r['condition']} | "
-                         f"{r['nominal_hz']:g} | refused: {r['refusal']} |||||||")
+                         f"{r['nominal_hz']:g} | refused: {r['refusal']} ||||||||")
             continue
         locked = "" if r["locked_share"] is None else f"{100 * r['locked_share']:.0f} %"
         lines.append(f"| {r['trial']} | {r['subject']} | {r['condition']} | "
                      f"{r['nominal_hz']:g} | {r['driven_hz']:.4g} | {r['cycles']} | "
-                     f"{r['mass_kg']:.4g} | {r['gain']:.3g} | {r['phase_deg']:.0f} | "
+                     f"{r['cycle_difference_pct']:.2f} % | {r['mass_kg']:.4g} | "
+                     f"{r['gain']:.3g} | {r['phase_deg']:.0f} | "
                      f"{r['coherence']:.2f} | {locked} |")
     lines += ["", "## Eyes closed against eyes open", "",
               "The body-COM gain with the eyes closed over that with the eyes open, per "

@@ -15,7 +15,15 @@ __all__ = [
     "StimulusError",
     "RecordingError",
     "SimulationError",
+    "bug_line",
 ]
+
+
+def bug_line(exc: BaseException) -> str:
+    """One line saying an unexpected exception is a bug: its type and message, the
+    message's white space folded and cut at 300 characters."""
+    detail = " ".join(str(exc).split())[:300]
+    return f"internal error (a bug; please report it): {type(exc).__name__}: {detail}"
 
 
 class PostureIdError(Exception):

@@ -50,6 +50,11 @@ class TimeUnit(enum.Enum):
     SECONDS = "s"
     MILLISECONDS = "ms"
 
+    @property
+    def per_second(self) -> float:
+        """How many of this unit make a second."""
+        return 1000.0 if self is TimeUnit.MILLISECONDS else 1.0
+
 
 @dataclass(frozen=True)
 class RecordingColumns:
@@ -337,8 +342,7 @@ def on_even_time(table: TextTable, columns: RecordingColumns) -> TextTable:
     if columns.time is None or columns.sample_rate_hz is not None or table.n_rows < 3:
         return table
     table.require([columns.time])
-    unit, _ = _time_unit(table, columns)
-    seconds = table.column(columns.time) / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
+    unit, _, seconds = _time_column_seconds(table, columns)
     steps = np.diff(seconds)
     if not np.all(steps > 0):
         return table  # said by the time column's check, naming the line
@@ -358,8 +362,8 @@ def on_even_time(table: TextTable, columns: RecordingColumns) -> TextTable:
     jitter = float(np.abs(seconds - (intercept + interval * index)).max())
     grid = seconds[0] + interval * index
     k = table.index(columns.time)
-    values = np.column_stack([grid * (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
-                              if j == k else np.interp(grid, seconds, table.values[:, j])
+    values = np.column_stack([grid * unit.per_second if j == k
+                              else np.interp(grid, seconds, table.values[:, j])
                               for j in range(table.values.shape[1])])
     notice = (f"{table.path}: column '{columns.time}': the time stamps jitter by up to "
               f"{jitter * 1e3:.2g} ms about an even {1 / interval:.5g} Hz clock "
@@ -399,7 +403,7 @@ def lab_columns(table: TextTable, columns: RecordingColumns,
     notices = list(table.notices)
     if columns.sample_rate_hz is not None:
         time = np.arange(table.n_rows) / columns.sample_rate_hz
-        stated = _time_column_rate(table, columns, column)
+        stated = _time_column_rate(table, columns)
         rate = columns.sample_rate_hz
         if stated is not None and abs(stated - rate) > 0.01 * rate:
             notices.append(f"{path}: the sample rate given (--sample-rate-hz {rate:g}) "
@@ -407,8 +411,7 @@ def lab_columns(table: TextTable, columns: RecordingColumns,
                            f"every time is {stated / rate:.3g}× and every frequency "
                            f"{rate / stated:.3g}× what the time column says")
     else:
-        unit, stated = _time_unit(table, columns)
-        seconds = column[columns.time] / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
+        unit, stated, seconds = _time_column_seconds(table, columns)
         check_time_column(path, seconds, RecordingError, column=columns.time,
                           unit=unit.value, flag=None if stated else "--time-units",
                           lines=table.row_lines)
@@ -434,13 +437,18 @@ def lab_columns(table: TextTable, columns: RecordingColumns,
     return time, tilt, theta, tuple(notices)
 
 
-def _time_column_rate(table: TextTable, columns: RecordingColumns,
-                      column: dict[str, np.ndarray]) -> float | None:
+def _time_column_seconds(table: TextTable, columns: RecordingColumns
+                         ) -> tuple[TimeUnit, bool, np.ndarray]:
+    """(the time column's unit, whether its header states it, the column in seconds)."""
+    unit, stated = _time_unit(table, columns)
+    return unit, stated, table.column(columns.time) / unit.per_second
+
+
+def _time_column_rate(table: TextTable, columns: RecordingColumns) -> float | None:
     """Hz, the rate of a named time column (in its unit) when it increases, else None."""
     if columns.time is None:
         return None
-    unit, _ = _time_unit(table, columns)
-    steps = np.diff(column[columns.time]) / (1000.0 if unit is TimeUnit.MILLISECONDS else 1.0)
+    steps = np.diff(_time_column_seconds(table, columns)[2])
     if not len(steps) or not np.all(steps > 0):
         return None
     return float(1.0 / np.median(steps))

@@ -198,8 +198,8 @@ def test_a_platform_resting_at_another_level_after_the_sine_is_not_taken_for_cyc
 
 def test_a_real_platforms_irregular_cycles_are_all_analysed():
     """A real platform at 0.4 Hz: each cycle's amplitude and phase off by about 0.6 % (its
-    cycles differ by up to 1.8 % of the peak, as the public force-plate study's do), the
-    column rounded to 0.001°, at rest at another level after. Every whole cycle but the
+    cycles differ by up to 1.8 % of the peak; the public force-plate study's, up to
+    1.9 %), the column rounded to 0.001°, at rest at another level after. Every whole cycle but the
     last is analysed, at the frequency the platform drove."""
     rng = np.random.default_rng(7)
     t = np.arange(18001) / 100.0

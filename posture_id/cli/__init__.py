@@ -39,7 +39,7 @@ from posture_id.cli import (
 from posture_id.cli.arguments import Parser
 from posture_id.cli.exit_status import BUG, EPILOG, INTERRUPTED, REFUSED
 from posture_id.cli.renamed import normalised
-from posture_id.errors import PostureIdError
+from posture_id.errors import PostureIdError, bug_line
 
 __all__ = ["main", "build_parser", "COMMAND_GROUPS"]
 
@@ -114,7 +114,6 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # noqa: BLE001 - the one place that turns a bug into one line
         if args.debug:
             raise
-        detail = " ".join(str(exc).split())[:300]
-        print(f"posture-id: internal error (a bug; please report it): {type(exc).__name__}: "
-              f"{detail}. Run again with --debug for the traceback.", file=sys.stderr)
+        print(f"posture-id: {bug_line(exc)}. Run again with --debug for the traceback.",
+              file=sys.stderr)
         return BUG

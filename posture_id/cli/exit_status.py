@@ -25,9 +25,9 @@ INTERRUPTED = 130
 #: The help text's last paragraph, for every command.
 EPILOG = ("exit status: 0 answered; 1 answered and written, but doubtful (a doubtful "
           "verdict, a model that falls, a fit that did not converge, a body that fell, a "
-          "cohort's recording or a study's trial without an answer, or with a doubtful one); 2 "
-          "input refused (one "
-          "line says why); 3 a bug (--debug shows it); 130 interrupted (finished work kept)")
+          "cohort's recording or a study's trial without an answer, or with a doubtful one); "
+          "2 input refused (one line says why); 3 a bug (--debug shows it); 130 interrupted "
+          "(finished work kept)")
 
 
 def answered(doubtful: bool) -> int:

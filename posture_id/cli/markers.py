@@ -172,8 +172,6 @@ def _plate_weighed_body(args: argparse.Namespace):
     from posture_id.cli.plate_mass import load_columns_from_args
     from posture_id.force_plate.load import standing_mass
 
-    if args.body is not None:
-        raise PostureIdError("--body and --height-m are two bodies: give one")
     load = load_columns_from_args(args)
     if load is None:
         raise PostureIdError("--height-m makes the subject's body with the mass the plate "

@@ -26,7 +26,7 @@ from posture_id.simulation.stimulus import (
     PRTS_STATE_S,
     TiltProfile,
     prts,
-    tilt_from_csv,
+    read_tilt_file,
 )
 from posture_id.trials.reading import RecordingLayout, read_recording
 
@@ -102,11 +102,9 @@ def stimulus_from_args(args: argparse.Namespace, default: TiltProfile | None
     if getattr(args, "tilt", None):
         if given:
             raise PostureIdError(f"--tilt replaces the PRTS: {', '.join(given)} do not apply")
-        profile = tilt_from_csv(args.tilt)
-        from posture_id.text_table import read_text_table
-
-        for notice in read_text_table(args.tilt, PostureIdError, "tilt file").notices:
-            say(notice)  # its encoding, title lines skipped, decimal commas
+        profile, notices = read_tilt_file(args.tilt)
+        for notice in notices:  # its encoding, title lines skipped, decimal commas
+            say(notice)
         return profile
     if given:
         return prts(**prts_arguments(args))

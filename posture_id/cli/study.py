@@ -109,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
                            permutations=args.permutations, workers=args.workers,
                            scheduler=args.scheduler)
     with folder:
-        replaced = _study_folder(args.out, folder)
+        replaced = _study_folder(args.out)
         with TerminalProgress("study") as progress:
             result = run_study(manifest, args.out, options, progress)
     for notice in result.notices:  # the manifest's, then the study's (a refusal says its own)
@@ -131,7 +131,7 @@ STUDY_FILES = ("summary.csv", "trials.csv", "study.json", "frf/*.json", "fits/*.
                "paired/*.json")
 
 
-def _study_folder(out: Path, folder: OutputFolder) -> str:
+def _study_folder(out: Path) -> str:
     """Refuse an ``--out`` that holds files and is not a study's own (an empty folder, or
     one whose study.json posture-id wrote); for a study's own, the files the run replaces
     (to say so), else ""."""

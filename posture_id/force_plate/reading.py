@@ -134,11 +134,12 @@ def read_force_plate(path: str | Path, columns: ForcePlateColumns, body: Body,
     _check_cop_span(path, columns, cop, unit)
     force = _force(table, columns)
     notices = list(notices)
-    if force is not None and float(np.median(force)) < 0:
-        notices.append(f"{path}: column '{columns.force}': the normal force is negative "
-                       f"(median {float(np.median(force)):.4g} N: the plate's vertical axis "
-                       "points down); its magnitude is used")
     if force is not None:
+        median = float(np.median(force))
+        if median < 0:
+            notices.append(f"{path}: column '{columns.force}': the normal force is negative "
+                           f"(median {median:.4g} N: the plate's vertical axis points down); "
+                           "its magnitude is used")
         notices += _off_the_plate(path, columns, time, np.abs(force), load)
     com = com_angle_from_cop(cop, rate, load, tilt, force, columns.cop_options(unit),
                              str(path))

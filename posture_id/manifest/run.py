@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.cohorts import CohortRow, CohortTask, Journal, write_summary
-from posture_id.errors import PostureIdError
+from posture_id.errors import PostureIdError, bug_line
 from posture_id.fileio import Result, atomic_write_text, jsonable
 from posture_id.force_plate.load import LoadColumns
 from posture_id.frf.response import FrfOptions
@@ -124,7 +124,7 @@ def _trial_frf(task: dict) -> dict | str:
     except PostureIdError as exc:
         return str(exc)
     except Exception as exc:  # noqa: BLE001 - one trial's bug must not stop the study
-        return _bug(task["name"], exc)
+        return f"{task['name']}: {bug_line(exc)}"
     return {**result, "subject": task["subject"], "condition": task["condition"],
             "file": task["name"], "notices": list(trial.notices)}
 
@@ -142,7 +142,7 @@ def _subject_fit(task: dict) -> dict | str:
     except PostureIdError as exc:
         return str(exc)
     except Exception as exc:  # noqa: BLE001 - one subject's bug must not stop the study
-        return _bug(f"subject {task['subject']}", exc)
+        return f"subject {task['subject']}: {bug_line(exc)}"
     return {**fit.to_dict(), "subject": task["subject"]}
 
 
@@ -201,13 +201,6 @@ def _check_per_condition(manifest: StudyManifest, options: StudyOptions) -> None
             raise PostureIdError(f"the per-condition parameter {exc}") from None
 
 
-def _bug(what: str, exc: Exception) -> str:
-    """Why a trial or subject failed with an internal error, in one line that names it."""
-    detail = " ".join(str(exc).split())[:300]
-    return (f"{what}: internal error (a bug; please report it with this file): "
-            f"{type(exc).__name__}: {detail}")
-
-
 def _task(entry: TrialEntry, options: StudyOptions) -> dict:
     """A trial's task: its file (its bytes too for a cluster), its body's URDF text, how
     it is read."""
@@ -234,7 +227,8 @@ class StudyResult(Result):
         failed: {trial or subject: why}. doubtful: the subjects whose fit's verdict is
         doubtful. notices: what the study assumed, left out or did again (a manifest's
         encoding, a subject without a condition, a fit made again, a trial no longer
-        named). frfs: each trial's FRF JSON (as a dict), in the manifest's order.
+        named). trial_notices: what reading each trial with an FRF noticed (its stimulus,
+        encoding, a drop-out), in the manifest's order, each naming its file.
     """
 
     out: Path
@@ -247,13 +241,7 @@ class StudyResult(Result):
     failed: dict = field(default_factory=dict)
     doubtful: tuple[str, ...] = ()
     notices: tuple[str, ...] = ()
-    frfs: tuple[dict, ...] = field(default=(), repr=False)
-
-    @property
-    def trial_notices(self) -> tuple[str, ...]:
-        """What reading each trial with an FRF noticed (its stimulus, encoding, a drop-out),
-        in the manifest's order (each names its file)."""
-        return tuple(n for data in self.frfs for n in data.get("notices", ()))
+    trial_notices: tuple[str, ...] = ()
 
     @property
     def answered_doubtfully(self) -> bool:
@@ -383,7 +371,8 @@ def run_study(manifest: StudyManifest, out: str | Path, options: StudyOptions | 
                      if (fit.get("trust") or {}).get("level") == "doubtful")
     result = StudyResult(out, manifest.subjects, manifest.conditions, tuple(trial_rows),
                          tuple(subject_rows), tuple(rows), paired, failed, doubtful,
-                         tuple(notices), tuple(frfs.values()))
+                         tuple(notices), tuple(n for data in frfs.values()
+                                               for n in data.get("notices", ())))
     result.to_json(out / "study.json")
     return result
 

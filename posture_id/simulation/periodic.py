@@ -45,7 +45,7 @@ import numpy as np
 
 from posture_id.simulation.stimulus import TiltProfile, tilt_from_array
 
-__all__ = ["PeriodicTilt", "recognise_periodic", "find_periodic", "REPEAT_LEVEL",
+__all__ = ["PeriodicTilt", "recognise_periodic", "find_periodic", "true_runs", "REPEAT_LEVEL",
            "STEADY_TOLERANCE", "PLATFORM_TOLERANCE", "SINUSOID_SHARE", "DISTORTION_SHARE",
            "MOVING_SHARE"]
 
@@ -55,8 +55,9 @@ REPEAT_LEVEL = 0.1
 #: this share of its peak.
 STEADY_TOLERANCE = 0.01
 #: The cycles analysed repeat the next within the column's noise and this share of its
-#: peak: a real platform's cycles differ by up to 1.6 % of it (its servo's irregularity at
-#: 0.4 Hz, on the public force-plate study's trials), a fade's by far more.
+#: peak: a real platform's cycles differ by up to 1.9 % of it (its servo's irregularity
+#: at 0.4 Hz, on the public force-plate study's trials: benchmarks/real_force_plate.py),
+#: a fade's by far more.
 PLATFORM_TOLERANCE = 0.02
 #: One harmonic with this share of the steady cycle's power makes a sinusoid.
 SINUSOID_SHARE = 0.95
@@ -162,6 +163,13 @@ def _period(x: np.ndarray, min_lag: int) -> int | None:
     return lag
 
 
+def true_runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(starts (R,), stops (R,)): the runs of True in a boolean ``mask`` (S,),
+    ``mask[starts[r]:stops[r]]`` each."""
+    edges = np.diff(np.concatenate([[0], np.asarray(mask).astype(np.int8), [0]]))
+    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+
+
 def _steady_run(x: np.ndarray, p: int, tolerance: float) -> tuple[int, int] | None:
     """(first, end): the steady part x[first:end], the longest run of samples t whose
     next cycle repeats them: |x[t+p] − x[t]| ≤ ``tolerance`` for every sample of the
@@ -183,8 +191,7 @@ def _steady_run(x: np.ndarray, p: int, tolerance: float) -> tuple[int, int] | No
     good = (worst <= tolerance) & (top - bottom >= MOVING_SHARE * float(np.ptp(x)))
     if not good.any():
         return None
-    edges = np.diff(np.concatenate([[0], good.astype(np.int8), [0]]))
-    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    starts, stops = true_runs(good)
     k = int(np.argmax(stops - starts))
     # a window [t, t+p) that repeats: the samples t..t+2p−1 are two equal cycles
     return int(starts[k]), int(stops[k]) - 1 + 2 * p

@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.errors import StimulusError
-from posture_id.fileio import check_time_column, read_numeric_csv
+from posture_id.fileio import check_time_column
+from posture_id.text_table import read_text_table
 
 __all__ = [
     "TiltProfile",
@@ -23,6 +24,7 @@ __all__ = [
     "prts",
     "tilt_from_array",
     "tilt_from_csv",
+    "read_tilt_file",
     "recognise_prts",
     "recognise_lab_prts",
     "unit_position",
@@ -599,7 +601,14 @@ def tilt_from_csv(path: str | Path) -> TiltProfile:
         StimulusError: naming the file: not a numeric CSV, a column missing, times that
             do not start at 0, do not increase or are not in seconds, or a constant tilt.
     """
-    header, values = read_numeric_csv(path, StimulusError, "tilt file")
+    return read_tilt_file(path)[0]
+
+
+def read_tilt_file(path: str | Path) -> tuple[TiltProfile, tuple[str, ...]]:
+    """:func:`tilt_from_csv`'s profile and what reading the file noticed (its encoding,
+    title lines skipped, decimal commas), each naming the file."""
+    table = read_text_table(Path(path), StimulusError, "tilt file")
+    header, values = list(table.header), table.values
     for col in ("time_s", "tilt_deg"):
         if col not in header:
             raise StimulusError(f"{path}: column '{col}' is missing (header: {','.join(header)})")
@@ -608,4 +617,4 @@ def tilt_from_csv(path: str | Path) -> TiltProfile:
     angles = np.radians(values[:, header.index("tilt_deg")])
     if np.ptp(angles) == 0:
         raise StimulusError(f"{path}: column 'tilt_deg' is constant: there is no stimulus")
-    return tilt_from_array(times, angles, description=str(path))
+    return tilt_from_array(times, angles, description=str(path)), table.notices

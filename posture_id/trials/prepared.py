@@ -16,7 +16,7 @@ import numpy as np
 
 from posture_id.errors import RecordingError, StimulusError
 from posture_id.recording import Recording
-from posture_id.simulation.periodic import recognise_periodic
+from posture_id.simulation.periodic import recognise_periodic, true_runs
 from posture_id.simulation.stimulus import (
     LAB_STATE_RANGE_S,
     PRTS_REGISTERS,
@@ -245,8 +245,7 @@ def _motion_left_out(recording: Recording, found) -> list[str]:
     t, tilt = recording.time, recording.tilt
     inside = (t >= found.moving_from_s) & (t <= found.moving_until_s)
     same = np.concatenate([[False], np.diff(tilt) == 0]) & inside
-    edges = np.diff(np.concatenate([[0], same.astype(np.int8), [0]]))
-    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    starts, stops = true_runs(same)
     held = [(int(a) - 1, int(b) - 1) for a, b in zip(starts, stops, strict=True)
             if t[int(b) - 1] - t[int(a) - 1] >= _HELD_S]
     for a, b in held[:3]:

@@ -1,5 +1,6 @@
-"""The flags that read a motion-capture trial (C3D): which markers make each segment, the
-platform's tilt, the lab's axes, and how long a gap may be filled."""
+"""The flags that read a motion-capture trial (C3D), or the marker or tracker positions of a
+text table: which markers make each segment, the platform's tilt, the lab's axes, the
+positions' unit, and how long a gap may be filled."""
 
 from __future__ import annotations
 
@@ -25,16 +26,18 @@ __all__ = ["add_marker_arguments", "mapping_from_args", "marker_flags_given",
 #: The marker flags and their defaults (a flag is given when its value differs).
 _MARKER_FLAGS = {"segment_markers": None, "com_markers": None, "tilt_markers": None,
                  "tilt_channel": None, "tilt_scale": None, "forward_axis": None,
-                 "vertical_axis": "z", "max_gap_s": DEFAULT_MAX_GAP_S}
+                 "vertical_axis": "z", "max_gap_s": DEFAULT_MAX_GAP_S,
+                 "position_units": None}
 
 
 def add_marker_arguments(parser: argparse.ArgumentParser) -> None:
     """--segment-markers, --com-markers, --tilt-markers, --tilt-channel, --tilt-scale,
     --forward-axis, --vertical-axis, --max-gap-s."""
     group = parser.add_argument_group(
-        "a motion-capture trial (C3D)",
+        "a motion-capture trial (C3D), or marker or tracker positions in a CSV",
         "the angles from markers: segment angles in space from the vertical, positive "
-        "forward; the tilt positive when the platform's front edge goes down "
+        "forward; the tilt positive when the platform's front edge goes down; in a CSV a "
+        "point NAME is its columns NAME_x, NAME_y, NAME_z, its tilt the --tilt-column "
         "(docs/motion_capture.md)")
     group.add_argument("--segment-markers", nargs="+", metavar="SEGMENT=LOWER,UPPER",
                        help="each segment's lower and upper point, support upward (e.g. "
@@ -58,6 +61,9 @@ def add_marker_arguments(parser: argparse.ArgumentParser) -> None:
                             "one as --forward-axis=-y)")
     group.add_argument("--vertical-axis", choices=AXES, default="z",
                        help="the file's upward axis (default %(default)s)")
+    group.add_argument("--position-units", choices=("m", "cm", "mm"),
+                       help="a CSV's position columns' unit where their headers state none "
+                            "(default m)")
     group.add_argument("--max-gap-s", type=non_negative_float, default=DEFAULT_MAX_GAP_S,
                        help="the longest gap of an occluded marker filled (cubic spline), s; "
                             "a longer one is refused (default %(default)g)")
@@ -69,12 +75,14 @@ def marker_flags_given(args: argparse.Namespace) -> list[str]:
             if getattr(args, name, default) != default]
 
 
-def mapping_from_args(args: argparse.Namespace) -> MarkerMapping | None:
-    """The mapping the marker flags give, or None when none is given.
+def mapping_from_args(args: argparse.Namespace, table: bool = False) -> MarkerMapping | None:
+    """The mapping the marker flags give, or None when none is given; ``table``: for the
+    positions in a CSV (its time and tilt columns named by the CSV flags), else a C3D's.
 
     Raises:
         PostureIdError: both or neither of --segment-markers and --com-markers, both tilt
-            sources, --tilt-scale without --tilt-channel, no --forward-axis.
+            sources, --tilt-scale without --tilt-channel, no --forward-axis; for a C3D a
+            CSV's column flags, for a CSV a C3D's analog channel.
     """
     given = marker_flags_given(args)
     if not given:
@@ -86,7 +94,17 @@ def mapping_from_args(args: argparse.Namespace) -> MarkerMapping | None:
         ("--units", getattr(args, "units", None) is not None),
         ("--sample-rate-hz", getattr(args, "sample_rate_hz", None) is not None),
         ("--cop-column", getattr(args, "cop_column", None))) if on]
-    if columns:
+    if table:
+        beside = [f for f in columns if f in ("--angle-columns", "--cop-column")]
+        if beside:
+            raise PostureIdError(f"{', '.join(beside)} and the marker flags "
+                                 f"({', '.join(given)}) are two sources of the sway: give one")
+        if args.tilt_channel or args.tilt_scale is not None:
+            raise PostureIdError("--tilt-channel and --tilt-scale read a C3D's analog "
+                                 "channel; a CSV's tilt is its --tilt-column (or "
+                                 "--tilt-markers BACK,FRONT)")
+    elif columns or getattr(args, "position_units", None) is not None:
+        columns += ["--position-units"] if getattr(args, "position_units", None) else []
         raise PostureIdError(f"{', '.join(columns)} read a CSV file's columns, and the "
                              f"marker flags ({', '.join(given)}) a C3D trial: give the ones "
                              "for the file (a C3D's tilt: --tilt-markers or --tilt-channel)")
@@ -96,11 +114,12 @@ def mapping_from_args(args: argparse.Namespace) -> MarkerMapping | None:
     if args.tilt_scale is not None and not args.tilt_channel:
         raise PostureIdError("--tilt-scale goes with --tilt-channel (an analog channel's "
                              "degrees per unit)")
+    what = "a CSV's marker positions" if table else "a C3D trial"
     if not (args.segment_markers or args.com_markers):
-        raise PostureIdError(f"{', '.join(given)} read a C3D trial: name its markers too "
+        raise PostureIdError(f"{', '.join(given)} read {what}: name its markers too "
                              "(--segment-markers SEGMENT=LOWER,UPPER ..., or --com-markers)")
     if args.forward_axis is None:
-        raise PostureIdError("a C3D trial needs --forward-axis: the file's axis the subject "
+        raise PostureIdError(f"{what} needs --forward-axis: the file's axis the subject "
                              f"faces ({', '.join(AXES)}); angles are signed by it")
     tilt = None
     if args.tilt_markers:

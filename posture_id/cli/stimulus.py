@@ -18,7 +18,9 @@ from posture_id.cli.markers import add_marker_arguments, mapping_from_args, writ
 from posture_id.errors import PostureIdError
 from posture_id.force_plate.cop import CopUnit
 from posture_id.force_plate.reading import ForcePlateColumns
+from posture_id.motion_capture import is_c3d
 from posture_id.motion_capture.mapping import MarkerMapping
+from posture_id.motion_capture.marker_table import LengthUnit, MarkerColumns
 from posture_id.recording import AngleUnit, Recording, RecordingColumns, TimeUnit
 from posture_id.simulation.protocols import Protocol, read_protocol
 from posture_id.simulation.stimulus import (
@@ -184,7 +186,17 @@ def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
     None for the standard header."""
     units = _units_given(args)
     time_units = getattr(args, "time_units", None)
-    mapping = mapping_from_args(args)
+    table = not is_c3d(getattr(args, "recording", "") or "")
+    mapping = mapping_from_args(args, table=table)
+    if mapping is not None and table:
+        tilt = None if args.tilt_column.lower() == "none" or mapping.tilt is not None \
+            else args.tilt_column
+        return MarkerColumns(mapping, RecordingColumns(
+            time=args.time_column, tilt=tilt, angles=(),
+            unit=None if units is None else AngleUnit(units),
+            time_unit=None if time_units is None else TimeUnit(time_units),
+            sample_rate_hz=args.sample_rate_hz),
+            None if args.position_units is None else LengthUnit(args.position_units))
     if mapping is not None:
         if time_units is not None:
             raise PostureIdError("--time-units reads a CSV file's time column; a C3D trial "
@@ -234,6 +246,6 @@ def recording_and_stimulus(args: argparse.Namespace, body) -> tuple[Recording,
     layout = columns_from_args(args)
     recording = read_recording(args.recording, None if body is None else body.segment_names,
                                None if stimulus is None else stimulus.angle, layout, body)
-    if isinstance(layout, MarkerMapping) and getattr(args, "plot", None):
+    if isinstance(layout, MarkerMapping) and getattr(args, "plot", None):  # a C3D's
         write_marker_plot(Path(args.recording), layout, Path(args.plot))
     return recording, stimulus

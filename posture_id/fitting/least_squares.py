@@ -256,8 +256,11 @@ def _search_offset(run: FitRun, result: FitResult) -> FitResult:
     between the fitted locked sway, shifted, and the recorded one (:data:`OFFSET_TRIES`:
     over a wide range that distance has a minimum every stimulated period), each fitted
     again with the stimulus shifted by it (classes kept), the best fit kept; then, from
-    it, the best offset again while it still moves (at most :data:`OFFSET_ROUNDS` times).
-    The result's trial is the shifted one, so that what re-simulates it uses the offset.
+    it, the best offset again while it still moves to one not tried (at most
+    :data:`OFFSET_ROUNDS` times), the fit of least cost over all of them kept. Every
+    shifted trial analyses the moved stimulus's own whole cycles
+    (:meth:`~posture_id.trials.PreparedTrial.shifted_whole`). The result's trial is the
+    shifted one, so that what re-simulates it uses the offset.
     """
     limit = run.options.locked.max_offset_s  # within half a cycle (fit_recording checked)
     fixed = replace(run.options, classes=FixedClasses(),
@@ -282,14 +285,22 @@ def _search_offset(run: FitRun, result: FitResult) -> FitResult:
                                               OFFSET_TRIES)
         if abs(offset) >= OFFSET_SETTLED_S
         and (shifted := run.trial.shifted_whole(offset)) is not None]
-    fit = min(candidates, key=lambda f: f.cost)
-    trial = fit.trial
+    fit = best = min(candidates, key=lambda f: f.cost)
+    base = run.trial.time_offset_s  # offsets below are from the trial given
+    seen = {round(f.trial.time_offset_s - base, 3) for f in candidates}
     for _ in range(OFFSET_ROUNDS):
         step = projection.best_offset(np.degrees(fit.fitted), measured, limit)
-        if abs(step) < OFFSET_SETTLED_S or abs(trial.time_offset_s + step) > limit:
+        total = fit.trial.time_offset_s - base + step
+        if (abs(step) < OFFSET_SETTLED_S or abs(total) > limit
+                or round(total, 3) in seen):  # settled, out of range, or back again
             break
-        trial = trial.shifted(step)
-        fit = fit_shifted(trial, fit)
+        shifted = run.trial.shifted_whole(total)
+        if shifted is None:
+            break
+        seen.add(round(total, 3))
+        fit = fit_shifted(shifted, fit)
+        best = min(best, fit, key=lambda f: f.cost)
+    fit = best  # the best offset seen, not the last: two offsets can trade places
     return replace(fit, stages=tuple(stages), iterations=sum(s.iterations for s in stages),
                    evaluations=sum(s.evaluations for s in stages),
                    provenance=result.provenance)

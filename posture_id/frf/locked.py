@@ -267,6 +267,36 @@ class LockedProjection:
                                               / self.noise[None]) ** 2).sum(axis=(1, 2))
         return taus, cost
 
+    def smoothest_offset(self, recorded: np.ndarray, tilt: np.ndarray, max_offset_s: float,
+                         step_s: float = 0.01) -> float:
+        """s, the stimulus offset τ in [−max, max] at which the recording's empirical
+        stimulus-locked FRF, H_k = R_k / (U_k·e^{−2πif_kτ}) (the recorded harmonics over
+        the tilt's, delayed by τ), is smoothest from one compared harmonic to the next:
+        the least Σ|H_{k+1} − H_k|² over its noise, summed over the channels. A body's
+        response changes smoothly with frequency; a stimulus off the sway's clock by τ
+        adds a phase ramp that turns by 2π·τ·Δf between neighbours. Model-free, so it is
+        off by the body's own group delay (a few tenths of a second): a start for a
+        search, not an answer. ``recorded``: (S, M) and ``tilt``: (S,), one unit (the
+        weighted projection's noise gives the weights; unweighted, each harmonic counts
+        alike)."""
+        r = self.spectrum(np.asarray(recorded, dtype=float))  # (K, M)
+        u = self.spectrum(np.asarray(tilt, dtype=float)[:, None])[:, 0]  # (K,)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            h = r / u[:, None]
+            sd = self.noise / np.abs(u)[:, None]
+        weights = 1.0 / (sd[1:] ** 2 + sd[:-1] ** 2)
+        weights[~np.isfinite(weights)] = 0.0
+        taus = np.arange(-max_offset_s, max_offset_s + step_s / 2, step_s)
+        best, best_rough = 0.0, np.inf
+        for start in range(0, len(taus), 512):  # bounded memory for a wide search
+            turn = np.exp(2j * np.pi * np.outer(taus[start:start + 512], self.frequencies_hz))
+            shifted = turn[:, :, None] * h[None]  # (T, K, M): H with the delay taken off
+            rough = (np.abs(np.diff(shifted, axis=1)) ** 2 * weights[None]).sum(axis=(1, 2))
+            k = int(np.argmin(rough))
+            if rough[k] < best_rough:
+                best, best_rough = float(taus[start + k]), float(rough[k])
+        return best
+
     def best_offset(self, fitted: np.ndarray, recorded: np.ndarray, max_offset_s: float,
                     step_s: float = 0.001) -> float:
         """s, the stimulus offset τ in [−max, max] that minimises the weighted distance of

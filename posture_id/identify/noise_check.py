@@ -119,18 +119,46 @@ class NoiseCheck:
         recorded (locked) sway."""
         return self.relative <= CLOSE_ENOUGH
 
+    def weighting_note(self) -> str:
+        """Why the ratio and the shares seem to disagree, or "": the ratio weighs each
+        compared harmonic by its own noise and the shares do not, so a residual at
+        harmonics quieter (or noisier) than the rest is beyond (within) the noise by the
+        ratio, which decides, while its amplitude is within (beyond) what the noise leaves."""
+        if not (math.isfinite(self.ratio) and math.isfinite(self.noise_relative)
+                and self.noise_relative > 0):
+            return ""
+        unweighted = self.relative / self.noise_relative
+        if self.ratio > self.limit and unweighted <= 1.0:
+            return ("by amplitude it is within what the noise leaves, but it lies at the "
+                    "harmonics where the noise is small: beyond the noise there")
+        if self.ratio <= 1.0 and unweighted > self.limit:
+            return ("by amplitude it is beyond what the noise leaves, but it lies at the "
+                    "harmonics where the noise is large: within the noise there")
+        return ""
+
     def sentence(self) -> str:
+        """The residual in one clause: first the measure that decides whether it is within
+        the noise (its RMS in units of the noise at each compared harmonic, against
+        :attr:`limit`), then its share of the recorded sway (which decides whether it is
+        close, against :data:`CLOSE_ENOUGH`), with the share the noise alone leaves, and
+        :meth:`weighting_note` where the two seem to disagree."""
         if not math.isfinite(self.ratio):
             return "residual without end: the model falls in re-simulation"
         what = ("stimulus-locked residual" if self.basis is Basis.LOCKED else "residual")
-        verdict = ("consistent with the recording's noise" if self.consistent
-                   else "larger than the recording's noise allows")
-        noisy = ("" if not math.isfinite(self.noise_relative) else
-                 f"; the noise alone leaves about {100 * self.noise_relative:.0f} %"
-                 + (", too much to check an answer to "
-                    f"{100 * CLOSE_ENOUGH:g} %" if self.noise_relative > CLOSE_ENOUGH else ""))
-        return (f"{what} of {100 * self.relative:.1f} % of the recorded {self.basis} sway"
-                f"{noisy} ({self.ratio:.2f}× the recording's own noise, {verdict})")
+        verdict = (f"within the {self.limit:g}× the noise allows" if self.consistent
+                   else f"beyond the {self.limit:g}× the noise allows")
+        close = ("a close answer's" if self.acceptable
+                 else f"more than the {100 * CLOSE_ENOUGH:g} % of a close answer")
+        noisy = ""
+        if math.isfinite(self.noise_relative):
+            noisy = (f"; the noise alone leaves about {100 * self.noise_relative:.0f} %"
+                     + (", too much to check an answer to "
+                        f"{100 * CLOSE_ENOUGH:g} %" if self.noise_relative > CLOSE_ENOUGH
+                        else ""))
+        note = self.weighting_note()
+        return (f"{what} of {self.ratio:.2f}× the recording's own noise ({verdict}), "
+                f"{100 * self.relative:.1f} % of the recorded {self.basis} sway ({close})"
+                f"{noisy}" + (f"; {note}" if note else ""))
 
     def to_dict(self) -> dict:
         return {"ratio": self.ratio if math.isfinite(self.ratio) else None,

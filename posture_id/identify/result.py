@@ -78,6 +78,9 @@ class IdentificationResult(Result):
             (:class:`~posture_id.identify.verdict.TrustVerdict`), or None.
         relaxed_refit: the hybrid fitted again with the classes relaxed (the CNN was unsure
             of a class, or its classes left more than the recording's noise).
+        stimulus_offset_s: s, how far the answer's stimulus is from the one recorded or
+            named (moved by ``auto`` to where the sway says it ran, or fitted with
+            ``--max-offset-s``); 0 when it is where the file or the command line put it.
     """
 
     method: Method
@@ -103,6 +106,7 @@ class IdentificationResult(Result):
     fell_at_s: float | None = None
     verdict: TrustVerdict | None = None
     relaxed_refit: bool = False
+    stimulus_offset_s: float = 0.0
 
     @property
     def fell(self) -> bool:
@@ -128,6 +132,7 @@ class IdentificationResult(Result):
                                      "locked_share": s.locked_share}
                          for s in self.segments},
             "fell_at_s": self.fell_at_s,
+            "stimulus_offset_s": self.stimulus_offset_s,
             "trust": None if self.verdict is None else self.verdict.to_dict(),
             "wall_time_s": self.wall_time_s,
             "identification_time_s": self.identification_time_s,

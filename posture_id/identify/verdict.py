@@ -194,11 +194,14 @@ class TrustVerdict:
         out = []
         noise = self.noise
         if noise is not None and not noise.acceptable:
+            note = noise.weighting_note()
             out.append(
                 f"its noise alone leaves about {100 * noise.noise_relative:.0f} % of the "
                 f"recorded {noise.basis} sway, too much to check an answer to "
-                f"{100 * CLOSE_ENOUGH:g} % (the model's residual: {100 * noise.relative:.1f} %, "
-                f"{noise.ratio:.2f}× the noise)" if math.isfinite(noise.noise_relative) else
+                f"{100 * CLOSE_ENOUGH:g} % (the model's residual: {noise.ratio:.2f}× the "
+                f"noise, {100 * noise.relative:.1f} % of the sway"
+                + (f"; {note}" if note else "") + ")"
+                if math.isfinite(noise.noise_relative) else
                 f"the model leaves a {noise.sentence()}")
         if self.unpinned:
             out.append(f"the recording does not pin {_listed(self.unpinned)} (to "
@@ -221,11 +224,25 @@ class TrustVerdict:
         """True only for :attr:`TrustLevel.DOUBTFUL`."""
         return bool(self.reasons)
 
+    def open_bounds(self) -> str:
+        """The clause naming what least squares left on a bound that does not make the
+        answer doubtful (Ki, a delay), or "": the value is the search's edge, not the
+        subject's (a lumped delay of 0 s is no one's delay)."""
+        others = [b for b in self.on_bounds if b not in self.bounds_that_matter]
+        if not others:
+            return ""
+        zero_delay = any(b.split()[1] == "delay_s" and "lower" in b for b in others)
+        return ("on a search bound, which the recording leaves open: " + ", ".join(others)
+                + (" (a delay of 0 s is the search's edge, not the subject's delay)"
+                   if zero_delay else ""))
+
     def line(self) -> str:
         """The one line a user reads."""
+        bounds = self.open_bounds()
         if self.level is TrustLevel.IMPRECISE:
-            return ("trust: imprecise: " + "; ".join(self.imprecision)
-                    + ": nothing says the answer is wrong; its intervals give the precision")
+            return ("trust: imprecise: " + "; ".join(
+                (*self.imprecision, *([bounds] if bounds else ())))
+                + ": nothing says the answer is wrong; its intervals give the precision")
         if not self.doubtful:
             noise = self.noise
             if noise is None:
@@ -237,12 +254,10 @@ class TrustVerdict:
                 what = (f": the model is close ({noise.basis} residual "
                         f"{100 * noise.relative:.1f} % of the recorded body sway), though "
                         f"not within the noise ({noise.ratio:.2f}× it)")
-            others = [b for b in self.on_bounds if b not in self.bounds_that_matter]
-            if others:
-                what += ("; on a search bound, which the recording leaves open: "
-                         + ", ".join(others))
+            if bounds:
+                what += f"; {bounds}"
             return f"trust: good{what}"
-        line = "trust: DOUBTFUL: " + "; ".join(self.reasons)
+        line = "trust: DOUBTFUL: " + "; ".join((*self.reasons, *([bounds] if bounds else ())))
         return line + (f"; try {self.suggestion}" if self.suggestion else "")
 
     def benchmark_fields(self) -> dict:

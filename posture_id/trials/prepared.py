@@ -86,14 +86,27 @@ class PreparedTrial:
                        time_offset_s=self.time_offset_s + offset_s)
 
     def shifted_whole(self, offset_s: float) -> PreparedTrial | None:
-        """:meth:`shifted`, its periodic part counted from where it now starts when that is
-        later (so that the cycles analysed hold the stimulus's cycles only, not the
-        ``offset_s`` of lead-in before it); None when less than one whole cycle is left."""
+        """:meth:`shifted`, its analysed cycles the moved stimulus's own whole cycles
+        inside the recording: counted from where its periodic part now starts, a cycle
+        that moved before the recording's start left out, and none past the recording's
+        end or, for a stimulus of a given number of cycles, past its last (an offset
+        either way must not analyse lead-in or the level rest after the stimulus as
+        part of a cycle); None when less than one whole cycle is left."""
         shifted = self.shifted(offset_s)
-        if offset_s > 0:
-            stimulus = replace(shifted.stimulus,
-                               periodic_from_s=shifted.stimulus.periodic_from_s + offset_s)
-            shifted = replace(shifted, stimulus=stimulus)
+        stimulus, period = self.stimulus, self.stimulus.period_s
+        if period is not None:
+            duration = self.recording.duration_s
+            start = stimulus.periodic_from_s + offset_s
+            held = (stimulus.cycles if stimulus.cycles is not None
+                    else math.floor((duration - stimulus.periodic_from_s) / period + 1e-9))
+            skipped = max(0, math.ceil(-start / period - 1e-9))
+            start += skipped * period
+            fits = math.floor((duration - start) / period + 1e-9)
+            cycles = min(held - skipped, fits)
+            if cycles < 1:
+                return None
+            shifted = replace(shifted, stimulus=replace(shifted.stimulus, periodic_from_s=start,
+                                                        cycles=cycles))
         return None if shifted.whole_cycle_shortfall() is not None else shifted
 
     def require_segments(self, segments: tuple[str, ...]) -> None:

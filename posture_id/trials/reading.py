@@ -12,13 +12,15 @@ from posture_id.errors import RecordingError
 from posture_id.force_plate.reading import ForcePlateColumns, read_force_plate
 from posture_id.motion_capture import is_c3d
 from posture_id.motion_capture.mapping import MarkerMapping
+from posture_id.motion_capture.marker_table import MarkerColumns, read_marker_table
 from posture_id.recording import Recording, RecordingColumns
 
 __all__ = ["read_recording", "RecordingLayout", "RECORDING_SUFFIXES"]
 
 #: How a file's contents are read: a lab's columns (CSV), a force plate's columns (the COP
-#: turned into the body-COM sway), a marker mapping (C3D), or None (the standard CSV header).
-RecordingLayout = RecordingColumns | ForcePlateColumns | MarkerMapping | None
+#: turned into the body-COM sway), a marker mapping (C3D), a CSV's marker or tracker
+#: positions, or None (the standard CSV header).
+RecordingLayout = RecordingColumns | ForcePlateColumns | MarkerMapping | MarkerColumns | None
 #: The suffixes a cohort's folder is searched for.
 RECORDING_SUFFIXES = (".csv", ".c3d")
 
@@ -41,6 +43,8 @@ def read_recording(path: str | Path, segments: tuple[str, ...] | None = None,
             a marker mapping for a CSV, and whatever its reader refuses).
     """
     if is_c3d(path):
+        if isinstance(layout, MarkerColumns):
+            layout = layout.mapping  # a C3D has its own rate, units and channels
         if not isinstance(layout, MarkerMapping):
             raise RecordingError(
                 f"{path}: a C3D file: name the markers of each segment (--segment-markers "
@@ -56,6 +60,8 @@ def read_recording(path: str | Path, segments: tuple[str, ...] | None = None,
                                  "the subject's body: give it (--body URDF; posture-id body "
                                  "--height-m H --mass-kg M --segments 1 writes one)")
         return read_force_plate(path, layout, body, tilt_of)
+    if isinstance(layout, MarkerColumns):
+        return read_marker_table(path, layout, segments, tilt_of)
     if isinstance(layout, MarkerMapping):
         raise RecordingError(f"{path}: the marker flags (--segment-markers, --com-markers, "
                              "--tilt-markers, --tilt-channel, --forward-axis) read a C3D "

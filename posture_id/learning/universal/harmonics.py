@@ -24,6 +24,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from posture_id.errors import RecordingError
 from posture_id.frf.locked import LockedOptions, LockedProjection
 
 __all__ = ["STORED_MAX_HZ", "HarmonicLayout", "harmonic_layout", "sway_harmonics",
@@ -64,12 +65,24 @@ class HarmonicLayout:
 
 
 def harmonic_layout(tilt: np.ndarray, sample_rate_hz: float, period_s: float,
-                    start_s: float = 0.0, name: str = "recording") -> HarmonicLayout:
+                    start_s: float = 0.0, name: str = "recording",
+                    cycles: int | None = None) -> HarmonicLayout:
     """The layout of a recording's tilt (S,) rad with a stimulus of period ``period_s``
-    from ``start_s``."""
+    from ``start_s``; ``cycles``: its whole cycles from there (None: every whole cycle to
+    the end).
+
+    Raises:
+        RecordingError: the tilt over those cycles leaves no harmonic empty (it is not
+            periodic there), so that no noise can be estimated beside the driven ones.
+    """
     tilt = np.asarray(tilt, dtype=float)
     projection = LockedProjection.for_recording(tilt, np.zeros((len(tilt), 1)), sample_rate_hz,
-                                                period_s, start_s, _OPTIONS, name)
+                                                period_s, start_s, _OPTIONS, name, cycles)
+    if projection.excited.all():
+        raise RecordingError(
+            f"{name}: the tilt over the {projection.cycles} cycle(s) of {period_s:g} s from "
+            f"{start_s:.2f} s has power at every harmonic of its period: it does not repeat "
+            "there, and no harmonic is left to estimate the noise beside the driven ones")
     u = projection.all_harmonics(tilt)
     p = projection.period
     k = np.arange(1, len(u) + 1)

@@ -181,11 +181,11 @@ class UniversalIdentifier:
         rec = trial.recording
         # the recordings of a study share their stimulus: its layout is made once
         key = (hash(rec.tilt.tobytes()), len(rec.tilt), rec.sample_rate_hz, stimulus.period_s,
-               stimulus.periodic_from_s)
+               stimulus.periodic_from_s, stimulus.cycles)
         if key not in self._layouts:
             try:
                 layout = harmonic_layout(rec.tilt, rec.sample_rate_hz, stimulus.period_s,
-                                         stimulus.periodic_from_s, trial.name)
+                                         stimulus.periodic_from_s, trial.name, stimulus.cycles)
             except PostureIdError as error:
                 raise RecordingError(f"{error} (the universal network needs whole cycles of "
                                      "its stimulus)") from None

@@ -159,3 +159,25 @@ def test_a_vr_export_is_identified_as_it_is_within_2_percent_of_it_evenly_sample
         answers[name] = json.loads(out.read_text())["parameters"][body.joint_names[0]]
     for field in ("kp", "ki", "kd", "delay_s"):
         assert answers["vr"][field] == pytest.approx(answers["even"][field], rel=0.02), field
+
+
+def test_a_rate_given_a_hair_off_the_clock_is_refused_with_the_rate_the_states_say(
+        vr_lab, tmp_path, capsys):
+    """The headset's clock runs at 89.53 Hz; the lab gives --sample-rate-hz 90: the PRTS's
+    0.25 s states then last 0.2487 s, a cycle no whole number of samples (before: "a
+    stimulus cycle of 19.896 s is not a whole number of samples", and nothing to do about
+    it). The time stamps alone are read right."""
+    folder, body, _ = vr_lab
+    rate = 89.53
+    stimulus = prts(1.0, cycles=3, states=80, onset_s=3.0, start_state=20)
+    time = np.arange(int(66.0 * rate)) / rate
+    sway = simulate(body, default_parameters(body), stimulus.spanning(66.0),
+                    SimulationOptions(sample_rate_hz=500.0))
+    _write_export(tmp_path / "slow.csv", time, np.degrees(stimulus.angle(time)),
+                  np.interp(time, sway.time, sway.theta[:, 0]))
+    args = ["frf", str(tmp_path / "slow.csv"), *COM, "--body", str(body.urdf_path), "--out",
+            str(tmp_path / "slow.json")]
+    assert main([*args, "--sample-rate-hz", "90"]) == 2
+    err = capsys.readouterr().err
+    assert "states last 0.2487 s" in err and "--sample-rate-hz 89.53" in err, err
+    assert main(args) == 0, capsys.readouterr().err

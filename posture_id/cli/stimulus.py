@@ -181,12 +181,23 @@ def _force_plate_flags(args: argparse.Namespace) -> list[str]:
             if getattr(args, key, None) is not None]
 
 
+def _positions_table(recording: str | None) -> bool:
+    """Whether the marker flags read a CSV's positions: the recording is not a C3D file,
+    nor a folder holding one (a cohort of C3D trials)."""
+    if not recording:
+        return False
+    path = Path(recording)
+    if path.is_dir():
+        return not any(is_c3d(p) for p in path.iterdir())
+    return not is_c3d(path)
+
+
 def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
     """How the flags say the file is read: a lab's columns, a C3D's marker mapping, or
     None for the standard header."""
     units = _units_given(args)
     time_units = getattr(args, "time_units", None)
-    table = not is_c3d(getattr(args, "recording", "") or "")
+    table = _positions_table(getattr(args, "recording", None))
     mapping = mapping_from_args(args, table=table)
     if mapping is not None and table:
         tilt = None if args.tilt_column.lower() == "none" or mapping.tilt is not None \

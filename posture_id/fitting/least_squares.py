@@ -247,7 +247,8 @@ class FitRun:
             if side is not None:
                 field_name, joint = names[k // lay.n], self.body.joint_names[k % lay.n]
                 value = params.array(field_name)[k % lay.n]
-                out.append(f"{joint} {field_name} at its {side} bound ({value:.4g})")
+                shown = "0" if abs(value) < 1e-6 else f"{value:.4g}"  # the search's 1e-11
+                out.append(f"{joint} {field_name} at its {side} bound ({shown})")
         return tuple(out)
 
 

@@ -820,9 +820,17 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, noise: N
         return verdict
     if verdict.reasons == (classes_doubted,):  # its sentence says what decides them
         return verdict
-    return replace(verdict, suggestion=suggestion(method, locked_fit, share, on_bounds, noise,
-                                                  options.prior_sd is not None,
-                                                  reads_people_like,
-                                                  _unreadable_by_network(trial) is None,
-                                                  trial.stimulus.period_s,
-                                                  locked_fit and options.locked.max_offset_s > 0))
+    advice = suggestion(method, locked_fit, share, on_bounds, noise,
+                        options.prior_sd is not None, reads_people_like,
+                        _unreadable_by_network(trial) is None, trial.stimulus.period_s,
+                        locked_fit and options.locked.max_offset_s > 0)
+    if not trial.tilt_recorded and verdict.beyond_noise:
+        # a named stimulus that no timing fits: the stimulus itself is the first suspect
+        advice = (f"{NAMED_STIMULUS_CHECK}" + (f"; else {advice}" if advice else ""))
+    return replace(verdict, suggestion=advice)
+
+
+#: The suggestion for an answer beyond the noise on a stimulus named, not recorded.
+NAMED_STIMULUS_CHECK = ("checking the stimulus named against the lab's protocol (--states, "
+                        "--state-s, --start-state, --sign, --onset-s: the sway follows no "
+                        "timing of this one within the noise)")

@@ -97,8 +97,10 @@ class PreparedTrial:
         if period is not None:
             duration = self.recording.duration_s
             start = stimulus.periodic_from_s + offset_s
-            held = (stimulus.cycles if stimulus.cycles is not None
-                    else math.floor((duration - stimulus.periodic_from_s) / period + 1e-9))
+            # the whole cycles the profile holds (a recording may end before the last)
+            held = math.floor((min(duration, stimulus.duration) - stimulus.periodic_from_s)
+                              / period + 1e-9)
+            held = held if stimulus.cycles is None else min(held, stimulus.cycles)
             skipped = max(0, math.ceil(-start / period - 1e-9))
             start += skipped * period
             fits = math.floor((duration - start) / period + 1e-9)
@@ -222,10 +224,20 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
                            "interpolated linearly between samples (name the stimulus to use "
                            "its exact profile)")
     original = recording.sample_rate_hz
+    _check_clock(recording, stimulus, original if rate_hz is None else rate_hz)
+    why = ""
+    if rate_hz is None and stimulus.period_s is not None:
+        # the analysis at the recording's own rate needs whole cycles of samples: at a
+        # headset's 89.53 Hz a 20 s cycle is 1790.7; the nearest rate above that holds one
+        samples = stimulus.period_s * original
+        if abs(samples - round(samples)) > 1e-6 * samples:
+            rate_hz = math.ceil(samples) / stimulus.period_s
+            why = (f" (so that a stimulus cycle of {stimulus.period_s:g} s is a whole "
+                   f"{math.ceil(samples)} samples)")
     resampled = recording if rate_hz is None else recording.resampled(rate_hz)
     if resampled is not recording:
-        notices.append(f"{name}: resampled from {original:.4g} Hz to {rate_hz:g} Hz "
-                       "by linear interpolation")
+        notices.append(f"{name}: resampled from {original:.4g} Hz to {rate_hz:.6g} Hz "
+                       f"by linear interpolation{why}")
     # the model runs exactly as long as the recording: a stimulus that ends before it
     # (a level tail) is held, one that ends after it (a shorter recording) is cut
     stimulus = stimulus.spanning(resampled.duration_s)
@@ -237,6 +249,38 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
         if not np.array_equal(exact, resampled.tilt):
             resampled = replace(resampled, tilt=exact)
     return PreparedTrial(resampled, stimulus, tuple(notices), original, rate_hint=hint)
+
+
+#: s, a lab's PRTS states last a whole number of these; a state found within
+#: :data:`CLOCK_SHARE` of one says the recording's clock is off by that share.
+ROUND_STATE_S = 0.05
+CLOCK_SHARE = 0.02
+
+
+def _check_clock(recording: Recording, stimulus: TiltProfile, rate_hz: float) -> None:
+    """Refuse a PRTS whose cycle is not a whole number of samples at ``rate_hz`` because
+    its states, by the recording's clock, last a hair off a round time (0.2487 s for
+    0.25 s): the clock (a time column, or ``--sample-rate-hz``) is off by that share, and
+    the message gives the rate the states say."""
+    period, states = stimulus.period_s, stimulus.states
+    if period is None or states is None:
+        return
+    samples = period * rate_hz
+    if abs(samples - round(samples)) <= 1e-6 * samples:
+        return
+    state = period / states
+    nearest = round(state / ROUND_STATE_S) * ROUND_STATE_S
+    share = state / nearest - 1.0 if nearest > 0 else math.inf
+    if not 1e-6 < abs(share) <= CLOCK_SHARE:
+        return
+    rate = recording.sample_rate_hz
+    raise RecordingError(
+        f"{recording.name}: the PRTS's states last {state:.5g} s by the recording's clock "
+        f"({rate:.6g} Hz), a cycle of {period:.5g} s that is not a whole number of samples "
+        f"at {rate_hz:g} Hz; a lab's states last a round time ({nearest:g} s), so the clock "
+        f"is {100 * abs(share):.2g} % {'slow' if share > 0 else 'fast'}: the samples come "
+        f"at {rate * state / nearest:.6g} Hz (--sample-rate-hz {rate * state / nearest:.6g};"
+        " or leave --sample-rate-hz out where the time column's stamps are right)")
 
 
 #: Motion outside the steady cycles longer than this many cycles is said (a fade is

@@ -100,9 +100,10 @@ def mapping_from_args(args: argparse.Namespace, table: bool = False) -> MarkerMa
             raise PostureIdError(f"{', '.join(beside)} and the marker flags "
                                  f"({', '.join(given)}) are two sources of the sway: give one")
         if args.tilt_channel or args.tilt_scale is not None:
-            raise PostureIdError("--tilt-channel and --tilt-scale read a C3D's analog "
-                                 "channel; a CSV's tilt is its --tilt-column (or "
-                                 "--tilt-markers BACK,FRONT)")
+            where = getattr(args, "recording", None)
+            raise PostureIdError(f"{str(where) + ': ' if where else ''}--tilt-channel and "
+                                 "--tilt-scale read a C3D's analog channel; a CSV's tilt is "
+                                 "its --tilt-column (or --tilt-markers BACK,FRONT)")
     elif columns or getattr(args, "position_units", None) is not None:
         columns += ["--position-units"] if getattr(args, "position_units", None) else []
         raise PostureIdError(f"{', '.join(columns)} read a CSV file's columns, and the "

@@ -398,12 +398,11 @@ class Identifier:
         than the answer at the given timing, least squares on the stimulus-locked sway
         decides (:meth:`_timing_profile`): the timing moves only where its fit's χ² is
         lower than the given timing's by at least :data:`SHIFT_CHI2`. Searched within a
-        quarter cycle of a tilt column: half a cycle on, a PRTS (and a sinusoid) is its own
-        negative, which is a question of the tilt's sign, not of its timing; a named
-        stimulus is searched over the whole cycle, and a best shift beyond a quarter of it
-        is said as that question, never taken. A mistake in the recording (a negated tilt
-        column, an angle step, a change of control) is not explained by a shift and is
-        not moved."""
+        quarter cycle, tilt column or named stimulus alike: half a cycle on, a PRTS (and a
+        sinusoid) is its own negative, which is a question of the tilt's sign (the
+        verdict's mistakes name it: the body then sways against the tilt), never one of
+        its timing. A mistake in the recording (a negated tilt column, an angle step, a
+        change of control) is not explained by a shift and is not moved."""
         verdict = answer.verdict
         if answer.fell or verdict.noise is None:
             return answer, trial, None
@@ -413,7 +412,7 @@ class Identifier:
         if not (verdict.beyond_noise or people_like) or period is None \
                 or LockedProjection.for_periodic_trial(trial) is None:
             return answer, trial, None
-        reach = period / 4 if trial.tilt_recorded else period / 2
+        reach = period / 4  # half a cycle on, a PRTS or a sinusoid is its own negative
         ratio = verdict.noise.ratio
         judged = [j for j in self._timing_candidates(trial, reach, progress, start)
                   if j[0] < ratio]
@@ -429,13 +428,6 @@ class Identifier:
         gain = 2.0 * (given[0][0] - best_cost) if given else math.inf
         if abs(offset) < 0.02 or gain < SHIFT_CHI2:
             return answer, trial, None
-        if abs(offset) > period / 4 + 1e-9:
-            return replace(answer, notices=(*answer.notices, (
-                f"{trial.name}: the sway follows the named stimulus best {offset:+.2f} s "
-                f"from where it was named, more than a quarter cycle ({period / 4:.2f} s) "
-                "away: half a cycle on, this stimulus is its own negative, so that is a "
-                "question of its sign (--sign), or of which stimulus ran (--states), not "
-                "of its timing; not moved"))), trial, None
         moved = self._identify(fitted, Step(Method.CNN, self.fit_options), progress, start)
         best = moved.verdict.noise.ratio
         evidence = (f"least squares on the locked sway: χ² lower by {gain:.0f}; the network's "

@@ -536,11 +536,10 @@ OFFSET_ROUNDS = 3
 #: dips within about ±0.15 s of the right timing on an 80-state PRTS of 0.25 s states).
 ONSET_GRID_S = 0.1
 #: s, how far either side of the smoothest-FRF offset that grid reaches (that offset is
-#: off by the body's group delay: within 0.5 s of the truth on 19 of 24, within 1 s on 22,
-#: of benchmarks/prts_timing.py's recordings).
-ONSET_WINDOW_S = 1.0
+#: off by the body's group delay: ``smoothest_error_s`` in benchmarks/prts_timing.py).
+ONSET_WINDOW_S = 2.0
 #: The grid's local minima :meth:`Identifier._onset` identifies and settles.
-ONSET_CANDIDATES = 2
+ONSET_CANDIDATES = 3
 #: The least drop of the locked least-squares χ² (its cost ×2, in units of the noise)
 #: for which ``auto`` moves a stimulus in time: on 80-state PRTS recordings of people-like
 #: sway the right timing beats the next local minimum by more than this in most, and a
@@ -548,24 +547,6 @@ ONSET_CANDIDATES = 2
 SHIFT_CHI2 = 10.0
 #: s, the offset ``auto``'s least squares still fits about a stimulus it moved in time.
 TIMING_POLISH_S = 0.5
-
-
-#: s, the offset ``auto``'s least squares still fits about a stimulus it moved in time.
-TIMING_POLISH_S = 0.5
-
-
-def shift_evidence(ratio: float, shifted_ratio: float, entries: int) -> float:
-    """How far a shift of the stimulus lowers the network's locked residual beyond chance:
-    each of the ``entries`` compared harmonics (of every segment) contributes |R|²/σ²,
-    about 1 for noise alone, so the residual's sum n·ratio² varies by about √n between
-    two answers that both explain the sway as well as the noise allows; the evidence is
-    the drop of that sum, n·(ratio² − shifted_ratio²), over √(2n) (−inf when the shifted
-    answer falls)."""
-    if not math.isfinite(shifted_ratio):
-        return -math.inf
-    if not math.isfinite(ratio):
-        return math.inf
-    return entries * (ratio**2 - shifted_ratio**2) / math.sqrt(2.0 * entries)
 
 
 @dataclass(frozen=True)

@@ -181,3 +181,30 @@ def test_a_rate_given_a_hair_off_the_clock_is_refused_with_the_rate_the_states_s
     err = capsys.readouterr().err
     assert "states last 0.2487 s" in err and "--sample-rate-hz 89.53" in err, err
     assert main(args) == 0, capsys.readouterr().err
+
+
+def test_a_tracker_that_lost_tracking_is_a_gap_filled_or_refused(vr_lab, tmp_path):
+    """A tracker writes (0, 0, 0) while it has lost tracking: a short stretch is filled
+    as a C3D's gap is, a long one refused with its frames."""
+    folder, body, theta = vr_lab
+    lines = (folder / "even.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    hip = [header.index(f"hip_{a}") for a in "xyz"]
+
+    def lost(rows: range, name: str):
+        edited = [lines[0]]
+        for k, line in enumerate(lines[1:]):
+            cells = line.split(",")
+            if k in rows:
+                for j in hip:
+                    cells[j] = "0"
+            edited.append(",".join(cells))
+        (tmp_path / name).write_text("\n".join(edited) + "\n")
+        return tmp_path / name
+
+    short = read_recording(lost(range(900, 909), "short.csv"), body.segment_names, None,
+                           _layout())
+    assert _rms_deg(short.theta[:, 0] - theta[: len(short.time)]) < 0.03
+    with pytest.raises(RecordingError, match=r"long\.csv.*'hip'.*frames 901"):
+        read_recording(lost(range(900, 990), "long.csv"), body.segment_names, None,
+                       _layout())

@@ -396,8 +396,9 @@ class Identifier:
         The network's residual finds them but cannot choose: on people-like sway its own
         error moves it as much as the timing does. Where a candidate's answer leaves less
         than the answer at the given timing, least squares on the stimulus-locked sway
-        decides (:meth:`_timing_profile`): the timing moves only where its fit's χ² is
-        lower than the given timing's by at least :data:`SHIFT_CHI2`. Searched within a
+        decides (:meth:`_timing_profile`, one prior for every timing): the timing moves
+        only where its fit's χ² is lower than the given timing's by at least
+        :data:`SHIFT_CHI2`. Searched within a
         quarter cycle, tilt column or named stimulus alike: half a cycle on, a PRTS (and a
         sinusoid) is its own negative, which is a question of the tilt's sign (the
         verdict's mistakes name it: the body then sways against the tilt), never one of
@@ -486,13 +487,15 @@ class Identifier:
                         polish: bool = True) -> list:
         """(cost, the fitted trial, the start's answer) of least squares on the
         stimulus-locked sway from each (trial, network answer) of ``starts``, the
-        network's classes kept, no prior (so that the costs compare: χ² = 2·cost); with
-        ``polish``, the offset fitted too within :data:`TIMING_POLISH_S`. A start whose
-        fit fails is left out."""
+        network's classes kept, with docs/model.md §5's prior about the body's defaults
+        (:data:`TIMING_PRIOR_SD`: one prior for every timing, so that the costs compare,
+        χ² = 2·cost with the prior's terms; without it a wrong timing's fit runs to
+        parameters no person has and can beat the right one); with ``polish``, the offset
+        fitted too within :data:`TIMING_POLISH_S`. A start whose fit fails is left out."""
         from posture_id.fitting.least_squares import fit_recording
 
-        options = replace(self.fit_options, classes=FixedClasses(), prior_sd=None,
-                          prior_centre=None, locked=LockedOptions(
+        options = replace(self.fit_options, classes=FixedClasses(),
+                          prior_sd=TIMING_PRIOR_SD, prior_centre=None, locked=LockedOptions(
                               max_offset_s=TIMING_POLISH_S if polish else 0.0))
         out = []
         for shifted, answer in starts:
@@ -547,6 +550,9 @@ ONSET_CANDIDATES = 3
 SHIFT_CHI2 = 10.0
 #: s, the offset ``auto``'s least squares still fits about a stimulus it moved in time.
 TIMING_POLISH_S = 0.5
+#: The prior SD (normalised parameters, about the body's defaults: docs/model.md §5) of
+#: the fits that decide the timing.
+TIMING_PRIOR_SD = 0.5
 
 
 @dataclass(frozen=True)

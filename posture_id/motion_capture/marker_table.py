@@ -10,7 +10,9 @@ else the one given, else metres; a unit that no standing person's segments fit i
 with the unit that fits. Time stamps that jitter (a headset's clock) are resampled onto
 their even clock first (:func:`~posture_id.recording.on_even_time`), said in a notice. The
 platform's tilt is the table's tilt column (an angle), or two platform points
-(``--tilt-markers``), or the named stimulus's.
+(``--tilt-markers``), or the named stimulus's. A point at exactly (0, 0, 0), what a tracker
+writes when it loses tracking, is missing there, and its gap is filled (or refused) as a
+C3D's is.
 """
 
 from __future__ import annotations
@@ -122,6 +124,7 @@ def _positions(table: TextTable, markers: tuple[str, ...], unit: LengthUnit | No
     scale = METRES_PER_UNIT[name]
     points = np.stack([np.column_stack([table.values[:, k] for k in indices[m]])
                        for m in markers], axis=1) * scale
+    points[np.all(points == 0.0, axis=2)] = np.nan  # a tracker that lost tracking
     return points, name, from_header
 
 

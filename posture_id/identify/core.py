@@ -415,18 +415,23 @@ class Identifier:
             return answer, trial, None
         reach = period / 4  # half a cycle on, a PRTS or a sinusoid is its own negative
         ratio = verdict.noise.ratio
+        cycles = LockedProjection.for_periodic_trial(trial).cycles
+        # a candidate compares only on as many cycles as the given timing analyses (a
+        # shift that loses one to the recording's start has less sway to explain)
         judged = [j for j in self._timing_candidates(trial, reach, progress, start)
-                  if j[0] < ratio]
+                  if j[0] < ratio and LockedProjection.for_periodic_trial(j[1]) is not None
+                  and LockedProjection.for_periodic_trial(j[1]).cycles == cycles]
         if not judged:
             return answer, trial, None
         given = self._timing_profile([(trial, answer)], progress, polish=False)
         profile = self._timing_profile([(shifted, moved) for _, shifted, moved in judged],
                                        progress)
-        if not profile:
-            return answer, trial, None
+        if not (given and profile):
+            return answer, trial, None  # a fit failed: nothing to compare
+        given = given[0][0]
         best_cost, fitted, moved = min(profile, key=lambda p: p[0])
         offset = fitted.time_offset_s - trial.time_offset_s
-        gain = 2.0 * (given[0][0] - best_cost) if given else math.inf
+        gain = 2.0 * (given - best_cost)
         if abs(offset) < 0.02 or gain < SHIFT_CHI2:
             return answer, trial, None
         moved = self._identify(fitted, Step(Method.CNN, self.fit_options), progress, start)
@@ -486,12 +491,14 @@ class Identifier:
     def _timing_profile(self, starts: list, progress: Progress | None,
                         polish: bool = True) -> list:
         """(cost, the fitted trial, the start's answer) of least squares on the
-        stimulus-locked sway from each (trial, network answer) of ``starts``, the
-        network's classes kept, with docs/model.md §5's prior about the body's defaults
+        stimulus-locked sway at each (trial, network answer) of ``starts``, from that
+        answer, its classes kept, with docs/model.md §5's prior about the body's defaults
         (:data:`TIMING_PRIOR_SD`: one prior for every timing, so that the costs compare,
         χ² = 2·cost with the prior's terms; without it a wrong timing's fit runs to
-        parameters no person has and can beat the right one); with ``polish``, the offset
-        fitted too within :data:`TIMING_POLISH_S`. A start whose fit fails is left out."""
+        parameters no person has and can beat the right one); with ``polish`` the offset
+        fitted too within :data:`TIMING_POLISH_S` (a candidate a few tens of milliseconds
+        off the right timing must not lose to a wrong one for that). A start whose fit
+        fails is left out."""
         from posture_id.fitting.least_squares import fit_recording
 
         options = replace(self.fit_options, classes=FixedClasses(),

@@ -415,17 +415,20 @@ class Identifier:
             return answer, trial, None
         reach = period / 4  # half a cycle on, a PRTS or a sinusoid is its own negative
         ratio = verdict.noise.ratio
-        cycles = LockedProjection.for_periodic_trial(trial).cycles
-        # a candidate compares only on as many cycles as the given timing analyses (a
-        # shift that loses one to the recording's start has less sway to explain)
+        # a candidate competes only on as many cycles as the given timing analyses: a
+        # shift that moves the stimulus's start before the recording's, or its end past
+        # it, loses a cycle, and a χ² over less sway wins for that alone (compared on the
+        # same fewer cycles, a wrong timing of people-like sway still won: one cycle
+        # cannot tell the subject's own sway from the response)
+        cycles = _analysed_cycles(trial)
         judged = [j for j in self._timing_candidates(trial, reach, progress, start)
-                  if j[0] < ratio and LockedProjection.for_periodic_trial(j[1]) is not None
-                  and LockedProjection.for_periodic_trial(j[1]).cycles == cycles]
+                  if j[0] < ratio and _analysed_cycles(j[1]) == cycles]
         if not judged:
             return answer, trial, None
         given = self._timing_profile([(trial, answer)], progress, polish=False)
-        profile = self._timing_profile([(shifted, moved) for _, shifted, moved in judged],
-                                       progress)
+        profile = [p for p in self._timing_profile(
+            [(shifted, moved) for _, shifted, moved in judged], progress)
+            if _analysed_cycles(p[1]) == cycles]
         if not (given and profile):
             return answer, trial, None  # a fit failed: nothing to compare
         given = given[0][0]
@@ -648,6 +651,12 @@ def _network_floor(options: FitOptions, scales, network_intervals) -> dict:
 #: The least SD of the network's prior on a normalised parameter (its intervals can be
 #: narrow where the network has seen much of the same).
 MIN_PRIOR_SD = 0.05
+
+
+def _analysed_cycles(trial: PreparedTrial) -> int | None:
+    """The stimulus cycles the trial's locked analysis spans (None: none)."""
+    projection = LockedProjection.for_periodic_trial(trial)
+    return None if projection is None else projection.cycles
 
 
 def _unreadable_by_network(trial: PreparedTrial) -> str | None:

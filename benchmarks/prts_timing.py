@@ -88,10 +88,10 @@ def recording(seed: int, index: int, control: bool, folder: Path):
     return body, truth, replace(rec, tilt=stimulus.angle(rec.time - shift)), shift
 
 
-def ceiling_error(body, truth, rec, shift: float) -> float:
+def ceiling_error(body, truth, trial, shift: float) -> float:
     """s, where the true parameters' locked sway best matches the recorded one, from the
-    truth: the timing error the recording leaves even to the right model."""
-    trial = prepare_trial(rec)
+    truth: the timing error the recording leaves even to the right model; ``trial``: the
+    recording prepared."""
     right = trial.shifted_whole(-shift)
     projection = LockedProjection.for_trial(right, LockedOptions())
     sway = simulate(body, truth, right.stimulus)
@@ -100,10 +100,10 @@ def ceiling_error(body, truth, rec, shift: float) -> float:
                                   CEILING_REACH_S, step_s=0.005)
 
 
-def smoothest_error(rec, shift: float) -> float:
+def smoothest_error(trial, shift: float) -> float:
     """s, the model-free start of the search (where the recording's locked FRF is
-    smoothest, within a quarter cycle) from the truth."""
-    trial = prepare_trial(rec)
+    smoothest, within a quarter cycle) from the truth; ``trial``: the recording
+    prepared."""
     projection = LockedProjection.for_trial(trial, LockedOptions())
     found = projection.smoothest_offset(np.degrees(trial.recording.theta),
                                         np.degrees(trial.recording.tilt),
@@ -120,6 +120,7 @@ def _one(task: tuple) -> dict:
     verdict = result.verdict
     line = verdict.line()
     error = result.stimulus_offset_s + shift
+    prepared = prepare_trial(rec)  # once, for the two references
     return {"index": index, "control": control, "shift_s": shift,
             "found_s": result.stimulus_offset_s, "error_s": error,
             "moved": abs(result.stimulus_offset_s) > 1e-9,
@@ -128,8 +129,8 @@ def _one(task: tuple) -> dict:
             "names_search": "--max-offset-s" in line or any(
                 "--max-offset-s" in n for n in result.notices),
             "half_cycle": bool(abs(abs(error) - 10.0) < 1.0),
-            "ceiling_error_s": ceiling_error(body, truth, rec, shift),
-            "smoothest_error_s": smoothest_error(rec, shift),
+            "ceiling_error_s": ceiling_error(body, truth, prepared, shift),
+            "smoothest_error_s": smoothest_error(prepared, shift),
             "seconds": seconds, "line": line}
 
 

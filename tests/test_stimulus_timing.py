@@ -5,7 +5,6 @@ here from simulated sway; benchmarks/prts_timing.py measures the same over many.
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -145,7 +144,7 @@ def test_a_delay_on_its_lower_bound_is_said_to_be_the_search_edge():
     line = verdict.line()
     assert "ankle delay_s at its lower bound (0)" in line
     assert "the search's edge, not the subject's delay" in line
-    assert math.isfinite(noise.ratio)
+    assert not verdict.doubtful  # a delay on its bound is what the recording leaves open
 
 
 def test_the_smoothest_frf_offset_finds_a_clean_shift(subject):

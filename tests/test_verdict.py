@@ -41,6 +41,7 @@ def test_people_like_sway_is_inside_the_universal_models_scope(tip):
     subject = people_like(tip, default_parameters(tip), prts(), 0.2, seed=4)
     result = identify(subject.recording, tip)
     verdict = result.verdict
+    assert result.stimulus_offset_s == 0.0  # rightly timed: the timing search keeps it
     assert verdict.locked_share < PEOPLE_LIKE_SHARE
     assert not any("stimulus-locked; the network" in r for r in verdict.reasons)
     assert not any("least squares on the raw sway" in r for r in verdict.reasons)

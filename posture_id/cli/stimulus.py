@@ -5,6 +5,7 @@ column flags that read a lab's recording as it is."""
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 from posture_id.cli.arguments import (
@@ -200,14 +201,11 @@ def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
     table = _positions_table(getattr(args, "recording", None))
     mapping = mapping_from_args(args, table=table)
     if mapping is not None and table:
-        tilt = None if args.tilt_column.lower() == "none" or mapping.tilt is not None \
-            else args.tilt_column
-        return MarkerColumns(mapping, RecordingColumns(
-            time=args.time_column, tilt=tilt, angles=(),
-            unit=None if units is None else AngleUnit(units),
-            time_unit=None if time_units is None else TimeUnit(time_units),
-            sample_rate_hz=args.sample_rate_hz),
-            None if args.position_units is None else LengthUnit(args.position_units))
+        columns = _lab_columns(args, units, time_units, ())
+        if mapping.tilt is not None:  # the platform's markers give the tilt
+            columns = replace(columns, tilt=None)
+        return MarkerColumns(mapping, columns, None if args.position_units is None
+                             else LengthUnit(args.position_units))
     if mapping is not None:
         if time_units is not None:
             raise PostureIdError("--time-units reads a CSV file's time column; a C3D trial "
@@ -218,9 +216,8 @@ def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
         if getattr(args, "angle_columns", None):
             raise PostureIdError("--cop-column and --angle-columns are two sources of the "
                                  "sway: give one")
-        tilt = None if args.tilt_column.lower() == "none" else args.tilt_column
         return ForcePlateColumns(
-            cop=args.cop_column, time=args.time_column, tilt=tilt,
+            cop=args.cop_column, time=args.time_column, tilt=_tilt_column(args),
             force=args.force_column, unit=None if units is None else AngleUnit(units),
             time_unit=None if time_units is None else TimeUnit(time_units),
             sample_rate_hz=args.sample_rate_hz,
@@ -242,8 +239,19 @@ def columns_from_args(args: argparse.Namespace) -> RecordingLayout:
             raise PostureIdError("--time-column and --tilt-column go with --angle-columns "
                                  "(name the file's columns)")
         return None
-    tilt = None if args.tilt_column.lower() == "none" else args.tilt_column
-    return RecordingColumns(time=args.time_column, tilt=tilt, angles=tuple(args.angle_columns),
+    return _lab_columns(args, units, time_units, tuple(args.angle_columns))
+
+
+def _tilt_column(args: argparse.Namespace) -> str | None:
+    """--tilt-column, or None for ``none`` (the file has no tilt column)."""
+    return None if args.tilt_column.lower() == "none" else args.tilt_column
+
+
+def _lab_columns(args: argparse.Namespace, units: str | None, time_units: str | None,
+                 angles: tuple[str, ...]) -> RecordingColumns:
+    """A lab's file's time, tilt and ``angles`` columns and their units, as the flags
+    name them."""
+    return RecordingColumns(time=args.time_column, tilt=_tilt_column(args), angles=angles,
                             unit=None if units is None else AngleUnit(units),
                             time_unit=None if time_units is None else TimeUnit(time_units),
                             sample_rate_hz=args.sample_rate_hz)

@@ -410,8 +410,8 @@ class Identifier:
         people_like = verdict.locked_share is not None and \
             verdict.locked_share < PEOPLE_LIKE_SHARE
         period = trial.stimulus.period_s
-        if not (verdict.beyond_noise or people_like) or period is None \
-                or LockedProjection.for_periodic_trial(trial) is None:
+        cycles = _analysed_cycles(trial)
+        if not (verdict.beyond_noise or people_like) or period is None or cycles is None:
             return answer, trial, None
         reach = period / 4  # half a cycle on, a PRTS or a sinusoid is its own negative
         ratio = verdict.noise.ratio
@@ -420,7 +420,6 @@ class Identifier:
         # it, loses a cycle, and a χ² over less sway wins for that alone (compared on the
         # same fewer cycles, a wrong timing of people-like sway still won: one cycle
         # cannot tell the subject's own sway from the response)
-        cycles = _analysed_cycles(trial)
         judged = [j for j in self._timing_candidates(trial, reach, progress, start)
                   if j[0] < ratio and _analysed_cycles(j[1]) == cycles]
         if not judged:
@@ -546,7 +545,7 @@ class Identifier:
 #: Rounds of :meth:`Identifier._settle_offset`.
 OFFSET_ROUNDS = 3
 #: s, the step of :meth:`Identifier._onset`'s grid of shifts (the network's residual
-#: dips within about ±0.15 s of the right timing on an 80-state PRTS of 0.25 s states).
+#: dips narrowly about the right timing: a fraction of a 0.25 s PRTS state).
 ONSET_GRID_S = 0.1
 #: s, how far either side of the smoothest-FRF offset that grid reaches (that offset is
 #: off by the body's group delay: ``smoothest_error_s`` in benchmarks/prts_timing.py).

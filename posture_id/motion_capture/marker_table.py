@@ -171,9 +171,9 @@ def read_marker_table(path: str | Path, layout: MarkerColumns,
     path = Path(path)
     mapping, columns = layout.mapping, layout.columns
     table = on_even_time(read_text_table(path, RecordingError, "recording"), columns)
-    needs_tilt = columns.tilt is None and mapping.tilt is None
+    from_markers = isinstance(mapping.tilt, TiltMarkers)  # else the column, or tilt_of
     time, tilt, _, notices = lab_columns(
-        table, columns, tilt_of if needs_tilt else (lambda t: np.zeros_like(t)))
+        table, columns, (lambda t: np.zeros_like(t)) if from_markers else tilt_of)
     points, unit, stated = _positions(table, mapping.markers, layout.position_unit)
     rate = (len(time) - 1) / float(time[-1] - time[0]) if len(time) > 1 else 0.0
     trial = MotionCaptureTrial(path=path, labels=mapping.markers, points=points,
@@ -184,7 +184,5 @@ def read_marker_table(path: str | Path, layout: MarkerColumns,
     recording = angles.recording(segments, lambda _: tilt)
     source = {**angles.source(), "format": "marker table", "point_unit": unit,
               "time_column": columns.time, "tilt_column": columns.tilt}
-    if isinstance(mapping.tilt, TiltMarkers):
-        return replace(recording, time=time, source=source, notices=notices)
-    return replace(recording, time=time, tilt=tilt, source=source, notices=notices,
-                   tilt_recorded=columns.tilt is not None)
+    return replace(recording, time=time, source=source, notices=notices,
+                   tilt_recorded=from_markers or columns.tilt is not None)

@@ -229,11 +229,11 @@ def prepare_trial(recording: Recording, stimulus: TiltProfile | None = None,
     if rate_hz is None and stimulus.period_s is not None:
         # the analysis at the recording's own rate needs whole cycles of samples: at a
         # headset's 89.53 Hz a 20 s cycle is 1790.7; the nearest rate above that holds one
-        samples = stimulus.period_s * original
-        if abs(samples - round(samples)) > 1e-6 * samples:
-            rate_hz = math.ceil(samples) / stimulus.period_s
+        if not _whole_samples(stimulus.period_s, original):
+            samples = math.ceil(stimulus.period_s * original)
+            rate_hz = samples / stimulus.period_s
             why = (f" (so that a stimulus cycle of {stimulus.period_s:g} s is a whole "
-                   f"{math.ceil(samples)} samples)")
+                   f"{samples} samples)")
     resampled = recording if rate_hz is None else recording.resampled(rate_hz)
     if resampled is not recording:
         notices.append(f"{name}: resampled from {original:.4g} Hz to {rate_hz:.6g} Hz "
@@ -263,10 +263,7 @@ def _check_clock(recording: Recording, stimulus: TiltProfile, rate_hz: float) ->
     0.25 s): the clock (a time column, or ``--sample-rate-hz``) is off by that share, and
     the message gives the rate the states say."""
     period, states = stimulus.period_s, stimulus.states
-    if period is None or states is None:
-        return
-    samples = period * rate_hz
-    if abs(samples - round(samples)) <= 1e-6 * samples:
+    if period is None or states is None or _whole_samples(period, rate_hz):
         return
     state = period / states
     nearest = round(state / ROUND_STATE_S) * ROUND_STATE_S
@@ -274,13 +271,21 @@ def _check_clock(recording: Recording, stimulus: TiltProfile, rate_hz: float) ->
     if not 1e-6 < abs(share) <= CLOCK_SHARE:
         return
     rate = recording.sample_rate_hz
+    true_rate = rate * state / nearest
     raise RecordingError(
         f"{recording.name}: the PRTS's states last {state:.5g} s by the recording's clock "
         f"({rate:.6g} Hz), a cycle of {period:.5g} s that is not a whole number of samples "
         f"at {rate_hz:g} Hz; a lab's states last a round time ({nearest:g} s), so the clock "
         f"is {100 * abs(share):.2g} % {'slow' if share > 0 else 'fast'}: the samples come "
-        f"at {rate * state / nearest:.6g} Hz (--sample-rate-hz {rate * state / nearest:.6g};"
-        " or leave --sample-rate-hz out where the time column's stamps are right)")
+        f"at {true_rate:.6g} Hz (--sample-rate-hz {true_rate:.6g}; or leave "
+        "--sample-rate-hz out where the time column's stamps are right)")
+
+
+def _whole_samples(period_s: float, rate_hz: float) -> bool:
+    """Whether a stimulus cycle of ``period_s`` is a whole number of samples at
+    ``rate_hz`` (what the cycle averages need)."""
+    samples = period_s * rate_hz
+    return abs(samples - round(samples)) <= 1e-6 * samples
 
 
 #: Motion outside the steady cycles longer than this many cycles is said (a fade is

@@ -15,6 +15,7 @@ __all__ = [
     "StimulusError",
     "RecordingError",
     "SimulationError",
+    "LearningError",
     "bug_line",
 ]
 
@@ -48,3 +49,8 @@ class RecordingError(PostureIdError):
 
 class SimulationError(PostureIdError):
     """A simulation request is inconsistent (options, shapes)."""
+
+
+class LearningError(PostureIdError):
+    """A network, its training set, training request, model directory, checkpoint or
+    calibration is inconsistent (every learning stage's errors are of this type)."""

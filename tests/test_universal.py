@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from posture_id.errors import LearningError
 from posture_id.learning.universal.features import (
     CHANNELS,
     GRID_HZ,
@@ -263,18 +264,26 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
     resumed = train_universal(tiny_set.path, tmp_path / "resumed", config, net)
     for key, value in whole.network.state_dict().items():
         assert torch.equal(value, resumed.network.state_dict()[key]), key
-    # an interrupted run on other data (here: its set had another shard count) is not
-    # resumed: the run starts afresh
+    # the state every trainer keeps, and a finished run asked again: its model, no epoch
+    state = json.loads((tmp_path / "resumed" / "training" / "state.json").read_text())
+    assert len(state["history"]) == 3 and state["weights"] == "training/epoch-0003.safetensors"
+    said: list[str] = []
+    again = train_universal(tiny_set.path, tmp_path / "resumed", config, net,
+                            progress=lambda update: said.append(update.message))
+    assert not [m for m in said if m.startswith("epoch ")]
+    assert all(torch.equal(v, again.network.state_dict()[k])
+               for k, v in whole.network.state_dict().items())
+    # an interrupted run on other data (here: its set had another shard count) is refused,
+    # naming what differs, and nothing of it is overwritten
     with pytest.raises(Stop):
         train_universal(tiny_set.path, tmp_path / "other", config, net, progress=stop_after_first)
-    state_file = tmp_path / "other" / "train-state.json"
+    state_file = tmp_path / "other" / "training" / "state.json"
     state = json.loads(state_file.read_text())
-    state["sets"][0]["shards"] += 1
+    state["identity"]["sets"][0]["shards"] += 1
     state_file.write_text(json.dumps(state))
-    said: list[str] = []
-    train_universal(tiny_set.path, tmp_path / "other", config, net,
-                    progress=lambda update: said.append(update.message))
-    assert [m for m in said if m.startswith("epoch")][0].startswith("epoch 1/")
+    with pytest.raises(LearningError, match=r"other: was trained with other arguments \(sets "):
+        train_universal(tiny_set.path, tmp_path / "other", config, net)
+    assert json.loads(state_file.read_text()) == state
     loaded = UniversalModel.load(tmp_path / "whole")
     x = np.random.default_rng(0).standard_normal((5, whole.input_mean.size)).astype(np.float32)
     assert np.allclose(loaded.predict(x).mean, whole.predict(x).mean)
@@ -326,7 +335,7 @@ def test_keep_clean_holds_the_clean_outputs_of_the_model_fine_tuned_from(tiny_se
 
     assert moved(tuned[300.0], clean) < 0.5 * moved(tuned[0.0], clean)
     assert moved(tuned[300.0], ~clean) > 0.5 * moved(tuned[0.0], ~clean)
-    with pytest.raises(ValueError, match="needs init"):
+    with pytest.raises(LearningError, match="needs init"):
         UniversalTrainingConfig(keep_clean=1.0)
     logits = torch.zeros(1, 2, 9)
     logits[..., 8] = 12.0
@@ -1060,7 +1069,7 @@ def test_the_network_s_shape_is_checked_and_kept_with_the_model(tmp_path):
     UniversalModel(net, np.zeros(6), np.ones(6), np.zeros(4), np.ones(4)).save(tmp_path / "m")
     assert UniversalModel.load(tmp_path / "m").network.config.hidden == (7, 5, 3)
     for bad in [(), (0,), (4, -1), (2.5,)]:
-        with pytest.raises(ValueError, match="hidden must be one or more positive integer"):
+        with pytest.raises(LearningError, match="hidden must be one or more positive integer"):
             UniversalNetworkConfig(hidden=bad)
 
 
@@ -1072,7 +1081,7 @@ def test_the_training_configuration_names_its_point_loss():
 
     assert UniversalTrainingConfig().point_loss == "squared"
     assert UniversalTrainingConfig(point_loss="absolute").point_loss == "absolute"
-    with pytest.raises(ValueError, match="point_loss must be one of squared, absolute"):
+    with pytest.raises(LearningError, match="point_loss must be one of squared, absolute"):
         UniversalTrainingConfig(point_loss="huber")
     args = build_parser().parse_args(["universal", "train", "set", "--out", "m",
                                       "--point-loss", "absolute"])

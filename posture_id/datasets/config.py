@@ -8,7 +8,7 @@ from pathlib import Path
 
 from posture_id.datasets.features import FS_HZ
 from posture_id.dec.prior import SIGMA
-from posture_id.errors import PostureIdError
+from posture_id.errors import LearningError
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.stimulus import TiltProfile, prts
@@ -19,7 +19,7 @@ __all__ = ["DatasetConfig", "DatasetError", "PAPER_SPLIT"]
 PAPER_SPLIT = (14000 / 20730, 3000 / 20730, 3730 / 20730)
 
 
-class DatasetError(PostureIdError):
+class DatasetError(LearningError):
     """A data-set directory or request is inconsistent."""
 
 

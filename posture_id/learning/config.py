@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass, field
 
 from posture_id.datasets.features import FEATURE_DEFINITION
-from posture_id.errors import PostureIdError
+from posture_id.errors import LearningError
 from posture_id.frf.features import FRF_FEATURE_DEFINITION
 
 __all__ = [
@@ -25,10 +25,6 @@ __all__ = [
     "Optimiser",
     "TrainingConfig",
 ]
-
-
-class LearningError(PostureIdError):
-    """A training request, model directory or checkpoint is inconsistent."""
 
 
 class Layout(enum.Enum):

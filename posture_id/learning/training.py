@@ -1,11 +1,8 @@
 """Training a CNN identifier on a data set: seeded, resumable, with early stopping.
 
-A model directory while training::
-
-    model.safetensors, model.json     the best network so far (see :mod:`.checkpoint`)
-    log.jsonl                         one line per epoch: losses, learning rate, time
-    training/state.json               what was asked (must match to resume), the history
-    training/epoch-NNNN.safetensors   weights and optimiser state after the last epoch
+A model directory while training holds ``model.safetensors`` and ``model.json``, the best
+network so far (see :mod:`.checkpoint`), beside the state every trainer keeps
+(:mod:`.trainer`).
 
 Every epoch draws its sample order from ``SeedSequence([seed, epoch])``, and the state
 after each epoch is saved atomically, so a run killed at any point and started again with
@@ -15,24 +12,18 @@ the same weights as an uninterrupted run.
 
 from __future__ import annotations
 
-import json
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import torch
 import torch.nn.functional as F  # noqa: N812 - torch's convention
-from safetensors.torch import load_file, save_file
 
 from posture_id.datasets.store import Dataset
 from posture_id.fileio import (
-    Result,
-    atomic_write,
-    atomic_write_text,
     file_sha256,
-    json_text,
     jsonable,
 )
 from posture_id.frf.features import frf_width
@@ -48,15 +39,11 @@ from posture_id.learning.config import (
 )
 from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import SplitSamples, Standardiser, stimulus_of
-from posture_id.learning.trainer import EpochTrainer
-from posture_id.plotting import plot_loss_curves
+from posture_id.learning.trainer import EpochTrainer, TrainingResult
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 
 __all__ = ["train", "Trainer", "TrainingResult", "Objective"]
-
-STATE = "training/state.json"
-
 
 class Objective:
     """The loss of a network configuration on standardised targets.
@@ -83,45 +70,6 @@ class Objective:
                 + F.binary_cross_entropy_with_logits(out[..., 4], labels))
 
 
-@dataclass(frozen=True)
-class TrainingResult(Result):
-    """How a training run went.
-
-    Attributes:
-        model_dir: where the best model is. epochs_run: epochs finished in all.
-        best_epoch: the epoch of the best validation loss (1-based). best_validation_loss.
-        stopped_early: early stopping ended it. wall_time_s: this call's time, s.
-        history: one dict per epoch (epoch, train_loss, validation_loss, learning_rate,
-        seconds).
-    """
-
-    model_dir: Path
-    epochs_run: int
-    best_epoch: int
-    best_validation_loss: float
-    stopped_early: bool
-    wall_time_s: float
-    history: tuple[dict, ...] = field(repr=False)
-    provenance: dict = field(default_factory=dict, repr=False)
-
-    def to_dict(self) -> dict:
-        return {"model_dir": str(self.model_dir), "epochs_run": self.epochs_run,
-                "best_epoch": self.best_epoch,
-                "best_validation_loss": self.best_validation_loss,
-                "stopped_early": self.stopped_early, "wall_time_s": self.wall_time_s,
-                "history": list(self.history), "provenance": self.provenance}
-
-    def summary(self) -> str:
-        how = "stopped early" if self.stopped_early else "all epochs"
-        return (f"{self.model_dir}: {self.epochs_run} epochs ({how}), best validation loss "
-                f"{self.best_validation_loss:.4f} at epoch {self.best_epoch}, "
-                f"{self.wall_time_s:.0f} s")
-
-    def plot(self, path=None, ax=None):
-        """Training and validation loss per epoch."""
-        return plot_loss_curves(self.history, path=path, ax=ax)
-
-
 def _optimiser(network: IdentifierNetwork, training: TrainingConfig, steps_per_epoch: int):
     """(optimiser, scheduler, step the scheduler per batch?)."""
     opt = training.optimiser
@@ -139,31 +87,6 @@ def _optimiser(network: IdentifierNetwork, training: TrainingConfig, steps_per_e
         optimiser, max_lr=opt.max_learning_rate,
         total_steps=max(training.epochs * steps_per_epoch, 2))
     return optimiser, schedule, True
-
-
-def _optimiser_tensors(optimiser) -> tuple[dict[str, torch.Tensor], dict]:
-    """Optimiser state as safetensors tensors plus JSON (param groups, scalars)."""
-    state = optimiser.state_dict()
-    tensors, scalars = {}, {}
-    for index, entries in state["state"].items():
-        for key, value in entries.items():
-            if torch.is_tensor(value):
-                tensors[f"optimiser.{index}.{key}"] = value.detach().contiguous()
-            else:
-                scalars[f"{index}.{key}"] = value
-    return tensors, {"param_groups": state["param_groups"], "scalars": scalars}
-
-
-def _restore_optimiser(optimiser, tensors: dict[str, torch.Tensor], data: dict) -> None:
-    state: dict = {}
-    for name, value in tensors.items():
-        if name.startswith("optimiser."):
-            _, index, key = name.split(".", 2)
-            state.setdefault(int(index), {})[key] = value
-    for name, value in data["scalars"].items():
-        index, key = name.split(".", 1)
-        state.setdefault(int(index), {})[key] = value
-    optimiser.load_state_dict({"state": state, "param_groups": data["param_groups"]})
 
 
 def _identity(data: Dataset, network: NetworkConfig, training: TrainingConfig) -> dict:
@@ -250,20 +173,6 @@ class Trainer(EpochTrainer):
                 f"modules, not {config.in_channels} and {config.modules}")
         return config
 
-    def resume(self) -> bool:
-        """Load the last epoch's state from the model directory, if there is one (True)."""
-        state = _read_state(self.out, self.identity)
-        if state is None:
-            return False
-        tensors = load_file(str(self.out / state["weights"]))
-        self.net.load_state_dict({k[len("network."):]: v for k, v in tensors.items()
-                                  if k.startswith("network.")})
-        _restore_optimiser(self.optimiser, tensors, state["optimiser"])
-        self.schedule.load_state_dict(state["schedule"])
-        self.history = state["history"]
-        self.best = (state["best_validation_loss"], state["best_epoch"])
-        return True
-
     def run_epoch(self, epoch: int, progress: Progress | None = None) -> dict:
         """One pass over the training split (batches shuffled by the seed and the epoch),
         then the validation loss; the epoch's row."""
@@ -301,8 +210,7 @@ class Trainer(EpochTrainer):
                                                      "best_epoch": epoch,
                                                      "best_validation_loss": validation,
                                                      "epochs_run": epoch}})
-        _write_state(self.out, self.identity, self.net, self.optimiser, self.schedule,
-                     self.history, self.best)
+        self.write_state()
         return improved
 
     def said(self, progress: Progress | None, epoch: int, row: dict, improved: bool) -> None:
@@ -342,44 +250,3 @@ def _sidecar(data: Dataset, training: TrainingConfig) -> dict:
                     "trials": m["counts"]["used"], "split": m["split"]},
         "training": {"config": jsonable(training)},
     }
-
-
-def _read_state(out: Path, identity: dict) -> dict | None:
-    """The state to resume from, None for a fresh start; refuse a foreign directory."""
-    path = out / STATE
-    if not path.exists():
-        if out.exists() and not out.is_dir():
-            raise LearningError(f"{out}: exists and is not a directory")
-        if out.exists() and any(out.iterdir()):
-            raise LearningError(f"{out}: exists, is not empty and holds no training state; "
-                                "choose another directory")
-        return None
-    try:
-        state = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise LearningError(f"{path}: not valid JSON ({exc})") from None
-    if state.get("identity") != identity:
-        theirs = state.get("identity", {})
-        diff = [k for k in identity if theirs.get(k) != identity[k]]
-        raise LearningError(f"{out}: was trained with other arguments ({', '.join(diff)} "
-                            "differ); choose another directory or repeat them")
-    if not (out / state["weights"]).is_file():
-        raise LearningError(f"{out / state['weights']}: the last epoch's state is missing")
-    return state
-
-
-def _write_state(out: Path, identity: dict, net, optimiser, schedule, history, best) -> None:
-    epoch = len(history)
-    weights = f"training/epoch-{epoch:04d}.safetensors"
-    tensors = {f"network.{k}": v.detach().contiguous() for k, v in net.state_dict().items()}
-    optimiser_tensors, optimiser_json = _optimiser_tensors(optimiser)
-    tensors.update(optimiser_tensors)
-    atomic_write(out / weights, lambda tmp: save_file(tensors, str(tmp)))
-    state = {"identity": identity, "weights": weights, "optimiser": optimiser_json,
-             "schedule": schedule.state_dict(), "history": history,
-             "best_validation_loss": best[0], "best_epoch": best[1]}
-    atomic_write_text(out / STATE, json_text(state))
-    atomic_write_text(out / "log.jsonl", "".join(json.dumps(r) + "\n" for r in history))
-    for old in (out / "training").glob("epoch-*.safetensors"):
-        if old.name != Path(weights).name:
-            old.unlink()

@@ -25,6 +25,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from posture_id.errors import LearningError
+
 __all__ = ["NoiseGate"]
 
 
@@ -51,12 +53,12 @@ class NoiseGate:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.white_members, int) and self.white_members >= 1):
-            raise ValueError(f"white_members must be an integer ≥ 1, got {self.white_members!r}")
+            raise LearningError(f"white_members must be an integer ≥ 1, got {self.white_members!r}")
         if not self.colour_from < self.colour_to:
-            raise ValueError(f"the colour ramp must rise: {self.colour_from} to "
+            raise LearningError(f"the colour ramp must rise: {self.colour_from} to "
                              f"{self.colour_to}")
         if not 0 < self.ratio_from < self.ratio_to:
-            raise ValueError(f"the noise-ratio ramp must rise from above 0: "
+            raise LearningError(f"the noise-ratio ramp must rise from above 0: "
                              f"{self.ratio_from} to {self.ratio_to}")
 
     def coloured_share(self, noise_ratio: np.ndarray, noise_colour: np.ndarray) -> np.ndarray:

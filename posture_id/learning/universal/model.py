@@ -12,7 +12,7 @@ import numpy as np
 import torch
 
 from posture_id._version import __version__
-from posture_id.errors import PostureIdError
+from posture_id.errors import LearningError
 from posture_id.fileio import json_text
 from posture_id.learning.model_files import SIDECAR, WEIGHTS, read_model_files, write_model_files
 from posture_id.learning.universal.features import UNIVERSAL_FEATURE_DEFINITION
@@ -30,7 +30,7 @@ __all__ = ["UniversalModel", "UniversalPrediction", "ModelError", "FORMAT", "WEI
 FORMAT = "posture_id-universal-model"
 
 
-class ModelError(PostureIdError):
+class ModelError(LearningError):
     """A universal model directory is missing, corrupt or of another kind."""
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
+from posture_id.errors import LearningError
 from posture_id.learning.universal.features import N_INPUTS
 
 __all__ = ["UniversalNetworkConfig", "UniversalNetwork", "OUTPUTS"]
@@ -35,10 +36,10 @@ class UniversalNetworkConfig:
 
     def __post_init__(self) -> None:
         if not (self.hidden and all(isinstance(h, int) and h >= 1 for h in self.hidden)):
-            raise ValueError(f"hidden must be one or more positive integer widths, "
+            raise LearningError(f"hidden must be one or more positive integer widths, "
                              f"got {self.hidden!r}")
         if not (isinstance(self.members, int) and self.members >= 1):
-            raise ValueError(f"members must be an integer ≥ 1, got {self.members!r}")
+            raise LearningError(f"members must be an integer ≥ 1, got {self.members!r}")
 
 
 def _perceptron(config: UniversalNetworkConfig) -> nn.Sequential:

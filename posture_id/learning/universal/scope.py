@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from posture_id.errors import PostureIdError
+from posture_id.errors import LearningError
 from posture_id.simulation.noise_families import NoiseFamily
 from posture_id.simulation.protocols import MAX_PLATFORM_DEG
 from posture_id.simulation.stimulus import LAB_STATE_RANGE_S, TiltProfile, prts
@@ -22,7 +22,7 @@ __all__ = ["UniversalScope", "BodyDraw", "StimulusDraw", "draw_body", "draw_stim
            "ScopeError"]
 
 
-class ScopeError(PostureIdError):
+class ScopeError(LearningError):
     """A scope is inconsistent."""
 
 

@@ -12,14 +12,13 @@ validation loss (MSE + cross-entropy, fixed noise) are kept; training stops earl
 torch finds one.
 
 The run is resumable: after each epoch the state (weights, optimiser, best weights,
-history) is written atomically to ``train-state.safetensors`` and ``train-state.json``
-in the output folder; the same command continues from there.
+history) is written in the layout every trainer keeps (:mod:`posture_id.learning.trainer`);
+the same command continues from there.
 """
 
 from __future__ import annotations
 
 import copy
-import json
 import math
 import time
 from collections.abc import Sequence
@@ -29,10 +28,9 @@ from typing import Literal, get_args
 
 import numpy as np
 import torch
-from safetensors.torch import load_file, save_file
 
-from posture_id.fileio import atomic_write, atomic_write_text, json_text
-from posture_id.learning.trainer import EpochTrainer
+from posture_id.errors import LearningError
+from posture_id.learning.trainer import EpochTrainer, TrainingResult, prefixed
 from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.network import (
@@ -48,8 +46,9 @@ from posture_id.learning.universal.samples import (
     without_families,
 )
 from posture_id.progress import Progress, report
+from posture_id.provenance import provenance
 
-__all__ = ["UniversalTrainingConfig", "UniversalTrainer", "UniversalTrainingResult",
+__all__ = ["UniversalTrainingConfig", "UniversalTrainer",
            "train_universal", "VALIDATION_SEED", "POINT_LOSSES"]
 
 #: Seed of the validation split's noise (fixed, so epochs are compared alike).
@@ -98,12 +97,12 @@ class UniversalTrainingConfig:
 
     def __post_init__(self) -> None:
         if not (self.keep_clean >= 0 and math.isfinite(self.keep_clean)):
-            raise ValueError(f"keep_clean must be a finite weight ≥ 0, got {self.keep_clean!r}")
+            raise LearningError(f"keep_clean must be a finite weight ≥ 0, got {self.keep_clean!r}")
         if self.keep_clean and self.init is None:
-            raise ValueError("keep_clean keeps the outputs of the model fine-tuned from: it "
+            raise LearningError("keep_clean keeps the outputs of the model fine-tuned from: it "
                              "needs init")
         if self.point_loss not in POINT_LOSSES:
-            raise ValueError(f"point_loss must be one of {', '.join(POINT_LOSSES)}, "
+            raise LearningError(f"point_loss must be one of {', '.join(POINT_LOSSES)}, "
                              f"got {self.point_loss!r}")
 
 
@@ -173,19 +172,8 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
     the best model is written to ``out`` and returned (a :class:`UniversalTrainer` run to
     its end; progress and a line per epoch through ``progress``)."""
     trainer = UniversalTrainer(data_path, out, config, network, progress)
+    trainer.resume()
     return trainer.run(progress).model
-
-
-@dataclass(frozen=True)
-class UniversalTrainingResult:
-    """A finished run: the model (written to ``out``), the epochs run, the best one and
-    whether early stopping ended it."""
-
-    model: UniversalModel
-    out: Path
-    epochs_run: int
-    best_epoch: int
-    stopped_early: bool
 
 
 class UniversalTrainer(EpochTrainer):
@@ -202,6 +190,7 @@ class UniversalTrainer(EpochTrainer):
                  config: UniversalTrainingConfig | None = None,
                  network: UniversalNetworkConfig | None = None,
                  progress: Progress | None = None) -> None:
+        self.started = time.perf_counter()
         self.config = config = config or UniversalTrainingConfig()
         self.progress = progress
         network_config = network or UniversalNetworkConfig()
@@ -250,14 +239,10 @@ class UniversalTrainer(EpochTrainer):
         self.schedule = torch.optim.lr_scheduler.OneCycleLR(
             self.optimiser, max_lr=config.max_learning_rate,
             total_steps=config.epochs * self.steps + 1)
-        self.sets = _run_identity(data, network_config)
-        out.mkdir(parents=True, exist_ok=True)  # only once the sets are read and fit to train
-        state = _resume(out, net, self.optimiser, self.schedule, config, self.sets)
-        self.best_state = state.pop("best_weights", None)
-        self.history = state.get("history", [])
-        losses = [h["validation_loss"] for h in self.history]
-        self.best = (state.get("best", math.inf),
-                     int(np.argmin(losses)) + 1 if losses else 0)
+        self.identity = {"training": asdict(config), "sets": _run_identity(data, network_config)}
+        self.best_state: dict | None = None
+        self.history: list[dict] = []
+        self.best: tuple[float, int] = (math.inf, 0)
         self.x_val = self.model.standardise(validation.inputs).to(device)
         self.t_val = _targets(validation, target_mean, target_std).to(device)
 
@@ -310,9 +295,15 @@ class UniversalTrainer(EpochTrainer):
             self.best = (row["validation_loss"], row["epoch"])
             self.best_state = {k: v.detach().cpu().clone()
                                for k, v in self.net.state_dict().items()}
-        _save_state(self.out, self.net, self.optimiser, self.schedule, self.best_state,
-                    self.history, self.best[0], self.config, self.sets)
+        self.write_state()
         return improved
+
+    def state_tensors(self) -> dict:
+        """The best epoch's weights (written to ``out`` when the run ends)."""
+        return {f"best.{k}": v.contiguous() for k, v in (self.best_state or {}).items()}
+
+    def restore_state_tensors(self, tensors: dict) -> None:
+        self.best_state = prefixed(tensors, "best.") or None
 
     def said(self, progress: Progress | None, epoch: int, row: dict, improved: bool) -> None:
         report(progress, epoch, self.epochs, "epoch",
@@ -320,7 +311,7 @@ class UniversalTrainer(EpochTrainer):
                f"{row['validation_loss']:.4f}{' (best)' if improved else ''}, "
                f"{row['seconds']:.0f} s")
 
-    def finish(self, stopped_early: bool) -> UniversalTrainingResult:
+    def finish(self, stopped_early: bool) -> TrainingResult:
         """The best epoch's weights, with the sidecar, written to ``out``; the state to
         resume from removed."""
         config, history, data = self.config, self.history, self.data
@@ -350,10 +341,10 @@ class UniversalTrainer(EpochTrainer):
                 "weights_sha256": self.base.sidecar["weights_sha256"],
                 "training": self.base.sidecar.get("training")}
         model.save(self.out)
-        for name in ("train-state.safetensors", "train-state.json"):
-            (self.out / name).unlink(missing_ok=True)
-        return UniversalTrainingResult(model, self.out, len(history), self.best[1],
-                                       stopped_early)
+        return TrainingResult(self.out, len(history), self.best[1], self.best[0],
+                              stopped_early, time.perf_counter() - self.started,
+                              tuple(history), provenance(config, datasets=[
+                                  str(d.path) for d in data]), model=model)
 
 
 def _ranges(samples: Samples, before: dict | None = None) -> dict:
@@ -381,42 +372,3 @@ def _run_identity(data, network: UniversalNetworkConfig) -> list[dict]:
     network's configuration."""
     return [{"path": str(d.path.resolve()), "config": d.manifest["config"],
              "shards": len(d.manifest["shards"])} for d in data] + [{"network": asdict(network)}]
-
-
-def _save_state(out: Path, net, optimiser, schedule, best_state, history, best, config,
-                sets: list[dict]) -> None:
-    tensors = {f"net.{k}": v.detach().cpu().contiguous() for k, v in net.state_dict().items()}
-    tensors |= {f"best.{k}": v.contiguous() for k, v in (best_state or {}).items()}
-    for pid, group in optimiser.state_dict()["state"].items():
-        for key, value in group.items():
-            tensors[f"opt.{pid}.{key}"] = torch.as_tensor(value).detach().cpu().contiguous()
-    atomic_write(out / "train-state.safetensors", lambda tmp: save_file(tensors, str(tmp)))
-    atomic_write_text(out / "train-state.json", json_text({
-        "config": asdict(config), "sets": sets, "history": history, "best": best,
-        "schedule": schedule.state_dict(),
-        "param_groups": optimiser.state_dict()["param_groups"]}))
-
-
-def _resume(out: Path, net, optimiser, schedule, config, sets: list[dict]) -> dict:
-    """Load the state of an interrupted run of the same configuration on the same sets
-    (else nothing: the run starts afresh)."""
-    meta_file, weights = out / "train-state.json", out / "train-state.safetensors"
-    if not (meta_file.exists() and weights.exists()):
-        return {}
-    meta = json.loads(meta_file.read_text())
-    if meta.get("config") != json.loads(json_text(asdict(config))) or \
-            meta.get("sets") != json.loads(json_text(sets)):
-        return {}
-    tensors = load_file(str(weights))
-    net.load_state_dict({k[4:]: v for k, v in tensors.items() if k.startswith("net.")})
-    opt = optimiser.state_dict()
-    opt["param_groups"] = [{k: tuple(v) if k == "betas" else v for k, v in group.items()}
-                           for group in meta["param_groups"]]
-    for pid in range(sum(len(g["params"]) for g in opt["param_groups"])):
-        found = {k.split(".", 2)[2]: v for k, v in tensors.items() if k.startswith(f"opt.{pid}.")}
-        if found:
-            opt["state"][pid] = found
-    optimiser.load_state_dict(opt)
-    schedule.load_state_dict(meta["schedule"])
-    best = {k[5:]: v for k, v in tensors.items() if k.startswith("best.")}
-    return {"history": meta["history"], "best": meta["best"], "best_weights": best or None}

@@ -52,7 +52,6 @@ from posture_id.identify.verdict import (
 )
 from posture_id.learning.config import LearningError
 from posture_id.learning.identifier import DEFAULT_LEVEL
-from posture_id.learning.universal.identifier import UniversalIdentifier
 from posture_id.progress import Progress
 from posture_id.provenance import provenance, recording_identity
 from posture_id.recording import Recording
@@ -246,7 +245,7 @@ class Identifier:
 
         base = noise.ratio if step.method is Method.CNN else ratio_of(trial, self.body)
         found = better_explanations(trial, self.body, base, noise.relative, ratio_of,
-                                    sizes=isinstance(self.cnn, UniversalIdentifier))
+                                    sizes=self.cnn.reads_any_body)
         if any(m.check is Check.ANOTHER_BODY for m in found) and not verdict.fitted \
                 and self._fits_within_noise(trial, cnn, step.fit_options):
             found = tuple(m for m in found if m.check is not Check.ANOTHER_BODY)

@@ -6,23 +6,19 @@ from __future__ import annotations
 from pathlib import Path
 
 from posture_id.bodies.body import Body
-from posture_id.learning.identifier import CnnIdentifier
-from posture_id.learning.protocol import NetworkIdentifier
-from posture_id.learning.universal.identifier import UniversalIdentifier, is_universal_model
+from posture_id.learning.identifier import NetworkIdentifier
+from posture_id.learning.universal.identifier import UniversalIdentifier
 
 __all__ = ["network_for", "Network"]
 
-#: What an identification asks of a network (both networks implement it).
+#: What an identification asks of a network (every architecture's identifier is one).
 Network = NetworkIdentifier
 
 
 def network_for(model: str | Path | Network | None, body: Body) -> Network:
-    """A network already loaded, a model directory (a universal model or a per-body
-    specialist made by ``posture-id train``), or None: the bundled universal model."""
-    if isinstance(model, CnnIdentifier | UniversalIdentifier):
-        return model
+    """A network already loaded, a model directory (of any registered architecture: the
+    universal model, a per-body specialist made by ``posture-id train``, ...), or None:
+    the bundled universal model."""
     if model is None:
         return UniversalIdentifier.bundled(body)
-    if is_universal_model(model):
-        return UniversalIdentifier.load(model, body)
-    return CnnIdentifier.load(model, body)
+    return NetworkIdentifier.resolve(model, body)

@@ -15,10 +15,11 @@ otherwise the error says so (least squares, ``posture-id fit``, takes any tilt).
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -35,9 +36,10 @@ from posture_id.errors import RecordingError
 from posture_id.fileio import Result
 from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.calibration import CnnCalibration
-from posture_id.learning.checkpoint import LoadedModel, load_model
+from posture_id.learning.checkpoint import FORMAT, LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
 from posture_id.learning.inputs import sway_features
+from posture_id.learning.model_files import SIDECAR
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import stimulus_of
 from posture_id.plotting import plot_intervals
@@ -51,7 +53,8 @@ from posture_id.uncertainty.noise import sensor_noise_deg
 if TYPE_CHECKING:
     from posture_id.learning.universal.typicality import Typicality
 
-__all__ = ["CnnIdentifier", "CnnIdentification", "DEFAULT_LEVEL"]
+__all__ = ["NetworkIdentifier", "CnnIdentifier", "CnnIdentification", "DEFAULT_LEVEL", "register",
+           "identifier_class"]
 
 #: The intervals' nominal coverage unless asked otherwise.
 DEFAULT_LEVEL = 0.9
@@ -122,16 +125,140 @@ class CnnIdentification(Result):
         return "\n".join(lines)
 
 
-class CnnIdentifier:
-    """A loaded model and the body it identifies."""
+#: Identifier classes by the sidecar format of the models they read (:func:`register`).
+_KINDS: dict[str, type[NetworkIdentifier]] = {}
+
+
+def register(cls: type[NetworkIdentifier]) -> type[NetworkIdentifier]:
+    """Make an identifier class known by its models' sidecar ``format``, so that
+    :meth:`NetworkIdentifier.load` (``identify --network``) reads them."""
+    _KINDS[cls.format] = cls
+    return cls
+
+
+def identifier_class(folder: str | Path) -> type[NetworkIdentifier]:
+    """The registered class that reads the model in ``folder``, by its sidecar's
+    ``format`` (the paper CNN's for a folder whose sidecar cannot be read: its loader
+    says precisely what is wrong)."""
+    try:
+        kind = json.loads((Path(folder) / SIDECAR).read_text(encoding="utf-8")).get("format")
+    except (OSError, ValueError, AttributeError):
+        kind = None
+    return _KINDS.get(kind, CnnIdentifier)
+
+
+class NetworkIdentifier:
+    """A trained network and the body it identifies: what an identification asks of any
+    architecture (the paper's spectrogram CNN, :class:`CnnIdentifier`; the universal
+    network, :class:`~posture_id.learning.universal.identifier.UniversalIdentifier`).
+
+    Attributes:
+        format: the sidecar format of the models the class reads (:func:`register`).
+        reads_people_like: trained on people-like sway (the verdict's people-like rules).
+        reads_any_body: identifies bodies of any size (the alternatives' other sizes).
+        model: the loaded weights and sidecar (``path``, ``sidecar``). body: the body
+        identified. notices: what loading it had to say (one line each). calibration:
+        its intervals' and class probabilities' calibration, or None. trained_on: the
+        body (or scope) it was trained on, in words. trained_on_this_body: whether it was
+        trained on this very body (its hybrid's calibration applies).
+    """
+
+    format: ClassVar[str] = ""
+    reads_people_like: ClassVar[bool] = False
+    reads_any_body: ClassVar[bool] = False
+    trained_on_this_body: bool = False
+    trained_on: str = ""
+    calibration: Any = None
+
+    def __init__(self, model: Any, body: Body, notices: tuple[str, ...] = ()) -> None:
+        self.model = model
+        self.body = body
+        self.notices = tuple(notices)
+        self.defaults = default_parameters(body)
+
+    @classmethod
+    def load(cls, folder: str | Path, body: Body) -> NetworkIdentifier:
+        """The model in ``folder`` as an identifier for ``body``, read by the class its
+        sidecar's format names (:func:`identifier_class`)."""
+        return identifier_class(folder).load(folder, body)
+
+    @classmethod
+    def bundled(cls, body: Body) -> NetworkIdentifier:
+        """The bundled model of this kind for ``body``."""
+        raise NotImplementedError
+
+    @classmethod
+    def resolve(cls, model: str | Path | NetworkIdentifier | None, body: Body
+                ) -> NetworkIdentifier:
+        """``model`` as an identifier for ``body``: one already loaded, a model directory,
+        or None for this kind's bundled model."""
+        if isinstance(model, NetworkIdentifier):
+            return model
+        return cls.bundled(body) if model is None else cls.load(model, body)
+
+    def for_body(self, body: Body) -> NetworkIdentifier:
+        """This kind of network for another body."""
+        raise NotImplementedError
+
+    def identify(self, trial: PreparedTrial, level: float = DEFAULT_LEVEL
+                 ) -> CnnIdentification:
+        """The network's answer on a prepared trial: parameters, class probabilities and
+        intervals at ``level``."""
+        raise NotImplementedError
+
+    def _own(self, loaded, refused: str):
+        """``loaded`` (what was read beside the model: a calibration, a widening, a
+        typicality reference, or None) if it was made for this model's weights; else
+        None, and the notice ``refused``."""
+        if loaded is not None and loaded.weights_sha256 != self.model.sidecar.get(
+                "weights_sha256"):
+            self.notices += (f"{self.model.path}: {refused}",)
+            return None
+        return loaded
+
+    @property
+    def layout(self) -> str:
+        """The architecture's name in answers (``model.layout``)."""
+        raise NotImplementedError
+
+    def _intervals(self, normalised: np.ndarray, half: np.ndarray, level: float, label: str,
+                   noise: float) -> ParameterIntervals:
+        """Intervals of half widths ``half`` (N, 4) about the normalised estimates."""
+        defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
+        return ParameterIntervals.around(normalised[:, :4], half, defaults, level, label,
+                                         noise, self.body.joint_names)
+
+    def _answer(self, trial: PreparedTrial, normalised: np.ndarray, probability: np.ndarray,
+                intervals: ParameterIntervals | None, notices: tuple[str, ...],
+                outside: list[str], model_extra: dict | None = None,
+                typicality: Typicality | None = None) -> CnnIdentification:
+        """The answer of normalised estimates (N, 5) and class probabilities (N,)."""
+        arrays = denormalise_arrays(normalised[None], self.defaults)
+        model_info = {"path": str(self.model.path), "layout": self.layout,
+                      "weights_sha256": self.model.sidecar.get("weights_sha256"),
+                      "trained_on": self.trained_on,
+                      "package_version": self.model.sidecar.get("package_version"),
+                      **(model_extra or {})}
+        return CnnIdentification(
+            parameters=arrays.trial(0, self.body.joint_names), normalised=normalised,
+            class_probability=probability, joints=self.body.joint_names, model=model_info,
+            intervals=intervals, notices=notices, outside=tuple(outside),
+            typicality=typicality,
+            provenance={**provenance(None, self.body, recording=trial.name),
+                        "body": body_identity(self.body)})
+
+
+@register
+class CnnIdentifier(NetworkIdentifier):
+    """A loaded model of the paper's spectrogram CNN and the body it identifies."""
+
+    format = FORMAT
 
     #: the specialists are trained on sensor noise only: people-like sway is outside them
     reads_people_like = False
 
     def __init__(self, model: LoadedModel, body: Body, notices: tuple[str, ...] = ()) -> None:
-        self.model = model
-        self.body = body
-        self.notices = tuple(notices)
+        super().__init__(model, body, notices)
         sidecar = model.sidecar
         trained = sidecar.get("body", {})
         if trained.get("n_segments") != body.n_segments:
@@ -141,13 +268,11 @@ class CnnIdentifier:
         if model.config.layout is not Layout.MODULAR and model.config.modules != body.n_segments:
             raise LearningError(f"{model.path}: {model.config.layout.value} model for "
                                 f"{model.config.modules} modules, body has {body.n_segments}")
-        self.calibration = CnnCalibration.load(model.path)
-        if (self.calibration is not None
-                and self.calibration.weights_sha256 != sidecar.get("weights_sha256")):
-            self.notices += (f"{model.path}: its calibration was made for other weights and is "
-                             "not used: no intervals (posture-id calibration makes one)",)
-            self.calibration = None
-        elif self.calibration is None:
+        calibration = CnnCalibration.load(model.path)
+        self.calibration = self._own(calibration, "its calibration was made for other "
+                                     "weights and is not used: no intervals (posture-id "
+                                     "calibration makes one)")
+        if calibration is None:
             self.notices += (f"{model.path}: the model has no calibration, so the CNN's own "
                              "answer has no intervals (posture-id calibration MODEL_DIR "
                              "DATASET makes one)",)
@@ -162,21 +287,12 @@ class CnnIdentifier:
         self.stimulus = stim
         self.profile = stimulus_of(stim)
         self.n_samples = int(round(self.profile.duration * FS_HZ)) + 1
-        self.defaults = default_parameters(body)
         #: the trained stimulus at the sample times (rad), what a recording's tilt must be
         self.expected_tilt = self.profile.angle(np.arange(self.n_samples) / FS_HZ)
 
     @classmethod
     def load(cls, model_dir: str | Path, body: Body) -> CnnIdentifier:
         return cls(load_model(model_dir), body)
-
-    @classmethod
-    def resolve(cls, model: str | Path | CnnIdentifier | None, body: Body) -> CnnIdentifier:
-        """``model`` as an identifier for ``body``: one already loaded, a model directory,
-        or None for the bundled model."""
-        if isinstance(model, CnnIdentifier):
-            return model
-        return cls.bundled(body) if model is None else cls.load(model, body)
 
     @classmethod
     def bundled(cls, body: Body) -> CnnIdentifier:
@@ -186,7 +302,7 @@ class CnnIdentifier:
 
     def for_body(self, body: Body) -> CnnIdentifier:
         """A specialist for another body: the bundled one of that body (a network trained
-        on one body identifies that body only; :class:`~.protocol.NetworkIdentifier`)."""
+        on one body identifies that body only)."""
         return self if body is self.body else CnnIdentifier.bundled(body)
 
     def features(self, trial: PreparedTrial) -> np.ndarray:
@@ -264,28 +380,19 @@ class CnnIdentifier:
                 probability = self.calibration.class_probability(logit)
             noise = sensor_noise_deg(theta)
             conformal = self.calibration.intervals
-            defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
             label = ("conformal, CNN (validation split)" if self.trained_on_this_body else
                      f"conformal, CNN, calibrated on body '{self.trained_on}', not on this "
                      "one (coverage not checked here)")
-            intervals = ParameterIntervals.around(
-                normalised[:, :4], conformal.scale(level, noise), defaults, level,
-                label, noise, self.body.joint_names)
+            intervals = self._intervals(normalised, conformal.scale(level, noise), level,
+                                        label, noise)
             if conformal.beyond(noise):
                 beyond = (f"its sensor noise (about {noise:.3f}°) is above the "
                           f"{conformal.noise_deg[-1]:.3f}° the intervals were calibrated "
                           "for: they are likely too narrow")
                 notices += (f"{trial.name}: {beyond}",)
                 outside.append(beyond)
-        arrays = denormalise_arrays(normalised[None], self.defaults)
-        params = arrays.trial(0, self.body.joint_names)
-        model_info = {"path": str(self.model.path), "layout": self.model.config.layout.value,
-                      "weights_sha256": self.model.sidecar.get("weights_sha256"),
-                      "trained_on": self.model.sidecar.get("body", {}).get("name"),
-                      "package_version": self.model.sidecar.get("package_version")}
-        return CnnIdentification(
-            parameters=params, normalised=normalised, class_probability=probability,
-            joints=self.body.joint_names, model=model_info, intervals=intervals,
-            notices=notices, outside=tuple(outside),
-            provenance={**provenance(None, self.body, recording=trial.name),
-                        "body": body_identity(self.body)})
+        return self._answer(trial, normalised, probability, intervals, notices, outside)
+
+    @property
+    def layout(self) -> str:
+        return self.model.config.layout.value

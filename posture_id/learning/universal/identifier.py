@@ -23,10 +23,15 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body
-from posture_id.dec.parameters import TARGET_FIELDS, default_parameters, denormalise_arrays
+from posture_id.dec.parameters import default_parameters
 from posture_id.errors import PostureIdError, RecordingError
 from posture_id.learning.config import LearningError
-from posture_id.learning.identifier import DEFAULT_LEVEL, CnnIdentification
+from posture_id.learning.identifier import (
+    DEFAULT_LEVEL,
+    CnnIdentification,
+    NetworkIdentifier,
+    register,
+)
 from posture_id.learning.universal.calibration import (
     UniversalCalibration,
     regime_of,
@@ -43,18 +48,16 @@ from posture_id.learning.universal.harmonics import (
     harmonic_layout,
     sway_harmonics,
 )
-from posture_id.learning.universal.model import SIDECAR, ModelError, UniversalModel
+from posture_id.learning.universal.model import FORMAT, SIDECAR, ModelError, UniversalModel
 from posture_id.learning.universal.samples import inputs_and_noise
 from posture_id.learning.universal.scope import UniversalScope
 from posture_id.learning.universal.typicality import TypicalityReference
-from posture_id.provenance import body_identity, provenance
 from posture_id.simulation.stimulus import LAB_STATE_RANGE_S
 from posture_id.trials import PreparedTrial
-from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
 from posture_id.uncertainty.widening import RecordingWidening
 
-__all__ = ["UniversalIdentifier", "BUNDLED_DIR", "is_universal_model", "stimulus_outside"]
+__all__ = ["UniversalIdentifier", "BUNDLED_DIR", "stimulus_outside"]
 
 #: The bundled universal model (made by ``make models``).
 BUNDLED_DIR = Path(__file__).resolve().parent / "models" / "universal"
@@ -64,31 +67,22 @@ _DESCRIPTOR_NAMES = ("ankle column", "knee column", "hip column", "1 segment", "
                      "m·g·h ratio below", "m·g·h ratio above")
 
 
-def is_universal_model(folder: str | Path) -> bool:
-    """Whether ``folder`` holds a universal model (not a per-body specialist)."""
-    try:
-        text = (Path(folder) / SIDECAR).read_text(encoding="utf-8")
-    except OSError:
-        return False
-    return '"posture_id-universal-model"' in text
+@register
+class UniversalIdentifier(NetworkIdentifier):
+    """The universal model and the body it identifies (never the network's "own" body: the
+    hybrid scales no least-squares intervals by it)."""
 
-
-class UniversalIdentifier:
-    """The universal model and the body it identifies (the same interface as
-    :class:`~posture_id.learning.identifier.CnnIdentifier`)."""
-
-    #: never the network's "own" body: the hybrid scales no least-squares intervals by it
-    trained_on_this_body = False
+    format = FORMAT
     #: trained on people-like sway (motor noise, drift): such a recording is inside its scope
     reads_people_like = True
+    reads_any_body = True
+    layout = "universal"
 
     def __init__(self, model: UniversalModel, body: Body, notices: tuple[str, ...] = ()) -> None:
         if not 1 <= body.n_segments <= 3:
             raise LearningError(f"the universal model identifies bodies of 1 to 3 segments; "
                                 f"'{body.name}' has {body.n_segments}")
-        self.model = model
-        self.body = body
-        self.notices = tuple(notices)
+        super().__init__(model, body, notices)
         self.trained_on = "the universal scope"
         calibration = UniversalCalibration.load(model.path) if model.path else None
         self.calibration = self._own(
@@ -108,19 +102,8 @@ class UniversalIdentifier:
         self.descriptors = body_descriptors(body)
         self.com = com_weights(body)
         self._layouts: dict = {}
-        self.defaults = default_parameters(body)
         self.body_outside = self._outside(self.descriptors, range(0, DESCRIPTORS - 4),
                                           f"body '{body.name}'")
-
-    def _own(self, loaded, refused: str):
-        """``loaded`` (what was read beside the model: a calibration or a typicality
-        reference, or None) if it was made for this model's weights; else None, and the
-        notice ``refused``."""
-        if loaded is not None and loaded.weights_sha256 != self.model.sidecar.get(
-                "weights_sha256"):
-            self.notices += (f"{self.model.path}: {refused}",)
-            return None
-        return loaded
 
     @classmethod
     def load(cls, folder: str | Path, body: Body) -> UniversalIdentifier:
@@ -233,28 +216,16 @@ class UniversalIdentifier:
                                      f"0.5–{LEVEL_MAX:g}")
             half = self.calibration.half_width(regime, level, prediction.sd,
                                                trend_terms(n, ratio, colour, inputs))
-            defaults = np.column_stack([self.defaults.array(f) for f in TARGET_FIELDS])
-            intervals = ParameterIntervals.around(
-                normalised[:, :4], half, defaults, level,
-                f"conformal, universal network (regime {regime_text(regime)}, held-out "
-                "bodies and stimuli)", noise, self.body.joint_names)
+            intervals = self._intervals(
+                normalised, half, level, f"conformal, universal network (regime "
+                f"{regime_text(regime)}, held-out bodies and stimuli)", noise)
         else:
             probability = 1.0 / (1.0 + np.exp(-prediction.logit))
         normalised[:, 4] = np.where(probability >= 0.5, 1.0, -1.0)
-        arrays = denormalise_arrays(normalised[None], self.defaults)
-        params = arrays.trial(0, self.body.joint_names)
         notices = self.notices + trial.notices + tuple(outside)
-        model_info = {"path": str(self.model.path), "layout": "universal",
-                      "weights_sha256": self.model.sidecar.get("weights_sha256"),
-                      "trained_on": self.trained_on,
-                      "package_version": self.model.sidecar.get("package_version"),
-                      "regime": regime, "noise_ratio": ratio, "noise_colour": colour}
-        return CnnIdentification(
-            parameters=params, normalised=normalised, class_probability=probability,
-            joints=self.body.joint_names, model=model_info, intervals=intervals,
-            notices=notices, outside=tuple(outside), typicality=typicality,
-            provenance={**provenance(None, self.body, recording=trial.name),
-                        "body": body_identity(self.body)})
+        return self._answer(trial, normalised, probability, intervals, notices, outside,
+                            {"regime": regime, "noise_ratio": ratio,
+                             "noise_colour": colour}, typicality)
 
 
 #: Relative slack of the stimulus checks: a lab's 4° is 4° however it was rounded or

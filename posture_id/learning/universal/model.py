@@ -5,7 +5,7 @@ Nothing is unpickled; a directory whose parts do not match is refused in one lin
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +20,7 @@ from posture_id.learning.universal.gate import NoiseGate
 from posture_id.learning.universal.network import (
     OUTPUTS,
     UniversalNetwork,
-    UniversalNetworkConfig,
+    network_config_of,
 )
 from posture_id.learning.universal.scope import UniversalScope
 
@@ -56,11 +56,14 @@ class UniversalModel:
     """The network and its standardisation.
 
     Attributes:
+        network: a torch module of a registered network kind
+            (:func:`~.network.register_network`; the perceptrons of
+            :class:`~.network.UniversalNetwork` unless its configuration says otherwise).
         input_mean, input_std: (N_INPUTS,). target_mean, target_std: (4,).
         sidecar: what made it (``model.json``). path: where it was loaded from.
     """
 
-    network: UniversalNetwork
+    network: torch.nn.Module
     input_mean: np.ndarray
     input_std: np.ndarray
     target_mean: np.ndarray
@@ -150,7 +153,7 @@ class UniversalModel:
         if not 0 <= index < members:
             raise ModelError(f"{self.path or 'this model'}: no member {index} (it has "
                              f"{members})")
-        network = UniversalNetwork(replace(self.network.config, members=1))
+        network = replace(self.network.config, members=1).build()
         network.members[0].load_state_dict(self.network.members[index].state_dict())
         network.eval()
         source = self._member_source(index)
@@ -194,8 +197,7 @@ class UniversalModel:
                    if k != "weights_sha256"}
         self.sidecar = write_model_files(folder, self.tensors(), {
             **sidecar, "format": FORMAT, "package_version": __version__,
-            "architecture": {**asdict(self.network.config),
-                             "hidden": list(self.network.config.hidden)},
+            "architecture": self.network.config.to_dict(),
             "features": UNIVERSAL_FEATURE_DEFINITION})
         self.path = Path(folder)
         return self.path
@@ -206,8 +208,10 @@ class UniversalModel:
         sidecar, tensors = read_model_files(folder, ModelError, _check_sidecar)
         sidecar_file = folder / SIDECAR
         arch = sidecar["architecture"]
-        config = UniversalNetworkConfig(int(arch["inputs"]), tuple(arch["hidden"]),
-                                        float(arch["dropout"]), int(arch.get("members", 1)))
+        try:
+            config = network_config_of(arch)
+        except LearningError as exc:
+            raise ModelError(f"{sidecar_file}: {exc}") from None
         if "gate" in sidecar:
             try:
                 gate = NoiseGate.from_dict(sidecar["gate"])
@@ -216,10 +220,17 @@ class UniversalModel:
             if gate.white_members >= config.members:
                 raise ModelError(f"{sidecar_file}: its gate gives {gate.white_members} of "
                                  f"{config.members} members to white noise, none to the rest")
-        network = UniversalNetwork(config)
-        network.load_state_dict(UniversalNetwork.upgrade_state(
-            {k.removeprefix("network."): v for k, v in tensors.items()
-             if k.startswith("network.")}))
+        network = config.build()
+        state = {k.removeprefix("network."): v for k, v in tensors.items()
+                 if k.startswith("network.")}
+        if isinstance(network, UniversalNetwork):
+            state = UniversalNetwork.upgrade_state(state)
+        try:
+            network.load_state_dict(state)
+        except RuntimeError as exc:
+            first = str(exc).splitlines()[1].strip() if "\n" in str(exc) else str(exc)
+            raise ModelError(f"{folder / WEIGHTS}: the weights do not fit the architecture "
+                             f"in {SIDECAR} ({first})") from None
         network.eval()
         std = {k.removeprefix("standardiser."): v.numpy() for k, v in tensors.items()
                if k.startswith("standardiser.")}
@@ -271,7 +282,7 @@ def ensemble_of(models: list[UniversalModel], by_noise: bool = False) -> Univers
                 raise ModelError(f"{name}: standardised otherwise than {first.path} "
                                  f"({attr} differs): its members read other inputs")
     members = [member for model in models for member in model.network.members]
-    network = UniversalNetwork(replace(shape, members=len(members)))
+    network = replace(shape, members=len(members)).build()
     for mine, theirs in zip(network.members, members, strict=True):
         mine.load_state_dict(theirs.state_dict())
     network.eval()

@@ -35,7 +35,6 @@ from posture_id.learning.universal.data import merged_scope, open_sets
 from posture_id.learning.universal.model import UniversalModel
 from posture_id.learning.universal.network import (
     OUTPUTS,
-    UniversalNetwork,
     UniversalNetworkConfig,
 )
 from posture_id.learning.universal.samples import (
@@ -230,7 +229,7 @@ class UniversalTrainer(EpochTrainer):
             input_std = np.maximum(first.inputs.std(axis=0, dtype=np.float64), 1e-6)
             target_mean = first.targets[:, :4].mean(axis=0)
             target_std = first.targets[:, :4].std(axis=0)
-            net = UniversalNetwork(network_config).to(device)
+            net = network_config.build().to(device)
         self.net, self.network_config = net, network_config
         self.model = UniversalModel(net, input_mean, input_std, target_mean, target_std)
         self.steps = math.ceil(len(first) / config.batch_size)
@@ -371,4 +370,4 @@ def _run_identity(data, network: UniversalNetworkConfig) -> list[dict]:
     configuration: each set's path, configuration and shard count, in order, then the
     network's configuration."""
     return [{"path": str(d.path.resolve()), "config": d.manifest["config"],
-             "shards": len(d.manifest["shards"])} for d in data] + [{"network": asdict(network)}]
+             "shards": len(d.manifest["shards"])} for d in data] + [{"network": network.to_dict()}]

@@ -215,7 +215,7 @@ class UniversalModel:
         if "gate" in sidecar:
             try:
                 gate = NoiseGate.from_dict(sidecar["gate"])
-            except (KeyError, TypeError, ValueError) as exc:
+            except (KeyError, TypeError, ValueError, LearningError) as exc:
                 raise ModelError(f"{sidecar_file}: its gate cannot be read ({exc})") from None
             if gate.white_members >= config.members:
                 raise ModelError(f"{sidecar_file}: its gate gives {gate.white_members} of "

@@ -108,7 +108,7 @@ PRESET_SHARDS    ?= 1200
 SMALL_SHARDS     ?= 1500
 ROBOT_SHARDS     ?= 900
 UNIVERSAL_EPOCHS ?= 45
-UNIVERSAL_DIR    := posture_id/learning/universal/models/universal
+UNIVERSAL_DIR    := posture_id/learning/models/universal
 universal-model: $(STAMP)
 	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
 	$(BIN)/posture-id universal data --out data/universal_people --shards $(PEOPLE_SHARDS) \

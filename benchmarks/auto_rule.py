@@ -40,8 +40,8 @@ from posture_id.frf.locked import LockedOptions
 from posture_id.identify.core import Identifier, Refinement, auto_refinement
 from posture_id.identify.method import Method
 from posture_id.identify.verdict import PEOPLE_LIKE_SHARE
-from posture_id.learning.universal.bodies import build_body
-from posture_id.learning.universal.scope import BodyDraw
+from posture_id.learning.data.bodies import build_body
+from posture_id.learning.data.scope import BodyDraw
 from posture_id.simulation import simulate
 from posture_id.simulation.stimulus import prts
 from posture_id.simulation.subjects import people_like

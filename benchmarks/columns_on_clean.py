@@ -24,8 +24,8 @@ from posture_id.bodies.body import load_body
 from posture_id.dec.prior import sample_parameters
 from posture_id.identify import Identifier, Method
 from posture_id.identify.alternatives import columns_exchanged
-from posture_id.learning.universal.bodies import build_body
-from posture_id.learning.universal.scope import BodyDraw
+from posture_id.learning.data.bodies import build_body
+from posture_id.learning.data.scope import BodyDraw
 from posture_id.simulation import prts, simulate
 
 STIMULI = ((0.5, 2, 242), (2.0, 2, 242), (1.0, 6, 80), (3.0, 6, 80))

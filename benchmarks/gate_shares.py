@@ -5,7 +5,7 @@ Run:  .venv/bin/python benchmarks/gate_shares.py [--cache data/table_cells]
                                                  [--families data/universal_families]
 
 For each module sample, the coloured-noise network's share w of the answer
-(:meth:`posture_id.learning.universal.gate.NoiseGate.coloured_share`, the bundled model's
+(:meth:`posture_id.learning.noise_gate.NoiseGate.coloured_share`, the bundled model's
 gate) from the sample's noise ratio and colour, as the identifier measures them. Prints,
 per kind of sway, how many samples go to the white-noise network alone (w = 0), to the
 coloured-noise one alone (w = 1) and between, the mean w, and the noise colour's and
@@ -22,14 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.learning.universal.calibration import COLOUR_EDGE
-from posture_id.learning.universal.data import merged_scope, open_sets
-from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import load_split, make_samples
-from posture_id.learning.universal.scope import UniversalScope
+from posture_id.learning.calibration import COLOUR_EDGE
+from posture_id.learning.data.drawn import merged_scope, open_sets
+from posture_id.learning.data.scope import UniversalScope
+from posture_id.learning.universal_model import UniversalModel
+from posture_id.learning.universal_samples import load_split, make_samples
 from posture_id.studies.universal_table import cached_samples
 
-BUNDLED = Path("posture_id/learning/universal/models/universal")
+BUNDLED = Path("posture_id/learning/models/universal")
 
 
 def _line(name: str, w: np.ndarray, colour: np.ndarray, ratio: np.ndarray) -> str:

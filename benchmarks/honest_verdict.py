@@ -44,8 +44,8 @@ from posture_id.dec.prior import sample_parameters
 from posture_id.errors import PostureIdError
 from posture_id.executors import LocalExecutor
 from posture_id.fileio import atomic_write_text, json_text
-from posture_id.learning.universal.bodies import build_body
-from posture_id.learning.universal.scope import BodyDraw
+from posture_id.learning.data.bodies import build_body
+from posture_id.learning.data.scope import BodyDraw
 from posture_id.recording import Recording
 from posture_id.simulation.batch import simulate
 from posture_id.simulation.noise_families import NoiseFamily, draw_noise

@@ -80,7 +80,7 @@ def make_material(root: Path) -> dict[str, str]:
         _quiet_main(["universal", "data", "--out", str(tiny), "--shards", "1", "--trials",
                      "4", "--quiet"])
     paths["universal_tiny"] = str(tiny)
-    paths["model"] = str(ROOT / "posture_id" / "learning" / "universal" / "models" / "universal")
+    paths["model"] = str(ROOT / "posture_id" / "learning" / "models" / "universal")
     from hostile_newest import make_newest_material
 
     make_newest_material(root, paths)

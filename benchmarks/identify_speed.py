@@ -27,8 +27,8 @@ import numpy as np
 import torch
 
 from posture_id import __version__, load_body, sample_parameters, simulate_batch
-from posture_id.datasets.features import FS_HZ, modular_images, stft
 from posture_id.fileio import atomic_write_text
+from posture_id.learning.features.spectrograms import FS_HZ, modular_images, stft
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.learning.prediction import predict_images
 from posture_id.trials import prepare_trial

@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.datasets.store import Dataset
 from posture_id.fileio import atomic_write_text
 from posture_id.learning.calibration import held_out_predictions
 from posture_id.learning.checkpoint import load_model
+from posture_id.learning.data.store import Dataset
 from posture_id.uncertainty.conformal import ConformalCalibration, Normaliser, conformal_quantile
 
 LEVEL = 0.9

@@ -23,7 +23,6 @@ import time
 from pathlib import Path
 
 from posture_id import __version__
-from posture_id.datasets import Dataset
 from posture_id.fileio import atomic_write_text
 from posture_id.learning import (
     AdamWOneCycle,
@@ -35,6 +34,7 @@ from posture_id.learning import (
     evaluate,
     train,
 )
+from posture_id.learning.data import Dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The paper's test rows (total RMSE, fit RMSE, accuracy): Table 2 and Table 4.

@@ -60,7 +60,7 @@ WIDENING_SEED = 777
 
 def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: int,
                learning_rate: float, base: Path, tilt: float) -> None:
-    from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
+    from posture_id.learning.universal_training import UniversalTrainingConfig, train_universal
     from posture_id.studies.universal_check import calibrate_model
 
     if not (out / "model.json").exists():
@@ -80,7 +80,7 @@ def _fine_tune(data: list[Path], out: Path, exclude: tuple[str, ...], epochs: in
 def _gated(data: list[Path], fine: Path, base: Path) -> Path:
     """The base and the fine-tune ``fine`` in one model gated by the noise (the bundled
     recipe's last step), calibrated on ``data``: ``fine`` + ``_gated``."""
-    from posture_id.learning.universal.model import UniversalModel, ensemble_of
+    from posture_id.learning.universal_model import UniversalModel, ensemble_of
     from posture_id.studies.universal_check import calibrate_model
 
     out = fine.with_name(fine.name + "_gated")
@@ -127,8 +127,8 @@ def _bundled_base(out: Path) -> None:
     """Write the base (``make universal-model``'s first stage) at ``out`` as the bundled
     model holds it: its white-noise member, checked byte for byte against the SHA-256 its
     sidecar names."""
-    from posture_id.learning.universal.identifier import BUNDLED_DIR
-    from posture_id.learning.universal.model import UniversalModel
+    from posture_id.learning.universal_identifier import BUNDLED_DIR
+    from posture_id.learning.universal_model import UniversalModel
 
     bundled = UniversalModel.load(BUNDLED_DIR)
     base = bundled.member(0)

@@ -19,8 +19,8 @@ import time
 from pathlib import Path
 
 import posture_id.simulation.noise as noise_module
-from posture_id.learning.universal.data import UniversalDataConfig, make_shard
-from posture_id.learning.universal.scope import UniversalScope
+from posture_id.learning.data.drawn import UniversalDataConfig, make_shard
+from posture_id.learning.data.scope import UniversalScope
 from posture_id.simulation.options import SimulationOptions
 
 

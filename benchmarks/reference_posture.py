@@ -28,8 +28,8 @@ from posture_id.bodies.body import load_body
 from posture_id.dec.parameters import default_parameters
 from posture_id.dec.prior import sample_parameters
 from posture_id.frf.cycles import cycle_average
-from posture_id.learning.universal.bodies import build_body
-from posture_id.learning.universal.scope import BodyDraw
+from posture_id.learning.data.bodies import build_body
+from posture_id.learning.data.scope import BodyDraw
 from posture_id.simulation import SimulationOptions, prts, simulate
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.stimulus import tilt_from_array

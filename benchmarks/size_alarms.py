@@ -22,8 +22,8 @@ import numpy as np
 
 from posture_id.dec.prior import sample_parameters
 from posture_id.identify.core import Identifier
-from posture_id.learning.universal.bodies import build_body
-from posture_id.learning.universal.scope import BodyDraw
+from posture_id.learning.data.bodies import build_body
+from posture_id.learning.data.scope import BodyDraw
 from posture_id.simulation import prts, simulate
 
 SEED = 2024

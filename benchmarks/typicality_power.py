@@ -23,8 +23,8 @@ import numpy as np
 from posture_id import load_body
 from posture_id.dec.parameters import default_parameters
 from posture_id.fileio import atomic_write_text
-from posture_id.learning.universal.identifier import UniversalIdentifier
-from posture_id.learning.universal.typicality import ATYPICAL_P
+from posture_id.learning.typicality import ATYPICAL_P
+from posture_id.learning.universal_identifier import UniversalIdentifier
 from posture_id.simulation import prts
 from posture_id.simulation.subjects import people_like
 from posture_id.trials import prepare_trial

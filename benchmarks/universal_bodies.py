@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.learning.universal.data import open_sets
-from posture_id.learning.universal.identifier import BUNDLED_DIR
-from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import load_split, make_samples
+from posture_id.learning.data.drawn import open_sets
+from posture_id.learning.universal_identifier import BUNDLED_DIR
+from posture_id.learning.universal_model import UniversalModel
+from posture_id.learning.universal_samples import load_split, make_samples
 from posture_id.studies.universal_check import TEST_SEED
 
 PEOPLE_LIKE_BELOW = 0.6

@@ -29,7 +29,7 @@ from posture_id import __version__, load_body, sample_parameters, simulate_batch
 from posture_id.bodies.anthropometry import straight_links, winter_segments
 from posture_id.bodies.urdf_writer import write_chain_urdf
 from posture_id.fileio import atomic_write_text
-from posture_id.learning.universal.identifier import UniversalIdentifier
+from posture_id.learning.universal_identifier import UniversalIdentifier
 from posture_id.simulation.stimulus import prts
 from posture_id.trials import prepare_trial
 

@@ -138,8 +138,8 @@ def test_exchanged_columns_are_named_on_a_recording_cleaner_than_the_networks_er
     and the answer is doubtful. With the size guard applied to columns too, as before,
     it was not; the recording as made has nothing named."""
     from posture_id.dec.prior import sample_parameters
-    from posture_id.learning.universal.bodies import build_body
-    from posture_id.learning.universal.scope import BodyDraw
+    from posture_id.learning.data.bodies import build_body
+    from posture_id.learning.data.scope import BodyDraw
 
     body = build_body(BodyDraw("winter", 3, 1.75, 70.0, ((1.0, 1.0),) * 3))
     stimulus = prts(2.0, 6, 80)

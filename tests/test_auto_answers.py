@@ -17,7 +17,7 @@ from posture_id.fitting.options import FitError, FitOptions
 from posture_id.frf.locked import LockedOptions
 from posture_id.identify import Identifier, Method, identify
 from posture_id.identify.core import network_prior
-from posture_id.learning.universal.identifier import UniversalIdentifier
+from posture_id.learning.universal_identifier import UniversalIdentifier
 from posture_id.simulation import prts
 from posture_id.simulation.subjects import people_like
 

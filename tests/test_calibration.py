@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from posture_id.cli import main
-from posture_id.datasets import DatasetConfig, generate_dataset
 from posture_id.learning.calibration import CALIBRATION, CnnCalibration
 from posture_id.learning.config import Layout, LearningError, NetworkConfig, TrainingConfig
+from posture_id.learning.data import DatasetConfig, generate_dataset
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.learning.training import train
 from posture_id.simulation.batch import simulate

@@ -12,7 +12,12 @@ import pytest
 
 from posture_id.bodies.body import DEFAULT_URDF
 from posture_id.cli import main
-from posture_id.datasets.generation import Dataset, DatasetConfig, DatasetError, generate_dataset
+from posture_id.learning.data.trial_generation import (
+    Dataset,
+    DatasetConfig,
+    DatasetError,
+    generate_dataset,
+)
 
 
 def _config(body=DEFAULT_URDF, **kw) -> DatasetConfig:
@@ -204,7 +209,7 @@ def test_motor_noise_moves_the_bodies_with_each_trials_own_seed(tmp_path):
     assert np.all((b["motor_noise_deg"] >= 0) & (b["motor_noise_deg"] <= 0.3))
     assert len(set(b["motor_noise_deg"].round(12))) == len(b["motor_noise_deg"])
     # the stored sway is the noisy sway: one trial re-simulated alone with its own noise
-    from posture_id.datasets.shards import motor_noises
+    from posture_id.learning.data.trial_shards import motor_noises
 
     noises = motor_noises(config, 0)
     first = int(np.flatnonzero(b["kept"])[0])

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from posture_id.datasets.features import (
+from posture_id.learning.features.spectrograms import (
     HOP,
     N_BINS,
     N_WINDOWS,

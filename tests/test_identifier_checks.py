@@ -17,7 +17,7 @@ from posture_id.fileio import json_text
 from posture_id.identify import Identifier
 from posture_id.identify.method import Method
 from posture_id.learning.identifier import CnnIdentifier, NetworkIdentifier
-from posture_id.learning.universal.identifier import UniversalIdentifier
+from posture_id.learning.universal_identifier import UniversalIdentifier
 from posture_id.models import DEC, TrustLevel
 from posture_id.recording import Recording
 from posture_id.simulation.batch import simulate

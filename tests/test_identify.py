@@ -98,7 +98,7 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     the classes and the fit recovers the truth; the verdict on the answer is good."""
     from dataclasses import replace
 
-    from posture_id.learning.universal.identifier import UniversalIdentifier
+    from posture_id.learning.universal_identifier import UniversalIdentifier
 
     # two 80-state cycles (40 s): the route, not the recording's length, is under test
     truth, recording = _noisy_trial(tip, 12, 0.01, prts(states=80, cycles=2))
@@ -132,7 +132,7 @@ def test_auto_refines_a_doubtful_answer_and_keeps_a_good_one(tip, monkeypatch):
     refined by least squares (and says so); a good answer is kept as it is."""
     from dataclasses import replace
 
-    from posture_id.learning.universal.identifier import UniversalIdentifier
+    from posture_id.learning.universal_identifier import UniversalIdentifier
 
     truth, recording = _noisy_trial(tip, 12, 0.01)
     good = identify(recording, tip, Method.AUTO)

@@ -126,7 +126,7 @@ def test_a_model_that_falls_is_said_in_one_line(tmp_path, tip, monkeypatch, caps
     """The network's answer makes the body fall when re-simulated: one line says so and what
     to try, the JSON is written and stays strict, the exit status is 1 (DOUBTFUL)."""
     from posture_id.cli.exit_status import DOUBTFUL
-    from posture_id.learning.universal.identifier import UniversalIdentifier
+    from posture_id.learning.universal_identifier import UniversalIdentifier
 
     honest = UniversalIdentifier.identify
 

@@ -30,7 +30,7 @@ def test_the_package_keeps_every_contract():
 
 @pytest.mark.parametrize(("module", "line", "broken"), [
     ("simulation/leak.py", "import torch", "torch is imported only by the learning layer"),
-    ("datasets/leak.py", "import casadi", "CasADi is imported only by the fitting layer"),
+    ("learning/data/leak.py", "import torch", "torch is imported only by the learning layer"),
     ("learning/leak.py", "import casadi", "CasADi is imported only by the fitting layer"),
     ("fitting/leak.py", "import matplotlib.pyplot",
      "matplotlib is imported only by posture_id.plotting"),

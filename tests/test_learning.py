@@ -13,7 +13,6 @@ import torch
 from safetensors.torch import load_file
 
 from posture_id.cli import main
-from posture_id.datasets import DatasetConfig, generate_dataset
 from posture_id.learning.checkpoint import load_model
 from posture_id.learning.config import (
     AdamWOneCycle,
@@ -24,6 +23,7 @@ from posture_id.learning.config import (
     SgdMomentum,
     TrainingConfig,
 )
+from posture_id.learning.data import DatasetConfig, generate_dataset
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import SplitSamples
 from posture_id.learning.training import train
@@ -76,7 +76,7 @@ def test_tiny_training_reduces_the_loss(tiny_set, tmp_path, layout, optimiser):
 
 def test_checkpoint_round_trips_to_identical_predictions(trained, tiny_set):
     out, _ = trained
-    from posture_id.datasets import Dataset
+    from posture_id.learning.data import Dataset
 
     model = load_model(out)
     samples = SplitSamples(Dataset.open(tiny_set), "test", Layout.MODULAR, model.standardiser)
@@ -174,8 +174,8 @@ def test_the_command_line_does_not_import_torch_to_start():
 def test_frf_network_round_trips_and_identifies(tiny_set, tmp_path, tip):
     """An FRF-feature network: trained by the same machinery, its checkpoint names the FRF
     features, and the identifier computes them from a recording exactly as training did."""
-    from posture_id.datasets import Dataset
     from posture_id.frf.features import FRF_FEATURE_DEFINITION
+    from posture_id.learning.data import Dataset
     from posture_id.learning.identifier import CnnIdentifier
     from posture_id.learning.samples import frf_inputs
     from posture_id.recording import Recording
@@ -205,8 +205,8 @@ def test_evaluate_puts_the_universal_model_beside_a_specialist(trained, tiny_set
     """``evaluate --universal``: the universal model on the specialist's own test trials;
     its class accuracy is what identifying each test trial's recording gives."""
     from posture_id.cli import main
-    from posture_id.datasets import Dataset
-    from posture_id.learning.universal.identifier import UniversalIdentifier
+    from posture_id.learning.data import Dataset
+    from posture_id.learning.universal_identifier import UniversalIdentifier
     from posture_id.recording import Recording
     from posture_id.simulation import prts
 

@@ -16,10 +16,10 @@ from torch import nn
 
 from posture_id.cli import main
 from posture_id.dec import sample_parameters
-from posture_id.learning.universal.features import N_INPUTS
-from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.network import OUTPUTS, network_config_of, register_network
-from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
+from posture_id.learning.features.module_frfs import N_INPUTS
+from posture_id.learning.universal_model import UniversalModel
+from posture_id.learning.universal_network import OUTPUTS, network_config_of, register_network
+from posture_id.learning.universal_training import UniversalTrainingConfig, train_universal
 from posture_id.recording import Recording
 from posture_id.simulation import prts, simulate
 

@@ -19,7 +19,7 @@ from posture_id.frf.locked import LockedOptions, LockedProjection
 from posture_id.identify import identify
 from posture_id.identify.noise_check import Basis, NoiseCheck
 from posture_id.identify.verdict import TrustVerdict
-from posture_id.learning.universal.harmonics import harmonic_layout
+from posture_id.learning.features.harmonics import harmonic_layout
 from posture_id.recording import Recording
 from posture_id.simulation.batch import simulate
 from posture_id.simulation.stimulus import prts

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from posture_id.errors import PostureIdError
-from posture_id.learning.universal.typicality import (
+from posture_id.learning.typicality import (
     ATYPICAL_P,
     TYPICALITY_FILE,
     TypicalityReference,
@@ -92,7 +92,7 @@ def subject(tip):
 
 
 def test_the_bundled_reference_is_the_bundled_models(tip):
-    from posture_id.learning.universal.identifier import UniversalIdentifier
+    from posture_id.learning.universal_identifier import UniversalIdentifier
 
     identifier = UniversalIdentifier.bundled(tip)
     assert identifier.typicality is not None
@@ -129,7 +129,7 @@ def test_the_default_command_doubts_sway_unlike_any_trained_on(tip, subject, tmp
 def test_a_reference_made_for_other_weights_is_not_used(tip, tmp_path):
     import shutil
 
-    from posture_id.learning.universal.identifier import BUNDLED_DIR, UniversalIdentifier
+    from posture_id.learning.universal_identifier import BUNDLED_DIR, UniversalIdentifier
 
     folder = tmp_path / "model"
     shutil.copytree(BUNDLED_DIR, folder)

@@ -11,24 +11,24 @@ import numpy as np
 import pytest
 
 from posture_id.errors import LearningError
-from posture_id.learning.universal.features import (
-    CHANNELS,
-    GRID_HZ,
-    band_weights,
-    body_descriptors,
-    module_features,
+from posture_id.learning.data.scope import (
+    BodyDraw,
+    UniversalScope,
+    draw_body,
+    draw_stimulus,
 )
-from posture_id.learning.universal.harmonics import (
+from posture_id.learning.features.harmonics import (
     drift_parts,
     harmonic_layout,
     sensor_noise_parts,
     sway_harmonics,
 )
-from posture_id.learning.universal.scope import (
-    BodyDraw,
-    UniversalScope,
-    draw_body,
-    draw_stimulus,
+from posture_id.learning.features.module_frfs import (
+    CHANNELS,
+    GRID_HZ,
+    band_weights,
+    body_descriptors,
+    module_features,
 )
 
 
@@ -58,7 +58,7 @@ def test_noise_colour_is_flat_for_white_noise_and_follows_a_known_spectrum():
     to that above 0.8 Hz at the excited harmonics (each estimated, as the features do,
     from the empty harmonics nearest it)."""
     from posture_id.frf.locked import noise_levels
-    from posture_id.learning.universal.features import (
+    from posture_id.learning.features.module_frfs import (
         COLOUR_HIGH_HZ,
         COLOUR_LOW_HZ,
         _rows,
@@ -172,7 +172,7 @@ def test_a_jittered_robot_is_the_lumped_robot_with_each_segment_scaled():
     """Loaded by Pinocchio, a jittered preset's segment i has mass a_i·m_i, COM b_i·c_i,
     inertia a_i·b_i²·I_i, and its joint b_(i-1) further up the segment below; the scope
     draws the factors within 1 ± preset_jitter, and none without it."""
-    from posture_id.learning.universal.bodies import build_body
+    from posture_id.learning.data.bodies import build_body
 
     factors = ((1.2, 0.9), (0.85, 1.1), (1.05, 1.15))
     lumped, jittered = build_body(BodyDraw("talos", 3)), build_body(
@@ -197,7 +197,7 @@ def test_a_jittered_robot_is_the_lumped_robot_with_each_segment_scaled():
 @pytest.fixture(scope="module")
 def tiny_set(tmp_path_factory):
     """A 20-shard set of 6 trials each: enough for every split."""
-    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
+    from posture_id.learning.data.drawn import UniversalDataConfig, generate_universal
 
     out = tmp_path_factory.mktemp("universal") / "set"
     return generate_universal(UniversalDataConfig(shards=20, trials=6, seed=5), out, workers=2)
@@ -205,13 +205,13 @@ def tiny_set(tmp_path_factory):
 
 @pytest.mark.slow
 def test_shards_are_reproducible_and_a_killed_run_resumes(tiny_set, tmp_path):
-    from posture_id.datasets.config import DatasetError
-    from posture_id.learning.universal.data import (
+    from posture_id.learning.data.drawn import (
         UniversalDataConfig,
         UniversalSet,
         generate_universal,
         make_shard,
     )
+    from posture_id.learning.data.trial_config import DatasetError
 
     config = UniversalDataConfig(shards=20, trials=6, seed=5)
     entry = tiny_set.shards()[3]
@@ -242,9 +242,9 @@ def test_shards_are_reproducible_and_a_killed_run_resumes(tiny_set, tmp_path):
 def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
     import torch
 
-    from posture_id.learning.universal.model import ModelError, UniversalModel
-    from posture_id.learning.universal.network import UniversalNetworkConfig
-    from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
+    from posture_id.learning.universal_model import ModelError, UniversalModel
+    from posture_id.learning.universal_network import UniversalNetworkConfig
+    from posture_id.learning.universal_training import UniversalTrainingConfig, train_universal
 
     config = UniversalTrainingConfig(epochs=3, batch_size=64, threads=1, patience=10)
     net = UniversalNetworkConfig(hidden=(32, 32))
@@ -301,10 +301,10 @@ def test_keep_clean_holds_the_clean_outputs_of_the_model_fine_tuned_from(tiny_se
     agree."""
     import torch
 
-    from posture_id.learning.universal.data import merged_scope, open_sets
-    from posture_id.learning.universal.network import UniversalNetworkConfig
-    from posture_id.learning.universal.samples import load_split, make_samples
-    from posture_id.learning.universal.training import (
+    from posture_id.learning.data.drawn import merged_scope, open_sets
+    from posture_id.learning.universal_network import UniversalNetworkConfig
+    from posture_id.learning.universal_samples import load_split, make_samples
+    from posture_id.learning.universal_training import (
         CLEAN_LOCKED_SHARE,
         UniversalTrainingConfig,
         _gap,
@@ -347,9 +347,9 @@ def test_keep_clean_holds_the_clean_outputs_of_the_model_fine_tuned_from(tiny_se
 def test_sets_trained_together_agree_but_on_motor_noise_body_mix_and_tilt_range(tmp_path):
     from dataclasses import replace
 
-    from posture_id.datasets.config import DatasetError
-    from posture_id.learning.universal.data import UniversalSet, merged_scope
-    from posture_id.learning.universal.scope import ScopeError, UniversalScope
+    from posture_id.learning.data.drawn import UniversalSet, merged_scope
+    from posture_id.learning.data.scope import ScopeError, UniversalScope
+    from posture_id.learning.data.trial_config import DatasetError
 
     def a_set(name, scope):
         return UniversalSet(tmp_path / name, {"config": {"scope": scope.to_dict()}})
@@ -382,11 +382,11 @@ def test_sets_trained_together_agree_but_on_motor_noise_body_mix_and_tilt_range(
 
 @pytest.mark.slow
 def test_training_on_two_sets_reads_both(tiny_set, tmp_path):
-    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
-    from posture_id.learning.universal.network import UniversalNetworkConfig
-    from posture_id.learning.universal.samples import SET_STRIDE, load_split
-    from posture_id.learning.universal.scope import UniversalScope
-    from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
+    from posture_id.learning.data.drawn import UniversalDataConfig, generate_universal
+    from posture_id.learning.data.scope import UniversalScope
+    from posture_id.learning.universal_network import UniversalNetworkConfig
+    from posture_id.learning.universal_samples import SET_STRIDE, load_split
+    from posture_id.learning.universal_training import UniversalTrainingConfig, train_universal
 
     people = generate_universal(UniversalDataConfig(
         shards=10, trials=4, seed=6, scope=UniversalScope(clean_share=0.0,
@@ -411,7 +411,7 @@ def test_training_on_two_sets_reads_both(tiny_set, tmp_path):
 
 @pytest.mark.parametrize("body_name", ["tip", "winter", "winter2"])
 def test_com_weights_linearise_the_com_above_each_joint(body_name, request):
-    from posture_id.learning.universal.features import com_weights
+    from posture_id.learning.features.module_frfs import com_weights
 
     body = request.getfixturevalue(body_name)
     w = com_weights(body)
@@ -450,7 +450,7 @@ def test_identify_by_default_reads_a_body_and_prts_no_network_was_trained_on(tmp
 
 
 def test_conformal_quantiles_and_temperature_recover_known_answers():
-    from posture_id.learning.universal.calibration import (
+    from posture_id.learning.calibration import (
         LEVELS,
         _conformal,
         _temperature,
@@ -473,7 +473,7 @@ def test_conformal_quantiles_and_temperature_recover_known_answers():
     assert [regime_text(k) for k in keys] == [
         "1 segment, clean, white noise", "3 segments, mostly noise, noise shaped by the body",
         "2 segments, clean, white noise", "3 segments, a little noisy, noise shaped by the body"]
-    from posture_id.learning.universal.calibration import Regime
+    from posture_id.learning.calibration import Regime
 
     assert [Regime.parse(k).key for k in (*keys, "2:3", "3")] == [*keys, "2:3", "3"]
     assert [r.key for r in Regime.parse("3:4c").broader()] == ["3:4c", "3:4", "3"]
@@ -483,8 +483,8 @@ def test_a_body_the_calibration_had_none_of_gets_the_pooled_values_or_a_clear_er
     """Calibrated on 2- and 3-segment bodies only, a 1-segment body's intervals use the
     values pooled over every sample (no KeyError); a calibration without them says what
     is missing."""
-    from posture_id.learning.universal.calibration import POOLED, UniversalCalibration
-    from posture_id.learning.universal.model import ModelError
+    from posture_id.learning.calibration import POOLED, UniversalCalibration
+    from posture_id.learning.universal_model import ModelError
 
     row = [[1.0, 2.0, 3.0, 4.0]] * 99
     cal = UniversalCalibration({"2": row, "3:4": [[5.0] * 4] * 99, "3:4c": [[6.0] * 4] * 99,
@@ -502,8 +502,8 @@ def test_a_body_the_calibration_had_none_of_gets_the_pooled_values_or_a_clear_er
 
 
 def test_a_calibration_made_before_the_noise_colour_is_refused_with_the_fix(tmp_path):
-    from posture_id.learning.universal.calibration import POOLED, UniversalCalibration
-    from posture_id.learning.universal.model import ModelError
+    from posture_id.learning.calibration import POOLED, UniversalCalibration
+    from posture_id.learning.universal_model import ModelError
 
     cal = UniversalCalibration({POOLED: [[1.0] * 4] * 99}, {POOLED: 1.0}, {POOLED: 500}, "x")
     cal.save(tmp_path)
@@ -529,8 +529,8 @@ class _ScaledErrorsModel:
         self.slope = slope
 
     def predict(self, inputs, noise_ratio=None, noise_colour=None):
-        from posture_id.learning.universal.model import UniversalPrediction
-        from posture_id.learning.universal.samples import STIMULUS_COLUMNS
+        from posture_id.learning.universal_model import UniversalPrediction
+        from posture_id.learning.universal_samples import STIMULUS_COLUMNS
 
         log_pp = inputs[:, STIMULUS_COLUMNS][:, 0].astype(float)
         errors = inputs[:, :4].astype(float) * 10 ** (self.slope * log_pp)[:, None]
@@ -540,8 +540,8 @@ class _ScaledErrorsModel:
 def _stimulus_samples(rng, m: int):
     """M clean module samples of every segment count over 0.5–4° tilts (equal p-p and
     velocity descriptors), true values 0, z ~ N(0, 1) in the first four inputs."""
-    from posture_id.learning.universal.features import N_INPUTS
-    from posture_id.learning.universal.samples import STIMULUS_COLUMNS, Samples
+    from posture_id.learning.features.module_frfs import N_INPUTS
+    from posture_id.learning.universal_samples import STIMULUS_COLUMNS, Samples
 
     log_pp = rng.uniform(np.log10(0.5), np.log10(4.0), m)
     inputs = np.zeros((m, N_INPUTS), dtype=np.float32)
@@ -560,14 +560,14 @@ def test_the_difficulty_trend_evens_the_coverage_over_stimuli():
     tilts more than 90 % and the large ones less; the difficulty trend, fitted on other
     samples, finds the slope, and the calibration covers every third of the tilts 90 %
     on a third set."""
-    from posture_id.learning.universal.calibration import (
+    from posture_id.learning.calibration import (
         POOLED,
         TREND_TERMS,
         UniversalCalibration,
         _conformal,
         calibrate,
     )
-    from posture_id.learning.universal.evaluation import score_samples
+    from posture_id.learning.evaluation import score_samples
 
     rng = np.random.default_rng(11)
     model = _ScaledErrorsModel(slope=0.5)
@@ -596,8 +596,8 @@ def test_the_difficulty_trend_evens_the_coverage_over_stimuli():
 
 
 def test_the_trend_terms_of_one_recording_are_its_modules_rows():
-    from posture_id.learning.universal.calibration import TREND_TERMS, trend_terms
-    from posture_id.learning.universal.features import N_INPUTS
+    from posture_id.learning.calibration import TREND_TERMS, trend_terms
+    from posture_id.learning.features.module_frfs import N_INPUTS
 
     inputs = np.random.default_rng(2).normal(size=(3, N_INPUTS))
     one = trend_terms(3, 0.01, 1.0, inputs)
@@ -734,8 +734,8 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
     writes the same table; a run asking for other trials is refused and leaves the
     folder as it was."""
     from posture_id.cli import main
-    from posture_id.learning.universal.identifier import BUNDLED_DIR
-    from posture_id.learning.universal.model import UniversalModel
+    from posture_id.learning.universal_identifier import BUNDLED_DIR
+    from posture_id.learning.universal_model import UniversalModel
     from posture_id.studies.universal_table import (
         _cache_key,
         _cell,
@@ -805,9 +805,9 @@ def test_ece_of_calibrated_and_overconfident_probabilities():
 ])
 def test_the_stimulus_is_checked_against_the_scope_s_own_ranges(states, state_s, amplitude,
                                                                   cycles, expected):
-    from posture_id.learning.universal.harmonics import harmonic_layout
-    from posture_id.learning.universal.identifier import stimulus_outside
-    from posture_id.learning.universal.scope import UniversalScope
+    from posture_id.learning.data.scope import UniversalScope
+    from posture_id.learning.features.harmonics import harmonic_layout
+    from posture_id.learning.universal_identifier import stimulus_outside
     from posture_id.simulation.stimulus import prts
 
     stimulus = prts(amplitude, cycles, states, state_s)
@@ -830,9 +830,9 @@ def test_an_ensemble_s_members_combine_into_their_mixture_and_round_trip(tmp_pat
     state dict of before (keys ``layers.*``) loads into today's network."""
     import torch
 
-    from posture_id.learning.universal.model import UniversalModel
-    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
-    from posture_id.learning.universal.training import _loss
+    from posture_id.learning.universal_model import UniversalModel
+    from posture_id.learning.universal_network import UniversalNetwork, UniversalNetworkConfig
+    from posture_id.learning.universal_training import _loss
 
     config = UniversalNetworkConfig(inputs=6, hidden=(4,), members=2)
     net = UniversalNetwork(config)
@@ -891,8 +891,8 @@ def test_models_trained_apart_make_one_ensemble_and_mismatches_are_refused(tmp_p
     import torch
 
     from posture_id.cli import main
-    from posture_id.learning.universal.model import ModelError, UniversalModel, ensemble_of
-    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+    from posture_id.learning.universal_model import ModelError, UniversalModel, ensemble_of
+    from posture_id.learning.universal_network import UniversalNetwork, UniversalNetworkConfig
 
     torch.manual_seed(3)
     config = UniversalNetworkConfig(inputs=6, hidden=(4,))
@@ -945,9 +945,9 @@ def test_a_model_gated_by_the_noise_answers_white_noise_by_its_first_network(tmp
     import torch
 
     from posture_id.cli import main
-    from posture_id.learning.universal.gate import NoiseGate
-    from posture_id.learning.universal.model import ModelError, UniversalModel, ensemble_of
-    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+    from posture_id.learning.noise_gate import NoiseGate
+    from posture_id.learning.universal_model import ModelError, UniversalModel, ensemble_of
+    from posture_id.learning.universal_network import UniversalNetwork, UniversalNetworkConfig
 
     torch.manual_seed(4)
     config = UniversalNetworkConfig(inputs=6, hidden=(4,))
@@ -1000,8 +1000,8 @@ def test_an_ensemble_member_saved_alone_is_the_model_it_came_from(tmp_path):
     refused."""
     import torch
 
-    from posture_id.learning.universal.model import ModelError, UniversalModel, ensemble_of
-    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+    from posture_id.learning.universal_model import ModelError, UniversalModel, ensemble_of
+    from posture_id.learning.universal_network import UniversalNetwork, UniversalNetworkConfig
 
     torch.manual_seed(5)
     config = UniversalNetworkConfig(inputs=6, hidden=(4,))
@@ -1034,9 +1034,9 @@ def test_the_scope_s_bodies_are_inside_and_a_small_robot_is_not(tmp_path):
     from posture_id.bodies.body import load_body
     from posture_id.bodies.lumping import robots_dir
     from posture_id.cli import main
-    from posture_id.learning.universal.bodies import build_body
-    from posture_id.learning.universal.identifier import UniversalIdentifier
-    from posture_id.learning.universal.scope import BodyDraw, UniversalScope
+    from posture_id.learning.data.bodies import build_body
+    from posture_id.learning.data.scope import BodyDraw, UniversalScope
+    from posture_id.learning.universal_identifier import UniversalIdentifier
 
     scope = UniversalScope()
     draws = [BodyDraw("winter", n, h, m, ((1.0, 1.0),) * n) for n in (1, 2, 3)
@@ -1058,8 +1058,8 @@ def test_the_network_s_shape_is_checked_and_kept_with_the_model(tmp_path):
     or none at all, is refused naming the field."""
     import torch
 
-    from posture_id.learning.universal.model import UniversalModel
-    from posture_id.learning.universal.network import UniversalNetwork, UniversalNetworkConfig
+    from posture_id.learning.universal_model import UniversalModel
+    from posture_id.learning.universal_network import UniversalNetwork, UniversalNetworkConfig
 
     config = UniversalNetworkConfig(inputs=6, hidden=(7, 5, 3))
     net = UniversalNetwork(config)
@@ -1077,7 +1077,7 @@ def test_the_training_configuration_names_its_point_loss():
     """The point loss is one of the two known; another is refused by name, and the command
     line passes its choice through."""
     from posture_id.cli import build_parser
-    from posture_id.learning.universal.training import UniversalTrainingConfig
+    from posture_id.learning.universal_training import UniversalTrainingConfig
 
     assert UniversalTrainingConfig().point_loss == "squared"
     assert UniversalTrainingConfig(point_loss="absolute").point_loss == "absolute"
@@ -1098,7 +1098,7 @@ def _motor_noise_harmonics(draws: int, shape=None, cutoff_hz: float = 0.2,
     ``with_frequencies``)."""
     from posture_id.dec.parameters import ParameterArrays
     from posture_id.dec.prior import sample_parameters
-    from posture_id.learning.universal.bodies import build_body
+    from posture_id.learning.data.bodies import build_body
     from posture_id.simulation.batch import simulate_batch
     from posture_id.simulation.noise import MotorNoise
     from posture_id.simulation.stimulus import prts
@@ -1145,7 +1145,7 @@ def test_motor_noise_harmonics_are_centred_with_uniform_phases_so_turning_them_i
 
 
 def test_turning_motor_noise_keeps_its_power_cross_spectra_and_the_locked_sway():
-    from posture_id.learning.universal.samples import rotate_motor_noise
+    from posture_id.learning.universal_samples import rotate_motor_noise
 
     rng = np.random.default_rng(4)
     locked = rng.standard_normal((30, 5, 3)) + 1j * rng.standard_normal((30, 5, 3))
@@ -1190,7 +1190,7 @@ def test_a_torque_noise_of_another_slope_moves_the_sway_noise_by_the_psd_ratio()
 
 
 def test_tilting_motor_noise_gives_each_trial_a_power_law_factor_and_keeps_its_power():
-    from posture_id.learning.universal.samples import TILT_PIVOT_HZ, tilt_motor_noise
+    from posture_id.learning.universal_samples import TILT_PIVOT_HZ, tilt_motor_noise
 
     rng = np.random.default_rng(5)
     f = np.geomspace(0.05, 2.5, 30)
@@ -1222,8 +1222,8 @@ def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it(
     """`universal train` hands the flag to the training configuration (what it would
     train with is caught, not run)."""
     from posture_id.cli import main
-    from posture_id.learning.universal import training
-    from posture_id.learning.universal.training import UniversalTrainingConfig
+    from posture_id.learning import training
+    from posture_id.learning.universal_training import UniversalTrainingConfig
 
     assert UniversalTrainingConfig().fresh_motor_noise is False
     seen = []

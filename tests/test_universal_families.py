@@ -8,13 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from posture_id.learning.universal.harmonics import (
+from posture_id.learning.data.scope import ScopeError, UniversalScope
+from posture_id.learning.features.harmonics import (
     coloured_noise_parts,
     harmonic_layout,
     sensor_noise_parts,
     sway_harmonics,
 )
-from posture_id.learning.universal.scope import ScopeError, UniversalScope
 from posture_id.simulation.measurement import MeasurementNoise
 
 FAMILIES = ("low_pass", "shallow", "drifting")
@@ -23,7 +23,7 @@ FAMILIES = ("low_pass", "shallow", "drifting")
 @pytest.fixture(scope="module")
 def family_set(tmp_path_factory):
     """12 shards of 8 trials, every noisy trial of one of three families."""
-    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
+    from posture_id.learning.data.drawn import UniversalDataConfig, generate_universal
 
     out = tmp_path_factory.mktemp("universal") / "families"
     scope = UniversalScope(noise_families=FAMILIES, clean_share=0.0)
@@ -47,7 +47,7 @@ def test_a_scope_names_known_families_once():
 
 def test_a_scope_without_families_draws_nothing_more():
     """A set made before families draws as it did: no number is taken from the stream."""
-    from posture_id.learning.universal.data import _noise_draws
+    from posture_id.learning.data.drawn import _noise_draws
 
     rng = np.random.default_rng(1)
     family, cutoff, shapes = _noise_draws(UniversalScope(), 5, rng)
@@ -56,7 +56,7 @@ def test_a_scope_without_families_draws_nothing_more():
 
 
 def test_shards_say_each_trials_family_and_draw_them_all(family_set):
-    from posture_id.learning.universal.samples import load_split
+    from posture_id.learning.universal_samples import load_split
 
     shards = load_split([family_set], "train")
     family = np.concatenate([s.arrays["noise_family"] for s in shards])
@@ -67,7 +67,7 @@ def test_shards_say_each_trials_family_and_draw_them_all(family_set):
 
 def test_training_can_leave_a_family_out(family_set):
     from posture_id.learning.config import LearningError
-    from posture_id.learning.universal.samples import load_split, without_families
+    from posture_id.learning.universal_samples import load_split, without_families
 
     scope = family_set.manifest["config"]["scope"]
     scope = UniversalScope.from_dict(scope)
@@ -111,9 +111,9 @@ def test_coloured_sensor_noise_on_harmonics_matches_noise_on_the_sway():
 @pytest.mark.slow
 def test_a_model_fine_tuned_from_the_bundled_one_keeps_its_standardisation(family_set,
                                                                           tmp_path):
-    from posture_id.learning.universal.identifier import BUNDLED_DIR
-    from posture_id.learning.universal.model import UniversalModel
-    from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
+    from posture_id.learning.universal_identifier import BUNDLED_DIR
+    from posture_id.learning.universal_model import UniversalModel
+    from posture_id.learning.universal_training import UniversalTrainingConfig, train_universal
 
     base = UniversalModel.load(BUNDLED_DIR)
     config = UniversalTrainingConfig(epochs=1, batch_size=64, threads=1, init=str(BUNDLED_DIR),
@@ -134,7 +134,7 @@ def test_a_model_fine_tuned_from_the_bundled_one_keeps_its_standardisation(famil
 def test_the_command_line_refuses_network_flags_with_init_and_families_a_set_lacks(
         family_set, tmp_path, capsys):
     from posture_id.cli import main
-    from posture_id.learning.universal.identifier import BUNDLED_DIR
+    from posture_id.learning.universal_identifier import BUNDLED_DIR
 
     status = main(["universal", "train", str(family_set.path), "--out", str(tmp_path / "m"),
                    "--init", str(BUNDLED_DIR), "--hidden", "64", "64"])
@@ -151,7 +151,7 @@ def test_the_command_line_refuses_network_flags_with_init_and_families_a_set_lac
 
 def test_a_set_too_small_for_a_split_is_refused_in_one_line(tmp_path, capsys):
     from posture_id.cli import main
-    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
+    from posture_id.learning.data.drawn import UniversalDataConfig, generate_universal
 
     small = generate_universal(UniversalDataConfig(shards=2, trials=3, seed=1),
                                tmp_path / "small", workers=1)

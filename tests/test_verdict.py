@@ -211,7 +211,7 @@ def test_the_default_command_doubts_an_answer_whose_class_the_network_cannot_tel
     """Through ``identify`` (``auto``, the bundled universal network) on people-like sway:
     the network's hip logit set to 0.4 (P(com) about 0.6) makes the answer doubtful for that
     reason, named; the same recording as the network gives it is not doubtful for it."""
-    from posture_id.learning.universal.model import UniversalModel
+    from posture_id.learning.universal_model import UniversalModel
 
     subject = people_like(tip, default_parameters(tip), prts(), 0.3, seed=7)
     plain = identify(subject.recording, tip)
@@ -263,8 +263,8 @@ def test_the_hybrid_on_exchanged_columns_is_doubted_for_the_noise_it_leaves(monk
     import posture_id.identify.core as core
     import posture_id.identify.verdict as verdict_module
     from posture_id.dec.prior import sample_parameters
-    from posture_id.learning.universal.bodies import build_body
-    from posture_id.learning.universal.scope import BodyDraw
+    from posture_id.learning.data.bodies import build_body
+    from posture_id.learning.data.scope import BodyDraw
 
     body = build_body(BodyDraw("winter", 2, 1.75, 70.0, ((1.0, 1.0),) * 2))
     truth = sample_parameters(body, 1, np.random.default_rng(5)).trial(0, body.joint_names)

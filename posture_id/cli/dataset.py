@@ -21,9 +21,9 @@ from posture_id.cli.simulate import (
     model_options,
 )
 from posture_id.cli.stimulus import add_stimulus_arguments, prts_arguments
-from posture_id.datasets.config import DatasetConfig
-from posture_id.datasets.generation import generate_dataset
-from posture_id.datasets.store import Dataset
+from posture_id.learning.data.store import Dataset
+from posture_id.learning.data.trial_config import DatasetConfig
+from posture_id.learning.data.trial_generation import generate_dataset
 
 __all__ = ["add_parser"]
 

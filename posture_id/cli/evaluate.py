@@ -60,7 +60,7 @@ def _evaluate(args: argparse.Namespace) -> int:
 def _compare(args: argparse.Namespace, report) -> list[Path]:
     """The universal model on the specialist's test trials, written beside its report."""
     from posture_id.fileio import atomic_write_text, json_text
-    from posture_id.learning.universal.identifier import BUNDLED_DIR
+    from posture_id.learning.universal_identifier import BUNDLED_DIR
     from posture_id.studies.universal_on_dataset import universal_on_dataset
 
     folder = BUNDLED_DIR if args.universal == "bundled" else Path(args.universal)

@@ -14,7 +14,6 @@ from posture_id.cli.arguments import (
     say,
 )
 from posture_id.cli.progress import TerminalProgress
-from posture_id.datasets.store import Dataset
 from posture_id.learning.config import (
     AdamWOneCycle,
     ClassOutput,
@@ -23,6 +22,7 @@ from posture_id.learning.config import (
     SgdMomentum,
     TrainingConfig,
 )
+from posture_id.learning.data.store import Dataset
 
 __all__ = ["add_parser"]
 

@@ -157,8 +157,8 @@ def add_parser(sub) -> None:
 
 def run_data(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
-    from posture_id.learning.universal.data import UniversalDataConfig, generate_universal
-    from posture_id.learning.universal.scope import ScopeError, UniversalScope
+    from posture_id.learning.data.drawn import UniversalDataConfig, generate_universal
+    from posture_id.learning.data.scope import ScopeError, UniversalScope
 
     given = {"trials": args.trials} if args.trials else {}
     scope = {k: v for k, v in (("clean_share", args.clean_share),
@@ -189,8 +189,8 @@ def run_data(args: argparse.Namespace) -> int:
 
 def run_train(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=tuple(args.data))
-    from posture_id.learning.universal.network import UniversalNetworkConfig
-    from posture_id.learning.universal.training import UniversalTrainingConfig, train_universal
+    from posture_id.learning.universal_network import UniversalNetworkConfig
+    from posture_id.learning.universal_training import UniversalTrainingConfig, train_universal
 
     if args.init is not None and (args.hidden or args.dropout is not None or args.members != 1):
         raise PostureIdError("--init keeps its model's network: --hidden, --dropout and "
@@ -232,7 +232,7 @@ def run_check(args: argparse.Namespace) -> int:
 
 def run_ensemble(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out", inputs=tuple(args.models))
-    from posture_id.learning.universal.model import UniversalModel, ensemble_of
+    from posture_id.learning.universal_model import UniversalModel, ensemble_of
 
     model = ensemble_of([UniversalModel.load(folder) for folder in args.models],
                         by_noise=args.by_noise)
@@ -246,7 +246,7 @@ def run_ensemble(args: argparse.Namespace) -> int:
 
 
 def run_typicality(args: argparse.Namespace) -> int:
-    from posture_id.learning.universal.typicality import TYPICALITY_FILE
+    from posture_id.learning.typicality import TYPICALITY_FILE
     from posture_id.studies.universal_check import reference_from_sets
 
     report = reference_from_sets(args.model, args.data)
@@ -265,7 +265,7 @@ def run_table(args: argparse.Namespace) -> int:
 
 
 def _table(args: argparse.Namespace) -> int:
-    from posture_id.learning.universal.identifier import BUNDLED_DIR
+    from posture_id.learning.universal_identifier import BUNDLED_DIR
     from posture_id.studies.universal_table import family_table
 
     if args.cache is not None:

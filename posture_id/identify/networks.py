@@ -7,7 +7,7 @@ from pathlib import Path
 
 from posture_id.bodies.body import Body
 from posture_id.learning.identifier import NetworkIdentifier
-from posture_id.learning.universal.identifier import UniversalIdentifier
+from posture_id.learning.universal_identifier import UniversalIdentifier
 
 __all__ = ["network_for", "Network"]
 

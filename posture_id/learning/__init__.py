@@ -1,7 +1,7 @@
 """Learning: the CNN identifier (networks, training, checkpoints, evaluation, prediction).
 
 The only layer that imports torch (a contract in ``pyproject.toml`` enforces it). It reads
-data sets from :mod:`posture_id.datasets` and sits beside :mod:`posture_id.fitting`, which
+data sets from :mod:`posture_id.learning.data` and sits beside :mod:`posture_id.fitting`, which
 it never imports.
 
 Modules: :mod:`.config` (NetworkConfig, TrainingConfig), :mod:`.network`, :mod:`.samples`

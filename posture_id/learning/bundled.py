@@ -11,7 +11,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from posture_id.learning.config import LearningError
+from posture_id.errors import LearningError
+from posture_id.learning.config import MODEL_FORMAT
 
 __all__ = ["MODELS_DIR", "bundled_models", "bundled_model_dir"]
 
@@ -19,13 +20,15 @@ MODELS_DIR = Path(__file__).resolve().parent / "models"
 
 
 def bundled_models() -> dict[Path, dict]:
-    """Model directory → its ``model.json``, for every bundled model."""
+    """Model directory → its ``model.json``, for every bundled per-body model."""
     out = {}
     for sidecar in sorted(MODELS_DIR.glob("*/model.json")):
         try:
-            out[sidecar.parent] = json.loads(sidecar.read_text(encoding="utf-8"))
+            data = json.loads(sidecar.read_text(encoding="utf-8"))
         except (OSError, json.JSONDecodeError):
             continue  # load_model gives the precise error if this one is asked for
+        if data.get("format") == MODEL_FORMAT:  # the universal model's folder is beside them
+            out[sidecar.parent] = data
     return out
 
 

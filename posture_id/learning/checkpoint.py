@@ -5,7 +5,7 @@ standardisation statistics) and ``model.json``::
 
     format, format_version, package_version
     architecture      the NetworkConfig
-    features          the feature definition (posture_id.datasets.features)
+    features          the feature definition (posture_id.learning.features.spectrograms)
     standardisation   target means and standard deviations (images: in the weights file)
     targets           names, units and how the class is read
     body, stimulus, simulation   from the training set's manifest (body SHA-256 included)
@@ -27,7 +27,13 @@ import torch
 
 from posture_id._version import __version__
 from posture_id.fileio import jsonable
-from posture_id.learning.config import ClassOutput, Layout, LearningError, NetworkConfig
+from posture_id.learning.config import (
+    MODEL_FORMAT,
+    ClassOutput,
+    Layout,
+    LearningError,
+    NetworkConfig,
+)
 from posture_id.learning.model_files import SIDECAR, WEIGHTS, read_model_files, write_model_files
 from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import Standardiser
@@ -35,7 +41,7 @@ from posture_id.learning.samples import Standardiser
 __all__ = ["FORMAT", "FORMAT_VERSION", "LoadedModel", "save_model", "load_model",
            "network_config_from_dict", "TARGETS"]
 
-FORMAT = "posture_id-model"
+FORMAT = MODEL_FORMAT
 FORMAT_VERSION = 1
 #: The five outputs of a module.
 TARGETS = [

@@ -11,9 +11,9 @@ import enum
 import math
 from dataclasses import dataclass, field
 
-from posture_id.datasets.features import FEATURE_DEFINITION
 from posture_id.errors import LearningError
 from posture_id.frf.features import FRF_FEATURE_DEFINITION
+from posture_id.learning.features.spectrograms import FEATURE_DEFINITION
 
 __all__ = [
     "LearningError",
@@ -25,6 +25,9 @@ __all__ = [
     "Optimiser",
     "TrainingConfig",
 ]
+
+#: The sidecar format of the paper CNN's models (:mod:`.checkpoint`).
+MODEL_FORMAT = "posture_id-model"
 
 
 class Layout(enum.Enum):

@@ -1,4 +1,7 @@
-"""How good a trained identifier is: the paper's tables and figures, and more.
+"""How good a trained network is, one module for both architectures.
+
+**The paper's CNN** (:func:`evaluate`, :class:`EvaluationReport`): its tables and
+figures, and more.
 
 On each split (training, validation, test) of a data set, in the training set's
 standardised target units (docs/model.md §5, §7):
@@ -19,6 +22,10 @@ re-simulation with the predicted parameters (docs/model.md §7): E_id = ‖α_BS
 degrees and E_rel = ‖α_BS − α̃_BS‖₂ / ‖α_BS‖₂, against the parameter MSE with their
 correlation (the paper's Fig. 6). A re-simulation that falls is counted and its E_rel
 taken as infinite.
+
+**The universal network** (:func:`score_samples`, :class:`GroupScore`): how well it does
+on held-out module samples: classes, parameter errors and interval coverage, overall and
+per group.
 """
 
 from __future__ import annotations
@@ -31,21 +38,30 @@ import numpy as np
 from scipy.stats import spearmanr
 
 from posture_id.bodies.body import load_body
-from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import TARGET_FIELDS, default_parameters, denormalise_arrays
 from posture_id.fileio import Result, atomic_write_text, json_text
+from posture_id.learning.calibration import (
+    UniversalCalibration,
+    regime_of,
+    trend_terms,
+)
 from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError, NetworkConfig
+from posture_id.learning.data.store import Dataset
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import SplitSamples, stimulus_of
+from posture_id.learning.universal_model import UniversalModel
+from posture_id.learning.universal_samples import Samples
 from posture_id.plotting import plot_identification_error, plot_parameter_errors
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.metrics import sway_errors
 from posture_id.simulation.options import SimulationOptions
+from posture_id.uncertainty.coverage import confidence_calibration_error
 
-__all__ = ["SplitMetrics", "EvaluationReport", "evaluate", "split_metrics"]
+__all__ = ["SplitMetrics", "EvaluationReport", "evaluate", "split_metrics", "GroupScore",
+           "score_samples", "relative_errors"]
 
 SPLITS = ("train", "validation", "test")
 NAMES = (*TARGET_FIELDS, "class")
@@ -347,3 +363,85 @@ def _identification(model, data: Dataset, samples: SplitSamples, predicted: np.n
                       "e_rel": [float(x) if np.isfinite(x) else None for x in e_rel],
                       "parameter_mse": per_trial_mse.tolist()},
     }
+
+
+
+
+def relative_errors(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """(M, 4) |p̂/p − 1| from normalised values t = p/p_default − 1."""
+    return np.abs((1.0 + estimate) / (1.0 + truth) - 1.0)
+
+
+@dataclass(frozen=True)
+class GroupScore:
+    """Scores of one group of module samples.
+
+    Attributes:
+        modules: samples. trials: distinct trials. classes_pct: modules whose class is
+        right, %. trials_all_right_pct: trials with every class right, %.
+        median_error_pct: parameter → median |relative error|, %. coverage_pct: parameter →
+        share of the truths inside the ``level`` intervals, % (NaN without a calibration).
+        by_module: per module position (0: the ankle), parameter → median |relative
+        error|, %. class_ece_pct: expected calibration error of the (calibrated) class
+        probabilities, 10 bins of confidence, %.
+    """
+
+    modules: int
+    trials: int
+    classes_pct: float
+    trials_all_right_pct: float
+    median_error_pct: dict
+    coverage_pct: dict
+    level: float
+    by_module: tuple = ()
+    class_ece_pct: float = float("nan")
+
+    def to_dict(self) -> dict:
+        return {"modules": self.modules, "trials": self.trials, "by_module": list(self.by_module),
+                "classes_pct": self.classes_pct, "trials_all_right_pct": self.trials_all_right_pct,
+                "class_ece_pct": self.class_ece_pct,
+                "median_error_pct": self.median_error_pct, "coverage_pct": self.coverage_pct,
+                "level": self.level}
+
+
+def score_samples(model: UniversalModel, samples: Samples,
+                  calibration: UniversalCalibration | None, level: float = 0.9,
+                  groups: np.ndarray | None = None) -> dict[str, GroupScore]:
+    """Scores per group label (``groups`` (M,) strings; default one group 'all')."""
+    pred = model.predict(samples.inputs, samples.noise_ratio, samples.noise_colour)
+    right = (pred.logit > 0) == (samples.targets[:, 4] > 0)
+    errors = relative_errors(pred.mean, samples.targets[:, :4])
+    inside = np.full(errors.shape, np.nan)
+    probability = 1.0 / (1.0 + np.exp(-pred.logit))
+    if calibration is not None:
+        regimes = regime_of(samples.segments, samples.noise_ratio, samples.noise_colour)
+        terms = trend_terms(samples.segments, samples.noise_ratio, samples.noise_colour,
+                            samples.inputs)
+        half = np.empty_like(pred.sd)
+        for regime in np.unique(regimes):
+            sel = regimes == regime
+            probability[sel] = calibration.probability(str(regime), pred.logit[sel])
+            half[sel] = calibration.half_width(str(regime), level, pred.sd[sel], terms[sel])
+        low = np.maximum(pred.mean - half, -1.0)
+        inside = ((samples.targets[:, :4] >= low)
+                  & (samples.targets[:, :4] <= pred.mean + half)).astype(float)
+    groups = np.full(len(samples), "all") if groups is None else np.asarray(groups)
+    out = {}
+    for g in sorted(set(groups.tolist())):
+        sel = groups == g
+        trials = samples.trial[sel]
+        all_right = [right[sel][trials == t].all() for t in np.unique(trials)]
+        out[g] = GroupScore(
+            modules=int(sel.sum()), trials=len(all_right),
+            classes_pct=float(100 * right[sel].mean()),
+            trials_all_right_pct=float(100 * np.mean(all_right)),
+            median_error_pct={n: float(100 * np.median(errors[sel, i]))
+                              for i, n in enumerate(TARGET_FIELDS)},
+            coverage_pct={n: float(100 * np.mean(inside[sel, i]))
+                          for i, n in enumerate(TARGET_FIELDS)},
+            level=level, class_ece_pct=100 * confidence_calibration_error(
+                probability[sel], samples.targets[sel, 4] > 0),
+            by_module=tuple({n: float(100 * np.median(errors[sel & (samples.module == m), i]))
+                             for i, n in enumerate(TARGET_FIELDS)}
+                            for m in np.unique(samples.module[sel])))
+    return out

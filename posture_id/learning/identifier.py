@@ -24,7 +24,6 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from posture_id.bodies.body import Body
-from posture_id.datasets.features import FS_HZ
 from posture_id.dec.parameters import (
     TARGET_FIELDS,
     DecParameters,
@@ -38,6 +37,7 @@ from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.calibration import CnnCalibration
 from posture_id.learning.checkpoint import FORMAT, LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
+from posture_id.learning.features.spectrograms import FS_HZ
 from posture_id.learning.inputs import sway_features
 from posture_id.learning.model_files import SIDECAR
 from posture_id.learning.prediction import predict_images
@@ -51,7 +51,7 @@ from posture_id.uncertainty.intervals import ParameterIntervals
 from posture_id.uncertainty.noise import sensor_noise_deg
 
 if TYPE_CHECKING:
-    from posture_id.learning.universal.typicality import Typicality
+    from posture_id.learning.typicality import Typicality
 
 __all__ = ["NetworkIdentifier", "CnnIdentifier", "CnnIdentification", "DEFAULT_LEVEL", "register",
            "identifier_class"]
@@ -75,7 +75,7 @@ class CnnIdentification(Result):
         outside: ways the recording lies outside what the network was trained or
             calibrated on (another body; more sensor noise than the calibration saw).
         typicality: how typical the recording's inputs are of the training distribution
-            (:mod:`posture_id.learning.universal.typicality`; None without a reference).
+            (:mod:`posture_id.learning.typicality`; None without a reference).
     """
 
     parameters: DecParameters
@@ -150,7 +150,7 @@ def identifier_class(folder: str | Path) -> type[NetworkIdentifier]:
 class NetworkIdentifier:
     """A trained network and the body it identifies: what an identification asks of any
     architecture (the paper's spectrogram CNN, :class:`CnnIdentifier`; the universal
-    network, :class:`~posture_id.learning.universal.identifier.UniversalIdentifier`).
+    network, :class:`~posture_id.learning.universal_identifier.UniversalIdentifier`).
 
     Attributes:
         format: the sidecar format of the models the class reads (:func:`register`).

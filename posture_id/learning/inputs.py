@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from posture_id.datasets.features import FS_HZ, modular_images, monolithic_images, stft
 from posture_id.frf.features import frf_features
 from posture_id.learning.config import Layout
+from posture_id.learning.features.spectrograms import FS_HZ, modular_images, monolithic_images, stft
 from posture_id.simulation.stimulus import TiltProfile
 
 __all__ = ["sway_features"]

@@ -21,10 +21,10 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import ParameterArrays
 from posture_id.frf.features import frf_features
 from posture_id.learning.config import Layout, LearningError
+from posture_id.learning.data.store import Dataset
 from posture_id.simulation.stimulus import TiltProfile, prts
 
 __all__ = ["Standardiser", "SplitSamples", "stimulus_of", "frf_inputs"]

@@ -111,7 +111,7 @@ class TrainingResult(Result):
         stopped_early: early stopping ended it. wall_time_s: this call's time, s.
         history: one dict per epoch (epoch, train_loss, validation_loss, learning_rate,
         seconds). model: the trained model, when the trainer hands it over (the
-        universal network's :class:`~posture_id.learning.universal.model.UniversalModel`).
+        universal network's :class:`~posture_id.learning.universal_model.UniversalModel`).
     """
 
     model_dir: Path
@@ -145,7 +145,7 @@ class TrainingResult(Result):
 class EpochTrainer:
     """A training run (the paper CNN's :class:`~posture_id.learning.training.Trainer`,
     the universal network's
-    :class:`~posture_id.learning.universal.training.UniversalTrainer`).
+    :class:`~posture_id.learning.universal_training.UniversalTrainer`).
 
     Subclasses set ``out`` (the model directory), ``identity`` (what must match to
     resume), ``net``, ``optimiser``, ``schedule``, ``epochs``, ``patience``, ``threads``,

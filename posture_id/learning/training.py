@@ -21,7 +21,6 @@ import numpy as np
 import torch
 import torch.nn.functional as F  # noqa: N812 - torch's convention
 
-from posture_id.datasets.store import Dataset
 from posture_id.fileio import (
     file_sha256,
     jsonable,
@@ -37,6 +36,7 @@ from posture_id.learning.config import (
     SgdMomentum,
     TrainingConfig,
 )
+from posture_id.learning.data.store import Dataset
 from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import SplitSamples, Standardiser, stimulus_of
 from posture_id.learning.trainer import EpochTrainer, TrainingResult

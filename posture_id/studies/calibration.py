@@ -31,7 +31,6 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import norm
 
-from posture_id.datasets.store import Dataset
 from posture_id.dec.parameters import TARGET_FIELDS
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result, atomic_write_text
@@ -45,6 +44,7 @@ from posture_id.learning.calibration import (
 )
 from posture_id.learning.checkpoint import load_model
 from posture_id.learning.config import LearningError
+from posture_id.learning.data.store import Dataset
 from posture_id.plotting import plot_coverage, plot_identifiability, plot_reliability
 from posture_id.progress import Progress, report
 from posture_id.studies.fit_runs import FIT_JOURNAL, run_fits

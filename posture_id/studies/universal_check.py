@@ -11,24 +11,24 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.fileio import atomic_write_text, json_text
-from posture_id.learning.universal.calibration import UniversalCalibration, calibrate
-from posture_id.learning.universal.data import open_sets
-from posture_id.learning.universal.evaluation import GroupScore, score_samples
-from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import (
+from posture_id.learning.calibration import UniversalCalibration, calibrate
+from posture_id.learning.data.drawn import open_sets
+from posture_id.learning.evaluation import GroupScore, score_samples
+from posture_id.learning.typicality import (
+    ATYPICAL_P,
+    TypicalityReport,
+    fit_reference,
+    recording_scores,
+)
+from posture_id.learning.universal_model import UniversalModel
+from posture_id.learning.universal_samples import (
     Samples,
     load_split,
     make_samples,
     require_trials,
     without_families,
 )
-from posture_id.learning.universal.training import VALIDATION_SEED
-from posture_id.learning.universal.typicality import (
-    ATYPICAL_P,
-    TypicalityReport,
-    fit_reference,
-    recording_scores,
-)
+from posture_id.learning.universal_training import VALIDATION_SEED
 
 __all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes",
            "reference_from_sets"]

@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import load_body
-from posture_id.datasets.store import Dataset
+from posture_id.learning.data.store import Dataset
+from posture_id.learning.evaluation import relative_errors
+from posture_id.learning.features.harmonics import harmonic_layout, sway_harmonics
+from posture_id.learning.features.module_frfs import body_descriptors, com_weights
 from posture_id.learning.samples import stimulus_of
-from posture_id.learning.universal.evaluation import relative_errors
-from posture_id.learning.universal.features import body_descriptors, com_weights
-from posture_id.learning.universal.harmonics import harmonic_layout, sway_harmonics
-from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import inputs_and_noise
+from posture_id.learning.universal_model import UniversalModel
+from posture_id.learning.universal_samples import inputs_and_noise
 
 __all__ = ["universal_on_dataset", "NOISE_STREAM"]
 

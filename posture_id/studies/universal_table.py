@@ -29,16 +29,16 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.datasets.config import DatasetError
-from posture_id.datasets.store import save_npz
 from posture_id.executors import executor_for
 from posture_id.fileio import atomic_write_text, json_text
-from posture_id.learning.universal.calibration import UniversalCalibration
-from posture_id.learning.universal.data import simulate_trials
-from posture_id.learning.universal.evaluation import GroupScore, score_samples
-from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.samples import LoadedShard, Samples, make_samples
-from posture_id.learning.universal.scope import BodyDraw, StimulusDraw, UniversalScope
+from posture_id.learning.calibration import UniversalCalibration
+from posture_id.learning.data.drawn import simulate_trials
+from posture_id.learning.data.scope import BodyDraw, StimulusDraw, UniversalScope
+from posture_id.learning.data.store import save_npz
+from posture_id.learning.data.trial_config import DatasetError
+from posture_id.learning.evaluation import GroupScore, score_samples
+from posture_id.learning.universal_model import UniversalModel
+from posture_id.learning.universal_samples import LoadedShard, Samples, make_samples
 from posture_id.plotting import plot_score_grid
 from posture_id.progress import Progress, report
 

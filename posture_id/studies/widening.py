@@ -49,7 +49,7 @@ def widening_for(model: str | Path, rows: list[dict], level: float = 0.9,
                  made_by: str = "") -> RecordingWidening:
     """The widening of the universal model in ``model`` fitted on its people-like answers
     ``rows`` (:func:`people_rows`), naming the model's weights."""
-    from posture_id.learning.universal.model import UniversalModel
+    from posture_id.learning.universal_model import UniversalModel
 
     sha = str(UniversalModel.load(model).sidecar.get("weights_sha256"))
     return fit_widening(*stack_rows(rows), level, sha, made_by=made_by)

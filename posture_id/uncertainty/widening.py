@@ -1,7 +1,7 @@
 """Intervals widened by what the recording's own noise does: a second calibration for
 people-like sway, conditioned on the noise the recording itself shows.
 
-The network's conformal intervals (:mod:`posture_id.learning.universal.calibration`) hold
+The network's conformal intervals (:mod:`posture_id.learning.calibration`) hold
 on the noise families it was calibrated on. On people-like sway of other shapes they may
 not: on the honest verdict's people-like subjects two families had their true Kp inside
 the 90 % intervals for 83 % of modules (``docs/results/widening/report.md``). What the

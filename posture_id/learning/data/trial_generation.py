@@ -32,10 +32,10 @@ import numpy as np
 
 from posture_id._version import __version__
 from posture_id.bodies.body import Body, load_body
-from posture_id.datasets.config import DatasetConfig, DatasetError
-from posture_id.datasets.features import FEATURE_DEFINITION
-from posture_id.datasets.runners import shard_runner
-from posture_id.datasets.store import (
+from posture_id.learning.data.trial_config import DatasetConfig, DatasetError
+from posture_id.learning.features.spectrograms import FEATURE_DEFINITION
+from posture_id.learning.data.runners import shard_runner
+from posture_id.learning.data.store import (
     FORMAT,
     FORMAT_VERSION,
     Dataset,

@@ -13,7 +13,7 @@ import numpy as np
 from posture_id.bodies.anthropometry import straight_links, winter_segments
 from posture_id.bodies.body import DEFAULT_URDF, Body, load_body
 from posture_id.bodies.urdf_writer import LinkSpec, chain_urdf
-from posture_id.learning.universal.scope import BodyDraw
+from posture_id.learning.data.scope import BodyDraw
 
 __all__ = ["body_urdf", "build_body"]
 

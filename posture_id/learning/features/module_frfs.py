@@ -29,7 +29,7 @@ import numpy as np
 from posture_id.bodies.body import Body
 from posture_id.dec.parameters import _column
 from posture_id.frf.locked import noise_levels
-from posture_id.learning.universal.harmonics import HarmonicLayout
+from posture_id.learning.features.harmonics import HarmonicLayout
 
 __all__ = ["GRID_HZ", "CHANNELS", "com_weights", "features_and_noise", "DESCRIPTORS",
            "FEATURE_MAX_HZ", "band_weights", "module_features", "body_descriptors",

@@ -1,4 +1,4 @@
-"""Training the universal network on a universal set (:mod:`.data`).
+"""Training the universal network on a universal set (:mod:`~.data.drawn`).
 
 Every epoch makes the training split's module samples afresh (:func:`.samples.
 make_samples`: new sensor noise and drift on the stored sway), so the network never sees
@@ -30,14 +30,14 @@ import numpy as np
 import torch
 
 from posture_id.errors import LearningError
+from posture_id.learning.data.drawn import merged_scope, open_sets
 from posture_id.learning.trainer import EpochTrainer, TrainingResult, prefixed
-from posture_id.learning.universal.data import merged_scope, open_sets
-from posture_id.learning.universal.model import UniversalModel
-from posture_id.learning.universal.network import (
+from posture_id.learning.universal_model import UniversalModel
+from posture_id.learning.universal_network import (
     OUTPUTS,
     UniversalNetworkConfig,
 )
-from posture_id.learning.universal.samples import (
+from posture_id.learning.universal_samples import (
     Samples,
     load_split,
     make_samples,
@@ -65,10 +65,10 @@ class UniversalTrainingConfig:
     the estimate learns the posterior mean) or 'absolute' (their mean absolute error: the
     posterior median), in training and in the validation loss that picks the epoch.
     ``fresh_motor_noise``: every epoch turns each training trial's motor noise to a new
-    draw (:func:`.samples.rotate_motor_noise`), as it draws its sensor noise and drift
+    draw (:func:`~.universal_samples.rotate_motor_noise`), as it draws its sensor noise and drift
     afresh; the validation split keeps the simulated noise. ``motor_noise_tilt``: every
     epoch (the first included) also tilts each training trial's motor-noise spectrum by a
-    slope drawn in ±this (:func:`.samples.tilt_motor_noise`; 0: the simulated shape).
+    slope drawn in ±this (:func:`~.universal_samples.tilt_motor_noise`; 0: the simulated shape).
     ``init``: a universal model's
     folder to start from (its weights and its standardisation: fine-tuning; the network
     settings are then its own). ``exclude_families``: noise families
@@ -128,7 +128,7 @@ def _loss(out: torch.Tensor, target: torch.Tensor, point_loss: PointLoss = "squa
 
 
 #: Realised locked share from which a trial counts as clean (no motor noise), as
-#: :mod:`.checking` groups them.
+#: :mod:`~posture_id.studies.universal_check` groups them.
 CLEAN_LOCKED_SHARE = 0.995
 
 
@@ -167,7 +167,7 @@ def train_universal(data_path: str | Path | Sequence[str | Path], out: str | Pat
                     config: UniversalTrainingConfig | None = None,
                     network: UniversalNetworkConfig | None = None,
                     progress: Progress | None = None) -> UniversalModel:
-    """Train on the set at ``data_path`` (or the sets, together: :func:`.data.open_sets`);
+    """Train on the set at ``data_path`` (or the sets, together: :func:`~.data.drawn.open_sets`);
     the best model is written to ``out`` and returned (a :class:`UniversalTrainer` run to
     its end; progress and a line per epoch through ``progress``)."""
     trainer = UniversalTrainer(data_path, out, config, network, progress)
@@ -350,7 +350,7 @@ def _ranges(samples: Samples, before: dict | None = None) -> dict:
     """Per input column, the 0.5 % and 99.5 % points of the training inputs' descriptors
     (what a recording is checked against); with ``before`` (a fine-tuned model's start's),
     the span of both."""
-    from posture_id.learning.universal.features import DESCRIPTORS
+    from posture_id.learning.features.module_frfs import DESCRIPTORS
 
     desc = samples.inputs[:, -DESCRIPTORS:]
     out = {"descriptors_low": np.percentile(desc, 0.5, axis=0).tolist(),

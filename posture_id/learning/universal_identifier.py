@@ -3,7 +3,7 @@ a lab runs, clean or people-like sway (docs/universal.md).
 
     >>> from posture_id import load_body, Recording
     >>> from posture_id.trials import prepare_trial
-    >>> from posture_id.learning.universal.identifier import UniversalIdentifier
+    >>> from posture_id.learning.universal_identifier import UniversalIdentifier
     >>> body = load_body("subject.urdf")
     >>> identifier = UniversalIdentifier.bundled(body)
     >>> result = identifier.identify(prepare_trial(Recording.from_csv("rec.csv")))
@@ -25,33 +25,33 @@ import numpy as np
 from posture_id.bodies.body import Body
 from posture_id.dec.parameters import default_parameters
 from posture_id.errors import PostureIdError, RecordingError
+from posture_id.learning.calibration import (
+    UniversalCalibration,
+    regime_of,
+    regime_text,
+    trend_terms,
+)
 from posture_id.learning.config import LearningError
+from posture_id.learning.data.scope import UniversalScope
+from posture_id.learning.features.harmonics import (
+    HarmonicLayout,
+    harmonic_layout,
+    sway_harmonics,
+)
+from posture_id.learning.features.module_frfs import (
+    DESCRIPTORS,
+    body_descriptors,
+    com_weights,
+)
 from posture_id.learning.identifier import (
     DEFAULT_LEVEL,
     CnnIdentification,
     NetworkIdentifier,
     register,
 )
-from posture_id.learning.universal.calibration import (
-    UniversalCalibration,
-    regime_of,
-    regime_text,
-    trend_terms,
-)
-from posture_id.learning.universal.features import (
-    DESCRIPTORS,
-    body_descriptors,
-    com_weights,
-)
-from posture_id.learning.universal.harmonics import (
-    HarmonicLayout,
-    harmonic_layout,
-    sway_harmonics,
-)
-from posture_id.learning.universal.model import FORMAT, SIDECAR, ModelError, UniversalModel
-from posture_id.learning.universal.samples import inputs_and_noise
-from posture_id.learning.universal.scope import UniversalScope
-from posture_id.learning.universal.typicality import TypicalityReference
+from posture_id.learning.typicality import TypicalityReference
+from posture_id.learning.universal_model import FORMAT, SIDECAR, ModelError, UniversalModel
+from posture_id.learning.universal_samples import inputs_and_noise
 from posture_id.simulation.stimulus import LAB_STATE_RANGE_S
 from posture_id.trials import PreparedTrial
 from posture_id.uncertainty.noise import sensor_noise_deg
@@ -61,7 +61,7 @@ __all__ = ["UniversalIdentifier", "BUNDLED_DIR", "stimulus_outside"]
 
 #: The bundled universal model (made by ``make models``).
 BUNDLED_DIR = Path(__file__).resolve().parent / "models" / "universal"
-#: The body's descriptors (:func:`~.features.body_descriptors`) in words.
+#: The body's descriptors (:func:`~.features.module_frfs.body_descriptors`) in words.
 _DESCRIPTOR_NAMES = ("ankle column", "knee column", "hip column", "1 segment", "2 segments",
                      "3 segments", "time scale", "coupling below", "coupling above",
                      "m·g·h ratio below", "m·g·h ratio above")

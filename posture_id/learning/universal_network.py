@@ -1,7 +1,7 @@
 """The universal network: multilayer perceptrons over one module's features, one or an
 ensemble of them trained together.
 
-Input (B, :data:`~.features.N_INPUTS`) standardised; output (K, B, 9) for K members: the
+Input (B, :data:`~.features.module_frfs.N_INPUTS`) standardised; output (K, B, 9) for K members: the
 four normalised continuous parameters [K̃p, K̃i, K̃d, Δ̃] standardised, the log SD the
 member expects of its error on each (what the conformal intervals scale,
 :mod:`.calibration`), and the class logit (positive: COM in space). The members differ
@@ -19,7 +19,7 @@ import torch
 from torch import nn
 
 from posture_id.errors import LearningError
-from posture_id.learning.universal.features import N_INPUTS
+from posture_id.learning.features.module_frfs import N_INPUTS
 
 __all__ = ["UniversalNetworkConfig", "UniversalNetwork", "OUTPUTS", "register_network",
            "network_config_of"]

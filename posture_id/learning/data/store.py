@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.datasets.config import DatasetError
+from posture_id.learning.data.trial_config import DatasetError
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
 from posture_id.plotting import plot_dataset_overview, plot_images
 

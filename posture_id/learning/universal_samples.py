@@ -1,5 +1,5 @@
 """Training samples of the universal network: one per module of every trial, made from a
-shard's stored harmonics with fresh sensor noise and drift (:mod:`.harmonics`)."""
+shard's stored harmonics with fresh sensor noise and drift (:mod:`~.features.harmonics`)."""
 
 from __future__ import annotations
 
@@ -10,18 +10,18 @@ import numpy as np
 
 from posture_id.dec.parameters import ParameterArrays
 from posture_id.learning.config import LearningError
-from posture_id.learning.universal.data import UniversalSet, shard_com_weights, shard_layout
-from posture_id.learning.universal.features import (
-    N_INPUTS,
-    features_and_noise,
-    stimulus_descriptors,
-)
-from posture_id.learning.universal.harmonics import (
+from posture_id.learning.data.drawn import UniversalSet, shard_com_weights, shard_layout
+from posture_id.learning.data.scope import UniversalScope
+from posture_id.learning.features.harmonics import (
     coloured_noise_parts,
     drift_parts,
     sensor_noise_parts,
 )
-from posture_id.learning.universal.scope import UniversalScope
+from posture_id.learning.features.module_frfs import (
+    N_INPUTS,
+    features_and_noise,
+    stimulus_descriptors,
+)
 from posture_id.simulation.noise_families import DRIFTING_COLOUR_SLOPE, NoiseFamily
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
@@ -52,7 +52,7 @@ class Samples:
     normalised [K̃p, K̃i, K̃d, Δ̃, C]. trial: (M,) trial index within the set made;
     module: (M,) its index in the body; segments: (M,) N; noise_ratio: (M,) the trial's
     share of locked harmonics that is noise; noise_colour: (M,) its noise's colour
-    (:func:`~.features.noise_colour`); locked_share: (M,) its body COM sway's
+    (:func:`~.features.module_frfs.noise_colour`); locked_share: (M,) its body COM sway's
     realised locked share; sensor_noise_deg, drift_deg: (M,) what was added; shard: (M,)
     the shard index."""
 
@@ -91,7 +91,7 @@ def load_split(data: UniversalSet | Sequence[UniversalSet], split: str) -> list[
 
 
 #: The columns of :func:`inputs_and_noise`'s inputs holding
-#: :func:`~.features.stimulus_descriptors`
+#: :func:`~.features.module_frfs.stimulus_descriptors`
 #: (the last four).
 STIMULUS_COLUMNS = slice(N_INPUTS - 4, N_INPUTS)
 
@@ -101,8 +101,9 @@ def inputs_and_noise(layout, harmonics: np.ndarray, body: np.ndarray, com: np.nd
     """The network's inputs of B sways' harmonics (K, B, N) on a body whose descriptors
     are ``body`` (N, 11) and COM weights ``com`` (N, N): (B·N, N_INPUTS) float32, module
     after module within each trial; and each module's trial's
-    :func:`~.features.noise_ratio` and :func:`~.features.noise_colour`, (B·N,) (what the
-    calibration's regimes and a gated model read), the noise estimated once."""
+    :func:`~.features.module_frfs.noise_ratio` and
+    :func:`~.features.module_frfs.noise_colour`, (B·N,) (what the calibration's regimes
+    and a gated model read), the noise estimated once."""
     feats, ratio, colour = features_and_noise(layout, harmonics, com)  # (B, N, C, G)
     b, n = feats.shape[:2]
     stim = np.broadcast_to(stimulus_descriptors(layout), (b, n, 4))
@@ -261,7 +262,7 @@ def without_families(shards: list[LoadedShard], scope: UniversalScope,
     return out
 
 
-#: Which shard index (mod 10) each split takes (:func:`~.data.split_of`).
+#: Which shard index (mod 10) each split takes (:func:`~.data.drawn.split_of`).
 _SPLIT_INDEX = {"test": "≡ 0", "calibration": "≡ 1", "validation": "≡ 2", "train": "≥ 3"}
 
 

@@ -14,15 +14,15 @@ import torch
 from posture_id._version import __version__
 from posture_id.errors import LearningError
 from posture_id.fileio import json_text
+from posture_id.learning.data.scope import UniversalScope
+from posture_id.learning.features.module_frfs import UNIVERSAL_FEATURE_DEFINITION
 from posture_id.learning.model_files import SIDECAR, WEIGHTS, read_model_files, write_model_files
-from posture_id.learning.universal.features import UNIVERSAL_FEATURE_DEFINITION
-from posture_id.learning.universal.gate import NoiseGate
-from posture_id.learning.universal.network import (
+from posture_id.learning.noise_gate import NoiseGate
+from posture_id.learning.universal_network import (
     OUTPUTS,
     UniversalNetwork,
     network_config_of,
 )
-from posture_id.learning.universal.scope import UniversalScope
 
 __all__ = ["UniversalModel", "UniversalPrediction", "ModelError", "FORMAT", "WEIGHTS",
            "SIDECAR", "ensemble_of"]
@@ -57,8 +57,8 @@ class UniversalModel:
 
     Attributes:
         network: a torch module of a registered network kind
-            (:func:`~.network.register_network`; the perceptrons of
-            :class:`~.network.UniversalNetwork` unless its configuration says otherwise).
+            (:func:`~.universal_network.register_network`; the perceptrons of
+            :class:`~.universal_network.UniversalNetwork` unless its configuration says otherwise).
         input_mean, input_std: (N_INPUTS,). target_mean, target_std: (4,).
         sidecar: what made it (``model.json``). path: where it was loaded from.
     """
@@ -85,7 +85,7 @@ class UniversalModel:
 
     @property
     def gate(self) -> NoiseGate | None:
-        """Which members answer which recording (:mod:`.gate`), or None: all, averaged."""
+        """Which members answer which recording (:mod:`~.noise_gate`), or None: all, averaged."""
         data = self.sidecar.get("gate")
         return None if data is None else NoiseGate.from_dict(data)
 
@@ -256,7 +256,7 @@ def ensemble_of(models: list[UniversalModel], by_noise: bool = False) -> Univers
     model (path, weights' SHA-256, training); calibrate the result anew
     (``posture-id universal check``): its spread is not any member's.
 
-    With ``by_noise``, the members are not averaged but gated (:mod:`.gate`): the first
+    With ``by_noise``, the members are not averaged but gated (:mod:`~.noise_gate`): the first
     model's answer recordings whose noise is white or nearly none, the others' those
     whose noise is shaped by the body.
 

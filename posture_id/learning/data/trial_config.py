@@ -6,7 +6,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from posture_id.datasets.features import FS_HZ
+from posture_id.learning.features.spectrograms import FS_HZ
 from posture_id.dec.prior import SIGMA
 from posture_id.errors import LearningError
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ

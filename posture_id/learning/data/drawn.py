@@ -14,7 +14,7 @@ Each trial is simulated three times (:func:`make_shard`): without motor noise (i
 stimulus-locked response), with a small unit of motor noise (how much sway a level
 makes), and with the level that leaves the drawn share of its body COM sway locked (as
 :func:`posture_id.simulation.subjects.people_like`, batched). The stored sway is the
-last one's harmonics (:mod:`.harmonics`); sensor noise and drift are added to them when
+last one's harmonics (:mod:`~posture_id.learning.features.harmonics`); sensor noise and drift are added to them when
 the features are made, afresh every epoch.
 
 Shards with ``k % 10 == 0`` are the test split, ``k % 10 == 1`` calibration,
@@ -33,16 +33,16 @@ from pathlib import Path
 import numpy as np
 
 from posture_id._version import __version__
-from posture_id.datasets.config import DatasetError
-from posture_id.datasets.store import check_shard, save_npz, shard_name
+from posture_id.learning.data.trial_config import DatasetError
+from posture_id.learning.data.store import check_shard, save_npz, shard_name
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
 from posture_id.dec.prior import sample_parameters
 from posture_id.executors import executor_for
 from posture_id.fileio import atomic_write_text, file_sha256, json_text
-from posture_id.learning.universal.bodies import build_body
-from posture_id.learning.universal.features import body_descriptors, com_weights
-from posture_id.learning.universal.harmonics import HarmonicLayout, harmonic_layout, sway_harmonics
-from posture_id.learning.universal.scope import (
+from posture_id.learning.data.bodies import build_body
+from posture_id.learning.features.module_frfs import body_descriptors, com_weights
+from posture_id.learning.features.harmonics import HarmonicLayout, harmonic_layout, sway_harmonics
+from posture_id.learning.data.scope import (
     BodyDraw,
     StimulusDraw,
     UniversalScope,
@@ -195,7 +195,7 @@ def _drawn_com(draw_json: str) -> bytes:
 
 
 def shard_com_weights(arrays: dict[str, np.ndarray]) -> np.ndarray:
-    """(N, N) the COM weights (:func:`~.features.com_weights`) of a shard's body, rebuilt
+    """(N, N) the COM weights (:func:`~posture_id.learning.features.module_frfs.com_weights`) of a shard's body, rebuilt
     from the body it drew."""
     n = int(arrays["y"].shape[2])
     return np.frombuffer(_drawn_com(str(arrays["draw"])), dtype=float).reshape(n, n)

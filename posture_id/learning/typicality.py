@@ -4,7 +4,7 @@ its inputs against the training distribution's.
 A network answers whatever it is given; far from every input it was trained on, its answer
 is an extrapolation that no calibration covers. Simulation-based inference tests such
 misspecification by asking how typical the observed summary statistics are under the
-simulator; here the summaries are the network's own inputs (:mod:`.features`: the
+simulator; here the summaries are the network's own inputs (:mod:`~.features.module_frfs`: the
 stimulus-locked harmonics' features of each module and the body's and stimulus's
 descriptors), standardised by the model's own standardisation.
 

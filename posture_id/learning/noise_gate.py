@@ -6,8 +6,8 @@ sway: the base on sway whose noise is a sensor's (white) or nearly none, the sta
 sway whose noise is shaped by the body (motor noise of any shape, drift: docs/universal.md,
 "The noise stage"). A :class:`NoiseGate` lets one model hold both and weigh them by what
 the recording itself shows, the two numbers the calibration's regimes are made of
-(:func:`~.features.noise_ratio`: the share of the locked harmonics that is noise;
-:func:`~.features.noise_colour`: white about 0, shaped by the body above
+(:func:`~.features.module_frfs.noise_ratio`: the share of the locked harmonics that is noise;
+:func:`~.features.module_frfs.noise_colour`: white about 0, shaped by the body above
 :data:`~.calibration.COLOUR_EDGE`):
 
     w = ramp(colour; colour_from, colour_to) · ramp(log10 ratio; log10 ratio_from, log10 ratio_to)

@@ -110,20 +110,20 @@ ROBOT_SHARDS     ?= 900
 UNIVERSAL_EPOCHS ?= 45
 UNIVERSAL_DIR    := posture_id/learning/models/universal
 universal-model: $(STAMP)
-	$(BIN)/posture-id universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
-	$(BIN)/posture-id universal data --out data/universal_people --shards $(PEOPLE_SHARDS) \
+	$(BIN)/posture-id network universal data --out data/universal --shards $(UNIVERSAL_SHARDS) --quiet
+	$(BIN)/posture-id network universal data --out data/universal_people --shards $(PEOPLE_SHARDS) \
 	  --seed 1 --clean-share 0 --locked-share 0.1 0.4 --quiet
-	$(BIN)/posture-id universal data --out data/universal_presets --shards $(PRESET_SHARDS) \
+	$(BIN)/posture-id network universal data --out data/universal_presets --shards $(PRESET_SHARDS) \
 	  --seed 2 --tip-share 0 --preset-share 1 --quiet
-	$(BIN)/posture-id universal data --out data/universal_small --shards $(SMALL_SHARDS) \
+	$(BIN)/posture-id network universal data --out data/universal_small --shards $(SMALL_SHARDS) \
 	  --seed 3 --amplitude-deg 0.35 1 --tip-share 0.1 --preset-share 0.4 --quiet
-	$(BIN)/posture-id universal data --out data/universal_robots --shards $(ROBOT_SHARDS) \
+	$(BIN)/posture-id network universal data --out data/universal_robots --shards $(ROBOT_SHARDS) \
 	  --seed 4 --amplitude-deg 0.35 1.5 --tip-share 0.05 --preset-share 0.9 \
 	  --preset-jitter 0.15 --quiet
-	$(BIN)/posture-id universal train data/universal data/universal_people \
+	$(BIN)/posture-id network universal train data/universal data/universal_people \
 	  data/universal_presets data/universal_small data/universal_robots \
 	  --out data/models/universal --epochs $(UNIVERSAL_EPOCHS) --fresh-motor-noise --quiet
-	$(BIN)/posture-id universal check data/models/universal data/universal \
+	$(BIN)/posture-id network universal calibrate data/models/universal data/universal \
 	  data/universal_people data/universal_presets data/universal_small \
 	  data/universal_robots > /dev/null
 	$(MAKE) universal-noise-model
@@ -133,14 +133,14 @@ universal-model: $(STAMP)
 # is fine-tuned, calibrated and given its typicality reference on.
 FIFTH_DIR := data/universal_fifth
 universal-fifth: $(STAMP)
-	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal --shards 600 --quiet
-	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal_people --shards 900 \
+	$(BIN)/posture-id network universal data --out $(FIFTH_DIR)/universal --shards 600 --quiet
+	$(BIN)/posture-id network universal data --out $(FIFTH_DIR)/universal_people --shards 900 \
 	  --seed 1 --clean-share 0 --locked-share 0.1 0.4 --quiet
-	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal_presets --shards 240 \
+	$(BIN)/posture-id network universal data --out $(FIFTH_DIR)/universal_presets --shards 240 \
 	  --seed 2 --tip-share 0 --preset-share 1 --quiet
-	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal_small --shards 300 \
+	$(BIN)/posture-id network universal data --out $(FIFTH_DIR)/universal_small --shards 300 \
 	  --seed 3 --amplitude-deg 0.35 1 --tip-share 0.1 --preset-share 0.4 --quiet
-	$(BIN)/posture-id universal data --out $(FIFTH_DIR)/universal_robots --shards 180 \
+	$(BIN)/posture-id network universal data --out $(FIFTH_DIR)/universal_robots --shards 180 \
 	  --seed 4 --amplitude-deg 0.35 1.5 --tip-share 0.05 --preset-share 0.9 \
 	  --preset-jitter 0.15 --quiet
 
@@ -148,7 +148,7 @@ universal-fifth: $(STAMP)
 # 10 min here): each trial's torque and measurement noise drawn from one family.
 NOISE_SHARDS ?= 900
 noise-families: $(STAMP)
-	$(BIN)/posture-id universal data --out data/universal_families --shards $(NOISE_SHARDS) \
+	$(BIN)/posture-id network universal data --out data/universal_families --shards $(NOISE_SHARDS) \
 	  --seed 11 --clean-share 0.1 --locked-share 0.1 0.6 --noise-families low_pass \
 	  two_corners shallow correlated drifting changing --quiet
 
@@ -168,19 +168,19 @@ NOISE_EPOCHS ?= 20
 NOISE_TILT   ?= 1
 GATED_DIR    := data/models/universal_gated
 universal-noise-model: universal-fifth noise-families
-	$(BIN)/posture-id universal train $(NOISE_SETS) --init data/models/universal \
+	$(BIN)/posture-id network universal train $(NOISE_SETS) --init data/models/universal \
 	  --out data/models/universal_noise --epochs $(NOISE_EPOCHS) --learning-rate 5e-4 \
 	  --fresh-motor-noise --motor-noise-tilt $(NOISE_TILT) --quiet
-	$(BIN)/posture-id universal ensemble data/models/universal data/models/universal_noise \
+	$(BIN)/posture-id network universal ensemble data/models/universal data/models/universal_noise \
 	  --by-noise --out $(GATED_DIR)
-	$(BIN)/posture-id universal check $(GATED_DIR) $(NOISE_SETS) > /dev/null
-	$(BIN)/posture-id universal typicality $(GATED_DIR) $(NOISE_SETS) > /dev/null
+	$(BIN)/posture-id network universal calibrate $(GATED_DIR) $(NOISE_SETS) > /dev/null
+	$(BIN)/posture-id network universal typicality $(GATED_DIR) $(NOISE_SETS) > /dev/null
 	mkdir -p $(UNIVERSAL_DIR) docs/models/universal
 	cp $(GATED_DIR)/model.safetensors $(GATED_DIR)/model.json $(GATED_DIR)/calibration.json \
 	  $(GATED_DIR)/typicality.safetensors $(UNIVERSAL_DIR)/
 	cp $(GATED_DIR)/model.json $(GATED_DIR)/check.md $(GATED_DIR)/check.json \
 	  $(GATED_DIR)/typicality.md $(GATED_DIR)/typicality.json docs/models/universal/
-	$(BIN)/posture-id universal table --trials 2048 --cache data/table_cells --quiet \
+	$(BIN)/posture-id network universal table --trials 2048 --cache data/table_cells --quiet \
 	  --out $(GATED_DIR)/table > /dev/null
 	cp $(GATED_DIR)/table/table.json $(GATED_DIR)/table/table.md $(GATED_DIR)/table/table.png \
 	  docs/results/universal/
@@ -202,12 +202,12 @@ recording-widening: $(STAMP)
 	  --out docs/results/widening/report.md
 
 model: $(STAMP)
-	$(BIN)/posture-id dataset generate --trials $(MODEL_TRIALS) --body $(URDF) \
+	$(BIN)/posture-id network cnn data generate --trials $(MODEL_TRIALS) --body $(URDF) \
 	  --sensor-noise-deg $(MODEL_NOISE_DEG) --out data/$(NAME) --quiet
-	$(BIN)/posture-id train data/$(NAME) --out data/models/$(NAME) --epochs $(MODEL_EPOCHS) \
+	$(BIN)/posture-id network cnn train data/$(NAME) --out data/models/$(NAME) --epochs $(MODEL_EPOCHS) \
 	  --quiet
-	$(BIN)/posture-id evaluate data/models/$(NAME) data/$(NAME) --out docs/models/$(NAME)
-	$(BIN)/posture-id calibration data/models/$(NAME) data/$(NAME) \
+	$(BIN)/posture-id network cnn evaluate data/models/$(NAME) data/$(NAME) --out docs/models/$(NAME)
+	$(BIN)/posture-id network cnn calibrate data/models/$(NAME) data/$(NAME) \
 	  --out docs/models/$(NAME)/calibration --fits $(FITS) --install > /dev/null
 	mkdir -p $(MODELS_DIR)/$(NAME)
 	cp data/models/$(NAME)/model.json data/models/$(NAME)/log.jsonl \
@@ -220,9 +220,9 @@ model: $(STAMP)
 # answers on FITS test trials per noise level (about 1 h on 2 cores, resumable).
 FITS ?= 0
 calibration: $(STAMP)
-	$(BIN)/posture-id calibration data/models/tip_default data/tip_default \
+	$(BIN)/posture-id network cnn calibrate data/models/tip_default data/tip_default \
 	  --out docs/models/tip_default/calibration --fits 500 --install > /dev/null
-	$(BIN)/posture-id calibration data/models/$(notdir $(TWO_SEGMENT:.urdf=)) \
+	$(BIN)/posture-id network cnn calibrate data/models/$(notdir $(TWO_SEGMENT:.urdf=)) \
 	  data/$(notdir $(TWO_SEGMENT:.urdf=)) \
 	  --out docs/models/$(notdir $(TWO_SEGMENT:.urdf=))/calibration --install > /dev/null
 	cp data/models/tip_default/calibration.json $(MODELS_DIR)/tip_default/
@@ -240,11 +240,11 @@ real-like-models: $(STAMP)
 	$(MAKE) real-like-model STATES=80 CYCLES=6 REAL_TRIALS=36000
 
 real-like-model: $(STAMP)
-	$(BIN)/posture-id dataset generate --trials $(REAL_TRIALS) --states $(STATES) \
+	$(BIN)/posture-id network cnn data generate --trials $(REAL_TRIALS) --states $(STATES) \
 	  --cycles $(CYCLES) --motor-noise 0.8 --sensor-noise-deg 0.05 --out data/real_$(STATES) --quiet
-	$(BIN)/posture-id train data/real_$(STATES) --layout frf --epochs 30 \
+	$(BIN)/posture-id network cnn train data/real_$(STATES) --layout frf --epochs 30 \
 	  --out data/models/real_$(STATES)_frf --quiet
-	$(BIN)/posture-id train data/real_$(STATES) --epochs 20 --out data/models/real_$(STATES)_cnn \
+	$(BIN)/posture-id network cnn train data/real_$(STATES) --epochs 20 --out data/models/real_$(STATES)_cnn \
 	  --quiet
 
 real-like: real-like-models

@@ -1,4 +1,4 @@
-"""The CNN against the optimiser: ``posture-id benchmark`` as a script.
+"""The CNN against the optimiser: ``posture-id network cnn benchmark`` as a script.
 
 Run:  .venv/bin/python benchmarks/cnn_vs_optimizer.py --out docs/results/benchmark
           [--trials 24] [--sensor-noise-deg 0.05] [--people-like] [--methods ...]

@@ -3,7 +3,7 @@
 Run:  .venv/bin/python benchmarks/dataset.py [--sizes 6910 27640] [--workdir DIR]
 
 For each size (kept trials; 6910 is the paper's set, 20 730 modular samples) it runs
-``posture-id dataset generate`` in a child process into a fresh directory and reports
+``posture-id network cnn data generate`` in a child process into a fresh directory and reports
 wall time, peak resident memory of the child (from wait4) and disk use, then deletes
 the directory. Figures go to benchmarks/results/dataset.json.
 """

@@ -9,7 +9,7 @@ subjects drawn from docs/model.md §5's prior (a seed no other run uses; subject
 drawn again) are simulated and identified by the locked least-squares fit
 (``FitOptions.locked``), started at their true parameters with their classes known (the
 design predicts the noise's effect on the estimate, not the search's failures, which
-``posture-id benchmark`` measures). Subjects are simulated and fitted at the design's
+``posture-id network cnn benchmark`` measures). Subjects are simulated and fitted at the design's
 integration step (5 ms), so that the comparison is of statistics, not of step sizes.
 
 The design (:func:`posture_id.design.predict.predict_protocols`) predicts, for the same

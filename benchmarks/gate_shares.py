@@ -10,7 +10,7 @@ gate) from the sample's noise ratio and colour, as the identifier measures them.
 per kind of sway, how many samples go to the white-noise network alone (w = 0), to the
 coloured-noise one alone (w = 1) and between, the mean w, and the noise colour's and
 ratio's quantiles (on the table, also the ratio of the samples whose noise reads
-coloured). The table's cells: ``posture-id universal table --trials 2048 --cache
+coloured). The table's cells: ``posture-id network universal table --trials 2048 --cache
 data/table_cells`` (its clean and low-pass people-like sway); the family set: ``make
 noise-families`` (its test split, per family, clean and noisy trials apart).
 """

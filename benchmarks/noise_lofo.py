@@ -7,21 +7,20 @@ Run:  .venv/bin/python benchmarks/noise_lofo.py [--set data/universal_families]
           [--held-out F ...] [--subjects 24] [--gated [--widen 24]] [--no-bundled]
           [--out docs/results/noise_lofo]
 
-The set: ``make noise-families`` (``posture-id universal data --out
+The set: ``make noise-families`` (``posture-id network universal data --out
 data/universal_families --shards 900 --seed 11 --clean-share 0.1 --locked-share 0.1 0.6
 --noise-families low_pass two_corners shallow correlated drifting changing``). The base:
 the universal network trained under the low-pass motor noise alone (``make
 universal-model``'s first stage, ``data/models/universal``; the bundled network is its
 fine-tune on every family, so it cannot be the start here). For each family but
 ``low_pass``, a model is fine-tuned from the base on the set's trials of the *other*
-families (``posture-id universal train SET --init BASE --exclude-families F
---fresh-motor-noise [--motor-noise-tilt T]``), calibrated on them (``posture-id universal
-check``: the calibration leaves F out too; ``--beside``: other sets trained and calibrated
+families (``posture-id network universal train SET --init BASE --exclude-families F
+--fresh-motor-noise [--motor-noise-tilt T]``), calibrated on them (``posture-id network universal calibrate``: the calibration leaves F out too; ``--beside``: other sets trained and calibrated
 on beside it, as the bundled network's recipe has the fifth of the five sets, ``make
 universal-fifth``), and judged on 24 people-like subjects of F
 made outside any set (``benchmarks/honest_verdict.py --model ... --groups people-like
 --families F``; ``--gated``: each fine-tune first put in one model with the base, gated
-by the noise, as the bundled model is: ``posture-id universal ensemble BASE FINE
+by the noise, as the bundled model is: ``posture-id network universal ensemble BASE FINE
 --by-noise``, then calibrated; ``--widen N``: then given its recording widening, fitted on
 its own answers to N people-like subjects of each family it saw, drawn with another seed,
 as ``make recording-widening`` fits the bundled model's, so that F is judged with intervals
@@ -177,7 +176,7 @@ def main() -> None:
     parser.add_argument("--epochs", type=int, default=6)
     parser.add_argument("--learning-rate", type=float, default=3e-4)
     parser.add_argument("--motor-noise-tilt", type=float, default=0.0,
-                        help="the fine-tunes' motor-noise tilt (posture-id universal train "
+                        help="the fine-tunes' motor-noise tilt (posture-id network universal train "
                              "--motor-noise-tilt; default 0)")
     parser.add_argument("--held-out", nargs="+", default=HELD_OUT, choices=HELD_OUT,
                         help="the families to hold out, one at a time (default: all five)")

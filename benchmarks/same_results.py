@@ -10,13 +10,13 @@ can be run with the same interpreter. The commands, each small enough to run in 
 2 cores and each seeded:
 
 - ``posture-id demo``: the answers of the shipped example recordings;
-- ``posture-id universal table --trials 256``: every cell of the universal table;
+- ``posture-id network universal table --trials 256``: every cell of the universal table;
 - ``benchmarks/ic_recovery.py --per-cell 1``: the IC fit on 12 IC recordings;
 - ``benchmarks/model_comparison.py --per-model 4``: DEC against IC on 8 recordings;
 - ``benchmarks/honest_verdict.py --subjects 2``: the verdict's counts on clean, people-like
   and planted-mistake recordings;
-- the paper CNN's Table 2 and 4 figures: ``posture-id evaluate`` of the bundled TIP CNN on a
-  data set of 256 TIP trials (``posture-id dataset generate --seed 77``).
+- the paper CNN's Table 2 and 4 figures: ``posture-id network cnn evaluate`` of the bundled TIP CNN on a
+  data set of 256 TIP trials (``posture-id network cnn data generate --seed 77``).
 
 Every number in the JSON files each command writes is read (keys that are wall-clock times
 left out) and compared with the same path in the other run: identical, or its largest

@@ -2,7 +2,7 @@
 
 Run:  .venv/bin/python benchmarks/table_against.py BASE/table.json OTHER/table.json
 
-Both tables must hold the same cells (``posture-id universal table --trials 2048 --cache
+Both tables must hold the same cells (``posture-id network universal table --trials 2048 --cache
 data/table_cells``: the cache keeps the trials, so a second model is scored on the very
 sway the first was). For the clean cells and for the people-like ones apart, prints the
 change of each cell's median |Kp error| (``median_error_pct``, percentage points: least,

@@ -175,6 +175,34 @@ def test_old_spellings_work_with_a_notice_of_their_new_name(tmp_path, capsys):
         ["body", "--height-m", "1.8", "--mass-kg=80"]
 
 
+def test_the_network_commands_old_names_work_with_a_notice_of_their_family(tmp_path, capsys):
+    """Each command that moved into ``posture-id network`` is read in its new words, says
+    them once, and does what it did: a data set made by the old spelling is the one the
+    new spelling makes, byte for byte."""
+    from posture_id.cli.renamed import MOVED_COMMANDS, normalised
+
+    assert normalised(["--debug", "train", "set", "--out", "m", "--noise-deg", "0.1"]) == \
+        ["--debug", "network", "cnn", "train", "set", "--out", "m", "--noise-deg", "0.1"]
+    assert "posture-id train is now posture-id network cnn train" in capsys.readouterr().err
+    assert normalised(["universal", "check", "m", "set"]) == \
+        ["network", "universal", "calibrate", "m", "set"]
+    assert normalised(["calibration", "m", "set", "--noise-deg", "0"]) == \
+        ["network", "cnn", "calibrate", "m", "set", "--sensor-noise-deg", "0"]
+    capsys.readouterr()
+    for old, new in MOVED_COMMANDS.items():  # every one reaches a parser of the family
+        assert main([old, "--help"]) == 0
+        assert f"usage: posture-id {' '.join(new)}" in capsys.readouterr().out
+    made = []
+    for k, argv in enumerate((["dataset", "generate"], ["network", "cnn", "data", "generate"])):
+        out = tmp_path / f"set{k}"
+        assert main([*argv, "--trials", "3", "--shard-size", "4", "--seed", "2", "--quiet",
+                     "--out", str(out)]) == 0
+        err = capsys.readouterr().err
+        assert ("posture-id dataset is now posture-id network cnn data" in err) == (k == 0)
+        made.append((out / "shard-00000.npz").read_bytes())
+    assert made[0] == made[1]
+
+
 def test_the_top_level_help_lists_every_command_once_by_task(capsys):
     from posture_id.cli import COMMAND_GROUPS, build_parser
 

@@ -62,7 +62,7 @@ def test_a_third_architecture_goes_through_data_training_calibration_check_and_i
         tip, tmp_path):
     # data: the training set, by the command line
     data = tmp_path / "set"
-    assert main(["universal", "data", "--out", str(data), "--shards", "20", "--trials", "40",
+    assert main(["network", "universal", "data", "--out", str(data), "--shards", "20", "--trials", "40",
                  "--seed", "5", "--quiet"]) == 0
     # training, by the API (its network is this module's)
     model_dir = tmp_path / "linear"
@@ -78,7 +78,7 @@ def test_a_third_architecture_goes_through_data_training_calibration_check_and_i
     x = np.random.default_rng(0).standard_normal((4, N_INPUTS))
     assert np.allclose(loaded.predict(x).mean, result.predict(x).mean)
     # calibration on the calibration split, the check on the held-out test split
-    assert main(["universal", "check", str(model_dir), str(data)]) == 0
+    assert main(["network", "universal", "calibrate", str(model_dir), str(data)]) == 0
     check = json.loads((model_dir / "check.json").read_text())
     assert check["overall"]["modules"] > 0
     assert all(0 <= check["overall"]["coverage_pct"][p] <= 100 for p in ("kp", "kd"))

@@ -515,7 +515,7 @@ def test_a_calibration_made_before_the_noise_colour_is_refused_with_the_fix(tmp_
         del data[before]
         (tmp_path / "calibration.json").write_text(json.dumps(data))
         with pytest.raises(ModelError, match="calibration.json: made for other levels or "
-                                             "regimes.*posture-id universal check"):
+                                             "regimes.*posture-id network universal calibrate"):
             UniversalCalibration.load(tmp_path)
 
 
@@ -1222,7 +1222,7 @@ def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it(
     """`universal train` hands the flag to the training configuration (what it would
     train with is caught, not run)."""
     from posture_id.cli import main
-    from posture_id.learning import training
+    from posture_id.learning import universal_training as training
     from posture_id.learning.universal_training import UniversalTrainingConfig
 
     assert UniversalTrainingConfig().fresh_motor_noise is False

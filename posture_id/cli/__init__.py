@@ -1,7 +1,6 @@
-"""Command line: ``posture-id body | simulate | fit | frf | dataset | train | evaluate |
-calibration | identify | demo | benchmark | universal | design | stimulus | compare | norm
-| robot``,
-one module per command.
+"""Command line: ``posture-id identify | fit | compare | frf | norm | study | body |
+simulate | stimulus | design | robot | network | demo``, one module per command (the
+``network`` family's jobs in the modules :mod:`.network` names).
 
 Every user error is printed as one line ``posture-id: error: ...`` (exit status 2), never
 a traceback: argument errors by :class:`~.arguments.Parser`, input errors as
@@ -17,24 +16,19 @@ import os
 import sys
 
 from posture_id.cli import (
-    benchmark,
     body,
-    calibration,
     compare,
-    dataset,
     demo,
     design,
-    evaluate,
     fit,
     frf,
     identify,
+    network,
     norm,
     platform_command,
     robot,
     simulate,
     study,
-    train,
-    universal,
 )
 from posture_id.cli.arguments import Parser
 from posture_id.cli.exit_status import BUG, EPILOG, INTERRUPTED, REFUSED
@@ -50,8 +44,7 @@ COMMAND_GROUPS = (
      ("identify", "fit", "compare", "frf", "norm", "study")),
     ("build bodies, stimuli and studies",
      ("body", "simulate", "stimulus", "design", "robot")),
-    ("train and evaluate networks",
-     ("universal", "dataset", "train", "evaluate", "calibration", "benchmark")),
+    ("train and evaluate networks", ("network",)),
     ("try it", ("demo",)),
 )
 EXAMPLES = """examples:
@@ -78,8 +71,7 @@ def build_parser() -> Parser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser,
                                 metavar="COMMAND", title="commands", prog="posture-id")
     for command in (identify, fit, compare, frf, norm, study, body, simulate, platform_command,
-                    design, robot, universal, dataset, train, evaluate, calibration, benchmark,
-                    demo):
+                    design, robot, network, demo):
         command.add_parser(sub)
     for command_parser in sub.choices.values():  # one meaning per exit status, said by all
         command_parser.epilog = EPILOG

@@ -1,4 +1,4 @@
-"""``posture-id benchmark``: the CNN against the optimiser, into a report folder."""
+"""``posture-id network cnn benchmark``: the CNN against the optimiser, into a report folder."""
 
 from __future__ import annotations
 
@@ -21,8 +21,8 @@ __all__ = ["add_parser", "BENCHMARK_METHODS"]
 BENCHMARK_METHODS = ("cnn", "paper-cnn", "fit", "hybrid", "auto")
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("benchmark", help="the networks against least squares, the hybrid and "
+def add_parser(sub, name: str = "benchmark") -> None:
+    p = sub.add_parser(name, help="the networks against least squares, the hybrid and "
                                          "auto, on held-out recordings")
     p.add_argument("--body", type=Path, help="URDF (default: the TIP)")
     p.add_argument("--trials", type=positive_int, default=50,
@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
 
     body = load_body(args.body or DEFAULT_URDF)
     journal = args.out / JOURNAL
-    with TerminalProgress("identifications", prefix="posture-id benchmark") as progress:
+    with TerminalProgress("identifications", prefix="posture-id network cnn benchmark") as progress:
         result = run_benchmark(body, args.trials, tuple(args.sensor_noise_deg), args.seed,
                                args.workers,
                                None if args.methods is None else tuple(args.methods),

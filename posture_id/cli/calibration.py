@@ -1,4 +1,4 @@
-"""``posture-id calibration``: calibrate a model's intervals and check their coverage."""
+"""``posture-id network cnn calibrate``: calibrate a model's intervals and check their coverage."""
 
 from __future__ import annotations
 
@@ -17,9 +17,9 @@ from posture_id.cli.progress import TerminalProgress
 __all__ = ["add_parser"]
 
 
-def add_parser(sub) -> None:
+def add_parser(sub, name: str = "calibrate") -> None:
     p = sub.add_parser(
-        "calibration",
+        name,
         help="calibrate a model's intervals and class probabilities; check their coverage",
         description="Calibrates the CNN's intervals (conformal) and class probabilities "
                     "(temperature) on the data set's validation split and checks their "
@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
 def _calibration(args: argparse.Namespace) -> int:
     from posture_id.studies.calibration import install_calibration, run_calibration
 
-    with TerminalProgress(prefix="posture-id calibration") as progress:
+    with TerminalProgress(prefix="posture-id network cnn calibrate") as progress:
         report = run_calibration(
             args.model, args.dataset, args.out,
             tuple(args.sensor_noise_deg) if args.sensor_noise_deg else None,

@@ -1,4 +1,4 @@
-"""``posture-id dataset generate|info``: training data sets."""
+"""``posture-id network cnn data generate|info``: training data sets."""
 
 from __future__ import annotations
 
@@ -28,8 +28,8 @@ from posture_id.learning.data.trial_generation import generate_dataset
 __all__ = ["add_parser"]
 
 
-def add_parser(sub) -> None:
-    data = sub.add_parser("dataset", help="training data: generate a data set, describe one")
+def add_parser(sub, name: str = "data") -> None:
+    data = sub.add_parser(name, help="training data: generate a data set, describe one")
     dsub = data.add_subparsers(dest="dataset_command", required=True)
     gen = dsub.add_parser("generate", help="simulate random trials into a data-set directory")
     gen.add_argument("--trials", type=positive_int, required=True,

@@ -1,4 +1,4 @@
-"""``posture-id evaluate``: the paper's tables and figures for a trained model."""
+"""``posture-id network cnn evaluate``: the paper's tables and figures for a trained model."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from posture_id.errors import PostureIdError
 __all__ = ["add_parser"]
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("evaluate", help="evaluate a trained model on a data set")
+def add_parser(sub, name: str = "evaluate") -> None:
+    p = sub.add_parser(name, help="evaluate a trained model on a data set")
     p.add_argument("model", type=Path, help="model directory")
     p.add_argument("dataset", type=Path, help="data-set directory")
     p.add_argument("--out", type=Path, required=True,
@@ -46,7 +46,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     # torch loads here, not when the parser is built: other commands start without it
     from posture_id.learning.evaluation import evaluate
 
-    with TerminalProgress(prefix="posture-id evaluate") as progress:
+    with TerminalProgress(prefix="posture-id network cnn evaluate") as progress:
         report = evaluate(args.model, args.dataset, resimulate=args.resimulate,
                           progress=progress)
     paths = report.write(args.out)
@@ -69,7 +69,7 @@ def _compare(args: argparse.Namespace, report) -> list[Path]:
     test = report.splits["test"]
     reading = universal["reading"]
     lines = [f"# The universal model against the specialist on {args.dataset} (test split)",
-             "", f"Command: `posture-id evaluate {args.model} {args.dataset} --out {args.out} "
+             "", f"Command: `posture-id network cnn evaluate {args.model} {args.dataset} --out {args.out} "
              f"--universal{'' if args.universal == 'bundled' else ' ' + args.universal}`", "",
              f"| model | fit RMSE ({reading}) | classes % |", "|---|---|---|",
              f"| specialist ({report.layout}) | {test.fit_rmse_per_sample:.4f} | "

@@ -15,13 +15,25 @@ from __future__ import annotations
 import os
 import sys
 
-__all__ = ["RENAMED", "AXIS_FLAGS", "normalised"]
+__all__ = ["RENAMED", "AXIS_FLAGS", "MOVED_COMMANDS", "normalised"]
+
+#: Commands that moved into the ``network`` family: old command → its new words.
+MOVED_COMMANDS: dict[str, tuple[str, ...]] = {
+    "universal": ("network", "universal"),
+    "dataset": ("network", "cnn", "data"),
+    "train": ("network", "cnn", "train"),
+    "evaluate": ("network", "cnn", "evaluate"),
+    "calibration": ("network", "cnn", "calibrate"),
+    "benchmark": ("network", "cnn", "benchmark"),
+}
+#: Jobs of the old ``universal`` command renamed in the family.
+_MOVED_UNIVERSAL_JOBS = {"check": "calibrate"}
 
 #: (command, old spelling): new spelling.
 RENAMED: dict[tuple[str, str], str] = {
     ("simulate", "--noise-deg"): "--sensor-noise-deg",
     ("benchmark", "--noise-deg"): "--sensor-noise-deg",
-    ("calibration", "--noise-deg"): "--sensor-noise-deg",
+    ("calibrate", "--noise-deg"): "--sensor-noise-deg",
     ("identify", "--frf-preset"): "--band-preset",
     ("body", "--height"): "--height-m",
     ("body", "--mass"): "--mass-kg",
@@ -46,10 +58,37 @@ def _notice(old: str, new: str) -> None:
           file=sys.stderr)
 
 
+def _moved(argv: list[str]) -> list[str]:
+    """``argv`` with a command that moved into the ``network`` family in its new words (a
+    notice on stderr)."""
+    at = next((k for k, a in enumerate(argv) if not a.startswith("-")), None)
+    if at is None or argv[at] not in MOVED_COMMANDS:
+        return argv
+    old = [argv[at]]
+    new = list(MOVED_COMMANDS[argv[at]])
+    rest = argv[at + 1:]
+    if argv[at] == "universal" and rest and rest[0] in _MOVED_UNIVERSAL_JOBS:
+        old.append(rest[0])
+        new.append(_MOVED_UNIVERSAL_JOBS[rest[0]])
+        rest = rest[1:]
+    _notice("posture-id " + " ".join(old), "posture-id " + " ".join(new))
+    return argv[:at] + new + rest
+
+
+def _job(argv: list[str]) -> str | None:
+    """The command a flag belongs to: the first word, or a network family's job."""
+    words = [a for a in argv if not a.startswith("-")]
+    if words[:1] == ["network"]:
+        return words[2] if len(words) > 2 else None
+    return words[0] if words else None
+
+
 def normalised(argv: list[str]) -> list[str]:
-    """``argv`` with renamed flags in their new spelling (a notice each on stderr), identify's
-    network folder under ``--network`` and negative axes joined to their flag."""
-    command = next((a for a in argv if not a.startswith("-")), None)
+    """``argv`` with a moved command and renamed flags in their new spelling (a notice each
+    on stderr), identify's network folder under ``--network`` and negative axes joined to
+    their flag."""
+    argv = _moved(argv)
+    command = _job(argv)
     out: list[str] = []
     k = 0
     while k < len(argv):

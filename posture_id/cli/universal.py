@@ -1,4 +1,4 @@
-"""``posture-id universal data | train | check | ensemble | typicality | table``: the
+"""``posture-id network universal data | train | check | ensemble | typicality | table``: the
 universal identifier's training set, training, calibration and check, ensembles of models
 trained apart, its typicality reference, and its table over body families and stimuli
 (docs/universal.md)."""
@@ -25,9 +25,9 @@ from posture_id.simulation.noise_families import NoiseFamily
 __all__ = ["add_parser"]
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("universal", help="the universal identifier: its training set, "
-                       "training, calibration and tables")
+def add_parser(sub, name: str = "universal") -> None:
+    p = sub.add_parser(name, help="the universal identifier: its training set, training, "
+                       "calibration and tables")
     u = p.add_subparsers(dest="universal_command", required=True, parser_class=type(p))
     d = u.add_parser("data", help="simulate the training set (resumable)")
     d.add_argument("--out", type=Path, required=True, help="set directory")
@@ -66,7 +66,7 @@ def add_parser(sub) -> None:
 
     t = u.add_parser("train", help="train the universal network on a set (resumable)")
     t.add_argument("data", type=Path, nargs="+",
-                   help="set directories (posture-id universal data), trained on together")
+                   help="set directories (posture-id network universal data), trained on together")
     t.add_argument("--out", type=Path, required=True, help="model directory")
     t.add_argument("--epochs", type=positive_int,
                    help="at most this many epochs (default: UniversalTrainingConfig's, 60)")
@@ -108,7 +108,7 @@ def add_parser(sub) -> None:
     t.add_argument("--quiet", action="store_true", help="no progress bar")
     t.set_defaults(func=run_train)
 
-    c = u.add_parser("check", help="calibrate a model on its set's calibration split (the "
+    c = u.add_parser("calibrate", help="calibrate a model on its set's calibration split (the "
                      "recording-difficulty trend on its validation split) and check it on "
                      "the test split")
     c.add_argument("model", type=Path, help="model directory")
@@ -178,7 +178,7 @@ def run_data(args: argparse.Namespace) -> int:
                                     lambda m: "--" + m.group(1).replace("_", "-"),
                                     text)) from None
     config = UniversalDataConfig(shards=args.shards, seed=args.seed, **given)
-    with TerminalProgress("shard", prefix="posture-id universal data",
+    with TerminalProgress("shard", prefix="posture-id network universal data",
                           quiet=args.quiet) as progress:
         data = generate_universal(config, args.out, args.workers, progress)
     counts = data.manifest["counts"]
@@ -214,7 +214,7 @@ def run_train(args: argparse.Namespace) -> int:
                                ("hidden", tuple(args.hidden) if args.hidden else None))
              if v is not None}
     network = UniversalNetworkConfig(members=args.members, **shape)
-    with TerminalProgress("epoch", prefix="posture-id universal train",
+    with TerminalProgress("epoch", prefix="posture-id network universal train",
                           quiet=args.quiet) as progress:
         train_universal(args.data, args.out, config, network, progress=progress)
     say(f"wrote {args.out / 'model.safetensors'} and model.json")
@@ -240,8 +240,8 @@ def run_ensemble(args: argparse.Namespace) -> int:
     gated = (f", {model.gate.white_members} of them for white noise"
              if model.gate is not None else "")
     say(f"wrote {args.out / 'model.safetensors'} and model.json "
-        f"({model.network.config.members} members{gated}); calibrate it: posture-id universal "
-        f"check {args.out} DATA_DIR...")
+        f"({model.network.config.members} members{gated}); calibrate it: posture-id network universal "
+        f"calibrate {args.out} DATA_DIR...")
     return 0
 
 
@@ -270,7 +270,7 @@ def _table(args: argparse.Namespace) -> int:
 
     if args.cache is not None:
         check_output_folder(args.cache, "--cache")
-    with TerminalProgress("cell", prefix="posture-id universal table",
+    with TerminalProgress("cell", prefix="posture-id network universal table",
                           quiet=args.quiet) as progress:
         # the seed and bodies per cell where given; family_table's defaults otherwise
         given = {name: value for name, value in (("seed", args.seed),

@@ -17,7 +17,7 @@ Network = NetworkIdentifier
 
 def network_for(model: str | Path | Network | None, body: Body) -> Network:
     """A network already loaded, a model directory (of any registered architecture: the
-    universal model, a per-body specialist made by ``posture-id train``, ...), or None:
+    universal model, a per-body specialist made by ``posture-id network cnn train``, ...), or None:
     the bundled universal model."""
     if model is None:
         return UniversalIdentifier.bundled(body)

@@ -177,7 +177,7 @@ class CnnCalibration:
                        ConformalCalibration.from_dict(data["least_squares"], str(path)))
         except (OSError, ValueError, KeyError, TypeError) as error:
             raise LearningError(f"{path}: unreadable calibration ({error}); make it again "
-                                "with posture-id calibration") from None
+                                "with posture-id network cnn calibrate") from None
 
 
 def calibrate_cnn(model: LoadedModel, data: Dataset, noise_levels: tuple[float, ...],
@@ -338,7 +338,7 @@ class UniversalCalibration:
                 return key
         raise ModelError(f"the universal calibration has no values for {regime_text(regime)} "
                          f"nor pooled ones (its samples: {self.counts}); calibrate the "
-                         "model on sets with such bodies (posture-id universal check)")
+                         "model on sets with such bodies (posture-id network universal calibrate)")
 
     def scale(self, regime: str, level: float) -> np.ndarray:
         """(4,) the score quantile at ``level`` (nearest kept level at or above it)."""
@@ -387,13 +387,13 @@ class UniversalCalibration:
                 raise ModelError(f"{file}: made for other levels or regimes than this code's "
                                  "(before the noise's colour or the recording's difficulty "
                                  "was part of it, say); "
-                                 "calibrate the model again: posture-id universal check "
+                                 "calibrate the model again: posture-id network universal calibrate "
                                  "MODEL_DIR SETS...")
             trend = tuple(tuple(float(v) for v in row) for row in data["trend"])
             if trend and np.shape(trend) != (len(TREND_TERMS), 4):
                 raise ModelError(f"{file}: its trend is {np.shape(trend)}, not "
                                  f"({len(TREND_TERMS)}, 4); calibrate the model again: "
-                                 "posture-id universal check MODEL_DIR SETS...")
+                                 "posture-id network universal calibrate MODEL_DIR SETS...")
             return cls(data["quantiles"], data["temperature"], data["counts"],
                        data["weights_sha256"], trend)
         except (json.JSONDecodeError, KeyError, TypeError) as exc:

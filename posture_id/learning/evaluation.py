@@ -174,7 +174,7 @@ class EvaluationReport(Result):
         return "\n".join(lines)
 
     def to_markdown(self) -> str:
-        """The tables as Markdown (what ``posture-id evaluate`` writes as report.md)."""
+        """The tables as Markdown (what ``posture-id network cnn evaluate`` writes as report.md)."""
         out = [f"# Evaluation: {self.layout} model", "",
                f"Model `{self.model_dir}`, data set `{self.dataset_dir}`.", "",
                "| set | samples | total RMSE (per sample) | fit RMSE (per sample) | "
@@ -274,7 +274,7 @@ def evaluate(model_dir: str | Path, dataset_dir: str | Path, resimulate: int = 2
             f"{dataset_dir}: a data set of the body {scored_on.get('name')!r}, and the model "
             f"{model_dir} was trained on {trained_on.get('name')!r}: a per-body model is "
             "scored on its own body's data (the universal model reads any body: "
-            "`posture-id universal table`)")
+            "`posture-id network universal table`)")
     joints = tuple(data.manifest["body"]["joints"])
     splits, test_detail = {}, None
     for name in SPLITS:

@@ -274,7 +274,7 @@ class CnnIdentifier(NetworkIdentifier):
                                      "calibration makes one)")
         if calibration is None:
             self.notices += (f"{model.path}: the model has no calibration, so the CNN's own "
-                             "answer has no intervals (posture-id calibration MODEL_DIR "
+                             "answer has no intervals (posture-id network cnn calibrate MODEL_DIR "
                              "DATASET makes one)",)
         #: the network was trained (and calibrated) on this very body
         self.trained_on_this_body = trained.get("sha256") == body.sha256

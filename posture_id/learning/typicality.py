@@ -20,7 +20,7 @@ universal set's held-out splits, the distribution the model was trained on):
 
 A recording with p below :data:`ATYPICAL_P` (its score beyond every one of the
 reference's recordings, when M ≥ 1000) is *atypical*: the trust verdict doubts it, with
-the score named (:mod:`posture_id.identify.verdict`). ``posture-id universal typicality``
+the score named (:mod:`posture_id.identify.verdict`). ``posture-id network universal typicality``
 writes the reference beside a model (``typicality.safetensors``), bound to its weights.
 """
 
@@ -160,7 +160,7 @@ class TypicalityReference:
                        meta["weights_sha256"], json.loads(meta["source"]))
         except (SafetensorError, OSError, ValueError, KeyError) as exc:
             raise PostureIdError(f"{path}: not a readable typicality reference ({exc}); "
-                                 "make it again with 'posture-id universal typicality'") from exc
+                                 "make it again with 'posture-id network universal typicality'") from exc
 
 
 def fit_reference(fit_inputs: np.ndarray, score_inputs: np.ndarray,

@@ -254,7 +254,7 @@ def ensemble_of(models: list[UniversalModel], by_noise: bool = False) -> Univers
     architecture but for the members, one standardisation. The sidecar is the last model's
     (its scope, sets and training; list the widest last) with ``ensemble_of`` naming each
     model (path, weights' SHA-256, training); calibrate the result anew
-    (``posture-id universal check``): its spread is not any member's.
+    (``posture-id network universal calibrate``): its spread is not any member's.
 
     With ``by_noise``, the members are not averaged but gated (:mod:`~.noise_gate`): the first
     model's answer recordings whose noise is white or nearly none, the others' those

@@ -277,5 +277,5 @@ def require_trials(shards: list[LoadedShard], data: Sequence[UniversalSet], spli
     left = f" outside the families left out ({', '.join(families)})" if families else ""
     raise LearningError(f"{names}: no {split} trial{left}: the {split} split takes the shards "
                         f"whose index is {_SPLIT_INDEX[split]} (mod 10) and this holds "
-                        f"{made}; make at least 10 shards (posture-id universal data "
+                        f"{made}; make at least 10 shards (posture-id network universal data "
                         "--shards N, resumable)")

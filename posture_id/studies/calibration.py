@@ -1,6 +1,6 @@
 """Are the error bars honest? Calibration of a model's intervals and class probabilities.
 
-:func:`run_calibration` (``posture-id calibration MODEL_DIR DATASET --out DIR``):
+:func:`run_calibration` (``posture-id network cnn calibrate MODEL_DIR DATASET --out DIR``):
 
 1. **Calibrates the CNN** on the data set's validation split at several sensor-noise
    levels (:func:`posture_id.learning.calibration.calibrate_cnn`).
@@ -273,7 +273,7 @@ class CalibrationReport(Result):
                  f"Model `{self.model_dir}`, data set `{self.dataset_dir}`. CNN intervals: "
                  f"conformal on the validation split at sensor noise "
                  f"{', '.join(f'{n:g}°' for n in self.noise_levels_deg)}; "
-                 "checked on the test split. Made by `posture-id calibration` "
+                 "checked on the test split. Made by `posture-id network cnn calibrate` "
                  "(docs/uncertainty.md).", "",
                  "## Coverage of the 90 % intervals", "",
                  f"Target: {100 * TARGET_BAND[0]:g}–{100 * TARGET_BAND[1]:g} % for every "

@@ -66,7 +66,7 @@ class CheckReport:
         head = ("| group | trials | classes % | all classes right % | Kp err % | Ki err % | "
                 "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay | class ECE % |")
         lines = ["# The universal model on its held-out test shards", "",
-                 "Made by `posture-id universal check MODEL_DIR DATA_DIR` "
+                 "Made by `posture-id network universal calibrate MODEL_DIR DATA_DIR` "
                  "(posture_id.studies.universal_check): calibrated on the calibration shards, "
                  "checked on the test shards (bodies and stimuli no training trial had). "
                  "People-like: under 60 % of the body COM sway locked; part-locked: 60–99.5 "

@@ -190,7 +190,7 @@ class FamilyTable:
 
     def markdown(self) -> str:
         lines = ["# The universal model over body families, stimuli and sway", "",
-                 "Made by `posture-id universal table` (posture_id.studies.universal_table: "
+                 "Made by `posture-id network universal table` (posture_id.studies.universal_table: "
                  "trials simulated for the table alone, their own seeds). A Winter cell's "
                  f"trials are spread over {self.bodies_per_cell} bodies of the family drawn from "
                  "the scope's heights and masses (table.json names them). Clean: sensor "
@@ -261,7 +261,7 @@ def cached_samples(cache: str | Path, trials: int, scope: UniversalScope,
         groups = _load_cell(_cell_file(cache, index), made_with)
         if groups is None:
             raise TableCacheError(f"{_cell_file(cache, index)}: no table cell there; make "
-                                  f"them with posture-id universal table --trials {trials} "
+                                  f"them with posture-id network universal table --trials {trials} "
                                   f"--cache {cache}")
         yield ((family, _stimulus_label(*stim), sway),
                cell_samples(index, groups, table, seed, bodies_per_cell))

@@ -15,8 +15,9 @@ universal-model``'s first stage, ``data/models/universal``; the bundled network 
 fine-tune on every family, so it cannot be the start here). For each family but
 ``low_pass``, a model is fine-tuned from the base on the set's trials of the *other*
 families (``posture-id network universal train SET --init BASE --exclude-families F
---fresh-motor-noise [--motor-noise-tilt T]``), calibrated on them (``posture-id network universal calibrate``: the calibration leaves F out too; ``--beside``: other sets trained and calibrated
-on beside it, as the bundled network's recipe has the fifth of the five sets, ``make
+--fresh-motor-noise [--motor-noise-tilt T]``), calibrated on them (``posture-id network
+universal calibrate``: the calibration leaves F out too; ``--beside``: other sets trained
+and calibrated on beside it, as the bundled network's recipe has the fifth of the five sets, ``make
 universal-fifth``), and judged on 24 people-like subjects of F
 made outside any set (``benchmarks/honest_verdict.py --model ... --groups people-like
 --families F``; ``--gated``: each fine-tune first put in one model with the base, gated

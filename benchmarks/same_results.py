@@ -15,8 +15,8 @@ can be run with the same interpreter. The commands, each small enough to run in 
 - ``benchmarks/model_comparison.py --per-model 4``: DEC against IC on 8 recordings;
 - ``benchmarks/honest_verdict.py --subjects 2``: the verdict's counts on clean, people-like
   and planted-mistake recordings;
-- the paper CNN's Table 2 and 4 figures: ``posture-id network cnn evaluate`` of the bundled TIP CNN on a
-  data set of 256 TIP trials (``posture-id network cnn data generate --seed 77``).
+- the paper CNN's Table 2 and 4 figures: ``posture-id network cnn evaluate`` of the bundled
+  TIP CNN on a data set of 256 TIP trials (``posture-id network cnn data generate --seed 77``).
 
 Every number in the JSON files each command writes is read (keys that are wall-clock times
 left out) and compared with the same path in the other run: identical, or its largest

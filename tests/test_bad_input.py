@@ -335,7 +335,8 @@ def test_tilt_file_itself(tmp_path, capsys, setup, problem):
 @pytest.fixture(scope="module")
 def small_set(tmp_path_factory):
     out = tmp_path_factory.mktemp("set") / "set"
-    assert main(["dataset", "generate", "--trials", "4", "--shard-size", "4", "--out", str(out),
+    assert main(["network", "cnn", "data", "generate", "--trials", "4", "--shard-size", "4",
+                "--out", str(out),
                  "--quiet"]) == 0
     return out
 
@@ -375,20 +376,21 @@ def test_bad_dataset_folder(tmp_path, capsys, small_set, case, command):
     shutil.copytree(small_set, folder)
     damage, problem = DATASET_CASES[case]
     damage(folder)
-    argv = (["dataset", "info", str(folder)] if command == "info"
-            else ["train", str(folder), "--out", str(tmp_path / "model")])
+    argv = (["network", "cnn", "data", "info", str(folder)] if command == "info"
+            else ["network", "cnn", "train", str(folder), "--out", str(tmp_path / "model")])
     _run(tmp_path, argv, capsys, problem, names=str(folder))
 
 
 def test_a_file_is_not_a_data_set(tmp_path, capsys):
     path = tmp_path / "set"
     path.write_text("x")
-    _run(tmp_path, ["dataset", "info", str(path)], capsys, "not a data set", names=str(path))
+    _run(tmp_path, ["network", "cnn", "data", "info", str(path)], capsys, "not a data set",
+         names=str(path))
 
 
 def test_a_hopeless_data_set_stops(tmp_path, capsys):
     out = tmp_path / "set"
-    code = main(["dataset", "generate", "--trials", "50", "--shard-size", "64",
+    code = main(["network", "cnn", "data", "generate", "--trials", "50", "--shard-size", "64",
                  "--sway-limit-deg", "0.05", "--out", str(out), "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and "out of reach" in err and "Traceback" not in err
@@ -406,7 +408,7 @@ def test_a_hopeless_data_set_stops(tmp_path, capsys):
 ])
 def test_a_universal_set_s_scope_is_checked_before_anything_runs(tmp_path, capsys, flags,
                                                                   problem):
-    _run(tmp_path, ["universal", "data", "--out", str(tmp_path / "set"), "--shards", "1",
+    _run(tmp_path, ["network", "universal", "data", "--out", str(tmp_path / "set"), "--shards", "1",
                     *flags], capsys, problem)
     assert not (tmp_path / "set").exists()
 
@@ -440,17 +442,21 @@ OUTPUT_CASES = {
     "body_out_folder": (["body", "--default-tip", "--out", "{d}/sub"], "is a folder"),
     "body_out_under_file": (["body", "--default-tip", "--out", "{d}/afile/x.urdf"],
                             "is a file"),
-    "generate_out_file": (["dataset", "generate", "--trials", "3", "--out", "{d}/afile"],
+    "generate_out_file": (["network", "cnn", "data", "generate", "--trials", "3", "--out",
+                          "{d}/afile"],
                           "is a file, not a folder"),
-    "generate_out_under_file": (["dataset", "generate", "--trials", "3", "--out",
+    "generate_out_under_file": (["network", "cnn", "data", "generate", "--trials", "3", "--out",
                                  "{d}/afile/set"], "is a file"),
-    "generate_out_not_a_set": (["dataset", "generate", "--trials", "3", "--out",
+    "generate_out_not_a_set": (["network", "cnn", "data", "generate", "--trials", "3", "--out",
                                 "{d}"], "holds no data-set manifest"),
-    "train_out_file": (["train", "{d}/sub", "--out", "{d}/afile"], "is a file, not a folder"),
-    "train_out_is_dataset": (["train", "{d}/sub", "--out", "{d}/sub"], "also an input"),
-    "evaluate_out_file": (["evaluate", "{d}/sub", "{d}/sub", "--out", "{d}/afile"],
+    "train_out_file": (["network", "cnn", "train", "{d}/sub", "--out", "{d}/afile"],
+                       "is a file, not a folder"),
+    "train_out_is_dataset": (["network", "cnn", "train", "{d}/sub", "--out", "{d}/sub"],
+                             "also an input"),
+    "evaluate_out_file": (["network", "cnn", "evaluate", "{d}/sub", "{d}/sub", "--out",
+                          "{d}/afile"],
                           "is a file, not a folder"),
-    "info_figures_file": (["dataset", "info", "{d}/sub", "--figures", "{d}/afile"],
+    "info_figures_file": (["network", "cnn", "data", "info", "{d}/sub", "--figures", "{d}/afile"],
                           "is a file, not a folder"),
 }
 
@@ -546,5 +552,5 @@ def test_truncated_shard_without_verification(tmp_path, capsys, small_set):
     shutil.copytree(small_set, folder)
     shard = folder / "shard-00000.npz"
     shard.write_bytes(shard.read_bytes()[:3000])
-    _run(tmp_path, ["dataset", "info", str(folder), "--no-verify", "--figures",
+    _run(tmp_path, ["network", "cnn", "data", "info", str(folder), "--no-verify", "--figures",
                     str(tmp_path / "figs")], capsys, "cannot be read", names=str(shard))

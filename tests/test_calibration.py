@@ -31,7 +31,7 @@ def calibrated(tmp_path_factory, tip):
                                      head=(16,))
     train(root / "set", root / "model", network,
           TrainingConfig(threads=1, batch_size=16, epochs=1))
-    status = main(["calibration", str(root / "model"), str(root / "set"),
+    status = main(["network", "cnn", "calibrate", str(root / "model"), str(root / "set"),
                    "--out", str(root / "report"), "--install"])
     assert status == 0
     return root
@@ -128,7 +128,7 @@ def test_an_unreadable_calibration_is_made_anew(calibrated, tmp_path):
     model = tmp_path / "model"
     shutil.copytree(calibrated / "model", model)
     (model / CALIBRATION).write_text("{not json")
-    assert main(["calibration", str(model), str(calibrated / "set"), "--out",
+    assert main(["network", "cnn", "calibrate", str(model), str(calibrated / "set"), "--out",
                  str(tmp_path / "report"), "--sensor-noise-deg", "0.05"]) == 0
     assert (model / CALIBRATION).read_text() == "{not json"  # told to write elsewhere only
     assert CnnCalibration.load(tmp_path / "report").weights_sha256 == CnnCalibration.load(

@@ -160,14 +160,16 @@ def test_dask_local_cluster_gives_the_same_shards(reference_set, tmp_path):
 
 def test_cli_generate_and_info(tmp_path, capsys):
     out = tmp_path / "cli"
-    assert main(["dataset", "generate", "--trials", "4", "--shard-size", "8", "--out",
+    assert main(["network", "cnn", "data", "generate", "--trials", "4", "--shard-size", "8",
+                "--out",
                  str(out), "--quiet"]) == 0
-    assert main(["dataset", "info", str(out)]) == 0
+    assert main(["network", "cnn", "data", "info", str(out)]) == 0
     text = capsys.readouterr().out
     assert "4 trials used" in text and "rejected" in text and "train" in text
     assert (out / "dataset_overview.png").stat().st_size > 10_000
     assert (out / "dataset_images.png").stat().st_size > 10_000
-    assert main(["dataset", "generate", "--trials", "5", "--shard-size", "8", "--out",
+    assert main(["network", "cnn", "data", "generate", "--trials", "5", "--shard-size", "8",
+                "--out",
                  str(out), "--quiet"]) == 2
     assert "other arguments (trials differ" in capsys.readouterr().err
 

@@ -64,7 +64,8 @@ def test_a_report_folder_is_the_users_again_once_they_edit_a_file(material, tmp_
     from posture_id.cli.output_folder import LEDGER
 
     monkeypatch.chdir(tmp_path)
-    command = ["evaluate", material["specialist"], material["set_tip"], "--out", "e",
+    command = ["network", "cnn", "evaluate", material["specialist"], material["set_tip"], "--out",
+               "e",
                "--resimulate", "0"]
     assert main(command) == 0
     ledger = json.loads((tmp_path / "e" / LEDGER).read_text())["files"]

@@ -212,7 +212,8 @@ def test_evaluate_puts_the_universal_model_beside_a_specialist(trained, tiny_set
 
     out, _ = trained
     report = tmp_path / "report"
-    assert main(["evaluate", str(out), str(tiny_set), "--out", str(report), "--resimulate",
+    assert main(["network", "cnn", "evaluate", str(out), str(tiny_set), "--out", str(report),
+                "--resimulate",
                  "0", "--universal"]) == 0
     comparison = json.loads((report / "universal_comparison.json").read_text())
     assert "| universal |" in (report / "universal_comparison.md").read_text()

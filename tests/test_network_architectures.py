@@ -62,7 +62,8 @@ def test_a_third_architecture_goes_through_data_training_calibration_check_and_i
         tip, tmp_path):
     # data: the training set, by the command line
     data = tmp_path / "set"
-    assert main(["network", "universal", "data", "--out", str(data), "--shards", "20", "--trials", "40",
+    assert main(["network", "universal", "data", "--out", str(data), "--shards", "20", "--trials",
+                "40",
                  "--seed", "5", "--quiet"]) == 0
     # training, by the API (its network is this module's)
     model_dir = tmp_path / "linear"

@@ -757,7 +757,8 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
     for i in range(len(cells)):  # every other cell stands in with cell 0's trials
         if i != missing:
             _save_cell(_cell_file(cache, i), stand_in, key)
-    argv = ["universal", "table", "--trials", "2", "--workers", "1", "--cache", str(cache),
+    argv = ["network", "universal", "table", "--trials", "2", "--workers", "1", "--cache",
+            str(cache),
             "--quiet"]
     assert main([*argv, "--out", str(tmp_path / "a")]) == 0
     made = _load_cell(_cell_file(cache, missing), key)
@@ -905,7 +906,7 @@ def test_models_trained_apart_make_one_ensemble_and_mismatches_are_refused(tmp_p
         model = UniversalModel(UniversalNetwork(config).eval(), *std, sidecar)
         model.save(tmp_path / name)
         models.append(UniversalModel.load(tmp_path / name))
-    assert main(["universal", "ensemble", str(tmp_path / "a"), str(tmp_path / "b"),
+    assert main(["network", "universal", "ensemble", str(tmp_path / "a"), str(tmp_path / "b"),
                  "--out", str(tmp_path / "ens")]) == 0
     ens = UniversalModel.load(tmp_path / "ens")
     assert ens.network.config.members == 2
@@ -932,7 +933,7 @@ def test_models_trained_apart_make_one_ensemble_and_mismatches_are_refused(tmp_p
         ensemble_of([models[0], other])
     with pytest.raises(ModelError, match="two or more"):
         ensemble_of(models[:1])
-    assert main(["universal", "ensemble", str(tmp_path / "a"), "--out",
+    assert main(["network", "universal", "ensemble", str(tmp_path / "a"), "--out",
                  str(tmp_path / "one")]) != 0
 
 
@@ -955,7 +956,8 @@ def test_a_model_gated_by_the_noise_answers_white_noise_by_its_first_network(tmp
     for name in ("white", "coloured"):
         UniversalModel(UniversalNetwork(config).eval(), *std,
                        {"scope": {"segments": [1, 2, 3]}}).save(tmp_path / name)
-    assert main(["universal", "ensemble", str(tmp_path / "white"), str(tmp_path / "coloured"),
+    assert main(["network", "universal", "ensemble", str(tmp_path / "white"),
+                str(tmp_path / "coloured"),
                  "--by-noise", "--out", str(tmp_path / "gated")]) == 0
     gated = UniversalModel.load(tmp_path / "gated")
     white, coloured = (UniversalModel.load(tmp_path / n) for n in ("white", "coloured"))
@@ -1083,7 +1085,7 @@ def test_the_training_configuration_names_its_point_loss():
     assert UniversalTrainingConfig(point_loss="absolute").point_loss == "absolute"
     with pytest.raises(LearningError, match="point_loss must be one of squared, absolute"):
         UniversalTrainingConfig(point_loss="huber")
-    args = build_parser().parse_args(["universal", "train", "set", "--out", "m",
+    args = build_parser().parse_args(["network", "universal", "train", "set", "--out", "m",
                                       "--point-loss", "absolute"])
     assert args.point_loss == "absolute"
 
@@ -1230,7 +1232,7 @@ def test_fresh_motor_noise_is_off_unless_asked_and_the_command_line_passes_it(
     monkeypatch.setattr(training, "train_universal",
                         lambda data, out, config, *a, **k: seen.append(config))
     (tmp_path / "set").mkdir()
-    argv = ["universal", "train", str(tmp_path / "set"), "--quiet", "--out"]
+    argv = ["network", "universal", "train", str(tmp_path / "set"), "--quiet", "--out"]
     assert main([*argv, str(tmp_path / "m1")]) == 0
     assert main([*argv, str(tmp_path / "m2"), "--fresh-motor-noise"]) == 0
     assert main([*argv, str(tmp_path / "m3"), "--motor-noise-tilt", "1"]) == 0

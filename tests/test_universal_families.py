@@ -136,11 +136,13 @@ def test_the_command_line_refuses_network_flags_with_init_and_families_a_set_lac
     from posture_id.cli import main
     from posture_id.learning.universal_identifier import BUNDLED_DIR
 
-    status = main(["universal", "train", str(family_set.path), "--out", str(tmp_path / "m"),
+    status = main(["network", "universal", "train", str(family_set.path), "--out",
+                  str(tmp_path / "m"),
                    "--init", str(BUNDLED_DIR), "--hidden", "64", "64"])
     assert status == 2
     assert "--init keeps its model's network" in capsys.readouterr().err
-    status = main(["universal", "train", str(family_set.path), "--out", str(tmp_path / "n"),
+    status = main(["network", "universal", "train", str(family_set.path), "--out",
+                  str(tmp_path / "n"),
                    "--exclude-families", "correlated", "--epochs", "1"])
     assert status == 2
     err = capsys.readouterr().err
@@ -156,7 +158,8 @@ def test_a_set_too_small_for_a_split_is_refused_in_one_line(tmp_path, capsys):
     small = generate_universal(UniversalDataConfig(shards=2, trials=3, seed=1),
                                tmp_path / "small", workers=1)
     out = tmp_path / "model"
-    assert main(["universal", "train", str(small.path), "--out", str(out), "--epochs", "1",
+    assert main(["network", "universal", "train", str(small.path), "--out", str(out), "--epochs",
+                "1",
                  "--quiet"]) == 2
     err = capsys.readouterr().err
     assert "no train trial: the train split takes the shards whose index is ≥ 3" in err

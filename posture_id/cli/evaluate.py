@@ -69,7 +69,9 @@ def _compare(args: argparse.Namespace, report) -> list[Path]:
     test = report.splits["test"]
     reading = universal["reading"]
     lines = [f"# The universal model against the specialist on {args.dataset} (test split)",
-             "", f"Command: `posture-id network cnn evaluate {args.model} {args.dataset} --out {args.out} "
+             "",
+             f"Command: `posture-id network cnn evaluate {args.model} {args.dataset} "
+             f"--out {args.out} "
              f"--universal{'' if args.universal == 'bundled' else ' ' + args.universal}`", "",
              f"| model | fit RMSE ({reading}) | classes % |", "|---|---|---|",
              f"| specialist ({report.layout}) | {test.fit_rmse_per_sample:.4f} | "

@@ -29,7 +29,8 @@ __all__ = ["add_parser"]
 
 def add_parser(sub, name: str = "train") -> None:
     p = sub.add_parser(name, help="train a CNN identifier on a data set")
-    p.add_argument("dataset", type=Path, help="data-set directory (posture-id network cnn data generate)")
+    p.add_argument("dataset", type=Path,
+                   help="data-set directory (posture-id network cnn data generate)")
     p.add_argument("--layout", choices=[x.value for x in Layout], default="modular",
                    help="spectrograms, one sample per module (default) or one per trial; "
                         "or FRF features, one per trial (posture_id.frf.features)")
@@ -88,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
                               batch_size=args.batch_size, patience=args.patience,
                               seed=args.seed, threads=args.threads,
                               buffer_shards=args.buffer_shards)
-    with TerminalProgress("epoch", prefix="posture-id network cnn train", quiet=args.quiet) as progress:
+    with TerminalProgress("epoch", prefix="posture-id network cnn train",
+                          quiet=args.quiet) as progress:
         result = train(args.dataset, args.out, network, training, progress)
     result.plot(args.out / "loss.png")
     say(result.summary())

@@ -240,8 +240,8 @@ def run_ensemble(args: argparse.Namespace) -> int:
     gated = (f", {model.gate.white_members} of them for white noise"
              if model.gate is not None else "")
     say(f"wrote {args.out / 'model.safetensors'} and model.json "
-        f"({model.network.config.members} members{gated}); calibrate it: posture-id network universal "
-        f"calibrate {args.out} DATA_DIR...")
+        f"({model.network.config.members} members{gated}); calibrate it: posture-id network "
+        f"universal calibrate {args.out} DATA_DIR...")
     return 0
 
 

@@ -45,4 +45,5 @@ def bundled_model_dir(body) -> tuple[Path, tuple[str, ...]]:
                             f"one trained on '{trained.get('name')}' ({folder.name})",)
     raise LearningError(
         f"no bundled model for a {body.n_segments}-segment body ('{body.name}'); train one "
-        "(posture-id network cnn data generate --body URDF, then posture-id network cnn train) and pass --network")
+        "(posture-id network cnn data generate --body URDF, then posture-id network cnn "
+        "train) and pass --network")

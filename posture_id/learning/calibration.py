@@ -387,8 +387,8 @@ class UniversalCalibration:
                 raise ModelError(f"{file}: made for other levels or regimes than this code's "
                                  "(before the noise's colour or the recording's difficulty "
                                  "was part of it, say); "
-                                 "calibrate the model again: posture-id network universal calibrate "
-                                 "MODEL_DIR SETS...")
+                                 "calibrate the model again: posture-id network universal "
+                                 "calibrate MODEL_DIR SETS...")
             trend = tuple(tuple(float(v) for v in row) for row in data["trend"])
             if trend and np.shape(trend) != (len(TREND_TERMS), 4):
                 raise ModelError(f"{file}: its trend is {np.shape(trend)}, not "

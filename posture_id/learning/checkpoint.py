@@ -114,8 +114,9 @@ def _check_sidecar(sidecar: dict, path: Path) -> None:
     of features this code does not compute."""
     if sidecar.get("format") == "posture_id-universal-model":
         raise LearningError(f"{path.parent}: the universal model, not a per-body model: "
-                            "`posture-id network universal table` scores it, `posture-id network cnn evaluate "
-                            "SPECIALIST SET --universal` sets it beside a specialist")
+                            "`posture-id network universal table` scores it, `posture-id "
+                            "network cnn evaluate SPECIALIST SET --universal` sets it beside a "
+                            "specialist")
     if sidecar.get("format") != FORMAT:
         raise LearningError(f"{path}: not a posture_id model (format is not '{FORMAT}')")
     version = sidecar.get("format_version")

@@ -160,7 +160,8 @@ class TypicalityReference:
                        meta["weights_sha256"], json.loads(meta["source"]))
         except (SafetensorError, OSError, ValueError, KeyError) as exc:
             raise PostureIdError(f"{path}: not a readable typicality reference ({exc}); "
-                                 "make it again with 'posture-id network universal typicality'") from exc
+                                 "make it again with 'posture-id network universal "
+                                 "typicality'") from exc
 
 
 def fit_reference(fit_inputs: np.ndarray, score_inputs: np.ndarray,

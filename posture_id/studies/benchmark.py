@@ -307,8 +307,8 @@ class BenchmarkReport(Result):
                  f"Far: a wrong class or E_rel above {100 * FAR_E_REL:g} %. Time: identifying "
                  "(the CNN's features and network; least squares; both for the hybrid) and the "
                  "whole `identify` call, with the checks and the re-simulation every method "
-                 "shares; each worker process on one thread. Made by `posture-id network cnn benchmark` "
-                 "(`benchmarks/cnn_vs_optimizer.py`).", ""]
+                 "shares; each worker process on one thread. Made by `posture-id network cnn "
+                 "benchmark` (`benchmarks/cnn_vs_optimizer.py`).", ""]
         far = {m: sum(s.far_from_truth for (_, method), s in stats.items()
                       if method == m) for m in METHODS}
         total = {m: sum(s.recordings for (_, method), s in stats.items()
@@ -388,8 +388,8 @@ class BenchmarkReport(Result):
                  "Share of the true values inside each identified parameter's 90 % interval "
                  "(`identify`'s intervals; docs/uncertainty.md). On this few recordings a "
                  "share has a sampling spread of about ±4 points; the calibration report "
-                 "(`posture-id network cnn calibrate`, docs/models/tip_default/calibration/) checks "
-                 "coverage on 5 398 CNN and 500 least-squares test trials.", "",
+                 "(`posture-id network cnn calibrate`, docs/models/tip_default/calibration/) "
+                 "checks coverage on 5 398 CNN and 500 least-squares test trials.", "",
                  "| sensor noise | method | intervals | recordings | all | Kp | Ki | Kd | Δ |",
                  "|---|---|---|---|---|---|---|---|---|"]
         for s in rows:

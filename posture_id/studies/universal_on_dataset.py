@@ -1,5 +1,6 @@
-"""The universal model on a specialist's own test set (``posture-id network cnn evaluate --universal``):
-the same trials, the same standardised units, so the two can be read side by side."""
+"""The universal model on a specialist's own test set (``posture-id network cnn evaluate
+--universal``): the same trials, the same standardised units, so the two can be read side
+by side."""
 
 from __future__ import annotations
 

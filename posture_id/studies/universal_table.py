@@ -190,8 +190,9 @@ class FamilyTable:
 
     def markdown(self) -> str:
         lines = ["# The universal model over body families, stimuli and sway", "",
-                 "Made by `posture-id network universal table` (posture_id.studies.universal_table: "
-                 "trials simulated for the table alone, their own seeds). A Winter cell's "
+                 "Made by `posture-id network universal table` "
+                 "(posture_id.studies.universal_table: trials simulated for the table alone, "
+                 "their own seeds). A Winter cell's "
                  f"trials are spread over {self.bodies_per_cell} bodies of the family drawn from "
                  "the scope's heights and masses (table.json names them). Clean: sensor "
                  "noise 0–0.1°, no motor noise. People-like: motor noise leaving 15–40 % of "

@@ -179,6 +179,23 @@ def plot_loss_curves(history, path=None, ax=None):
     return fig
 
 
+def plot_shares(labels, shares_pct, expected_pct: float, xlabel: str, expected_label: str,
+                path=None, ax=None):
+    """Horizontal bars, one share (%) per label, and the share expected as a line."""
+    fig, axes = _axes(ax, 1, 1, (7, 0.35 * len(labels) + 1.5))
+    a = axes[0, 0]
+    a.barh(range(len(labels)), shares_pct, color="C0")
+    a.axvline(expected_pct, color="C3", lw=1, ls="--", label=expected_label)
+    a.set_yticks(range(len(labels)), labels, fontsize=7)
+    a.invert_yaxis()
+    a.set_xlabel(xlabel)
+    a.grid(alpha=0.3, axis="x")
+    a.legend(fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    return fig
+
+
 def plot_parameter_errors(names, mean, spread, path=None, ax=None, title=""):
     """The paper's Fig. 5: mean absolute error of each normalised parameter with its spread.
 

@@ -16,12 +16,18 @@ from torch import nn
 
 from posture_id.cli import main
 from posture_id.dec import sample_parameters
+from posture_id.fileio import json_text
 from posture_id.learning.features.module_frfs import N_INPUTS
 from posture_id.learning.universal_model import UniversalModel
 from posture_id.learning.universal_network import OUTPUTS, network_config_of, register_network
-from posture_id.learning.universal_training import UniversalTrainingConfig, train_universal
+from posture_id.learning.universal_training import (
+    UniversalTrainer,
+    UniversalTrainingConfig,
+    train_universal,
+)
 from posture_id.recording import Recording
 from posture_id.simulation import prts, simulate
+from posture_id.studies.universal_check import calibrate_model, reference_from_sets
 
 
 class LinearReadout(nn.Module):
@@ -67,9 +73,11 @@ def test_a_third_architecture_goes_through_data_training_calibration_check_and_i
                  "--seed", "5", "--quiet"]) == 0
     # training, by the API (its network is this module's)
     model_dir = tmp_path / "linear"
-    result = train_universal(data, model_dir, UniversalTrainingConfig(
+    trainer = UniversalTrainer(data, model_dir, UniversalTrainingConfig(
         epochs=3, batch_size=64, threads=1), network=LinearReadoutConfig())
-    assert isinstance(result.network, LinearReadout)
+    training = trainer.run()  # a TrainingResult, its model the trained one
+    result = training.model
+    assert isinstance(result, UniversalModel) and isinstance(result.network, LinearReadout)
     sidecar = json.loads((model_dir / "model.json").read_text())
     assert sidecar["architecture"] == {"kind": "linear-readout", "inputs": N_INPUTS,
                                        "members": 1}
@@ -83,6 +91,21 @@ def test_a_third_architecture_goes_through_data_training_calibration_check_and_i
     check = json.loads((model_dir / "check.json").read_text())
     assert check["overall"]["modules"] > 0
     assert all(0 <= check["overall"]["coverage_pct"][p] <= 100 for p in ("kp", "kd"))
+    # the same check by the API, a result of the Result family; the typicality reference
+    report = calibrate_model(model_dir, data)
+    assert json.loads(json_text(report.to_dict())) == check
+    assert "held-out test shards" in report.summary()
+    report.plot(tmp_path / "check.png")
+    typicality = reference_from_sets(model_dir, data)
+    assert typicality.test_recordings > 0 and "Typicality reference" in typicality.summary()
+    typicality.plot(tmp_path / "typicality.png")
+    training.plot(tmp_path / "loss.png")
+    assert all((tmp_path / f).stat().st_size > 5_000
+               for f in ("check.png", "typicality.png", "loss.png"))
+    assert training.epochs_run == 3 and "3 epochs" in training.summary()
+    assert train_universal(data, model_dir, UniversalTrainingConfig(  # done: read, not run
+        epochs=3, batch_size=64, threads=1), network=LinearReadoutConfig()).sidecar[
+            "weights_sha256"] == sidecar["weights_sha256"]
     # identification of a recording by the command line, with this model's intervals
     rng = np.random.default_rng(4)
     while True:

@@ -33,7 +33,8 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.errors import PostureIdError
-from posture_id.fileio import atomic_write
+from posture_id.fileio import Result, atomic_write
+from posture_id.plotting import plot_shares
 
 __all__ = ["TypicalityReference", "Typicality", "TypicalityReport", "fit_reference",
            "recording_scores", "shrunk_covariance", "ATYPICAL_P",
@@ -184,7 +185,7 @@ def fit_reference(fit_inputs: np.ndarray, score_inputs: np.ndarray,
 
 
 @dataclass(frozen=True)
-class TypicalityReport:
+class TypicalityReport(Result):
     """A reference made from sets, and how often it calls the sets' own held-out test
     recordings atypical (its false alarms: about :data:`ATYPICAL_P` if the reference is
     right), overall and by regime."""
@@ -210,3 +211,13 @@ class TypicalityReport:
         for key, (atypical, count) in self.false_alarms.items():
             lines.append(f"| {key} ({count}) | {atypical} | {atypical / max(count, 1):.2%} |")
         return "\n".join(lines)
+
+    def summary(self) -> str:
+        return self.markdown()
+
+    def plot(self, path=None, ax=None):
+        """The test recordings called atypical, per regime, against the share expected."""
+        labels = list(self.false_alarms)
+        shares = [100 * a / max(n, 1) for a, n in self.false_alarms.values()]
+        return plot_shares(labels, shares, 100 * ATYPICAL_P,
+                           "test recordings called atypical, %", "expected share", path, ax)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import Result, atomic_write_text, json_text
 from posture_id.learning.calibration import UniversalCalibration, calibrate
 from posture_id.learning.data.drawn import open_sets
 from posture_id.learning.evaluation import GroupScore, score_samples
@@ -29,6 +29,7 @@ from posture_id.learning.universal_samples import (
     without_families,
 )
 from posture_id.learning.universal_training import VALIDATION_SEED
+from posture_id.plotting import plot_score_grid
 
 __all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes",
            "reference_from_sets"]
@@ -48,7 +49,7 @@ def true_regimes(samples: Samples) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class CheckReport:
+class CheckReport(Result):
     """Test-split scores overall, per segment count and per simulated regime."""
 
     overall: GroupScore
@@ -81,6 +82,20 @@ class CheckReport:
                          + " / ".join(f"{c[k]:.0f}" for k in ("kp", "ki", "kd", "delay_s"))
                          + f" | {s.class_ece_pct:.1f} |")
         return "\n".join(lines)
+
+    def summary(self) -> str:
+        return self.markdown()
+
+    def plot(self, path=None, ax=None):
+        """Classes right, median Kp error and mean coverage per group (one row each)."""
+        groups = {"all": self.overall, **self.by_segments, **self.by_regime}
+        column = np.array([[s.classes_pct, s.median_error_pct["kp"],
+                            np.mean(list(s.coverage_pct.values()))] for s in groups.values()])
+        return plot_score_grid(list(groups), ["test split"], {
+            "classes right, %": (column[:, :1], (80, 100), ".0f"),
+            "median |Kp error|, %": (column[:, 1:2], (0, 20), ".1f"),
+            f"{100 * self.overall.level:.0f} % interval coverage (mean of 4), %":
+                (column[:, 2:], (75, 100), ".0f")}, path, ax)
 
 
 def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str | Path],

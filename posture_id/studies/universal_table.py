@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.executors import executor_for
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import Result, atomic_write_text, json_text
 from posture_id.learning.calibration import UniversalCalibration
 from posture_id.learning.data.drawn import simulate_trials
 from posture_id.learning.data.scope import BodyDraw, StimulusDraw, UniversalScope
@@ -179,7 +179,7 @@ def _stimulus_label(states: int, cycles: int, amp: float) -> str:
 
 
 @dataclass(frozen=True)
-class FamilyTable:
+class FamilyTable(Result):
     """Scores per (family, stimulus, sway) cell."""
 
     cells: dict
@@ -214,6 +214,9 @@ class FamilyTable:
                          + " / ".join(f"{c[k]:.0f}" for k in ("kp", "ki", "kd", "delay_s"))
                          + " |")
         return "\n".join(lines)
+
+    def summary(self) -> str:
+        return self.markdown()
 
     def plot(self, path=None, ax=None):
         rows = [f"{f}, {s}" for f in FAMILIES for s in SWAY]

@@ -79,9 +79,7 @@ class UniversalIdentifier(NetworkIdentifier):
     layout = "universal"
 
     def __init__(self, model: UniversalModel, body: Body, notices: tuple[str, ...] = ()) -> None:
-        if not 1 <= body.n_segments <= 3:
-            raise LearningError(f"the universal model identifies bodies of 1 to 3 segments; "
-                                f"'{body.name}' has {body.n_segments}")
+        _refuse_size(body)
         super().__init__(model, body, notices)
         self.trained_on = "the universal scope"
         calibration = UniversalCalibration.load(model.path) if model.path else None
@@ -99,6 +97,14 @@ class UniversalIdentifier(NetworkIdentifier):
             TypicalityReference.load(model.path) if model.path else None,
             "its typicality reference was made for other weights and is not used")
         self.scope = model.scope
+        self._take_body(body)
+
+    def _take_body(self, body: Body) -> None:
+        """Identify ``body``: its descriptors, COM weights and defaults, what of it lies
+        outside the training bodies, no stimulus layout kept from another body."""
+        _refuse_size(body)
+        self.body = body
+        self.defaults = default_parameters(body)
         self.descriptors = body_descriptors(body)
         self.com = com_weights(body)
         self._layouts: dict = {}
@@ -111,17 +117,8 @@ class UniversalIdentifier(NetworkIdentifier):
 
     def for_body(self, body: Body) -> UniversalIdentifier:
         """The same model and calibration for another body (nothing read again)."""
-        if not 1 <= body.n_segments <= 3:
-            raise LearningError(f"the universal model identifies bodies of 1 to 3 segments; "
-                                f"'{body.name}' has {body.n_segments}")
         other = copy.copy(self)
-        other.body = body
-        other.descriptors = body_descriptors(body)
-        other.com = com_weights(body)
-        other._layouts = {}
-        other.defaults = default_parameters(body)
-        other.body_outside = other._outside(other.descriptors, range(0, DESCRIPTORS - 4),
-                                            f"body '{body.name}'")
+        other._take_body(body)
         return other
 
     @classmethod
@@ -226,6 +223,12 @@ class UniversalIdentifier(NetworkIdentifier):
         return self._answer(trial, normalised, probability, intervals, notices, outside,
                             {"regime": regime, "noise_ratio": ratio,
                              "noise_colour": colour}, typicality)
+
+
+def _refuse_size(body: Body) -> None:
+    if not 1 <= body.n_segments <= 3:
+        raise LearningError(f"the universal model identifies bodies of 1 to 3 segments; "
+                            f"'{body.name}' has {body.n_segments}")
 
 
 #: Relative slack of the stimulus checks: a lab's 4° is 4° however it was rounded or

@@ -63,9 +63,11 @@ def test_every_quoted_flag_and_choice_exists(where, command):
     commands = _subparsers(root)
     assert words[0] in commands, f"{where}: no command {words[0]!r}"
     parser = commands[words[0]]
-    if (words[0] in ("dataset", "universal", "norm", "robot") and len(words) > 1
-            and not words[1].startswith("-")):
-        parser = _subparsers(parser)[words[1]]
+    for word in words[1:]:  # down the sub-commands named (network cnn data generate, ...)
+        below = _subparsers(parser)
+        if not below or word.startswith("-") or word not in below:
+            break
+        parser = below[word]
     flags = _flags(parser) | _flags(root)
     for k, word in enumerate(words):
         if not word.startswith("--"):

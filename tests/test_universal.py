@@ -775,7 +775,7 @@ def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_pa
     capsys.readouterr()
     # other trials on the same folder: refused in one line, nothing simulated or overwritten
     kept = {f.name: f.read_bytes() for f in cache.iterdir()}
-    argv[3] = "3"  # --trials 3
+    argv[argv.index("--trials") + 1] = "3"
     assert main([*argv, "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "made with 2 trials per cell" in err

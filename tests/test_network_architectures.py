@@ -103,7 +103,7 @@ def test_a_third_architecture_goes_through_data_training_calibration_check_and_i
     assert all((tmp_path / f).stat().st_size > 5_000
                for f in ("check.png", "typicality.png", "loss.png"))
     assert training.epochs_run == 3 and "3 epochs" in training.summary()
-    assert train_universal(data, model_dir, UniversalTrainingConfig(  # done: read, not run
+    assert train_universal(data, model_dir, UniversalTrainingConfig(  # done: resumed, no epoch run
         epochs=3, batch_size=64, threads=1), network=LinearReadoutConfig()).sidecar[
             "weights_sha256"] == sidecar["weights_sha256"]
     # identification of a recording by the command line, with this model's intervals

@@ -328,8 +328,7 @@ class UniversalTrainer(EpochTrainer):
             "datasets": [{"path": str(d.path.resolve()), "config": d.manifest["config"],
                           "counts": d.manifest.get("counts")} for d in data],
             "training": {**asdict(config), "history": history,
-                         "best_epoch": int(np.argmin([h["validation_loss"]
-                                                      for h in history])) + 1,
+                         "best_epoch": self.best[1],
                          "device": str(self.device), "train_samples": len(self.first)},
             "ranges": _ranges(self.first, None if self.base is None
                               else self.base.sidecar["ranges"]),

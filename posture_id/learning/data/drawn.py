@@ -14,8 +14,8 @@ Each trial is simulated three times (:func:`make_shard`): without motor noise (i
 stimulus-locked response), with a small unit of motor noise (how much sway a level
 makes), and with the level that leaves the drawn share of its body COM sway locked (as
 :func:`posture_id.simulation.subjects.people_like`, batched). The stored sway is the
-last one's harmonics (:mod:`~posture_id.learning.features.harmonics`); sensor noise and drift are added to them when
-the features are made, afresh every epoch.
+last one's harmonics (:mod:`~posture_id.learning.features.harmonics`); sensor noise and
+drift are added to them when the features are made, afresh every epoch.
 
 Shards with ``k % 10 == 0`` are the test split, ``k % 10 == 1`` calibration,
 ``k % 10 == 2`` validation (early stopping), the rest training: held-out trials are on
@@ -33,15 +33,11 @@ from pathlib import Path
 import numpy as np
 
 from posture_id._version import __version__
-from posture_id.learning.data.trial_config import DatasetError
-from posture_id.learning.data.store import check_shard, save_npz, shard_name
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
 from posture_id.dec.prior import sample_parameters
 from posture_id.executors import executor_for
-from posture_id.fileio import atomic_write_text, file_sha256, json_text
+from posture_id.fileio import file_sha256, json_text
 from posture_id.learning.data.bodies import build_body
-from posture_id.learning.features.module_frfs import body_descriptors, com_weights
-from posture_id.learning.features.harmonics import HarmonicLayout, harmonic_layout, sway_harmonics
 from posture_id.learning.data.scope import (
     BodyDraw,
     StimulusDraw,
@@ -49,6 +45,17 @@ from posture_id.learning.data.scope import (
     draw_body,
     draw_stimulus,
 )
+from posture_id.learning.data.store import (
+    SET_KEYS,
+    check_shard,
+    read_manifest,
+    save_npz,
+    shard_name,
+    write_manifest,
+)
+from posture_id.learning.data.trial_config import DatasetError
+from posture_id.learning.features.harmonics import HarmonicLayout, harmonic_layout, sway_harmonics
+from posture_id.learning.features.module_frfs import body_descriptors, com_weights
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.noise import DEFAULT_SHAPE, MotorNoise, MotorShape
@@ -195,8 +202,8 @@ def _drawn_com(draw_json: str) -> bytes:
 
 
 def shard_com_weights(arrays: dict[str, np.ndarray]) -> np.ndarray:
-    """(N, N) the COM weights (:func:`~posture_id.learning.features.module_frfs.com_weights`) of a shard's body, rebuilt
-    from the body it drew."""
+    """(N, N) the COM weights (:func:`~posture_id.learning.features.module_frfs.com_weights`)
+    of a shard's body, rebuilt from the body it drew."""
     n = int(arrays["y"].shape[2])
     return np.frombuffer(_drawn_com(str(arrays["draw"])), dtype=float).reshape(n, n)
 
@@ -230,7 +237,7 @@ def generate_universal(config: UniversalDataConfig, out: str | Path, workers: in
     out.mkdir(parents=True, exist_ok=True)
     entries = {e["index"]: e for e in manifest["shards"] if e["index"] < config.shards}
     todo = [k for k in range(config.shards) if k not in entries]
-    _write(out, manifest)
+    write_manifest(out, manifest)
     report(progress, len(entries), config.shards, "shard")
     executor = executor_for(None, workers, processes=True)
     try:
@@ -241,7 +248,7 @@ def generate_universal(config: UniversalDataConfig, out: str | Path, workers: in
                           "simulated": int(arrays["simulated"]), "split": split_of(k),
                           "sha256": file_sha256(file)}
             manifest["shards"] = [entries[i] for i in sorted(entries)]
-            _write(out, manifest)
+            write_manifest(out, manifest)
             report(progress, len(entries), config.shards, "shard")
     finally:
         executor.close()
@@ -250,24 +257,12 @@ def generate_universal(config: UniversalDataConfig, out: str | Path, workers: in
     manifest["counts"] = {"shards": len(entries),
                           "simulated": sum(e["simulated"] for e in entries.values()),
                           "kept": sum(e["kept"] for e in entries.values())}
-    _write(out, manifest)
+    write_manifest(out, manifest)
     return UniversalSet(out, manifest)
 
 
 def _read(out: Path) -> dict | None:
-    if not (out / "manifest.json").exists():
-        return None
-    try:
-        manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise DatasetError(f"{out / 'manifest.json'}: not valid JSON ({exc})") from None
-    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
-        raise DatasetError(f"{out / 'manifest.json'}: not a universal training set manifest")
-    return manifest
-
-
-def _write(out: Path, manifest: dict) -> None:
-    atomic_write_text(out / "manifest.json", json_text(manifest))
+    return read_manifest(out, FORMAT, None, "a universal training set manifest", SET_KEYS)
 
 
 @dataclass

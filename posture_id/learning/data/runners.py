@@ -11,10 +11,10 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from posture_id.bodies.body import Body
-from posture_id.learning.data.trial_config import DatasetConfig, DatasetError
-from posture_id.learning.data.trial_shards import make_shard, make_shard_remote
 from posture_id.errors import PostureIdError
 from posture_id.executors import TaskExecutor, executor_for
+from posture_id.learning.data.trial_config import DatasetConfig, DatasetError
+from posture_id.learning.data.trial_shards import make_shard, make_shard_remote
 
 __all__ = ["shard_runner"]
 

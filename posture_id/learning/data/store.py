@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from posture_id.learning.data.trial_config import DatasetError
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
+from posture_id.learning.data.trial_config import DatasetError
 from posture_id.plotting import plot_dataset_overview, plot_images
 
-__all__ = ["Dataset", "FORMAT", "FORMAT_VERSION", "read_manifest", "write_manifest",
+__all__ = ["Dataset", "FORMAT", "FORMAT_VERSION", "SET_KEYS", "read_manifest", "write_manifest",
            "check_shard", "save_npz", "shard_name"]
 
 FORMAT = "posture_id-dataset"
@@ -30,9 +30,10 @@ FORMAT_VERSION = 2
 #: Arrays every shard holds.
 SHARD_ARRAYS = ("kp", "ki", "kd", "delay_s", "sign", "kpas", "bpas", "abort_time",
                 "max_sway_deg", "kept", "theta", "alpha_bs", "modular", "monolithic", "targets")
-#: Keys every manifest has, with their types (a finished one has more: counts, split).
-_MANIFEST_KEYS = {"config": dict, "body": dict, "stimulus": dict, "options": dict,
-                  "shards": list, "complete": bool}
+#: Keys every set's manifest has, with their types.
+SET_KEYS = {"config": dict, "shards": list, "complete": bool}
+#: Keys every paper data set's manifest has (a finished one has more: counts, split).
+_MANIFEST_KEYS = {**SET_KEYS, "body": dict, "stimulus": dict, "options": dict}
 _SHARD_KEYS = {"index": int, "file": str, "simulated": int, "kept": int, "sha256": str}
 
 
@@ -196,7 +197,16 @@ class Dataset:
         return overview, images
 
 
-def read_manifest(path: Path) -> dict | None:
+def read_manifest(path: Path, format: str = FORMAT, version: int | None = FORMAT_VERSION,
+                  what: str = "a posture_id data-set manifest", keys: dict = _MANIFEST_KEYS
+                  ) -> dict | None:
+    """The manifest of the set in ``path`` (None when it has none), checked: JSON, of
+    ``format`` (``what`` names it in the refusal) and ``version`` (None: unversioned), with
+    ``keys`` of their types and shard entries of a set's.
+
+    Raises:
+        DatasetError: naming the file and what is wrong with it.
+    """
     file = path / "manifest.json"
     if not file.exists():
         return None
@@ -206,14 +216,14 @@ def read_manifest(path: Path) -> dict | None:
         raise DatasetError(f"{file}: not valid JSON ({exc})") from None
     except OSError as exc:
         raise DatasetError(f"{file}: cannot be read ({exc.strerror})") from None
-    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
-        raise DatasetError(f"{file}: not a posture_id data-set manifest")
-    if manifest.get("format_version") != FORMAT_VERSION:
+    if not isinstance(manifest, dict) or manifest.get("format") != format:
+        raise DatasetError(f"{file}: not {what}")
+    if version is not None and manifest.get("format_version") != version:
         raise DatasetError(
             f"{file}: data-set format version {manifest.get('format_version')!r}; this "
-            f"posture_id reads version {FORMAT_VERSION}: generate the set again"
+            f"posture_id reads version {version}: generate the set again"
         )
-    for key, kind in _MANIFEST_KEYS.items():
+    for key, kind in keys.items():
         if key not in manifest:
             raise DatasetError(f"{file}: the manifest is missing '{key}'")
         if not isinstance(manifest[key], kind):

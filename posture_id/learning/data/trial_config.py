@@ -6,9 +6,9 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from posture_id.learning.features.spectrograms import FS_HZ
 from posture_id.dec.prior import SIGMA
 from posture_id.errors import LearningError
+from posture_id.learning.features.spectrograms import FS_HZ
 from posture_id.simulation.noise import DEFAULT_CUTOFF_HZ
 from posture_id.simulation.options import SimulationOptions
 from posture_id.simulation.stimulus import TiltProfile, prts

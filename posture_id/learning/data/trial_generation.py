@@ -32,8 +32,8 @@ import numpy as np
 
 from posture_id._version import __version__
 from posture_id.bodies.body import Body, load_body
-from posture_id.learning.data.trial_config import DatasetConfig, DatasetError
-from posture_id.learning.features.spectrograms import FEATURE_DEFINITION
+from posture_id.dec.parameters import default_parameters
+from posture_id.fileio import file_sha256
 from posture_id.learning.data.runners import shard_runner
 from posture_id.learning.data.store import (
     FORMAT,
@@ -45,8 +45,8 @@ from posture_id.learning.data.store import (
     shard_name,
     write_manifest,
 )
-from posture_id.dec.parameters import default_parameters
-from posture_id.fileio import file_sha256
+from posture_id.learning.data.trial_config import DatasetConfig, DatasetError
+from posture_id.learning.features.spectrograms import FEATURE_DEFINITION
 from posture_id.progress import Progress, report
 
 __all__ = ["generate_dataset"]

@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import Body, load_body
-from posture_id.learning.data.trial_config import DatasetConfig
-from posture_id.learning.features.spectrograms import modular_images, monolithic_images, stft
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
 from posture_id.dec.prior import sample_parameters
+from posture_id.learning.data.trial_config import DatasetConfig
+from posture_id.learning.features.spectrograms import modular_images, monolithic_images, stft
 from posture_id.simulation.batch import simulate_batch
 from posture_id.simulation.noise import MotorNoise
 

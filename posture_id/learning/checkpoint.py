@@ -34,7 +34,13 @@ from posture_id.learning.config import (
     LearningError,
     NetworkConfig,
 )
-from posture_id.learning.model_files import SIDECAR, WEIGHTS, read_model_files, write_model_files
+from posture_id.learning.model_files import (
+    WEIGHTS,
+    load_weights,
+    prefixed,
+    read_model_files,
+    write_model_files,
+)
 from posture_id.learning.network import IdentifierNetwork
 from posture_id.learning.samples import Standardiser
 
@@ -133,20 +139,14 @@ def load_model(folder: str | Path) -> LoadedModel:
     """Load and check a model directory (see the module doc); never unpickles."""
     folder = Path(folder)
     sidecar, tensors = read_model_files(folder, LearningError, _check_sidecar)
-    weights_path = folder / WEIGHTS
     config = network_config_from_dict(sidecar.get("architecture") or {})
     network = IdentifierNetwork(config)
-    weights = {k[len("network."):]: v for k, v in tensors.items() if k.startswith("network.")}
-    try:
-        network.load_state_dict(weights, strict=True)
-    except RuntimeError as exc:
-        first = str(exc).splitlines()[1].strip() if "\n" in str(exc) else str(exc)
-        raise LearningError(f"{weights_path}: the weights do not fit the architecture in "
-                            f"{SIDECAR} ({first})") from None
+    load_weights(network, prefixed(tensors, "network."), folder, LearningError)
     try:
         standardiser = Standardiser.from_tensors(tensors)
     except KeyError as exc:
-        raise LearningError(f"{weights_path}: standardisation tensor {exc} is missing") from None
+        raise LearningError(f"{folder / WEIGHTS}: standardisation tensor {exc} is missing"
+                            ) from None
     network.eval()
     network.to(memory_format=torch.channels_last)
     return LoadedModel(folder, network, config, standardiser, sidecar)

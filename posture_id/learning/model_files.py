@@ -17,7 +17,8 @@ from safetensors.torch import load_file, save_file
 from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
 
-__all__ = ["WEIGHTS", "SIDECAR", "write_model_files", "read_model_files"]
+__all__ = ["WEIGHTS", "SIDECAR", "write_model_files", "read_model_files", "load_weights",
+           "prefixed"]
 
 WEIGHTS = "model.safetensors"
 SIDECAR = "model.json"
@@ -61,3 +62,21 @@ def read_model_files(folder: str | Path, error: type[PostureIdError],
     except (SafetensorError, OSError, ValueError) as exc:
         raise error(f"{weights_path}: not a readable safetensors file ({exc})") from None
     return sidecar, tensors
+
+
+def load_weights(network: torch.nn.Module, state: dict[str, torch.Tensor], folder: Path,
+                 error: type[PostureIdError]) -> None:
+    """Load ``state`` (the model in ``folder``'s ``network.*`` tensors, named without the
+    prefix) into ``network`` (strict); weights that do not fit its architecture are one
+    ``error`` line naming the file."""
+    try:
+        network.load_state_dict(state, strict=True)
+    except RuntimeError as exc:
+        first = str(exc).splitlines()[1].strip() if "\n" in str(exc) else str(exc)
+        raise error(f"{folder / WEIGHTS}: the weights do not fit the architecture in "
+                    f"{SIDECAR} ({first})") from None
+
+
+def prefixed(tensors: dict[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:
+    """The tensors whose names start with ``prefix``, named without it."""
+    return {k[len(prefix):]: v for k, v in tensors.items() if k.startswith(prefix)}

@@ -30,18 +30,14 @@ from safetensors.torch import load_file, save_file
 
 from posture_id.errors import LearningError
 from posture_id.fileio import Result, atomic_write, atomic_write_text, json_text
+from posture_id.learning.model_files import prefixed
 from posture_id.learning.threads import torch_threads
 from posture_id.plotting import plot_loss_curves
 from posture_id.progress import Progress
 
-__all__ = ["EpochTrainer", "TrainingResult", "STATE", "read_state", "prefixed"]
+__all__ = ["EpochTrainer", "TrainingResult", "STATE", "read_state"]
 
 STATE = "training/state.json"
-
-
-def prefixed(tensors: dict[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:
-    """The tensors whose names start with ``prefix``, named without it."""
-    return {k[len(prefix):]: v for k, v in tensors.items() if k.startswith(prefix)}
 
 
 def _optimiser_tensors(optimiser) -> tuple[dict[str, torch.Tensor], dict]:

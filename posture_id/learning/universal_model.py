@@ -16,7 +16,14 @@ from posture_id.errors import LearningError
 from posture_id.fileio import json_text
 from posture_id.learning.data.scope import UniversalScope
 from posture_id.learning.features.module_frfs import UNIVERSAL_FEATURE_DEFINITION
-from posture_id.learning.model_files import SIDECAR, WEIGHTS, read_model_files, write_model_files
+from posture_id.learning.model_files import (
+    SIDECAR,
+    WEIGHTS,
+    load_weights,
+    prefixed,
+    read_model_files,
+    write_model_files,
+)
 from posture_id.learning.noise_gate import NoiseGate
 from posture_id.learning.universal_network import (
     OUTPUTS,
@@ -221,16 +228,10 @@ class UniversalModel:
                 raise ModelError(f"{sidecar_file}: its gate gives {gate.white_members} of "
                                  f"{config.members} members to white noise, none to the rest")
         network = config.build()
-        state = {k.removeprefix("network."): v for k, v in tensors.items()
-                 if k.startswith("network.")}
+        state = prefixed(tensors, "network.")
         if isinstance(network, UniversalNetwork):
             state = UniversalNetwork.upgrade_state(state)
-        try:
-            network.load_state_dict(state)
-        except RuntimeError as exc:
-            first = str(exc).splitlines()[1].strip() if "\n" in str(exc) else str(exc)
-            raise ModelError(f"{folder / WEIGHTS}: the weights do not fit the architecture "
-                             f"in {SIDECAR} ({first})") from None
+        load_weights(network, state, folder, ModelError)
         network.eval()
         std = {k.removeprefix("standardiser."): v.numpy() for k, v in tensors.items()
                if k.startswith("standardiser.")}

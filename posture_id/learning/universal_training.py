@@ -31,7 +31,8 @@ import torch
 
 from posture_id.errors import LearningError
 from posture_id.learning.data.drawn import merged_scope, open_sets
-from posture_id.learning.trainer import EpochTrainer, TrainingResult, prefixed
+from posture_id.learning.model_files import prefixed
+from posture_id.learning.trainer import EpochTrainer, TrainingResult
 from posture_id.learning.universal_model import UniversalModel
 from posture_id.learning.universal_network import (
     OUTPUTS,

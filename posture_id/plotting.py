@@ -58,9 +58,7 @@ def plot_trial(result, path: str | Path | None = None, ax=None, title: str | Non
     for ax in (ax_tilt, ax_sway):
         ax.grid(alpha=0.3)
     fig.suptitle(title or getattr(result, "description", ""))
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_dataset_overview(kp_normalised: np.ndarray, joints, max_sway_deg: np.ndarray,
@@ -92,9 +90,7 @@ def plot_dataset_overview(kp_normalised: np.ndarray, joints, max_sway_deg: np.nd
     ax_sway.set_ylabel("simulations")
     ax_sway.legend()
     ax_sway.set_title(f"{int((~kept).sum())} of {len(kept)} aborted")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_images(modular: np.ndarray, monolithic: np.ndarray, joints, path=None, ax=None):
@@ -123,6 +119,11 @@ def plot_images(modular: np.ndarray, monolithic: np.ndarray, joints, path=None, 
                       cmap="twilight" if c >= n else "viridis")
             ax.set_title(f"monolithic channel {c}", fontsize=8)
     fig.suptitle("spectrogram images (frequency 0–10 Hz up, time right; magnitudes log10)")
+    return _finished(fig, path)
+
+
+def _finished(fig, path):
+    """``fig`` laid out tight and saved to ``path`` (when given): what every plot returns."""
     fig.tight_layout()
     _save(fig, path)
     return fig
@@ -149,9 +150,7 @@ def plot_fit(result, path=None, ax=None):
         ax.legend(loc="upper right", fontsize=8)
     axes[-1, 0].set_xlabel("time (s)")
     fig.suptitle(f"DEC fit: RMS {result.rms_deg:.4f}°, classes {'/'.join(result.classes)}")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_loss_curves(history, path=None, ax=None):
@@ -174,9 +173,7 @@ def plot_loss_curves(history, path=None, ax=None):
     a.set_ylabel("loss")
     a.grid(alpha=0.3, which="both")
     a.legend()
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_shares(labels, shares_pct, expected_pct: float, xlabel: str, expected_label: str,
@@ -191,9 +188,7 @@ def plot_shares(labels, shares_pct, expected_pct: float, xlabel: str, expected_l
     a.set_xlabel(xlabel)
     a.grid(alpha=0.3, axis="x")
     a.legend(fontsize=8)
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_parameter_errors(names, mean, spread, path=None, ax=None, title=""):
@@ -210,9 +205,7 @@ def plot_parameter_errors(names, mean, spread, path=None, ax=None, title=""):
     a.set_ylabel("|error| (normalised units)")
     a.set_title(title or "absolute error per parameter: mean ± standard deviation")
     a.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_identification_error(parameter_mse, error, path=None, ax=None, ylabel="", title=""):
@@ -224,9 +217,7 @@ def plot_identification_error(parameter_mse, error, path=None, ax=None, ylabel="
     a.set_ylabel(ylabel)
     a.set_title(title)
     a.grid(alpha=0.3, which="both")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_identification(result, path=None, ax=None):
@@ -248,9 +239,7 @@ def plot_identification(result, path=None, ax=None):
     axes[-1, 0].set_xlabel("time (s)")
     fig.suptitle(f"{result.method.value}: classes {'/'.join(result.classes)}, E_rel "
                  f"{100 * result.e_rel:.2f} %")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_benchmark(groups: dict, path=None, ax=None):
@@ -268,9 +257,7 @@ def plot_benchmark(groups: dict, path=None, ax=None):
         a.set_title(title)
         a.grid(alpha=0.3, which="both", axis="y")
         a.tick_params(axis="x", labelsize=7)
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_frf(result, path=None, ax=None):
@@ -299,9 +286,7 @@ def plot_frf(result, path=None, ax=None):
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(f"FRF of {result.name} relative to the tilt ({result.cycles} cycle(s) "
                  f"of {result.period_s:g} s)")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_locked_sway(time, recorded, locked, fits: dict, frequencies_hz, recorded_spectrum,
@@ -339,9 +324,7 @@ def plot_locked_sway(time, recorded, locked, fits: dict, frequencies_hz, recorde
     bottom.legend(loc="lower left", fontsize=8)
     bottom.grid(alpha=0.3, which="both")
     fig.suptitle(title)
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_coverage(levels, curves: dict, labels, band, path=None, ax=None):
@@ -378,9 +361,7 @@ def plot_coverage(levels, curves: dict, labels, band, path=None, ax=None):
     right.set_ylabel("coverage of the 90 % intervals")
     right.legend(fontsize=7, loc="lower right")
     right.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_reliability(diagrams: dict, path=None, ax=None):
@@ -413,9 +394,7 @@ def plot_reliability(diagrams: dict, path=None, ax=None):
     bottom.set_xlabel("predicted P(C = +1, controls the COM)")
     bottom.set_ylabel("samples per bin")
     bottom.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_identifiability(ratios: dict, labels, path=None, ax=None):
@@ -437,9 +416,7 @@ def plot_identifiability(ratios: dict, labels, path=None, ax=None):
     a.set_ylabel("90 % interval width / prior's")
     a.legend(fontsize=7)
     a.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_intervals(joints, estimate, lower, upper, words, prior, level: float, method: str,
@@ -474,9 +451,7 @@ def plot_intervals(joints, estimate, lower, upper, words, prior, level: float, m
                 "red: not determined by this recording", fontsize=9)
     a.legend(fontsize=7, loc="lower right")
     a.grid(alpha=0.3, axis="x")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_batch(time, tilt, alpha_bs, stable, description: str = "", path=None, ax=None):
@@ -499,9 +474,7 @@ def plot_batch(time, tilt, alpha_bs, stable, description: str = "", path=None, a
         a.grid(alpha=0.3)
     fig.suptitle(f"{description}: {len(stable)} trials, {int(np.sum(stable))} stable "
                  "(blue), the others red")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_cohort(names, joints, kp, e_rel, path=None, ax=None):
@@ -526,9 +499,7 @@ def plot_cohort(names, joints, kp, e_rel, path=None, ax=None):
     for a in (a_kp, a_rel):
         a.grid(alpha=0.3, axis="x")
         a.invert_yaxis()
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_score_grid(rows: list[str], columns: list[str], panels: dict, path=None, ax=None):
@@ -548,9 +519,7 @@ def plot_score_grid(rows: list[str], columns: list[str], panels: dict, path=None
                        color="white" if v < (low + high) / 2 else "black")
         a.set_title(title, fontsize=9)
         fig.colorbar(image, ax=a, shrink=0.8)
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_model_frfs(frequencies_hz, recorded, models: dict, coherence, title: str = "",
@@ -581,9 +550,7 @@ def plot_model_frfs(frequencies_hz, recorded, models: dict, coherence, title: st
         a.grid(alpha=0.3, which="both")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(title)
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_condition_frfs(conditions, trials, curves: dict, title: str = "", path=None,
@@ -630,9 +597,7 @@ def plot_condition_frfs(conditions, trials, curves: dict, title: str = "", path=
         a.grid(alpha=0.3, which="both")
     gain.legend(fontsize=8)
     fig.suptitle(title)
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_model_comparison(frequencies_hz, stimulated, recorded, models: dict, noise,
@@ -669,9 +634,7 @@ def plot_model_comparison(frequencies_hz, stimulated, recorded, models: dict, no
     top.legend(fontsize=8)
     bottom.legend(fontsize=8)
     fig.suptitle(title)
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_delta_bic(names, delta_bic, preferred, margin: float = 10.0, path=None, ax=None):
@@ -687,9 +650,7 @@ def plot_delta_bic(names, delta_bic, preferred, margin: float = 10.0, path=None,
     a.set_yticks(y, names)
     a.set_xlabel("sign(ΔBIC)·log10(1 + |ΔBIC|), ΔBIC = BIC(IC) − BIC(DEC): > 0 favours DEC")
     a.grid(alpha=0.3, axis="x")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_reweighting(names, w_by_part, bic: dict, path=None, ax=None):
@@ -707,9 +668,7 @@ def plot_reweighting(names, w_by_part, bic: dict, path=None, ax=None):
     for a in (left, right):
         a.grid(alpha=0.3)
     fig.suptitle(" + ".join(str(n) for n in names))
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_norm_test(result, path=None, ax=None):
@@ -747,9 +706,7 @@ def plot_norm_test(result, path=None, ax=None):
             axes[2, c].legend(fontsize=7)
         axes[0, c].legend(fontsize=7)
     fig.suptitle(f"{result.name}: human-likeness {result.human_likeness:.2f}")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_group_difference(result, path=None, ax=None):
@@ -766,9 +723,7 @@ def plot_group_difference(result, path=None, ax=None):
         a.legend(fontsize=7)
     axes[-1, 0].set_xlabel("t (s)")
     fig.suptitle(f"{result.names[0]} − {result.names[1]}: p = {result.p_value:.4f}")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_parameter_differences(result, path=None, ax=None):
@@ -785,9 +740,7 @@ def plot_parameter_differences(result, path=None, ax=None):
     a.axvline(0, color="k", lw=0.6)
     a.set_yticks(range(len(rows)), [r["parameter"] for r in rows], fontsize=7)
     a.set_xlabel(f"{result.names[0]} − {result.names[1]} (% of {result.names[1]}'s mean)")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_marker_angles(angles, path=None, ax=None):
@@ -825,9 +778,7 @@ def plot_marker_angles(angles, path=None, ax=None):
         a.grid(alpha=0.3)
     fig.suptitle(f"{angles.trial.path.name}: markers (shaded: gaps filled) and the angles "
                  "derived from them")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_paired_difference(result, path=None, ax=None):
@@ -864,9 +815,7 @@ def plot_paired_difference(result, path=None, ax=None):
         axes[1, c].set_xlabel("frequency (Hz)")
     fig.suptitle(f"{a} against {b}, {result.size} subjects (paired): whole FRF "
                  f"p = {result.p_value:.4f}")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_study_conditions(result, path=None, ax=None):
@@ -915,9 +864,7 @@ def plot_study_conditions(result, path=None, ax=None):
     gains.legend(fontsize=7)
     gains.grid(alpha=0.3)
     fig.suptitle(f"study: {len(result.subjects)} subjects, {len(conditions)} conditions")
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)
 
 
 def plot_robot_check(result, path=None, ax=None):
@@ -963,6 +910,4 @@ def plot_robot_check(result, path=None, ax=None):
         ax_g.legend(fontsize=8, title="solid: MuJoCo, dashed: lumped", title_fontsize=8)
     fig.suptitle(f"robot check of {result.name}: {result.engine_label} vs "
                  f"{result.lumped_label}", fontsize=10)
-    fig.tight_layout()
-    _save(fig, path)
-    return fig
+    return _finished(fig, path)

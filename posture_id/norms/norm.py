@@ -506,7 +506,7 @@ class NormTests(Result):
 
     def plot(self, path=None, ax=None):
         """Each subject's :meth:`NormTest.plot`, side by side (four subjects a row)."""
-        from posture_id.plotting import _axes, _save
+        from posture_id.plotting import _axes, _finished
 
         m = len(self.norm.channels)
         columns = min(4, len(self.tests))
@@ -525,9 +525,7 @@ class NormTests(Result):
             for a in axes[3 * r : 3 * r + 3, c * m : (c + 1) * m].ravel():
                 a.set_visible(False)
         fig.suptitle(f"{self.name}: {len(self.tests)} subject(s) against the norm")
-        fig.tight_layout()
-        _save(fig, path)
-        return fig
+        return _finished(fig, path)
 
 
 def against_norm(norm: Norm, frequencies_hz: np.ndarray, response: np.ndarray,

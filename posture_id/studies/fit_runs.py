@@ -27,8 +27,8 @@ from posture_id.executors import LocalExecutor
 from posture_id.fitting.least_squares import fit_recording
 from posture_id.fitting.options import FitOptions, FixedClasses
 from posture_id.identify import Method
-from posture_id.learning.checkpoint import SIDECAR
 from posture_id.learning.data.store import Dataset
+from posture_id.learning.model_files import SIDECAR
 from posture_id.learning.samples import stimulus_of
 from posture_id.progress import Progress, report
 from posture_id.recording import Recording

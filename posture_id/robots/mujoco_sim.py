@@ -33,7 +33,6 @@ import numpy as np
 from posture_id.bodies.body import Body
 from posture_id.dec.parameters import DecParameters, default_parameters
 from posture_id.errors import SimulationError
-from posture_id.provenance import body_identity
 from posture_id.robots.errors import RobotError, require_mujoco
 from posture_id.robots.mujoco_model import ChainModel, MujocoOptions
 from posture_id.simulation.options import SimulationOptions
@@ -337,8 +336,5 @@ def loop_result(options: SimulationOptions, tilt: np.ndarray, looped: tuple, bod
     and fall time) on the tilt ``tilt`` (K + 1,) rad of the step grid, for ``body`` (the
     chain, or the lumped body of a whole one) under ``params``."""
     theta, alpha, abort_time = looped
-    sample_time, sample_tilt = options.sampled(tilt)
-    return SimulationResult(
-        time=sample_time, tilt=sample_tilt, theta=theta, alpha=alpha, abort_time=abort_time,
-        segments=body.segment_names, joints=body.joint_names, parameters=params,
-        description=description, options=options, body_identity=body_identity(body))
+    return SimulationResult.on_body(options, tilt, body, params, description, theta=theta,
+                                    alpha=alpha, abort_time=abort_time)

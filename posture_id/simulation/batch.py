@@ -23,7 +23,6 @@ from posture_id.bodies.body import Body
 from posture_id.dec.parameters import DecParameters, ParameterArrays, default_parameters
 from posture_id.errors import SimulationError
 from posture_id.progress import Progress, report
-from posture_id.provenance import body_identity
 from posture_id.simulation.kernel import LANES, buffer_length, kernels
 from posture_id.simulation.noise import MotorNoise, motor_noise_torques, per_trial
 from posture_id.simulation.options import MAX_DELAY_S, SimulationOptions
@@ -151,20 +150,8 @@ def simulate_batch(
         with ThreadPoolExecutor(max_workers=workers) as pool:
             list(pool.map(run_block, firsts))
     abort_time = np.where(abort_step >= 0, abort_step * options.dt, np.nan)
-    sample_time, sample_tilt = options.sampled(tilt)
-    return BatchResult(
-        time=sample_time,
-        tilt=sample_tilt,
-        theta=out_theta,
-        alpha=out_alpha,
-        abort_time=abort_time,
-        segments=body.segment_names,
-        joints=body.joint_names,
-        parameters=params,
-        description=stimulus.description,
-        options=options,
-        body_identity=body_identity(body),
-    )
+    return BatchResult.on_body(options, tilt, body, params, stimulus.description,
+                               theta=out_theta, alpha=out_alpha, abort_time=abort_time)
 
 
 def simulate(

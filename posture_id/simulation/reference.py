@@ -21,7 +21,6 @@ import numpy as np
 
 from posture_id.bodies.body import Body
 from posture_id.dec.parameters import DecParameters, default_parameters
-from posture_id.provenance import body_identity
 from posture_id.simulation.batch import block_arrays, check_joints
 from posture_id.simulation.kernel import LANES, kernels
 from posture_id.simulation.noise import MotorNoise, motor_noise_torques, per_trial
@@ -143,17 +142,5 @@ def simulate_reference(
         v = v + options.dt * np.asarray(acc)
         q = q + options.dt * v
 
-    sample_time, sample_tilt = options.sampled(tilt)
-    return SimulationResult(
-        time=sample_time,
-        tilt=sample_tilt,
-        theta=theta_out,
-        alpha=alpha_out,
-        abort_time=abort_time,
-        segments=body.segment_names,
-        joints=body.joint_names,
-        parameters=params,
-        description=stimulus.description,
-        options=options,
-        body_identity=body_identity(body),
-    )
+    return SimulationResult.on_body(options, tilt, body, params, stimulus.description,
+                                    theta=theta_out, alpha=alpha_out, abort_time=abort_time)

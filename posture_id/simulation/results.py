@@ -10,15 +10,29 @@ import numpy as np
 from posture_id.dec.parameters import DecParameters, ParameterArrays
 from posture_id.fileio import Result
 from posture_id.plotting import plot_batch, plot_trial
-from posture_id.provenance import provenance
+from posture_id.provenance import body_identity, provenance
 from posture_id.recording import Recording
 from posture_id.simulation.options import SimulationOptions
 
 __all__ = ["SimulationResult", "BatchResult"]
 
 
+class _OnBody:
+    """What both results share: built from a simulator's step-grid tilt and a body."""
+
+    @classmethod
+    def on_body(cls, options: SimulationOptions, tilt: np.ndarray, body, parameters,
+                description: str, **samples):
+        """The result of a run on ``body`` under ``parameters``: ``tilt`` (K + 1,) rad of
+        the step grid is sampled by ``options``; ``samples`` are theta, alpha, abort_time."""
+        sample_time, sample_tilt = options.sampled(tilt)
+        return cls(time=sample_time, tilt=sample_tilt, segments=body.segment_names,
+                   joints=body.joint_names, parameters=parameters, description=description,
+                   options=options, body_identity=body_identity(body), **samples)
+
+
 @dataclass(frozen=True)
-class SimulationResult(Result):
+class SimulationResult(_OnBody, Result):
     """One simulated trial, sampled at ``sample_rate_hz``.
 
     Attributes:
@@ -86,7 +100,7 @@ class SimulationResult(Result):
 
 
 @dataclass(frozen=True)
-class BatchResult(Result):
+class BatchResult(_OnBody, Result):
     """B simulated trials with the same stimulus.
 
     Attributes:

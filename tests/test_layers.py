@@ -102,3 +102,15 @@ def test_an_import_cycle_is_found_even_for_type_hints(tmp_path):
                        "FitRun\n")
     cycles = _cycles(tmp_path)
     assert len(cycles) == 1 and "posture_id.fitting.options" in cycles[0], cycles
+
+
+def test_no_file_of_the_package_is_ignored_by_git():
+    """A tracked package file that .gitignore matches (a pattern meant for the root's
+    data/ matched posture_id/learning/data/) is skipped by ruff's walk and hides a new
+    module there from ``git status``."""
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    ignored = subprocess.run(["git", "ls-files", "--cached", "--ignored", "--exclude-standard",
+                              "posture_id", "tests", "benchmarks", "docs"], cwd=ROOT,
+                             capture_output=True, text=True, check=True).stdout.split()
+    assert ignored == []

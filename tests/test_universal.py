@@ -1262,3 +1262,29 @@ def test_a_table_draws_its_own_sway_whatever_noise_the_model_was_trained_under()
     # a cell drawn over noise families (a scope of the user's own) keeps one family per
     # trial kept, however many batches it took
     assert all(len(g["noise_family"]) == len(g["targets"]) for g in drawn)
+
+
+def test_universal_manifest_is_checked_like_a_paper_sets(tiny_set, tmp_path):
+    """A universal set's manifest is read by the one manifest reader: a shard entry
+    without its SHA-256, or a manifest without its shard list, is refused naming the file."""
+    import json
+    import shutil
+
+    from posture_id.learning.data.drawn import UniversalSet
+    from posture_id.learning.data.trial_config import DatasetError
+
+    copy = tmp_path / "set"
+    shutil.copytree(tiny_set.path, copy)
+    manifest = json.loads((copy / "manifest.json").read_text())
+    broken = {**manifest, "shards": [{k: v for k, v in e.items() if k != "sha256"}
+                                     for e in manifest["shards"]]}
+    (copy / "manifest.json").write_text(json.dumps(broken))
+    with pytest.raises(DatasetError, match=r"manifest.json: shard entry 0 is not an object"):
+        UniversalSet.open(copy)
+    (copy / "manifest.json").write_text(json.dumps(
+        {k: v for k, v in manifest.items() if k != "shards"}))
+    with pytest.raises(DatasetError, match=r"manifest.json: the manifest is missing 'shards'"):
+        UniversalSet.open(copy)
+    (copy / "manifest.json").write_text(json.dumps({**manifest, "format": "other"}))
+    with pytest.raises(DatasetError, match="not a universal training set manifest"):
+        UniversalSet.open(copy)

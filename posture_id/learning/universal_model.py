@@ -233,8 +233,7 @@ class UniversalModel:
             state = UniversalNetwork.upgrade_state(state)
         load_weights(network, state, folder, ModelError)
         network.eval()
-        std = {k.removeprefix("standardiser."): v.numpy() for k, v in tensors.items()
-               if k.startswith("standardiser.")}
+        std = {k: v.numpy() for k, v in prefixed(tensors, "standardiser.").items()}
         return cls(network, std["input_mean"], std["input_std"], std["target_mean"],
                    std["target_std"], sidecar, folder)
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from posture_id.bodies.body import Body
 from posture_id.dec.parameters import DecParameters, ParameterArrays
 from posture_id.fileio import Result
 from posture_id.plotting import plot_batch, plot_trial
@@ -21,8 +22,9 @@ class _OnBody:
     """What both results share: built from a simulator's step-grid tilt and a body."""
 
     @classmethod
-    def on_body(cls, options: SimulationOptions, tilt: np.ndarray, body, parameters,
-                description: str, **samples):
+    def on_body(cls, options: SimulationOptions, tilt: np.ndarray, body: Body,
+                parameters: DecParameters | ParameterArrays, description: str,
+                **samples: np.ndarray):
         """The result of a run on ``body`` under ``parameters``: ``tilt`` (K + 1,) rad of
         the step grid is sampled by ``options``; ``samples`` are theta, alpha, abort_time."""
         sample_time, sample_tilt = options.sampled(tilt)

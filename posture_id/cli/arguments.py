@@ -29,6 +29,7 @@ __all__ = [
     "non_negative_float",
     "check_output_file",
     "check_output_folder",
+    "check_out_and_plot",
     "command_rate",
     "share",
     "say",
@@ -152,6 +153,13 @@ def check_output_file(path: Path | None, flag: str, inputs=(), outputs=()) -> No
     for other in outputs:
         if other is not None and _same_file(path, Path(other)):
             raise PostureIdError(f"{path}: given as two different outputs; choose two names")
+
+
+def check_out_and_plot(args: argparse.Namespace, inputs=()) -> None:
+    """:func:`check_output_file` of a command's ``--out`` and ``--plot`` (``args.out``,
+    ``args.plot``): neither one of ``inputs``, the plot not the result's own file."""
+    check_output_file(args.out, "--out", inputs)
+    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
 
 
 def check_output_folder(path: Path, flag: str, inputs=()) -> None:

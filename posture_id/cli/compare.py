@@ -8,7 +8,7 @@ from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
-    check_output_file,
+    check_out_and_plot,
     is_cohort,
     non_negative_int,
     positive_int,
@@ -21,7 +21,7 @@ from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
     columns_from_args,
-    recording_and_stimulus,
+    prepared_trial,
     stimulus_from_args,
 )
 from posture_id.errors import PostureIdError
@@ -63,15 +63,13 @@ def run(args: argparse.Namespace) -> int:
     if is_cohort(args.recording):
         return run_cohort(args)
     args.recording = Path(args.recording)
-    inputs = (args.recording, args.body, args.tilt, args.second)
-    check_output_file(args.out, "--out", inputs)
-    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_out_and_plot(args, (args.recording, args.body, args.tilt, args.second))
     if args.second is not None:
         return _run_amplitudes(args)
     from posture_id.comparison.models import compare_models
 
     body = recording_body(args, DEFAULT_URDF)
-    trial = _trial(args, body)
+    trial = prepared_trial(args, body)
     with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
         result = compare_models(trial, body, _ic_options(args), progress,
                                 not args.no_held_out)
@@ -104,7 +102,7 @@ def run_cohort(args: argparse.Namespace) -> int:
 
         def read(path: Path):
             args.recording = path
-            return _trial(args, body)
+            return prepared_trial(args, body)
 
         options = _ic_options(args)
         recorded = {"stimulus": stimulus_record(stimulus_from_args(args, default=None)),
@@ -130,7 +128,7 @@ def _run_amplitudes(args: argparse.Namespace) -> int:
     trials = []
     for part, path in enumerate((args.recording, args.second), 1):
         args.recording, args.part = path, (part if args.protocol else None)
-        trials.append(_trial(args, body))
+        trials.append(prepared_trial(args, body))
     _two_amplitudes(*(t.recording for t in trials))
     with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
         result = compare_amplitudes(trials, body, _ic_options(args), progress)
@@ -144,15 +142,6 @@ def _ic_options(args: argparse.Namespace):
 
     return IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
                         starts=args.starts, seed=args.seed)
-
-
-def _trial(args: argparse.Namespace, body):
-    """``args.recording`` read with its stimulus, checked against ``body``, prepared."""
-    from posture_id.trials import prepare_trial
-
-    recording, stimulus = recording_and_stimulus(args, body)
-    recording.check_segments(body.segment_names)
-    return prepare_trial(recording, stimulus)
 
 
 #: The larger tilt's RMS over the smaller's below which two recordings are one amplitude.

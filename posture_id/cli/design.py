@@ -70,13 +70,9 @@ def run(args: argparse.Namespace) -> int:
         return _design(args)
 
 
-def _design_ic(args: argparse.Namespace) -> int:
-    """``--model ic``: the IC fit's predicted widths per protocol."""
-    from posture_id.bodies.body import DEFAULT_URDF, load_body
-    from posture_id.design.candidates import default_candidates
-    from posture_id.design.ic import design_ic
-    from posture_id.simulation.protocols import read_protocol
-
+def _refuse_dec_flags_for_ic(args: argparse.Namespace) -> None:
+    """``--model ic`` (the IC fit's predicted widths per protocol): refuse DEC's flags, and
+    a design without noise."""
     given = [flag for flag, on in (("--goal", args.goal), ("--max-minutes", args.max_minutes),
                                    ("--max-peak-to-peak-deg", args.max_peak_to_peak_deg),
                                    ("--max-velocity-deg-s", args.max_velocity_deg_s),
@@ -91,41 +87,40 @@ def _design_ic(args: argparse.Namespace) -> int:
                              "recording without noise pins every parameter exactly, and no "
                              "protocol is better than another; give the noise the recordings "
                              "will have")
-    body = load_body(args.body or DEFAULT_URDF)
-    protocols = ([read_protocol(f) for f in args.protocol] if args.protocol
-                 else default_candidates())
-    with TerminalProgress("subject", prefix="posture-id design",
-                          quiet=args.quiet) as progress:
-        result = design_ic(body, protocols, args.sensor_noise_deg, args.locked_share,
-                           args.draws, args.seed, progress=progress)
-    result.write(args.out)
-    print(result.markdown())
-    say(f"wrote {args.out / 'design.md'}, design.json, design.png and the protocols "
-        f"({result.seconds:.0f} s)")
-    return 0
 
 
 def _design(args: argparse.Namespace) -> int:
-    if args.model == "ic":
-        return _design_ic(args)
+    """The candidates' predicted widths (``--model ic``: the IC fit's), ranked, written
+    to ``--out``."""
     from posture_id.bodies.body import DEFAULT_URDF, load_body
     from posture_id.design.candidates import default_candidates
-    from posture_id.design.goal import PARAMETERS, DesignGoal
-    from posture_id.design.noise import SwayNoise
-    from posture_id.design.predict import DesignOptions
-    from posture_id.design.report import design
     from posture_id.simulation.protocols import read_protocol
 
+    if args.model == "ic":
+        _refuse_dec_flags_for_ic(args)
     body = load_body(args.body or DEFAULT_URDF)
     protocols = ([read_protocol(f) for f in args.protocol] if args.protocol
                  else default_candidates())
-    noise = SwayNoise(args.sensor_noise_deg, args.locked_share, args.motor_sd_deg)
-    goal = DesignGoal(tuple(args.goal or PARAMETERS), args.max_minutes,
-                      args.max_peak_to_peak_deg, args.max_velocity_deg_s)
-    options = DesignOptions(draws=args.draws, seed=args.seed, residual=args.residual)
-    with TerminalProgress("recording", prefix="posture-id design",
-                          quiet=args.quiet) as progress:
-        result = design(body, protocols, noise, goal, options, progress)
+    if args.model == "ic":
+        from posture_id.design.ic import design_ic
+
+        with TerminalProgress("subject", prefix="posture-id design",
+                              quiet=args.quiet) as progress:
+            result = design_ic(body, protocols, args.sensor_noise_deg, args.locked_share,
+                               args.draws, args.seed, progress=progress)
+    else:
+        from posture_id.design.goal import PARAMETERS, DesignGoal
+        from posture_id.design.noise import SwayNoise
+        from posture_id.design.predict import DesignOptions
+        from posture_id.design.report import design
+
+        noise = SwayNoise(args.sensor_noise_deg, args.locked_share, args.motor_sd_deg)
+        goal = DesignGoal(tuple(args.goal or PARAMETERS), args.max_minutes,
+                          args.max_peak_to_peak_deg, args.max_velocity_deg_s)
+        options = DesignOptions(draws=args.draws, seed=args.seed, residual=args.residual)
+        with TerminalProgress("recording", prefix="posture-id design",
+                              quiet=args.quiet) as progress:
+            result = design(body, protocols, noise, goal, options, progress)
     result.write(args.out)
     print(result.markdown())
     say(f"wrote {args.out / 'design.md'}, design.json, design.png and the protocols "

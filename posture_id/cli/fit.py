@@ -8,7 +8,7 @@ from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF
 from posture_id.cli.arguments import (
-    check_output_file,
+    check_out_and_plot,
     default_of,
     non_negative_float,
     non_negative_int,
@@ -23,7 +23,7 @@ from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
-    recording_and_stimulus,
+    prepared_trial,
 )
 from posture_id.dec.parameters import MAX_DELAY_S, PAPER_TABLE, DecParameters
 from posture_id.errors import PostureIdError
@@ -35,7 +35,6 @@ from posture_id.fitting.options import (
     RelaxedClasses,
 )
 from posture_id.frf.locked import LockedOptions
-from posture_id.trials import prepare_trial
 
 __all__ = ["add_parser", "run", "add_search_arguments", "search_keywords", "ic_answer"]
 
@@ -168,21 +167,15 @@ def run(args: argparse.Namespace) -> int:
         raise PostureIdError(f"{', '.join(given)}: go with several recordings (one recording "
                              "is one condition, every parameter its own)")
     args.recording = recordings[0]
-    inputs = (args.recording, args.body, args.init, args.tilt)
-    check_output_file(args.out, "--out", inputs)
-    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_out_and_plot(args, (args.recording, args.body, args.init, args.tilt))
     if args.model == "ic":
-        return _fit_ic(args)
-    if args.fit_ki:
-        raise PostureIdError("--fit-ki goes with --model ic (DEC's Ki is always identified)")
-    options = options_from(args)
+        return ic_answer(args, _ic_options(args))
+    options = _dec_options(args)
     body = recording_body(args, DEFAULT_URDF)
-    recording, stimulus = recording_and_stimulus(args, body)
+    trial = prepared_trial(args, body, options.simulation.sample_rate_hz)
     init = DecParameters.from_json(args.init, body) if args.init else None
     from posture_id.fitting.least_squares import fit_recording  # CasADi loads here
 
-    recording.check_segments(body.segment_names)
-    trial = prepare_trial(recording, stimulus, options.simulation.sample_rate_hz)
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
         result = fit_recording(trial, body, init, options, progress=progress)
     result = at_the_noise(result)
@@ -196,8 +189,9 @@ _DEC_ONLY = ("--init", "--classes", "--no-compile", "--locked", "--max-offset-s"
              "--prior-sd", "--gain-range", "--delay-range")
 
 
-def _fit_ic(args: argparse.Namespace) -> int:
-    """``fit --model ic``: the IC parameters of the recording's locked COM sway."""
+def _ic_options(args: argparse.Namespace):
+    """``fit --model ic``'s options (:class:`~posture_id.fitting.frequency.IcFitOptions`):
+    the IC parameters of the recordings' locked COM sway; DEC's flags refused."""
     given = [f for f in search_flags_given(args) if f in _DEC_ONLY]
     given += [f for f, on in (("--init", args.init is not None),
                               ("--classes", args.classes != "relaxed"),
@@ -207,9 +201,16 @@ def _fit_ic(args: argparse.Namespace) -> int:
                              "stimulus-locked COM sway within docs/model.md §8's bounds")
     from posture_id.fitting.frequency import IcFitOptions
 
-    return ic_answer(args, IcFitOptions(
-        fit_ki=args.fit_ki, fit_passive=args.fit_passive, starts=args.starts, seed=args.seed,
-        locked=LockedOptions(max_frequency_hz=args.max_frequency_hz)))
+    return IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive, starts=args.starts,
+                        seed=args.seed,
+                        locked=LockedOptions(max_frequency_hz=args.max_frequency_hz))
+
+
+def _dec_options(args: argparse.Namespace) -> FitOptions:
+    """The DEC fit's options (:func:`options_from`); --fit-ki refused."""
+    if args.fit_ki:
+        raise PostureIdError("--fit-ki goes with --model ic (DEC's Ki is always identified)")
+    return options_from(args)
 
 
 def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
@@ -223,9 +224,7 @@ def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
     from posture_id.models.protocol import TrustLevel
 
     _each_trial_once(recordings)
-    inputs = (*recordings, args.body, args.tilt)
-    check_output_file(args.out, "--out", inputs)
-    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_out_and_plot(args, (*recordings, args.body, args.tilt))
     if args.conditions is not None and len(args.conditions) != len(recordings):
         raise PostureIdError(f"--conditions: {len(args.conditions)} label(s) for "
                              f"{len(recordings)} recordings: give one label per recording")
@@ -237,22 +236,9 @@ def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
                              "several starts from the first's own fit)")
     model = model_named(args.model)
     if args.model == "ic":
-        given = [f for f in search_flags_given(args) if f in _DEC_ONLY]
-        given += [f for f, on in (("--classes", args.classes != "relaxed"),
-                                  ("--no-compile", args.no_compile)) if on]
-        if given:
-            raise PostureIdError(f"{', '.join(given)}: DEC's fit only; --model ic fits the "
-                                 "stimulus-locked COM sway within docs/model.md §8's bounds")
-        from posture_id.fitting.frequency import IcFitOptions
-
-        options = IcFitOptions(fit_ki=args.fit_ki, fit_passive=args.fit_passive,
-                               starts=args.starts, seed=args.seed,
-                               locked=LockedOptions(max_frequency_hz=args.max_frequency_hz))
+        options = _ic_options(args)  # --init: refused above, with the other one-recording flags
     else:
-        if args.fit_ki:
-            raise PostureIdError("--fit-ki goes with --model ic (DEC's Ki is always "
-                                 "identified)")
-        options = options_from(args)
+        options = _dec_options(args)
         if options.locked is None:  # the joint fit compares the locked harmonics
             options = replace(options, locked=LockedOptions(
                 max_frequency_hz=args.max_frequency_hz))
@@ -268,9 +254,7 @@ def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
     for path in recordings:
         one = copy(args)
         one.recording = path
-        recording, stimulus = recording_and_stimulus(one, body)
-        recording.check_segments(body.segment_names)
-        trials.append(prepare_trial(recording, stimulus))
+        trials.append(prepared_trial(one, body))
     with TerminalProgress(prefix="posture-id fit", quiet=True) as progress:
         result = fit_joint(model, trials, body, labels, per, options, progress=progress)
     for notice in (n for trial in trials for n in trial.notices):  # a refusal says its own
@@ -316,9 +300,7 @@ def ic_answer(args: argparse.Namespace, options) -> int:
     from posture_id.fitting.frequency import fit_ic
 
     body = recording_body(args, DEFAULT_URDF)
-    recording, stimulus = recording_and_stimulus(args, body)
-    recording.check_segments(body.segment_names)
-    trial = prepare_trial(recording, stimulus)
+    trial = prepared_trial(args, body)
     result = fit_ic(trial, body, options)
     for notice in trial.notices:  # what was found on the way in (a refusal says its own)
         say(notice)

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from posture_id.cli.arguments import (
-    check_output_file,
+    check_out_and_plot,
     default_of,
     non_negative_int,
     positive_float,
@@ -18,12 +18,11 @@ from posture_id.cli.plate_mass import add_load_arguments
 from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
-    recording_and_stimulus,
+    prepared_trial,
 )
 from posture_id.errors import PostureIdError
 from posture_id.frf import FrfOptions, frequency_response
 from posture_id.frf.bands import BAND_PRESETS, parse_bands
-from posture_id.trials import prepare_trial
 
 __all__ = ["add_parser", "run"]
 
@@ -79,9 +78,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    inputs = (args.recording, args.body, args.tilt)
-    check_output_file(args.out, "--out", inputs)
-    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_out_and_plot(args, (args.recording, args.body, args.tilt))
     if (args.height_m is not None or args.load_columns) and not args.cop_column:
         raise PostureIdError("--height-m and --load-columns weigh the subject on a force "
                              "plate: they go with --cop-column")
@@ -89,9 +86,8 @@ def run(args: argparse.Namespace) -> int:
         raise PostureIdError("--load-columns weighs the subject for the body --height-m makes: "
                              "give the height too (or --body URDF, without them)")
     body = recording_body(args, None)
-    recording, stimulus = recording_and_stimulus(args, body)
+    trial = prepared_trial(args, body, rate_hz=None, checked=False)
     options = _options(args)
-    trial = prepare_trial(recording, stimulus, rate_hz=None)
     result = frequency_response(trial, body, options, args.period_s)
     for notice in trial.notices:  # what was found on the way in (a refusal says its own)
         say(notice)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
-    check_output_file,
+    check_out_and_plot,
     interval_level,
     is_cohort,
     say,
@@ -25,6 +25,7 @@ from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
     columns_from_args,
+    prepared_trial,
     recording_and_stimulus,
     stimulus_from_args,
 )
@@ -115,9 +116,7 @@ def run(args: argparse.Namespace) -> int:
     if args.model == "ic":
         return _identify_ic(args)
     fit_options = FitOptions(**search_keywords(args))
-    inputs = (args.recording, args.body, args.network, args.tilt)
-    check_output_file(args.out, "--out", inputs)
-    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_out_and_plot(args, (args.recording, args.body, args.network, args.tilt))
     # torch and CasADi load here, not when the parser is built: other commands start fast
     from posture_id.identify import Identifier, Method
     body = recording_body(args, DEFAULT_URDF)
@@ -153,9 +152,7 @@ def _identify_ic(args: argparse.Namespace) -> int:
     if given:
         raise PostureIdError(f"{', '.join(given)}: DEC's identification only; --model ic fits "
                              "the stimulus-locked body COM sway (docs/ic.md)")
-    check_output_file(args.out, "--out", (args.recording, args.body, args.tilt))
-    check_output_file(args.plot, "--plot", (args.recording, args.body, args.tilt),
-                      outputs=(args.out,))
+    check_out_and_plot(args, (args.recording, args.body, args.tilt))
     options = IcFitOptions(fit_passive=args.fit_passive,
                            locked=LockedOptions(max_frequency_hz=args.max_frequency_hz))
     return ic_answer(args, options)
@@ -241,7 +238,6 @@ def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm
     returns the recordings that got none, with why (each said)."""
     from posture_id.frf.bands import BAND_PRESETS
     from posture_id.norms.cohort import cohort_frfs
-    from posture_id.trials import prepare_trial
     from posture_id.trials.subjects import subject_urdf
 
     bands = norm_bands(args, norm) if norm is not None else BAND_PRESETS[args.band_preset]
@@ -256,8 +252,7 @@ def _cohort_frfs(args: argparse.Namespace, recordings: list[Path], body, norm
 
     def read(path: Path):
         args.recording = path
-        recording, stimulus = recording_and_stimulus(args, body_of(path))
-        return prepare_trial(recording, stimulus, rate_hz=None)
+        return prepared_trial(args, body_of(path), rate_hz=None, checked=False)
 
     failed = cohort_frfs(recordings, args.out, read, body_of, bands, norm)
     for name, why in failed.items():

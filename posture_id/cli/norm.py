@@ -7,6 +7,7 @@ import argparse
 from pathlib import Path
 
 from posture_id.cli.arguments import (
+    check_out_and_plot,
     check_output_file,
     non_negative_int,
     positive_float,
@@ -19,7 +20,7 @@ from posture_id.cli.markers import recording_body
 from posture_id.cli.stimulus import (
     add_column_arguments,
     add_lab_stimulus_arguments,
-    recording_and_stimulus,
+    prepared_trial,
 )
 from posture_id.errors import PostureIdError
 from posture_id.frf.bands import BAND_PRESETS
@@ -140,9 +141,7 @@ def run_build(args: argparse.Namespace) -> int:
 
 
 def run_test(args: argparse.Namespace) -> int:
-    inputs = (args.recording, args.norm, args.body, args.tilt)
-    check_output_file(args.out, "--out", inputs)
-    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_out_and_plot(args, (args.recording, args.norm, args.body, args.tilt))
     from posture_id.norms.norm import Norm, NormTests, against_norm
     from posture_id.norms.readers import frf_from_json, frf_json_channels, read_frfs
 
@@ -216,7 +215,6 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
 
     from posture_id.frf.analysis import frequency_response
     from posture_id.frf.response import FrfOptions
-    from posture_id.trials import prepare_trial
 
     try:
         options = FrfOptions.lab_convention(norm_bands(args, norm))
@@ -225,8 +223,7 @@ def _recording_frf(args: argparse.Namespace, norm) -> tuple:
             raise
         options = None  # a norm at the frequencies a stimulus drives (sinusoids): its own
     body = recording_body(args, None)
-    recording, stimulus = recording_and_stimulus(args, body)
-    trial = prepare_trial(recording, stimulus, rate_hz=None)
+    trial = prepared_trial(args, body, rate_hz=None, checked=False)
     frf = frequency_response(trial, body, options)
     rows = np.arange(len(frf.frequencies_hz))
     if options is None:
@@ -327,9 +324,7 @@ def run_compare(args: argparse.Namespace) -> int:
         raise PostureIdError(f"{shared[0]}: in both groups (--group ... --group ...); "
                              + ("with --paired a subject's two conditions are two files"
                                 if args.paired else "a member belongs to one group"))
-    inputs = tuple(p for g in args.group for p in g)
-    check_output_file(args.out, "--out", inputs)
-    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_out_and_plot(args, tuple(p for g in args.group for p in g))
     from posture_id.norms.groups import compare_groups
     from posture_id.norms.readers import read_frfs
 

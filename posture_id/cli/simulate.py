@@ -9,6 +9,7 @@ import numpy as np
 
 from posture_id.bodies.body import DEFAULT_URDF, load_body
 from posture_id.cli.arguments import (
+    check_out_and_plot,
     check_output_file,
     default_of,
     non_negative_float,
@@ -191,8 +192,7 @@ def _marker_gap(marker: str, start: str, duration: str, end_s: float
 
 def run(args: argparse.Namespace) -> int:
     inputs = (args.body, args.params, args.tilt)
-    check_output_file(args.out, "--out", inputs)
-    check_output_file(args.plot, "--plot", inputs, outputs=(args.out,))
+    check_out_and_plot(args, inputs)
     check_output_file(args.force_plate_out, "--force-plate-out", inputs,
                       outputs=(args.out, args.plot))
     if args.cop_noise_mm and args.force_plate_out is None:

@@ -31,11 +31,12 @@ from posture_id.simulation.stimulus import (
     prts,
     read_tilt_file,
 )
+from posture_id.trials import PreparedTrial, prepare_trial
 from posture_id.trials.reading import RecordingLayout, read_recording
 
 __all__ = ["add_stimulus_arguments", "add_lab_stimulus_arguments", "prts_arguments",
            "protocol_profile",
-           "stimulus_from_args", "recording_and_stimulus", "add_column_arguments",
+           "stimulus_from_args", "recording_and_stimulus", "prepared_trial", "add_column_arguments",
            "columns_from_args"]
 
 _PRTS_FLAGS = {"amplitude_deg": "--amplitude-deg", "cycles": "--cycles", "states": "--states"}
@@ -268,3 +269,14 @@ def recording_and_stimulus(args: argparse.Namespace, body) -> tuple[Recording,
     if isinstance(layout, MarkerMapping) and getattr(args, "plot", None):  # a C3D's
         write_marker_plot(Path(args.recording), layout, Path(args.plot))
     return recording, stimulus
+
+
+def prepared_trial(args: argparse.Namespace, body, rate_hz: float | None = 50.0,
+                   checked: bool = True) -> PreparedTrial:
+    """``args.recording`` read for ``body`` with its stimulus (:func:`recording_and_stimulus`),
+    with ``checked`` its columns checked to be the body's segments, prepared at ``rate_hz``
+    Hz (None: the recording's own rate, as the FRF takes it)."""
+    recording, stimulus = recording_and_stimulus(args, body)
+    if checked:
+        recording.check_segments(body.segment_names)
+    return prepare_trial(recording, stimulus, rate_hz)

@@ -37,6 +37,7 @@ from posture_id.learning.config import (
 from posture_id.learning.model_files import (
     WEIGHTS,
     load_weights,
+    network_tensors,
     prefixed,
     read_model_files,
     write_model_files,
@@ -96,8 +97,7 @@ def save_model(folder: str | Path, network: IdentifierNetwork, standardiser: Sta
     ``sidecar`` holds what only the caller knows (body, stimulus, data set, training); the
     format, version, architecture, features and targets are added here.
     """
-    tensors = {f"network.{k}": v.detach().contiguous()
-               for k, v in network.state_dict().items()}
+    tensors = network_tensors(network)
     tensors.update({k: v.float() if v.dtype == torch.float64 else v
                     for k, v in standardiser.to_tensors().items()})
     write_model_files(folder, tensors, {

@@ -18,7 +18,7 @@ from posture_id.errors import PostureIdError
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
 
 __all__ = ["WEIGHTS", "SIDECAR", "write_model_files", "read_model_files", "load_weights",
-           "prefixed"]
+           "prefixed", "network_tensors"]
 
 WEIGHTS = "model.safetensors"
 SIDECAR = "model.json"
@@ -80,3 +80,9 @@ def load_weights(network: torch.nn.Module, state: dict[str, torch.Tensor], folde
 def prefixed(tensors: dict[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:
     """The tensors whose names start with ``prefix``, named without it."""
     return {k[len(prefix):]: v for k, v in tensors.items() if k.startswith(prefix)}
+
+
+def network_tensors(network: torch.nn.Module) -> dict[str, torch.Tensor]:
+    """The weights of ``network`` as the files keep them: ``network.*``, on the CPU,
+    contiguous."""
+    return {f"network.{k}": v.detach().cpu().contiguous() for k, v in network.state_dict().items()}

@@ -21,6 +21,7 @@ one that is not empty and holds no state, is refused in one line.
 from __future__ import annotations
 
 import json
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,7 +31,7 @@ from safetensors.torch import load_file, save_file
 
 from posture_id.errors import LearningError
 from posture_id.fileio import Result, atomic_write, atomic_write_text, json_text
-from posture_id.learning.model_files import prefixed
+from posture_id.learning.model_files import network_tensors, prefixed
 from posture_id.learning.threads import torch_threads
 from posture_id.plotting import plot_loss_curves
 from posture_id.progress import Progress
@@ -145,9 +146,10 @@ class EpochTrainer:
 
     Subclasses set ``out`` (the model directory), ``identity`` (what must match to
     resume), ``net``, ``optimiser``, ``schedule``, ``epochs``, ``patience``, ``threads``,
-    ``history`` (one row per epoch run, resumed ones included) and ``best`` ((validation
-    loss, epoch), epoch 0: none yet), and implement :meth:`run_epoch`, :meth:`checkpoint`
-    (which calls :meth:`write_state`), :meth:`said` and :meth:`finish`; a run that keeps
+    ``history`` (one row per epoch run, resumed ones included), ``best`` ((validation
+    loss, epoch), epoch 0: none yet) and ``started`` (its ``time.perf_counter()``), and
+    implement :meth:`run_epoch`, :meth:`keep_best`, :meth:`said` and :meth:`finish`
+    (which returns :meth:`result`); a run that keeps
     more than the network and the optimiser (the best weights, say) names it in
     :meth:`state_tensors` and takes it back in :meth:`restore_state_tensors`.
     """
@@ -162,6 +164,7 @@ class EpochTrainer:
     threads: int | None
     history: list[dict]
     best: tuple[float, int]
+    started: float
 
     def state_tensors(self) -> dict[str, torch.Tensor]:
         """Tensors the state keeps besides the network's and the optimiser's (none)."""
@@ -189,8 +192,7 @@ class EpochTrainer:
         the epoch before's tensors."""
         out = self.out
         weights = f"training/epoch-{len(self.history):04d}.safetensors"
-        tensors = {f"network.{k}": v.detach().cpu().contiguous()
-                   for k, v in self.net.state_dict().items()}
+        tensors = network_tensors(self.net)
         optimiser_tensors, optimiser_json = _optimiser_tensors(self.optimiser)
         tensors.update(optimiser_tensors)
         tensors.update(self.state_tensors())
@@ -215,8 +217,19 @@ class EpochTrainer:
         raise NotImplementedError
 
     def checkpoint(self, row: dict) -> bool:
-        """Keep the epoch (its row in ``history``, the state to resume from, the best
-        weights); whether it is the best so far."""
+        """Keep the epoch: its row in ``history``, the network when its validation loss is
+        the best so far (:meth:`keep_best`), and the state to resume from; whether it is
+        the best so far."""
+        self.history.append(row)
+        improved = row["validation_loss"] < self.best[0]
+        if improved:
+            self.best = (row["validation_loss"], row["epoch"])
+            self.keep_best()
+        self.write_state()
+        return improved
+
+    def keep_best(self) -> None:
+        """Keep the network of the best epoch so far (``best``)."""
         raise NotImplementedError
 
     def said(self, progress: Progress | None, epoch: int, row: dict, improved: bool) -> None:
@@ -226,6 +239,14 @@ class EpochTrainer:
     def finish(self, stopped_early: bool) -> Any:
         """The run's result, once its epochs are done."""
         raise NotImplementedError
+
+    def result(self, stopped_early: bool, made_by: dict, model: Any = None) -> TrainingResult:
+        """The :class:`TrainingResult` of the epochs run (``made_by``: its provenance;
+        ``model``: the trained model, when the trainer hands it over), timed from
+        ``started``."""
+        return TrainingResult(self.out, len(self.history), self.best[1], self.best[0],
+                              stopped_early, time.perf_counter() - self.started,
+                              tuple(self.history), made_by, model=model)
 
     def run(self, progress: Progress | None = None) -> Any:
         """Epochs from where the run stands to the configured number, or until early

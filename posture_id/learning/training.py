@@ -197,21 +197,14 @@ class Trainer(EpochTrainer):
                 "learning_rate": self.optimiser.param_groups[0]["lr"],
                 "seconds": time.perf_counter() - began}
 
-    def checkpoint(self, row: dict) -> bool:
-        """Keep the epoch: the model when it is the best so far (True), and the state to
-        resume from."""
-        self.history.append(row)
-        epoch, validation = row["epoch"], row["validation_loss"]
-        improved = validation < self.best[0]
-        if improved:
-            self.best = (validation, epoch)
-            save_model(self.out, self.net, self.standardiser,
-                       {**self.sidecar, "training": {**self.sidecar["training"],
-                                                     "best_epoch": epoch,
-                                                     "best_validation_loss": validation,
-                                                     "epochs_run": epoch}})
-        self.write_state()
-        return improved
+    def keep_best(self) -> None:
+        """Write the model of the best epoch so far into the model directory."""
+        validation, epoch = self.best
+        save_model(self.out, self.net, self.standardiser,
+                   {**self.sidecar, "training": {**self.sidecar["training"],
+                                                 "best_epoch": epoch,
+                                                 "best_validation_loss": validation,
+                                                 "epochs_run": epoch}})
 
     def said(self, progress: Progress | None, epoch: int, row: dict, improved: bool) -> None:
         report(progress, len(self.train_set), len(self.train_set), "sample",
@@ -220,10 +213,7 @@ class Trainer(EpochTrainer):
                f"{row['seconds']:.0f} s")
 
     def finish(self, stopped_early: bool) -> TrainingResult:
-        return TrainingResult(self.out, len(self.history), self.best[1], self.best[0],
-                              stopped_early, time.perf_counter() - self.started,
-                              tuple(self.history),
-                              provenance(self.training, dataset=str(self.data.path)))
+        return self.result(stopped_early, provenance(self.training, dataset=str(self.data.path)))
 
 
 def evaluate_loss(net: IdentifierNetwork, objective: Objective, samples: SplitSamples,

@@ -20,6 +20,7 @@ from posture_id.learning.model_files import (
     SIDECAR,
     WEIGHTS,
     load_weights,
+    network_tensors,
     prefixed,
     read_model_files,
     write_model_files,
@@ -191,8 +192,7 @@ class UniversalModel:
                          f"member {index} came from")
 
     def tensors(self) -> dict[str, torch.Tensor]:
-        out = {f"network.{k}": v.detach().contiguous()
-               for k, v in self.network.state_dict().items()}
+        out = network_tensors(self.network)
         for name in ("input_mean", "input_std", "target_mean", "target_std"):
             out[f"standardiser.{name}"] = torch.from_numpy(
                 np.ascontiguousarray(getattr(self, name), dtype=np.float64))

@@ -288,15 +288,9 @@ class UniversalTrainer(EpochTrainer):
         return {"epoch": epoch, "train_loss": total / len(x), "validation_loss": val,
                 "seconds": time.perf_counter() - started}
 
-    def checkpoint(self, row: dict) -> bool:
-        self.history.append(row)
-        improved = row["validation_loss"] < self.best[0]
-        if improved:
-            self.best = (row["validation_loss"], row["epoch"])
-            self.best_state = {k: v.detach().cpu().clone()
-                               for k, v in self.net.state_dict().items()}
-        self.write_state()
-        return improved
+    def keep_best(self) -> None:
+        """Keep a copy of the weights (written to ``out`` when the run ends)."""
+        self.best_state = {k: v.detach().cpu().clone() for k, v in self.net.state_dict().items()}
 
     def state_tensors(self) -> dict:
         """The best epoch's weights (written to ``out`` when the run ends)."""
@@ -340,10 +334,8 @@ class UniversalTrainer(EpochTrainer):
                 "weights_sha256": self.base.sidecar["weights_sha256"],
                 "training": self.base.sidecar.get("training")}
         model.save(self.out)
-        return TrainingResult(self.out, len(history), self.best[1], self.best[0],
-                              stopped_early, time.perf_counter() - self.started,
-                              tuple(history), provenance(config, datasets=[
-                                  str(d.path) for d in data]), model=model)
+        return self.result(stopped_early, provenance(config, datasets=[str(d.path) for d in data]),
+                           model)
 
 
 def _ranges(samples: Samples, before: dict | None = None) -> dict:

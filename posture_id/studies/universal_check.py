@@ -48,6 +48,21 @@ def true_regimes(samples: Samples) -> np.ndarray:
     return np.char.add(np.char.add(np.char.add(np.char.add(seg, ", "), kind), ", "), noise)
 
 
+def _left_out(model: UniversalModel) -> tuple[str, ...]:
+    """The noise families ``model`` was trained without: its calibration, check and
+    typicality reference leave them out too (they are what it is to be judged on)."""
+    return tuple(model.sidecar.get("training", {}).get("exclude_families", ()))
+
+
+def _held_out(model: UniversalModel, data: list, split: str, seed: int) -> Samples:
+    """The module samples of ``split`` of the sets ``data``, their noise drawn from
+    ``seed`` as in training, without the noise families of :func:`_left_out`."""
+    left_out = _left_out(model)
+    shards = require_trials(without_families(load_split(data, split), model.scope, left_out),
+                            data, split, left_out)
+    return make_samples(shards, model.scope, np.random.default_rng(seed))
+
+
 @dataclass(frozen=True)
 class CheckReport(Result):
     """Test-split scores overall, per segment count and per simulated regime."""
@@ -107,20 +122,11 @@ def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str 
     trained without are left out of all three (they are what it is to be judged on)."""
     model = UniversalModel.load(model_dir)
     data = open_sets(data_path)
-    scope = model.scope
-    # a model trained without some noise families is calibrated and checked without them
-    left_out = tuple(model.sidecar.get("training", {}).get("exclude_families", ()))
-
-    def split(name: str):
-        return require_trials(without_families(load_split(data, name), scope, left_out),
-                              data, name, left_out)
-
-    cal = make_samples(split("calibration"), scope, np.random.default_rng(CALIBRATION_SEED))
-    validation = make_samples(split("validation"), scope,
-                              np.random.default_rng(VALIDATION_SEED))
+    cal = _held_out(model, data, "calibration", CALIBRATION_SEED)
+    validation = _held_out(model, data, "validation", VALIDATION_SEED)
     calibration: UniversalCalibration = calibrate(model, cal, validation)
     calibration.save(model_dir)
-    test = make_samples(split("test"), scope, np.random.default_rng(TEST_SEED))
+    test = _held_out(model, data, "test", TEST_SEED)
     overall = score_samples(model, test, calibration, level)["all"]
     by_segments = score_samples(model, test, calibration, level,
                                 np.char.add(test.segments.astype(str), "-seg"))
@@ -141,22 +147,15 @@ def reference_from_sets(model_dir: str | Path, data_path) -> TypicalityReport:
     (:data:`TYPICALITY_FILE`, ``typicality.json``, ``typicality.md``)."""
     model = UniversalModel.load(model_dir)
     data = open_sets(data_path)
-    left_out = tuple(model.sidecar.get("training", {}).get("exclude_families", ()))
-
-    def samples(name: str, seed: int):
-        shards = require_trials(without_families(load_split(data, name), model.scope,
-                                                 left_out), data, name, left_out)
-        return make_samples(shards, model.scope, np.random.default_rng(seed))
-
-    fit = samples("calibration", CALIBRATION_SEED)
-    scored = samples("validation", VALIDATION_SEED)
+    fit = _held_out(model, data, "calibration", CALIBRATION_SEED)
+    scored = _held_out(model, data, "validation", VALIDATION_SEED)
     reference = fit_reference(
         model.standardised(fit.inputs), model.standardised(scored.inputs), scored.trial,
         model.sidecar.get("weights_sha256", ""),
         {"sets": [str(p) for p in ([data_path] if isinstance(data_path, (str, Path))
                                    else data_path)],
-         "fit_modules": int(len(fit.inputs)), "left_out_families": list(left_out)})
-    test = samples("test", TEST_SEED)
+         "fit_modules": int(len(fit.inputs)), "left_out_families": list(_left_out(model))})
+    test = _held_out(model, data, "test", TEST_SEED)
     scores = recording_scores(reference.d2(model.standardised(test.inputs)), test.trial)
     atypical = np.array([reference.tail(s) < ATYPICAL_P for s in scores])
     _, first = np.unique(test.trial, return_index=True)

@@ -25,7 +25,7 @@ bodies and stimuli no training trial had.
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
@@ -289,11 +289,6 @@ class UniversalSet:
         check_shard(self.path, entry)
         with np.load(self.path / entry["file"], allow_pickle=False) as z:
             return {key: z[key] for key in z.files}
-
-    def iter_split(self, split: str) -> Iterator[dict[str, np.ndarray]]:
-        for entry in self.shards(split):
-            if entry["kept"]:
-                yield self.load(entry)
 
 
 def open_sets(paths: str | Path | Sequence[str | Path]) -> list[UniversalSet]:

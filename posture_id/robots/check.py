@@ -135,20 +135,14 @@ class RobotCheck(Result):
             return None if x is None else np.asarray(x).tolist()
 
         gain_diff, phase_diff = self.gain_difference_percent, self.phase_difference_deg
+        columns = {"engine_gain": self.engine_gain, "engine_phase_deg": self.engine_phase_deg,
+                   "lumped_gain": self.lumped_gain, "lumped_phase_deg": self.lumped_phase_deg,
+                   "gain_difference_percent": gain_diff, "phase_difference_deg": phase_diff}
         per_channel = {}
         for m, name in enumerate(self.channels):
             per_channel[name] = {
                 "variance_explained": float(self.variance_explained[m]),
-                "engine_gain": None if self.engine_gain is None else arr(self.engine_gain[:, m]),
-                "engine_phase_deg": (None if self.engine_phase_deg is None
-                                     else arr(self.engine_phase_deg[:, m])),
-                "lumped_gain": None if self.lumped_gain is None else arr(self.lumped_gain[:, m]),
-                "lumped_phase_deg": (None if self.lumped_phase_deg is None
-                                     else arr(self.lumped_phase_deg[:, m])),
-                "gain_difference_percent": (None if gain_diff is None
-                                            else arr(gain_diff[:, m])),
-                "phase_difference_deg": (None if phase_diff is None
-                                         else arr(phase_diff[:, m])),
+                **{key: None if x is None else arr(x[:, m]) for key, x in columns.items()},
                 "max_abs_gain_difference_percent": (
                     None if gain_diff is None else float(np.max(np.abs(gain_diff[:, m])))),
                 "max_abs_phase_difference_deg": (

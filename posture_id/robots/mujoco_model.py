@@ -141,6 +141,52 @@ def _quat(rotation: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q)
 
 
+def inertial(com, mass: float, tensor: np.ndarray) -> str:
+    """An MJCF ``<inertial>``: COM (3,) m in the body's frame, mass kg, inertia tensor
+    (3, 3) kg·m² about the COM."""
+    t = tensor
+    return (f'<inertial pos="{_vec(com)}" mass="{mass:.17g}" '
+            f'fullinertia="{_vec((t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2]))}"/>')
+
+
+def mjcf_head(name: str, options: MujocoOptions, gravity: np.ndarray, at: np.ndarray,
+              axis: np.ndarray, solver: str = "") -> list[str]:
+    """The first lines of an MJCF of a body on the platform, to the platform's inertial:
+    the model ``name``, MuJoCo's step, integrator and ``gravity`` (3,) m/s² (``solver``:
+    more ``<option>`` attributes), contacts off, the platform's body at ``at`` (3,) m and
+    its hinge about ``axis`` (3,) with ``options.platform_armature``."""
+    return [
+        f'<mujoco model="{name}">',
+        '  <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>',
+        f'  <option timestep="{options.step_s:.17g}" '
+        f'integrator="{_MJCF_INTEGRATOR[options.integrator]}" gravity="{_vec(gravity)}"'
+        f'{solver}>',
+        '    <flag contact="disable"/>',
+        '  </option>',
+        '  <worldbody>',
+        f'    <body name="{PLATFORM}" pos="{_vec(at)}">',
+        f'      <joint name="{PLATFORM}" type="hinge" axis="{_vec(axis)}" '
+        f'armature="{options.platform_armature:.17g}"/>',
+        # on the axis: the platform's own weight exerts no torque about it
+        '      <inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/>',
+    ]
+
+
+def compile_mjcf(xml: str, refused: str):
+    """The ``mujoco.MjModel`` of the MJCF text ``xml``.
+
+    Raises:
+        MissingExtraError: MuJoCo is not installed.
+        RobotError: MuJoCo refuses the model: ``refused``, then its message in one line.
+    """
+    mujoco = require_mujoco()
+    try:
+        return mujoco.MjModel.from_xml_string(xml)
+    except ValueError as exc:
+        msg = " ".join(str(exc).split())
+        raise RobotError(f"{refused} ({msg})") from None
+
+
 def chain_mjcf(body: Body, options: MujocoOptions | None = None,
                kpas: np.ndarray | None = None, bpas: np.ndarray | None = None) -> str:
     """The MJCF text of ``body`` standing on its platform (see the module).
@@ -175,18 +221,7 @@ def chain_mjcf(body: Body, options: MujocoOptions | None = None,
     size = max(s.length for s in body.segments)
     half = 0.3 * size * (np.abs(fwd) + np.abs(axis)) + 0.01 * np.abs(up)  # box half-sizes, m
     lines = [
-        f'<mujoco model="{body.name} on a tilting platform">',
-        '  <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>',
-        f'  <option timestep="{options.step_s:.17g}" '
-        f'integrator="{_MJCF_INTEGRATOR[options.integrator]}" gravity="{_vec(gravity)}">',
-        '    <flag contact="disable"/>',
-        '  </option>',
-        '  <worldbody>',
-        f'    <body name="{PLATFORM}" pos="{_vec(ankle)}">',
-        f'      <joint name="{PLATFORM}" type="hinge" axis="{_vec(axis)}" '
-        f'armature="{options.platform_armature:.17g}"/>',
-        # on the axis: the platform's own weight exerts no torque about it
-        '      <inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/>',
+        *mjcf_head(f"{body.name} on a tilting platform", options, gravity, ankle, axis),
         f'      <geom type="box" size="{_vec(half)}" pos="{_vec(-0.01 * up)}" '
         'contype="0" conaffinity="0" rgba="0.6 0.6 0.6 1"/>',
         f'      <site name="{PLATFORM}{SITE}"/>',
@@ -204,15 +239,12 @@ def chain_mjcf(body: Body, options: MujocoOptions | None = None,
         inertia = model.inertias[j]
         tensor = np.asarray(inertia.inertia, dtype=float)
         tensor = tensor + options.inertia_floor * (np.eye(3) - np.outer(local_axis, local_axis))
-        full = (tensor[0, 0], tensor[1, 1], tensor[2, 2], tensor[0, 1], tensor[0, 2],
-                tensor[1, 2])
         com = np.asarray(inertia.lever, dtype=float)
         lines += [
             f'{indent}<body name="{seg.name}" pos="{_vec(pos)}" quat="{_vec(_quat(rot))}">',
             f'{indent}  <joint name="{seg.joint}" type="hinge" axis="{_vec(local_axis)}" '
             f'stiffness="{kpas[j - 1]:.17g}" damping="{bpas[j - 1]:.17g}"/>',
-            f'{indent}  <inertial pos="{_vec(com)}" mass="{float(inertia.mass):.17g}" '
-            f'fullinertia="{_vec(full)}"/>',
+            f'{indent}  {inertial(com, float(inertia.mass), tensor)}',
             f'{indent}  <geom type="capsule" fromto="0 0 0 {_vec(2.0 * com)}" size="0.03" '
             'contype="0" conaffinity="0"/>',
             # at the joint's anchor, aligned with the world at the zero posture
@@ -288,11 +320,7 @@ class ChainModel:
         mujoco = require_mujoco()
         options = options or MujocoOptions()
         xml = chain_mjcf(body, options, kpas, bpas)
-        try:
-            model = mujoco.MjModel.from_xml_string(xml)
-        except ValueError as exc:
-            msg = " ".join(str(exc).split())
-            raise RobotError(f"{body.urdf_path}: MuJoCo refuses the model ({msg})") from None
+        model = compile_mjcf(xml, f"{body.urdf_path}: MuJoCo refuses the model")
         obj = mujoco.mjtObj
         platform = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, PLATFORM)
         bodies = np.array([mujoco.mj_name2id(model, obj.mjOBJ_BODY, s.name)

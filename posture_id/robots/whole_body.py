@@ -339,7 +339,7 @@ class WholeBodyModel:
         """
         import pinocchio as pin
 
-        from posture_id.robots.mujoco_model import _MJCF_INTEGRATOR, MujocoOptions
+        from posture_id.robots.mujoco_model import MujocoOptions, compile_mjcf, inertial, mjcf_head
 
         mujoco = require_mujoco()
         if segments not in ROLES:
@@ -378,20 +378,10 @@ class WholeBodyModel:
         step = mujoco_options.step_s
         weld_tc = max(options.weld_timeconst_s, 2.0 * step)
         lines = [
-            f'<mujoco model="{spec.name} whole body on a tilting platform">',
-            '  <compiler angle="radian" inertiafromgeom="false" autolimits="true"/>',
-            f'  <option timestep="{step:.17g}" '
-            f'integrator="{_MJCF_INTEGRATOR[mujoco_options.integrator]}" '
-            f'gravity="{_vec(gravity)}" jacobian="dense" '
-            f'tolerance="{mujoco_options.solver_tolerance:.17g}" '
-            f'iterations="{mujoco_options.solver_iterations}">',
-            '    <flag contact="disable"/>',
-            '  </option>',
-            '  <worldbody>',
-            f'    <body name="{PLATFORM}" pos="{_vec(ankle_point)}">',
-            f'      <joint name="{PLATFORM}" type="hinge" axis="{_vec(lateral)}" '
-            f'armature="{mujoco_options.platform_armature:.17g}"/>',
-            '      <inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/>',
+            *mjcf_head(f"{spec.name} whole body on a tilting platform", mujoco_options,
+                       gravity, ankle_point, lateral,
+                       f' jacobian="dense" tolerance="{mujoco_options.solver_tolerance:.17g}"'
+                       f' iterations="{mujoco_options.solver_iterations}"'),
             f'      <geom type="box" size="{size} {size} 0.005" pos="0 0 -0.08" '
             'contype="0" conaffinity="0" rgba="0.6 0.6 0.6 1"/>',
             '    </body>',
@@ -416,8 +406,6 @@ class WholeBodyModel:
                 mass = options.mass_floor_kg
                 tensor = np.eye(3) * 1e-3 * mass
             tensor = tensor + floor * np.eye(3)
-            full = (tensor[0, 0], tensor[1, 1], tensor[2, 2], tensor[0, 1], tensor[0, 2],
-                    tensor[1, 2])
             lines.append(f'{indent}<body name="{name}" pos="{_vec(rel_pos)}" '
                          f'quat="{_vec(_quat(rel_rot))}">')
             if parent == 0:
@@ -435,8 +423,7 @@ class WholeBodyModel:
                     lines.append(f'{indent}  <joint name="{name}" type="hinge" '
                                  f'axis="{_vec(local_axis)}" stiffness="{stiff:.17g}" '
                                  f'damping="{damp:.17g}"/>')
-            lines.append(f'{indent}  <inertial pos="{_vec(inertia.lever)}" '
-                         f'mass="{mass:.17g}" fullinertia="{_vec(full)}"/>')
+            lines.append(f'{indent}  {inertial(inertia.lever, mass, tensor)}')
             lines.append(f'{indent}  <site name="{name}_anchor"/>')
             lines.append(f'{indent}  <site name="{name}_frame" quat="{_vec(_quat(rot.T))}"/>')
             for child in children[j]:
@@ -470,12 +457,7 @@ class WholeBodyModel:
                 ]
         lines += ["  <sensor>", *sensors, "  </sensor>", "</mujoco>"]
         xml = "\n".join(lines) + "\n"
-        try:
-            mj = mujoco.MjModel.from_xml_string(xml)
-        except ValueError as exc:
-            msg = " ".join(str(exc).split())
-            raise RobotError(f"{spec.urdf}: MuJoCo refuses the whole-body model ({msg})") \
-                from None
+        mj = compile_mjcf(xml, f"{spec.urdf}: MuJoCo refuses the whole-body model")
         obj = mujoco.mjtObj
         jid = [[mujoco.mj_name2id(mj, obj.mjOBJ_JOINT, model.names[j]) for j in pair]
                for pair in ids]

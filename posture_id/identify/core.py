@@ -40,7 +40,13 @@ from posture_id.identify.alternatives import better_explanations
 from posture_id.identify.method import DEFAULT_METHOD, Method
 from posture_id.identify.mistakes import Check, find_mistakes
 from posture_id.identify.networks import Network, network_for
-from posture_id.identify.noise_check import NOISE_RATIO_LIMIT, Basis, NoiseCheck, noise_check
+from posture_id.identify.noise_check import (
+    NOISE_RATIO_LIMIT,
+    Basis,
+    NoiseCheck,
+    noise_check,
+    unweighted_projection,
+)
 from posture_id.identify.result import NOTHING_BALANCES, IdentificationResult, SegmentFit
 from posture_id.identify.verdict import (
     PEOPLE_LIKE_SHARE,
@@ -191,12 +197,10 @@ class Identifier:
         else:
             parameters, normalised = cnn.parameters, cnn.normalised
             notices += trial.notices
-        locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+        locked = unweighted_projection(trial)
         checked = _resimulate(body, trial, parameters, options.simulation, locked)
         body_share = checked.pop("locked_share")  # the verdict's, not a result field
-        noise = noise_check(trial, checked["resimulated"],
-                            body_sway=(checked["sway_recorded"], checked["sway_resimulated"]),
-                            projection=locked)
+        noise = checked.pop("noise")
         # the network's intervals, widened for a people-like recording's own noise: the
         # network's answer's, and the floor of a fit from its prior
         network_intervals = (None if cnn is None
@@ -286,12 +290,9 @@ class Identifier:
         verdict is). ``locked``: the trial's unweighted locked projection (default: made
         here)."""
         if locked is None:
-            locked = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
-        sway = simulate(body, parameters, trial.stimulus,
-                        replace(self.fit_options.simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG))
-        recorded = trial.recording.theta
-        return noise_check(trial, sway.theta, projection=locked, body_sway=(
-            body.com_angles(recorded)[:, 0], sway.alpha[: len(recorded), 0]))
+            locked = unweighted_projection(trial)
+        return _resimulate(body, trial, parameters, self.fit_options.simulation,
+                           locked)["noise"]
 
     def _auto(self, trial: PreparedTrial, progress: Progress | None,
               start: float) -> IdentificationResult:
@@ -523,8 +524,7 @@ class Identifier:
         the offset moves by at least 20 ms and the residual shrinks (at most
         :data:`OFFSET_ROUNDS` times)."""
         for _ in range(OFFSET_ROUNDS):
-            projection = LockedProjection.for_periodic_trial(trial,
-                                                             LockedOptions(weighted=False))
+            projection = unweighted_projection(trial)
             if projection is None or answer.fell:
                 break
             step = projection.best_offset(np.degrees(answer.resimulated),
@@ -716,15 +716,16 @@ def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,
 def _resimulate(body: Body, trial: PreparedTrial, parameters,
                 simulation: SimulationOptions, locked: LockedProjection | None) -> dict:
     """Simulate the identified model on the trial's stimulus (with any fitted offset);
-    E_id, E_rel, segment fits; with ``locked`` (the trial's unweighted locked projection)
-    the locked statistics too."""
+    E_id, E_rel, segment fits and its check against the recording's noise (``noise``:
+    :func:`noise_check` on the body COM sway); with ``locked`` (the trial's unweighted
+    locked projection) the locked statistics too."""
     rec = trial.recording
     wide = replace(simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
-    trial = simulate(body, parameters, trial.stimulus, wide)
+    sim = simulate(body, parameters, trial.stimulus, wide)
     n = len(rec.time)
-    theta = trial.theta[:n]
+    theta = sim.theta[:n]
     sway_recorded = body.com_angles(rec.theta)[:, 0]
-    sway_simulated = trial.alpha[:n, 0]
+    sway_simulated = sim.alpha[:n, 0]
     e_id, e_rel = map(float, sway_errors(sway_recorded, sway_simulated))
     fell = math.isinf(e_rel)
     share = explained = body_share = None
@@ -745,11 +746,13 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
         segments.append(SegmentFit(
             name, math.degrees(float(np.sqrt(np.mean(residual**2)))),
             float(1.0 - np.var(residual) / np.var(rec.theta[:, j])), **statistics))
+    noise = noise_check(trial, theta, body_sway=(sway_recorded, sway_simulated),
+                        projection=locked)
     return {"e_id_deg": e_id, "e_rel": e_rel, "segments": tuple(segments), "time": rec.time,
             "recorded": rec.theta, "resimulated": theta, "sway_recorded": sway_recorded,
-            "sway_resimulated": sway_simulated, "fell_at_s": trial.abort_time,
+            "sway_resimulated": sway_simulated, "fell_at_s": sim.abort_time,
             "locked_share": None if body_share is None or not math.isfinite(body_share)
-            else body_share}
+            else body_share, "noise": noise}
 
 
 def _widened(network, cnn, intervals, share: float | None, noise: NoiseCheck):

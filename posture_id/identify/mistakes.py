@@ -41,8 +41,8 @@ import numpy as np
 
 from posture_id.choices import Choice
 from posture_id.frf.cycles import cycle_average
-from posture_id.frf.locked import LockedOptions, LockedProjection, noise_levels
-from posture_id.identify.noise_check import harmonic_noise
+from posture_id.frf.locked import LockedProjection, noise_levels
+from posture_id.identify.noise_check import harmonic_noise, unweighted_projection
 from posture_id.trials import PreparedTrial
 
 __all__ = ["Mistake", "find_mistakes", "tilt_sign", "angle_steps", "control_change",
@@ -108,7 +108,7 @@ def find_mistakes(trial: PreparedTrial, body, resimulated: np.ndarray | None,
     ``resimulated``: (S, N) rad, the identified model's sway (None, or not finite: the
     control-change check reads the recording itself)."""
     if projection is None:
-        projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+        projection = unweighted_projection(trial)
     found = [tilt_sign(trial, body, projection), *angle_steps(trial),
              control_change(trial, resimulated, projection)]
     return tuple(m for m in found if m is not None)

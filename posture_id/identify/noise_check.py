@@ -56,8 +56,8 @@ class Basis(Choice):
     RAW = "raw"
 
 
-__all__ = ["NoiseCheck", "noise_check", "harmonic_noise", "NOISE_RATIO_LIMIT",
-           "CLOSE_ENOUGH"]
+__all__ = ["NoiseCheck", "noise_check", "harmonic_noise", "unweighted_projection",
+           "NOISE_RATIO_LIMIT", "CLOSE_ENOUGH"]
 
 #: The residual's RMS in units of the recording's noise up to which a model is said to
 #: explain the recording as well as its noise allows.
@@ -187,7 +187,7 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
     model_theta = np.asarray(model_theta, dtype=float)[: len(recorded)]
     residual = np.degrees(recorded - model_theta)
     if projection is None:
-        projection = LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
+        projection = unweighted_projection(trial)
     if projection is not None and projection.cycles < 2 and projection.excited.all():
         projection = None  # one cycle of a tilt that leaves no harmonic empty: no noise there
     if projection is not None:
@@ -226,6 +226,13 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
     relative = float(np.sqrt(np.sum(residual**2) / np.sum(spread**2)))
     return NoiseCheck(float(np.sqrt(np.mean(residual**2))) / noise, Basis.RAW, noise, limit,
                       relative)
+
+
+def unweighted_projection(trial: PreparedTrial) -> LockedProjection | None:
+    """The trial's unweighted locked projection, the one an answer is judged by
+    (:meth:`~posture_id.frf.locked.LockedProjection.for_periodic_trial`; None where there
+    is nothing locked to compare)."""
+    return LockedProjection.for_periodic_trial(trial, LockedOptions(weighted=False))
 
 
 def harmonic_noise(projection: LockedProjection, signal_deg: np.ndarray) -> np.ndarray:

@@ -32,6 +32,18 @@ def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
     return fig, axes
 
 
+def _over_frequency(column, ylabels, log_first: bool = True) -> None:
+    """Label a column of axes that share a log frequency axis (Hz, on the last): each its
+    y label and a grid; the first (a gain) on a log scale when ``log_first``."""
+    if log_first:
+        column[0].set_yscale("log")
+    for a, label in zip(column, ylabels, strict=True):
+        a.set_ylabel(label)
+        a.grid(alpha=0.3, which="both")
+    column[-1].set_xscale("log")
+    column[-1].set_xlabel("frequency (Hz)")
+
+
 def plot_trial(result, path: str | Path | None = None, ax=None, title: str | None = None):
     """Tilt (top) and segment sway with the body COM sway α_BS (bottom), in degrees.
 
@@ -271,18 +283,11 @@ def plot_frf(result, path=None, ax=None):
         axes[1, 0].plot(f, result.phase_deg[:, m], **style)
         if result.coherence is not None:
             axes[2, 0].plot(f, result.coherence[:, m], **style)
-    axes[0, 0].set_yscale("log")
-    axes[0, 0].set_ylabel("gain (deg/deg)")
-    axes[1, 0].set_ylabel("phase (°)")
-    axes[2, 0].set_ylabel("coherence γ²")
+    _over_frequency(axes[:, 0], ("gain (deg/deg)", "phase (°)", "coherence γ²"))
     axes[2, 0].set_ylim(0, 1.05)
     if result.coherence is None:
         axes[2, 0].text(0.5, 0.5, "one cycle, no bands: nothing averaged", ha="center",
                         transform=axes[2, 0].transAxes)
-    axes[2, 0].set_xscale("log")
-    axes[2, 0].set_xlabel("frequency (Hz)")
-    for a in axes[:, 0]:
-        a.grid(alpha=0.3, which="both")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(f"FRF of {result.name} relative to the tilt ({result.cycles} cycle(s) "
                  f"of {result.period_s:g} s)")
@@ -539,15 +544,8 @@ def plot_model_frfs(frequencies_hz, recorded, models: dict, coherence, title: st
         axes[0, 0].plot(f, np.abs(h), color=f"C{k}", lw=1.5, label=label)
         axes[1, 0].plot(f, np.degrees(np.unwrap(np.angle(h))), color=f"C{k}", lw=1.5)
     axes[2, 0].plot(f, coherence, "o-", ms=3, lw=1, color="k")
-    axes[0, 0].set_yscale("log")
-    axes[0, 0].set_ylabel("gain (deg/deg)")
-    axes[1, 0].set_ylabel("phase (°)")
-    axes[2, 0].set_ylabel("locked share γ²")
+    _over_frequency(axes[:, 0], ("gain (deg/deg)", "phase (°)", "locked share γ²"))
     axes[2, 0].set_ylim(0, 1.05)
-    axes[2, 0].set_xscale("log")
-    axes[2, 0].set_xlabel("frequency (Hz)")
-    for a in axes[:, 0]:
-        a.grid(alpha=0.3, which="both")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(title)
     return _finished(fig, path)
@@ -588,13 +586,7 @@ def plot_condition_frfs(conditions, trials, curves: dict, title: str = "", path=
         gain.plot(f, np.abs(recorded), **style,
                   label=f"recorded, {condition}" if k == 0 else None)
         phase.plot(f, degrees, **style)
-    gain.set_yscale("log")
-    gain.set_ylabel("gain (deg/deg)")
-    phase.set_ylabel("phase (°)")
-    phase.set_xscale("log")
-    phase.set_xlabel("frequency (Hz)")
-    for a in (gain, phase):
-        a.grid(alpha=0.3, which="both")
+    _over_frequency((gain, phase), ("gain (deg/deg)", "phase (°)"))
     gain.legend(fontsize=8)
     fig.suptitle(title)
     return _finished(fig, path)
@@ -898,14 +890,9 @@ def plot_robot_check(result, path=None, ax=None):
             ax_p.plot(f, phase[:, m], style, color=f"C{m}", marker="o", ms=2.5, lw=1)
     if result.engine_gain is None or result.lumped_gain is None:
         ax_g.text(0.5, 0.5, "a body fell: no FRF of it", ha="center", transform=ax_g.transAxes)
-    for a in (ax_g, ax_p):
-        a.set_xscale("log")
-        a.grid(alpha=0.3, which="both")
+    _over_frequency((ax_g, ax_p), ("gain (deg/deg)", "phase (°)"))
+    ax_g.set_xscale("log")
     ax_t.grid(alpha=0.3)
-    ax_g.set_yscale("log")
-    ax_g.set_ylabel("gain (deg/deg)")
-    ax_p.set_ylabel("phase (°)")
-    ax_p.set_xlabel("frequency (Hz)")
     if len(f):
         ax_g.legend(fontsize=8, title="solid: MuJoCo, dashed: lumped", title_fontsize=8)
     fig.suptitle(f"robot check of {result.name}: {result.engine_label} vs "

@@ -30,7 +30,7 @@ from posture_id.errors import BodyError
 from posture_id.fileio import atomic_write_text
 
 __all__ = ["RobotPreset", "PRESETS", "robots_dir", "lump_robot", "LumpedBody", "preset_body",
-           "load_posture"]
+           "load_posture", "world_inertia"]
 
 _PITCH_TOL = 1e-6
 
@@ -132,24 +132,22 @@ def _joint_id(model, name: str, role: str, urdf: Path) -> int:
     raise BodyError(f"{urdf}: {role} joint '{name}' is not in the model{hint}")
 
 
+def world_inertia(model, data, j: int) -> tuple[float, np.ndarray, np.ndarray]:
+    """The body of Pinocchio joint ``j`` placed by ``data``'s forward kinematics: mass
+    (kg), COM (3,) m and inertia tensor about the COM (3, 3) kg·m², world axes."""
+    inertia, placement = model.inertias[j], data.oMi[j]
+    rot = np.asarray(placement.rotation)
+    return (float(inertia.mass), np.asarray(placement.act(np.asarray(inertia.lever))),
+            rot @ np.asarray(inertia.inertia) @ rot.T)
+
+
 def _group_inertia(model, data, ids) -> tuple[float, np.ndarray, np.ndarray]:
     """Mass (kg), COM (3,) m and inertia tensor about the COM (3, 3) kg·m², world axes."""
-    mass = 0.0
-    first = np.zeros(3)
-    parts = []
-    for j in ids:
-        inertia = model.inertias[j]
-        if inertia.mass == 0.0:
-            continue
-        placement = data.oMi[j]
-        rot = np.asarray(placement.rotation)
-        com = np.asarray(placement.act(np.asarray(inertia.lever)))
-        parts.append((inertia.mass, com, rot @ np.asarray(inertia.inertia) @ rot.T))
-        mass += inertia.mass
-        first += inertia.mass * com
+    parts = [world_inertia(model, data, j) for j in ids if model.inertias[j].mass != 0.0]
+    mass = sum(m for m, _, _ in parts)
     if mass == 0.0:
         raise BodyError("a lumped segment has no mass: check the joint names")
-    com = first / mass
+    com = sum(m * c for m, c, _ in parts) / mass
     tensor = np.zeros((3, 3))
     for m, c, inertia in parts:
         d = c - com

@@ -47,6 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
+from posture_id.bodies.lumping import world_inertia
 from posture_id.errors import BodyError
 from posture_id.robots.errors import RobotError, require_mujoco
 from posture_id.robots.mujoco_model import _quat, _vec
@@ -204,18 +205,6 @@ class ServoGain:
                 "locked": self.locked, "armature_kgm2": self.armature}
 
 
-def _world_inertias(model, data):
-    """Per Pinocchio joint j ≥ 1: mass kg, COM (3,) m, inertia (3, 3) about the COM,
-    world axes."""
-    out = {}
-    for j in range(1, model.njoints):
-        inertia = model.inertias[j]
-        rot = np.asarray(data.oMi[j].rotation)
-        out[j] = (float(inertia.mass), np.asarray(data.oMi[j].act(np.asarray(inertia.lever))),
-                  rot @ np.asarray(inertia.inertia) @ rot.T)
-    return out
-
-
 def _joint_axes(model, data, q) -> dict[int, np.ndarray]:
     """World axis (3,) of every 1-DoF revolute joint at ``q`` (others absent)."""
     import pinocchio as pin
@@ -244,7 +233,7 @@ def servo_gains(model, data, q, dec_joints: set[int], ankles: tuple[int, int],
     K = ``stiffness_factor`` · m · g · max(lever, ``min_lever_m``); B = 2ζ·√(K·I), I the
     carried mass's moment of inertia about the joint's axis (the same share).
     """
-    parts = _world_inertias(model, data)
+    parts = {j: world_inertia(model, data, j) for j in range(1, model.njoints)}
     axes = _joint_axes(model, data, q)
     g = float(np.linalg.norm(model.gravity.linear))
     everything = set(range(1, model.njoints))

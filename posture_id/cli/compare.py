@@ -79,9 +79,7 @@ def run(args: argparse.Namespace) -> int:
 
 def run_cohort(args: argparse.Namespace) -> int:
     """Every recording of a folder or pattern, into the --out folder."""
-    import glob
-
-    from posture_id.cli.output_folder import OutputFolder
+    from posture_id.cli.output_folder import cohort_folder
     from posture_id.comparison.cohort import compare_cohort
     from posture_id.identify.cohort import find_recordings, stimulus_record
 
@@ -95,9 +93,7 @@ def run_cohort(args: argparse.Namespace) -> int:
         raise PostureIdError(f"{args.recording}: a cohort's comparisons need a folder: --out "
                              "FOLDER")
     recordings = find_recordings(args.recording)
-    writes = (*(f"{glob.escape(p.stem)}.json" for p in recordings), "summary.csv")
-    with OutputFolder(args.out, "--out", writes,
-                      inputs=(*recordings, args.body, args.tilt, *{p.parent for p in recordings})):
+    with cohort_folder(args, recordings):
         body = load_body(args.body or DEFAULT_URDF)
 
         def read(path: Path):

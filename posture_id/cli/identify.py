@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import glob
 from functools import cache
 from pathlib import Path
 
@@ -19,7 +18,7 @@ from posture_id.cli.exit_status import answered
 from posture_id.cli.fit import add_search_arguments, search_flags_given, search_keywords
 from posture_id.cli.markers import recording_body
 from posture_id.cli.norm import norm_bands
-from posture_id.cli.output_folder import OutputFolder
+from posture_id.cli.output_folder import cohort_folder
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
     add_column_arguments,
@@ -132,12 +131,6 @@ def run(args: argparse.Namespace) -> int:
     return answered(result.fell or (result.verdict is not None and result.verdict.doubtful))
 
 
-def _folders_of(recordings: list[Path]) -> set[Path]:
-    """The recordings' folders: a cohort's results beside its recordings would be read as
-    recordings the next time."""
-    return {p.parent for p in recordings}
-
-
 def _identify_ic(args: argparse.Namespace) -> int:
     """``--model ic``: the IC fit of one recording (fit --model ic's)."""
     from posture_id.cli.fit import ic_answer
@@ -176,9 +169,6 @@ def run_cohort(args: argparse.Namespace) -> int:
                              "them: posture-id compare DIR --out FOLDER")
     fit_options = FitOptions(**search_keywords(args))
     recordings = find_recordings(args.recording)
-    writes = (*(f"{glob.escape(p.stem)}.json" for p in recordings), "summary.csv",
-              *((f"{glob.escape(p.stem)}.frf.json" for p in recordings)
-                if args.band_preset or args.norm else ()))
     norm = _cohort_norm(args)
     if args.scheduler:
         from posture_id.executors import check_scheduler_address
@@ -190,8 +180,8 @@ def run_cohort(args: argparse.Namespace) -> int:
             names = ", ".join(p.name for p in without[:3]) + (" …" if len(without) > 3 else "")
             say(f"{len(without)} of {len(recordings)} recordings have no body in "
                 f"{args.bodies} ({names}): they get {args.body or 'the default TIP'}")
-    with OutputFolder(args.out, "--out", writes,
-                      inputs=(*recordings, args.body, args.tilt, *_folders_of(recordings))):
+    suffixes = (".json", ".frf.json") if args.band_preset or args.norm else (".json",)
+    with cohort_folder(args, recordings, suffixes):
         body = load_body(args.body or DEFAULT_URDF)
         stimulus = stimulus_from_args(args, default=None)
         identifier = Identifier(body, Method(args.method), args.network, fit_options,

@@ -14,6 +14,7 @@ it is the user's. A run that fails leaves no new empty folder behind.
 
 from __future__ import annotations
 
+import glob
 import hashlib
 import json
 from collections.abc import Iterable, Sequence
@@ -23,7 +24,7 @@ from types import TracebackType
 from posture_id.cli.arguments import check_output_folder
 from posture_id.errors import PostureIdError
 
-__all__ = ["LEDGER", "OutputFolder", "written_by_posture_id"]
+__all__ = ["LEDGER", "OutputFolder", "written_by_posture_id", "cohort_folder"]
 
 #: The folder's record of the files posture-id wrote into it: {relative path: SHA-256}
 #: (JSON, but not named *.json: a user's loop over the results' JSON does not meet it).
@@ -127,3 +128,15 @@ class OutputFolder:
         atomic_write_text(self.path / LEDGER, json_text(
             {"about": "the files posture-id wrote here (it overwrites these, and no other)",
              "files": dict(sorted(files.items()))}))
+
+
+def cohort_folder(args, recordings: list[Path], suffixes: Sequence[str] = (".json",)
+                  ) -> OutputFolder:
+    """A cohort's ``--out`` folder (``args.out``): ``<recording><suffix>`` for each of the
+    ``recordings`` and each of ``suffixes``, and summary.csv. Its inputs: the recordings,
+    ``--body``, ``--tilt`` and the recordings' folders (results beside the recordings would
+    be read as recordings the next time)."""
+    writes = (*(f"{glob.escape(p.stem)}{suffix}" for suffix in suffixes for p in recordings),
+              "summary.csv")
+    return OutputFolder(args.out, "--out", writes, inputs=(
+        *recordings, args.body, args.tilt, *{p.parent for p in recordings}))

@@ -191,10 +191,7 @@ def subjects_without_a_body(recordings: list[Path], bodies: str | Path) -> list[
     """The recordings whose subject has no ``<recording stem>.urdf`` in ``bodies``; a
     folder of bodies that holds none of the recordings' is refused (the names do not
     match: every subject would get the default body)."""
-    bodies = Path(bodies)
-    if not bodies.is_dir():
-        raise PostureIdError(f"{bodies}: not a folder of bodies (one URDF per subject, named "
-                             "like their recording)")
+    bodies = _bodies_folder(bodies)
     missing = [p for p in recordings if not (bodies / f"{p.stem}.urdf").is_file()]
     if recordings and len(missing) == len(recordings):
         found = sorted(q.name for q in bodies.glob("*.urdf"))[:3]
@@ -203,6 +200,15 @@ def subjects_without_a_body(recordings: list[Path], bodies: str | Path) -> list[
             f"{recordings[0].stem}.urdf and the like; found {', '.join(found) or 'no URDF'}):"
             " name each subject's URDF like their recording")
     return missing
+
+
+def _bodies_folder(bodies: str | Path) -> Path:
+    """``bodies`` as a folder of the subjects' bodies, refused when it is none."""
+    bodies = Path(bodies)
+    if not bodies.is_dir():
+        raise PostureIdError(f"{bodies}: not a folder of bodies (one URDF per subject, named "
+                             "like their recording)")
+    return bodies
 
 
 class SubjectIdentifiers:
@@ -215,10 +221,7 @@ class SubjectIdentifiers:
                  model: str | Path | None = None,
                  trial_bodies: MarkerMapping | None = None) -> None:
         self.default, self.model = identifier, model
-        self.bodies = None if bodies is None else Path(bodies)
-        if self.bodies is not None and not self.bodies.is_dir():
-            raise PostureIdError(f"{self.bodies}: not a folder of bodies (one URDF per "
-                                 "subject, named like their recording)")
+        self.bodies = None if bodies is None else _bodies_folder(bodies)
         self.trial_bodies = trial_bodies
         self._built: dict[Path, Identifier] = {}
 

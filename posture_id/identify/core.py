@@ -49,10 +49,10 @@ from posture_id.identify.noise_check import (
 )
 from posture_id.identify.result import NOTHING_BALANCES, IdentificationResult, SegmentFit
 from posture_id.identify.verdict import (
-    PEOPLE_LIKE_SHARE,
     UNSURE_CLASS,
     TrustVerdict,
     class_doubts,
+    is_people_like,
     suggestion,
     unpinned_parameters,
 )
@@ -335,9 +335,7 @@ class Identifier:
         verdict = answer.verdict
         how = auto_refinement(verdict)
         if polish and how in (Refinement.KEEP, Refinement.RAW):
-            people_like = (verdict.locked_share is not None
-                           and verdict.locked_share < PEOPLE_LIKE_SHARE)
-            how = Refinement.LOCKED_PRIOR if people_like else Refinement.LOCKED
+            how = Refinement.LOCKED_PRIOR if verdict.people_like else Refinement.LOCKED
         if how is Refinement.KEEP:
             return answer
         options, on = self.fit_options, "the sway"
@@ -407,11 +405,9 @@ class Identifier:
         verdict = answer.verdict
         if answer.fell or verdict.noise is None:
             return answer, trial, None
-        people_like = verdict.locked_share is not None and \
-            verdict.locked_share < PEOPLE_LIKE_SHARE
         period = trial.stimulus.period_s
         cycles = _analysed_cycles(trial)
-        if not (verdict.beyond_noise or people_like) or period is None or cycles is None:
+        if not (verdict.beyond_noise or verdict.people_like) or period is None or cycles is None:
             return answer, trial, None
         reach = period / 4  # half a cycle on, a PRTS or a sinusoid is its own negative
         ratio = verdict.noise.ratio
@@ -605,7 +601,7 @@ def auto_refinement(verdict: TrustVerdict) -> Refinement:
                                 or verdict.outside):
         return Refinement.KEEP
     share = verdict.locked_share
-    if share is not None and share < PEOPLE_LIKE_SHARE:
+    if verdict.people_like:
         return Refinement.LOCKED_PRIOR if verdict.beyond_noise else Refinement.KEEP
     if verdict.noise is not None and verdict.noise.unchecked:
         # one cycle: no locked share to tell people-like sway from part-locked, and least
@@ -762,8 +758,8 @@ def _widened(network, cnn, intervals, share: float | None, noise: NoiseCheck):
     leaves (``noise.noise_relative``); as they are otherwise."""
     widening = getattr(network, "widening", None)
     relative = noise.noise_relative
-    if (widening is None or intervals is None or share is None
-            or share >= PEOPLE_LIKE_SHARE or not math.isfinite(relative)):
+    if (widening is None or intervals is None or not is_people_like(share)
+            or not math.isfinite(relative)):
         return intervals
     factor = widening.factor(relative)
     if np.all(factor <= 1.0):
@@ -787,7 +783,7 @@ def _verdict(method: Method, options: FitOptions, trial: PreparedTrial, noise: N
     sway (the universal model); ``intervals`` (or None) and ``parameters``: the answer's;
     ``resimulated``: its sway re-simulated (S, N) rad."""
     locked_fit = options.locked is not None
-    people_like = share is not None and share < PEOPLE_LIKE_SHARE
+    people_like = is_people_like(share)
     outside = list(cnn.outside) if method is Method.CNN and cnn is not None else []
     if people_like and method is Method.CNN and not reads_people_like:
         outside.append(f"only {100 * share:.0f} % of the body sway is stimulus-locked; the "

@@ -121,7 +121,7 @@ class IdentificationResult(Result):
     def to_dict(self) -> dict:
         """JSON-ready (no sample arrays): parameters, errors, per-segment fit, trust verdict,
         intervals, notices, the stages' results and provenance."""
-        out = {
+        return {
             "method": self.method.value,
             **parameter_block(self.parameters, self.normalised, self.class_probability),
             "e_id_deg": self.e_id_deg,
@@ -143,7 +143,6 @@ class IdentificationResult(Result):
                                                   if k != "provenance"},
             "provenance": self.provenance,
         }
-        return out
 
     def fell_line(self) -> str:
         """The one line that says the identified model falls (and what to try, unless

@@ -63,11 +63,16 @@ from posture_id.uncertainty.intervals import LABELS
 
 __all__ = ["TrustVerdict", "TrustLevel", "PEOPLE_LIKE_SHARE", "PINNED_FIELDS", "PINNED_TO",
            "CLASSES_RIGHT_AT_LEAST", "UNSURE_CLASS", "NAMED_CLASS", "FITTED_NOISE_LIMIT",
-           "suggestion", "unpinned_parameters", "class_doubts"]
+           "suggestion", "unpinned_parameters", "class_doubts", "is_people_like"]
 
 #: Body sway whose noise-corrected stimulus-locked share is below this is people-like:
 #: the subject's own sway dominates (docs/real_recordings.md: 10–40 % in people).
 PEOPLE_LIKE_SHARE = 0.6
+
+
+def is_people_like(locked_share: float | None) -> bool:
+    """Whether body sway of this stimulus-locked share (None: unknown) is people-like."""
+    return locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
 
 #: A parameter on a search bound makes the answer doubtful when it is one of these: the
 #: sway determines them well, so a bound there cut the answer short. Ki and the delay are
@@ -162,6 +167,11 @@ class TrustVerdict:
         """Least squares' answer leaves more than :data:`FITTED_NOISE_LIMIT` times the
         recording's noise (close to the sway or not)."""
         return self.fitted and self.noise is not None and self.noise.ratio > FITTED_NOISE_LIMIT
+
+    @property
+    def people_like(self) -> bool:
+        """The body sway is people-like (:func:`is_people_like`)."""
+        return is_people_like(self.locked_share)
 
     @property
     def not_close(self) -> bool:
@@ -330,7 +340,7 @@ def suggestion(method: Method, locked: bool, locked_share: float | None,
             return ("a recording of at least one whole cycle of a periodic tilt (a PRTS): "
                     "the network, the hybrid and the locked fit read only those")
         return ""
-    people_like = locked_share is not None and locked_share < PEOPLE_LIKE_SHARE
+    people_like = is_people_like(locked_share)
     if people_like and not locked and not (method is Method.CNN and network_reads_people_like):
         return LOCKED_FLAGS
     timing = (period_s is not None and method is not Method.CNN and not offset_searched

@@ -56,6 +56,16 @@ def _count(name: str, value) -> int:
     return int(value)
 
 
+def _numbers(values, count: int, refusal: str) -> tuple[float, ...]:
+    """``values`` as ``count`` finite floats (one per sine); ``refusal`` where they are not."""
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in values):
+        raise StimulusError(refusal)
+    numbers = tuple(float(v) for v in values)
+    if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
+        raise StimulusError(refusal)
+    return numbers
+
+
 #: The largest peak-to-peak tilt a protocol may ask of a posture platform, degrees.
 MAX_PLATFORM_DEG = 20.0
 #: A protocol's frequencies lie below this, Hz: the Nyquist frequency of the 50 Hz
@@ -233,13 +243,8 @@ class MultisineProtocol(_Single):
             value = getattr(self, name)
             if value is None:
                 continue
-            if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
-                raise StimulusError(f"protocol {name} must be {len(h)} finite numbers (one "
-                                    f"per harmonic), got {getattr(self, name)!r}")
-            value = tuple(float(v) for v in value)
-            if len(value) != len(h) or not all(math.isfinite(v) for v in value):
-                raise StimulusError(f"protocol {name} must be {len(h)} finite numbers (one "
-                                    f"per harmonic), got {getattr(self, name)!r}")
+            value = _numbers(value, len(h), f"protocol {name} must be {len(h)} finite numbers "
+                             f"(one per harmonic), got {value!r}")
             if name == "weights" and (min(value) < 0 or max(value) <= 0):
                 raise StimulusError("protocol weights must be ≥ 0, not all 0")
             object.__setattr__(self, name, value)
@@ -292,13 +297,8 @@ class SumOfSinesProtocol(_Single):
         object.__setattr__(self, "frequencies_hz", f)
         object.__setattr__(self, "amplitudes_deg", a)
         if self.phases_rad is not None:
-            if not all(isinstance(v, int | float) and not isinstance(v, bool)
-                       for v in self.phases_rad):
-                raise StimulusError(f"protocol phases_rad must be {len(f)} finite numbers")
-            p = tuple(float(v) for v in self.phases_rad)
-            if len(p) != len(f) or not all(math.isfinite(v) for v in p):
-                raise StimulusError(f"protocol phases_rad must be {len(f)} finite numbers")
-            object.__setattr__(self, "phases_rad", p)
+            object.__setattr__(self, "phases_rad", _numbers(
+                self.phases_rad, len(f), f"protocol phases_rad must be {len(f)} finite numbers"))
         _count("cycles", self.cycles)
         _count("repetitions", self.repetitions)
         _below_nyquist("frequencies_hz", max(f))

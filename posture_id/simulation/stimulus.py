@@ -328,13 +328,10 @@ def recognise_lab_prts(times_s: np.ndarray, tilt_rad: np.ndarray) -> TiltProfile
             n = int(round(states * state_s * _SEARCH_RATE_HZ))
             if n > len(coarse) or n < 8:
                 continue
-            x = coarse[:n] - coarse[:n].mean()
             template = unit_position(symbols, np.arange(n) / (state_s * _SEARCH_RATE_HZ))
-            template = template - template.mean()
-            norm = float(np.linalg.norm(x) * np.linalg.norm(template))
-            if norm == 0:
+            corr = _correlation(template, coarse[:n])
+            if corr is None:
                 continue
-            corr = np.fft.irfft(np.fft.rfft(template) * np.conj(np.fft.rfft(x)), n) / norm
             k = int(np.argmax(np.abs(corr)))
             if abs(corr[k]) > best[0]:
                 best = (float(abs(corr[k])), states, float(state_s), k,
@@ -463,14 +460,19 @@ def prts_match(tilt_rad: np.ndarray, rate_hz: float, states: int,
     x = np.asarray(tilt_rad, dtype=float)
     if n < 8 or len(x) < n:
         return 0.0
-    x = x[:n] - x[:n].mean()
-    template = prts(1.0, 1, states, state_s).angle(np.arange(n) / rate_hz)
-    template = template - template.mean()
-    norm = float(np.linalg.norm(x) * np.linalg.norm(template))
+    correlation = _correlation(x[:n], prts(1.0, 1, states, state_s).angle(np.arange(n) / rate_hz))
+    return 0.0 if correlation is None else float(np.max(np.abs(correlation)))
+
+
+def _correlation(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """(n,) the circular cross-correlation of two (n,) series, each less its mean, over the
+    product of their norms (its peak is 1 where one is the other shifted); None where
+    either is constant."""
+    a, b = a - a.mean(), b - b.mean()
+    norm = float(np.linalg.norm(a) * np.linalg.norm(b))
     if norm == 0:
-        return 0.0
-    correlation = np.fft.irfft(np.fft.rfft(x) * np.conj(np.fft.rfft(template)), n)
-    return float(np.max(np.abs(correlation)) / norm)
+        return None
+    return np.fft.irfft(np.fft.rfft(a) * np.conj(np.fft.rfft(b)), len(a)) / norm
 
 
 @dataclass(frozen=True)

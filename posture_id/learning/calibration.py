@@ -50,10 +50,9 @@ import numpy as np
 from posture_id.fileio import atomic_write_text, json_text
 from posture_id.learning.checkpoint import LoadedModel
 from posture_id.learning.config import ClassOutput, Layout, LearningError
-from posture_id.learning.data.store import Dataset
+from posture_id.learning.data.store import Dataset, with_sensor_noise
 from posture_id.learning.inputs import sway_features
 from posture_id.learning.prediction import predict_images
-from posture_id.learning.samples import stimulus_of
 from posture_id.learning.universal_model import ModelError, UniversalModel, UniversalPrediction
 from posture_id.learning.universal_samples import STIMULUS_COLUMNS, Samples
 from posture_id.progress import Progress, report
@@ -93,20 +92,17 @@ def held_out_predictions(model: LoadedModel, data: Dataset, split: str, noise_de
     ``noise_deg``° added to the stored noise-free sway (seeded by shard and level)."""
     layout = model.config.layout
     locals_ = data.split_local(split)
-    profile = stimulus_of(data.manifest["stimulus"])
-    rate = float(data.manifest["options"]["sample_rate_hz"])
+    profile = data.stimulus
     estimate, truth, logit, noise = [], [], [], []
     shards = [k for k, local in enumerate(locals_) if len(local)]
     for done, k in enumerate(shards):
         report(progress, done, len(shards), f"{split} split at {noise_deg:g}°")
         arrays = data.load_shard(k, keys=("theta", "targets"))
         local = locals_[k]
-        theta = arrays["theta"][local].astype(np.float64)
-        rng = np.random.default_rng(np.random.SeedSequence(
-            [k, int(round(1e6 * noise_deg)), _NOISE_STREAM]))
-        theta += np.radians(noise_deg) * rng.standard_normal(theta.shape)
-        tilt = profile.angle(np.arange(theta.shape[1]) / rate)
-        features = sway_features(layout, profile, tilt, theta)
+        theta = with_sensor_noise(arrays["theta"][local].astype(np.float64), noise_deg,
+                                  np.random.SeedSequence([k, int(round(1e6 * noise_deg)),
+                                                          _NOISE_STREAM]))
+        features = sway_features(layout, profile, data.tilt(theta.shape[1]), theta)
         n = theta.shape[2]
         if layout is Layout.MODULAR:
             features = features.reshape(-1, *features.shape[2:])

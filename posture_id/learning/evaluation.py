@@ -49,7 +49,7 @@ from posture_id.learning.checkpoint import LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError, NetworkConfig
 from posture_id.learning.data.store import Dataset
 from posture_id.learning.prediction import predict_images
-from posture_id.learning.samples import SplitSamples, stimulus_of
+from posture_id.learning.samples import SplitSamples
 from posture_id.learning.universal_model import UniversalModel
 from posture_id.learning.universal_samples import Samples
 from posture_id.plotting import plot_identification_error, plot_parameter_errors
@@ -327,8 +327,7 @@ def _identification(model, data: Dataset, samples: SplitSamples, predicted: np.n
     if body.sha256 != manifest["body"]["sha256"]:
         raise LearningError(f"{manifest['body']['urdf']}: the body file changed since the data "
                             "set was made; E_id needs the same body")
-    stim = manifest["stimulus"]
-    stimulus = stimulus_of(stim)
+    stimulus = data.stimulus
     options = SimulationOptions(**manifest["options"])
     truth = samples.trial_parameters()
     count = min(count, truth.n_trials)

@@ -24,8 +24,7 @@ import torch
 from posture_id.dec.parameters import ParameterArrays
 from posture_id.frf.features import frf_features
 from posture_id.learning.config import Layout, LearningError
-from posture_id.learning.data.store import Dataset
-from posture_id.simulation.stimulus import TiltProfile, prts
+from posture_id.learning.data.store import Dataset, stimulus_of, with_sensor_noise
 
 __all__ = ["Standardiser", "SplitSamples", "stimulus_of", "frf_inputs"]
 
@@ -33,23 +32,15 @@ __all__ = ["Standardiser", "SplitSamples", "stimulus_of", "frf_inputs"]
 FRF_NOISE_STREAM = 0x465246
 
 
-def stimulus_of(entry: dict) -> TiltProfile:
-    """The PRTS of a data-set manifest's (or a model sidecar's) ``"stimulus"`` entry."""
-    return prts(entry["amplitude_deg"], entry["cycles"], entry["states"])
-
-
 def frf_inputs(data: Dataset, arrays: dict[str, np.ndarray], k: int) -> np.ndarray:
     """(K, 3N, 1, F) FRF features of every used trial of shard ``k`` (``arrays``): its
     stored sway plus white sensor noise of the trial's ``sensor_noise_deg``, drawn from
     ``SeedSequence([k, FRF_NOISE_STREAM])``."""
-    stimulus = stimulus_of(data.manifest["stimulus"])
-    rate = float(data.manifest["options"]["sample_rate_hz"])
-    theta = arrays["theta"].astype(np.float64)
-    rng = np.random.default_rng(np.random.SeedSequence([k, FRF_NOISE_STREAM]))
-    sd = np.radians(arrays["sensor_noise_deg"])[:, None, None]
-    noisy = theta + sd * rng.standard_normal(theta.shape)
-    tilt = stimulus.angle(np.arange(theta.shape[1]) / rate)
-    return frf_features(tilt, noisy, rate, stimulus.period_s, stimulus.periodic_from_s)
+    stimulus = data.stimulus
+    noisy = with_sensor_noise(arrays["theta"].astype(np.float64), arrays["sensor_noise_deg"],
+                              np.random.SeedSequence([k, FRF_NOISE_STREAM]))
+    return frf_features(data.tilt(noisy.shape[1]), noisy, data.rate_hz, stimulus.period_s,
+                        stimulus.periodic_from_s)
 
 
 @dataclass(frozen=True)

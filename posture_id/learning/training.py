@@ -38,7 +38,7 @@ from posture_id.learning.config import (
 )
 from posture_id.learning.data.store import Dataset
 from posture_id.learning.network import IdentifierNetwork
-from posture_id.learning.samples import SplitSamples, Standardiser, stimulus_of
+from posture_id.learning.samples import SplitSamples, Standardiser
 from posture_id.learning.trainer import EpochTrainer, TrainingResult
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
@@ -160,9 +160,8 @@ class Trainer(EpochTrainer):
         data = self.data
         config = network or NetworkConfig.for_body(Layout.MODULAR, data.n_segments)
         if config.layout is Layout.FRF:  # the input's width follows the stimulus
-            stimulus = stimulus_of(data.manifest["stimulus"])
-            rate = float(data.manifest["options"]["sample_rate_hz"])
-            tilt = stimulus.angle(np.arange(int(round(stimulus.duration * rate)) + 1) / rate)
+            stimulus, rate = data.stimulus, data.rate_hz
+            tilt = data.tilt(int(round(stimulus.duration * rate)) + 1)
             config = replace(config, image_size=frf_width(
                 tilt, rate, stimulus.period_s, stimulus.periodic_from_s))
         expected = NetworkConfig.for_body(config.layout, data.n_segments)

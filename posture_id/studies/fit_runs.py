@@ -29,7 +29,6 @@ from posture_id.fitting.options import FitOptions, FixedClasses
 from posture_id.identify import Method
 from posture_id.learning.data.store import Dataset
 from posture_id.learning.model_files import SIDECAR
-from posture_id.learning.samples import stimulus_of
 from posture_id.progress import Progress, report
 from posture_id.recording import Recording
 from posture_id.studies.journal import Journal
@@ -56,10 +55,8 @@ def held_out_recording(data: Dataset, shard: int, local: int, noise_deg: float,
     of one stored trial."""
     arrays = data.load_shard(shard, keys=("theta", "targets"))
     theta = arrays["theta"][local].astype(np.float64)
-    rate = float(data.manifest["options"]["sample_rate_hz"])
-    t = np.arange(len(theta)) / rate
-    stimulus = stimulus_of(data.manifest["stimulus"])
-    recording = Recording(t, stimulus.angle(t), theta, tuple(data.manifest["body"]["segments"]),
+    t = np.arange(len(theta)) / data.rate_hz
+    recording = Recording(t, data.tilt(len(theta)), theta, tuple(data.manifest["body"]["segments"]),
                           f"trial {shard}:{local}")
     if noise_deg > 0:
         recording = recording.with_sensor_noise(noise_deg, seed)

@@ -9,11 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from posture_id.bodies.body import load_body
-from posture_id.learning.data.store import Dataset
+from posture_id.learning.data.store import Dataset, with_sensor_noise
 from posture_id.learning.evaluation import relative_errors
 from posture_id.learning.features.harmonics import harmonic_layout, sway_harmonics
 from posture_id.learning.features.module_frfs import body_descriptors, com_weights
-from posture_id.learning.samples import stimulus_of
 from posture_id.learning.universal_model import UniversalModel
 from posture_id.learning.universal_samples import inputs_and_noise
 
@@ -34,8 +33,7 @@ def universal_on_dataset(universal_dir: str | Path, dataset_dir: str | Path,
     body = load_body(data.manifest["body"]["urdf"])
     stats = data.stats()
     std = np.asarray(stats["targets_std"], dtype=float)[:4]
-    stimulus = stimulus_of(data.manifest["stimulus"])
-    rate = float(data.manifest["options"]["sample_rate_hz"])
+    stimulus, rate = data.stimulus, data.rate_hz
     desc, com = body_descriptors(body), com_weights(body)
     local = data.split_local("test")
     errors, rel, right = [], [], []
@@ -44,13 +42,12 @@ def universal_on_dataset(universal_dir: str | Path, dataset_dir: str | Path,
         if not len(idx):
             continue
         arrays = data.load_shard(k)
-        theta = arrays["theta"][idx].astype(np.float64)
-        rng = np.random.default_rng(np.random.SeedSequence([k, NOISE_STREAM]))
-        sd = np.radians(arrays["sensor_noise_deg"][idx])[:, None, None]
-        theta = theta + sd * rng.standard_normal(theta.shape)
+        theta = with_sensor_noise(arrays["theta"][idx].astype(np.float64),
+                                  arrays["sensor_noise_deg"][idx],
+                                  np.random.SeedSequence([k, NOISE_STREAM]))
         if layout is None:
-            tilt = stimulus.angle(np.arange(theta.shape[1]) / rate)
-            layout = harmonic_layout(tilt, rate, stimulus.period_s, stimulus.periodic_from_s)
+            layout = harmonic_layout(data.tilt(theta.shape[1]), rate, stimulus.period_s,
+                                     stimulus.periodic_from_s)
         y = sway_harmonics(layout, np.moveaxis(theta, 0, 1))  # (K, T, N)
         pred = model.predict(*inputs_and_noise(layout, y, desc, com))
         truth = arrays["targets"][idx].reshape(-1, 5).astype(float)

@@ -20,9 +20,10 @@ import numpy as np
 from posture_id.fileio import atomic_write, atomic_write_text, file_sha256, json_text
 from posture_id.learning.data.trial_config import DatasetError
 from posture_id.plotting import plot_dataset_overview, plot_images
+from posture_id.simulation.stimulus import TiltProfile, prts
 
 __all__ = ["Dataset", "FORMAT", "FORMAT_VERSION", "SET_KEYS", "read_manifest", "write_manifest",
-           "check_shard", "save_npz", "shard_name"]
+           "check_shard", "save_npz", "shard_name", "stimulus_of", "with_sensor_noise"]
 
 FORMAT = "posture_id-dataset"
 #: 2: the simulation options are nested under "simulation" in the configuration.
@@ -35,6 +36,19 @@ SET_KEYS = {"config": dict, "shards": list, "complete": bool}
 #: Keys every paper data set's manifest has (a finished one has more: counts, split).
 _MANIFEST_KEYS = {**SET_KEYS, "body": dict, "stimulus": dict, "options": dict}
 _SHARD_KEYS = {"index": int, "file": str, "simulated": int, "kept": int, "sha256": str}
+
+
+def stimulus_of(entry: dict) -> TiltProfile:
+    """The PRTS of a data-set manifest's (or a model sidecar's) ``"stimulus"`` entry."""
+    return prts(entry["amplitude_deg"], entry["cycles"], entry["states"])
+
+
+def with_sensor_noise(theta: np.ndarray, sd_deg, seed) -> np.ndarray:
+    """Trials' segment angles ``theta`` (T, S, N) rad plus white sensor noise of SD
+    ``sd_deg`` (°, one for all or (T,) one per trial), drawn from
+    ``np.random.default_rng(seed)`` (a seed sequence, or a generator drawn on)."""
+    rng = np.random.default_rng(seed)
+    return theta + np.reshape(np.radians(sd_deg), (-1, 1, 1)) * rng.standard_normal(theta.shape)
 
 
 @dataclass
@@ -82,6 +96,20 @@ class Dataset:
     def n_segments(self) -> int:
         """N, the segments of the body the set was simulated for."""
         return self.manifest["body"]["n_segments"]
+
+    @property
+    def stimulus(self) -> TiltProfile:
+        """The PRTS the set's trials were simulated under (:func:`stimulus_of`)."""
+        return stimulus_of(self.manifest["stimulus"])
+
+    @property
+    def rate_hz(self) -> float:
+        """The sample rate of the stored sway, Hz."""
+        return float(self.manifest["options"]["sample_rate_hz"])
+
+    def tilt(self, samples: int) -> np.ndarray:
+        """(samples,) the stimulus's tilt at the stored sway's first sample times, rad."""
+        return self.stimulus.angle(np.arange(samples) / self.rate_hz)
 
     def load_shard(self, k: int, keys: tuple[str, ...] | None = None
                    ) -> dict[str, np.ndarray]:

@@ -14,6 +14,7 @@ import numpy as np
 from posture_id.bodies.body import Body, load_body
 from posture_id.dec.parameters import ParameterArrays, default_parameters, normalise_arrays
 from posture_id.dec.prior import sample_parameters
+from posture_id.learning.data.store import with_sensor_noise
 from posture_id.learning.data.trial_config import DatasetConfig
 from posture_id.learning.features.spectrograms import modular_images, monolithic_images, stft
 from posture_id.simulation.batch import simulate_batch
@@ -55,7 +56,7 @@ def make_shard(config: DatasetConfig, k: int, body: Body | None = None) -> dict[
     theta = batch.theta[kept]
     # sensor noise (after the parameter draws, so parameters do not depend on it)
     noise_sd = config.sensor_noise_deg * rng.random(len(theta))
-    noisy = theta + np.radians(noise_sd)[:, None, None] * rng.standard_normal(theta.shape)
+    noisy = with_sensor_noise(theta, noise_sd, rng)
     spectra = stft(np.moveaxis(noisy, 1, 2))  # (K, N, 51, 51)
     tilt_spectrum = stft(batch.tilt)
     targets = normalise_arrays(params, default_parameters(body))[kept]

@@ -101,30 +101,32 @@ def add_search_arguments(parser: argparse.ArgumentParser) -> None:
                              "(docs/model.md §5 draws have 0.5)")
     parser.add_argument("--fit-passive", action="store_true",
                         help="also fit each module's passive stiffness and damping")
-    low, high = (1 + b for b in default_of(FitOptions, "gain_bounds"))
+    low, high = _range_default("gain_bounds")
     parser.add_argument("--gain-range", type=non_negative_float, nargs=2, metavar=("MIN", "MAX"),
                         default=[low, high],
                         help="Kp, Ki and Kd are searched between MIN× and MAX× the body's "
                              f"default gains (default {low:g} {high:g})")
-    low, high = (1 + b for b in default_of(FitOptions, "delay_bounds"))
+    low, high = _range_default("delay_bounds")
     parser.add_argument("--delay-range", type=non_negative_float, nargs=2,
                         metavar=("MIN", "MAX"), default=[low, high],
                         help="delays are searched between MIN× and MAX× the default delay "
                              f"(default {low:g} {high:g})")
 
 
+def _range_default(bounds: str) -> list[float]:
+    """--gain-range's or --delay-range's default: FitOptions' ``bounds`` as factors."""
+    return [1 + b for b in default_of(FitOptions, bounds)]
+
+
 def search_flags_given(args: argparse.Namespace) -> list[str]:
     """The flags of :func:`add_search_arguments` given a value other than their default."""
-    low, high = (1 + b for b in default_of(FitOptions, "gain_bounds"))
-    delay_low, delay_high = (1 + b for b in default_of(FitOptions, "delay_bounds"))
-    defaults = {"--locked": (args.locked, False),
-                "--max-frequency-hz": (args.max_frequency_hz,
-                                       default_of(LockedOptions, "max_frequency_hz")),
-                "--max-offset-s": (args.max_offset_s, 0.0),
-                "--prior-sd": (args.prior_sd, None), "--fit-passive": (args.fit_passive, False),
-                "--gain-range": (list(args.gain_range), [low, high]),
-                "--delay-range": (list(args.delay_range), [delay_low, delay_high])}
-    return [flag for flag, (value, default) in defaults.items() if value != default]
+    defaults = {"--locked": False,
+                "--max-frequency-hz": default_of(LockedOptions, "max_frequency_hz"),
+                "--max-offset-s": 0.0, "--prior-sd": None, "--fit-passive": False,
+                "--gain-range": _range_default("gain_bounds"),
+                "--delay-range": _range_default("delay_bounds")}
+    return [flag for flag, default in defaults.items()
+            if getattr(args, flag[2:].replace("-", "_")) != default]  # a range: a list
 
 
 def search_keywords(args: argparse.Namespace) -> dict:

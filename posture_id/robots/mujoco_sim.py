@@ -40,7 +40,7 @@ from posture_id.simulation.results import SimulationResult
 from posture_id.simulation.stimulus import TiltProfile, prts
 
 __all__ = ["simulate_mujoco", "DelayLine", "DecController", "ChainSensors", "deadband",
-           "run_dec_loop", "loop_result", "stepped_options"]
+           "run_dec_loop", "stepped_options", "checked_parameters"]
 
 
 def deadband(rate: float, width: float) -> float:
@@ -211,31 +211,54 @@ def stepped_options(base: SimulationOptions, mujoco_options: MujocoOptions
         raise RobotError(f"MuJoCo timestep_s {dt:g} s: {exc}") from None
 
 
-def run_dec_loop(mujoco, m, d, tilt: np.ndarray, tilt_vel: np.ndarray,
-                 options: SimulationOptions, n: int, prescribe, sensors,
-                 controller: DecController, apply) -> tuple[np.ndarray, np.ndarray,
-                                                             float | None]:
-    """Step MuJoCo's model ``m``/``d`` through the stimulus on the step grid (``tilt``,
-    ``tilt_vel`` (K + 1,) rad, rad/s) under ``controller``: each step ``prescribe(angle,
-    rate)`` sets the platform, ``sensors()`` gives (θ, ω, α, α̇, platform angle and rate,
-    q, q̇) of the N modules, ``apply(torques)`` puts the N torques on the joints.
+def checked_parameters(params: DecParameters | None, body: Body, what: str
+                       ) -> DecParameters:
+    """``params`` (default: ``body``'s defaults), refused unless they are for its joints
+    (``what`` names the body in the refusal: "body", "the lumped")."""
+    params = params or default_parameters(body)
+    if params.joints != body.joint_names:
+        raise RobotError(f"parameters are for joints {', '.join(params.joints)}; {what} "
+                         f"'{body.name}' has {', '.join(body.joint_names)}")
+    return params
+
+
+def run_dec_loop(mujoco, m, d, stimulus: TiltProfile, options: SimulationOptions,
+                 body: Body, params: DecParameters, holding: list, prescribe, sensors,
+                 apply, description: str) -> SimulationResult:
+    """Step MuJoCo's model ``m``/``d`` through ``stimulus`` on the step grid under a
+    :class:`DecController` of ``params``: each step ``prescribe(angle, rate)`` sets the
+    platform (rad, rad/s), ``sensors()`` gives (θ, ω, α, α̇, platform angle and rate, q,
+    q̇) of the N modules, ``apply(torques)`` puts the N torques (N·m) on the joints.
+
+    The reference posture (docs/model.md §2) is MuJoCo's state when this is called (call
+    after ``mj_forward`` at rest): its COM-above angles, and ``holding`` (N,) N·m, the
+    torques that hold it against gravity.
 
     Returns:
-        (θ (S, N) rad, α (S, N) rad at the samples, NaN from a fall on; the fall's time,
-        s, or None).
+        The :class:`SimulationResult` for ``body`` (the chain, or the lumped body of a
+        whole one): θ (S, N) rad, α (S, N) rad at the samples, NaN from a fall on, and
+        the fall's time, s, or None; its description the stimulus's, then
+        ``description``.
     """
-    n_steps, every, dt = len(tilt) - 1, options.sample_every, options.dt
+    n_steps, every, dt = options.n_steps(stimulus), options.sample_every, options.dt
+    tilt, tilt_vel = stimulus.on_grid(dt, n_steps)
+    kp = params.array("kp").tolist()
+    alpha_ref = sensors()[2]
+    hold = [holding[i] - kp[i] * math.sin(alpha_ref[i]) for i in range(body.n_segments)]
+    controller = DecController(params, alpha_ref, hold, dt, options.deadband_rad_s)
     limit = math.radians(options.sway_limit_deg)
     n_samples = n_steps // every + 1
-    theta_out = np.full((n_samples, n), np.nan)
-    alpha_out = np.full((n_samples, n), np.nan)
+    theta_out = np.full((n_samples, body.n_segments), np.nan)
+    alpha_out = np.full((n_samples, body.n_segments), np.nan)
+    abort_time = None
     tilt_list, tilt_vel_list = tilt.tolist(), tilt_vel.tolist()
     for step in range(n_steps + 1):
         prescribe(tilt_list[step], tilt_vel_list[step])
         mujoco.mj_forward(m, d)
         theta, omega, alpha, alpha_rate, platform_angle, platform_rate, q, qd = sensors()
         if not all(abs(th) <= limit for th in theta):  # NaN too: a diverged body fell
-            return theta_out, alpha_out, step * dt
+            abort_time = step * dt
+            break
         if step % every == 0:
             theta_out[step // every] = theta
             alpha_out[step // every] = alpha
@@ -244,7 +267,9 @@ def run_dec_loop(mujoco, m, d, tilt: np.ndarray, tilt_vel: np.ndarray,
         apply(controller.torques(q, qd, theta, omega, alpha, alpha_rate, platform_angle,
                                  platform_rate))
         mujoco.mj_step(m, d)
-    return theta_out, alpha_out, None
+    return SimulationResult.on_body(options, tilt, body, params,
+                                    f"{stimulus.description}; {description}",
+                                    theta=theta_out, alpha=alpha_out, abort_time=abort_time)
 
 
 def simulate_mujoco(
@@ -279,20 +304,12 @@ def simulate_mujoco(
     mujoco_options = mujoco_options or MujocoOptions()
     base = options or SimulationOptions()
     stimulus = stimulus or prts()
-    params = params or default_parameters(body)
-    if params.joints != body.joint_names:
-        raise RobotError(f"parameters are for joints {', '.join(params.joints)}; body "
-                         f"'{body.name}' has {', '.join(body.joint_names)}")
+    params = checked_parameters(params, body, "body")
     options = stepped_options(base, mujoco_options)
-    dt = options.dt
     n = body.n_segments
-    kp = params.array("kp").tolist()
     chain = ChainModel.build(body, mujoco_options, params.array("kpas"), params.array("bpas"))
     m = chain.model
     d = mujoco.MjData(m)
-    n_steps = options.n_steps(stimulus)
-    tilt, tilt_vel = stimulus.on_grid(dt, n_steps)
-    deadband_width = options.deadband_rad_s
 
     jq = [int(a) for a in chain.joint_qpos]
     jd = [int(a) for a in chain.joint_dofs]
@@ -302,9 +319,7 @@ def simulate_mujoco(
     # the reference posture (docs/model.md §2): MuJoCo's COM-above angles and holding
     # torques (its bias forces at rest) at the zero configuration
     mujoco.mj_forward(m, d)
-    alpha_ref = sense()[2]
-    hold = [-float(d.qfrc_bias[jd[i]]) - kp[i] * math.sin(alpha_ref[i]) for i in range(n)]
-    controller = DecController(params, alpha_ref, hold, dt, deadband_width)
+    holding = [-float(d.qfrc_bias[jd[i]]) for i in range(n)]
     qpos, qvel, applied = d.qpos, d.qvel, d.qfrc_applied
 
     def prescribe(angle: float, rate: float) -> None:
@@ -323,18 +338,6 @@ def simulate_mujoco(
         for i in range(n):  # passive stiffness and damping: MuJoCo's own
             applied[jd[i]] = torques[i]
 
-    looped = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options, n, prescribe, sensors,
-                          controller, apply)
-    return loop_result(options, tilt, looped, body, params,
-                       f"{stimulus.description}; MuJoCo {mujoco.__version__} "
-                       f"{mujoco_options.integrator} {dt * 1000:g} ms")
-
-
-def loop_result(options: SimulationOptions, tilt: np.ndarray, looped: tuple, body: Body,
-                params: DecParameters, description: str) -> SimulationResult:
-    """The :class:`SimulationResult` of a :func:`run_dec_loop` run (``looped``: its θ, α
-    and fall time) on the tilt ``tilt`` (K + 1,) rad of the step grid, for ``body`` (the
-    chain, or the lumped body of a whole one) under ``params``."""
-    theta, alpha, abort_time = looped
-    return SimulationResult.on_body(options, tilt, body, params, description, theta=theta,
-                                    alpha=alpha, abort_time=abort_time)
+    return run_dec_loop(mujoco, m, d, stimulus, options, body, params, holding, prescribe,
+                        sensors, apply, f"MuJoCo {mujoco.__version__} "
+                        f"{mujoco_options.integrator} {options.dt * 1000:g} ms")

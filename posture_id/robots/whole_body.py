@@ -681,14 +681,8 @@ def simulate_whole_body(
         angles θ (S, N) rad and COM-above angles α (S, N) rad of the whole body, at the
         sampling rate; the fall's time or None, :class:`WholeBodyModel`).
     """
-    from posture_id.dec.parameters import default_parameters
     from posture_id.robots.mujoco_model import MujocoOptions
-    from posture_id.robots.mujoco_sim import (
-        DecController,
-        loop_result,
-        run_dec_loop,
-        stepped_options,
-    )
+    from posture_id.robots.mujoco_sim import checked_parameters, run_dec_loop, stepped_options
     from posture_id.robots.stability import choose_step
     from posture_id.simulation.options import SimulationOptions
     from posture_id.simulation.stimulus import prts
@@ -699,10 +693,7 @@ def simulate_whole_body(
     stimulus = stimulus or prts()
     if lumped is None:
         lumped = lumped_body(spec, segments)
-    params = params or default_parameters(lumped)
-    if params.joints != lumped.joint_names:
-        raise RobotError(f"parameters are for joints {', '.join(params.joints)}; the lumped "
-                         f"'{lumped.name}' has {', '.join(lumped.joint_names)}")
+    params = checked_parameters(params, lumped, "the lumped")
     kpas, bpas = params.array("kpas"), params.array("bpas")
     if mujoco_options.timestep_s is None:
         built = []  # the last one built is the step chosen (choose_step stops there)
@@ -719,21 +710,12 @@ def simulate_whole_body(
         body = WholeBodyModel.build(spec, segments, kpas, bpas, mujoco_options,
                                     whole_body_options)
     options = stepped_options(base, mujoco_options)
-    dt = options.dt
-    n = segments
-    kp = params.array("kp").tolist()
     m = body.model
     d = mujoco.MjData(m)
     sense = WholeBodySensors(body, d)
-    n_steps = options.n_steps(stimulus)
-    tilt, tilt_vel = stimulus.on_grid(dt, n_steps)
-    width = options.deadband_rad_s
-
     mujoco.mj_forward(m, d)
-    alpha_ref = sense()[2]
     gravity = np.asarray(m.opt.gravity, dtype=float)
     grav = sense.gravity_torques(gravity)  # gravity's torque on the mass above each joint
-    hold = [grav[i] - kp[i] * math.sin(alpha_ref[i]) for i in range(n)]
     feedforward = static_torques(body, d, [-g for g in grav])
     d.qfrc_applied[body.held_dofs] = feedforward
     # each held joint's servo reports the static torque it is given (held_dofs follow the
@@ -754,19 +736,15 @@ def simulate_whole_body(
         qvel[pd] = rate
 
     def apply(torques: list) -> None:
-        for i in range(n):  # shared by the left and right joint of the lumped one
+        for i in range(segments):  # shared by the left and right joint of the lumped one
             left, right = dofs[i]
             sl, sr = signs[i]
             applied[left] = sl * torques[i]
             applied[right] = sr * torques[i]
 
-    controller = DecController(params, alpha_ref, hold, dt, width)
-    looped = run_dec_loop(mujoco, m, d, tilt, tilt_vel, options, n, prescribe, sense,
-                          controller, apply)
-    return loop_result(options, tilt, looped, lumped, params,
-                       f"{stimulus.description}; {spec.name} whole body in MuJoCo "
-                       f"{mujoco.__version__} {mujoco_options.integrator} {dt * 1000:g} ms"
-                       ), body
+    return run_dec_loop(mujoco, m, d, stimulus, options, lumped, params, grav, prescribe,
+                        sense, apply, f"{spec.name} whole body in MuJoCo {mujoco.__version__} "
+                        f"{mujoco_options.integrator} {options.dt * 1000:g} ms"), body
 
 
 def lumped_body(spec: WholeBodySpec, segments: int = 3):

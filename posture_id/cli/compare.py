@@ -18,8 +18,7 @@ from posture_id.cli.exit_status import answered
 from posture_id.cli.markers import recording_body
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
-    add_column_arguments,
-    add_lab_stimulus_arguments,
+    add_recording_arguments,
     columns_from_args,
     prepared_trial,
     stimulus_from_args,
@@ -54,8 +53,7 @@ def add_parser(sub) -> None:
                         "both, IC with a W per amplitude")
     p.add_argument("--no-held-out", action="store_true",
                    help="skip the held-out cycle (two fits fewer; the BIC alone decides)")
-    add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with")
-    add_column_arguments(p)
+    add_recording_arguments(p)
     p.set_defaults(func=run)
 
 

@@ -21,8 +21,7 @@ from posture_id.cli.exit_status import answered
 from posture_id.cli.markers import recording_body
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
-    add_column_arguments,
-    add_lab_stimulus_arguments,
+    add_recording_arguments,
     prepared_trial,
 )
 from posture_id.dec.parameters import MAX_DELAY_S, PAPER_TABLE, DecParameters
@@ -74,8 +73,7 @@ def add_parser(sub) -> None:
                           "order (e.g. open open open closed closed closed; default: each "
                           "recording its own condition)")
     add_search_arguments(fit)
-    add_lab_stimulus_arguments(fit, "tilt CSV (time_s,tilt_deg) the recording was made with")
-    add_column_arguments(fit)
+    add_recording_arguments(fit)
     fit.set_defaults(func=run)
 
 

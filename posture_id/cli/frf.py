@@ -16,8 +16,7 @@ from posture_id.cli.arguments import (
 from posture_id.cli.markers import recording_body
 from posture_id.cli.plate_mass import add_load_arguments
 from posture_id.cli.stimulus import (
-    add_column_arguments,
-    add_lab_stimulus_arguments,
+    add_recording_arguments,
     prepared_trial,
 )
 from posture_id.errors import PostureIdError
@@ -69,9 +68,8 @@ def add_parser(sub) -> None:
                      help="the labs' convention: the first cycle left out, no drift removed "
                           "(with a lab's bands; --skip-cycles and --drift-order then apply "
                           "only when given)")
-    add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with; "
-                                  "give --period-s with it")
-    add_column_arguments(p)
+    add_recording_arguments(p, "tilt CSV (time_s,tilt_deg) the recording was made with; "
+                               "give --period-s with it")
     add_load_arguments(p, "with --height-m and --cop-column: the mass of the subject's body "
                           "from the trial's own load (docs/force_plates.md)")
     p.set_defaults(func=run)

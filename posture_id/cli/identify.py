@@ -21,8 +21,7 @@ from posture_id.cli.norm import norm_bands
 from posture_id.cli.output_folder import cohort_folder
 from posture_id.cli.progress import TerminalProgress
 from posture_id.cli.stimulus import (
-    add_column_arguments,
-    add_lab_stimulus_arguments,
+    add_recording_arguments,
     columns_from_args,
     prepared_trial,
     recording_and_stimulus,
@@ -85,8 +84,7 @@ def add_parser(sub) -> None:
                    help="cohort: test each recording against this norm (its points): "
                         "summary.csv gains human_likeness, inside_prediction_band and "
                         "distance_percentile")
-    add_lab_stimulus_arguments(p, "tilt CSV (time_s,tilt_deg) the recordings were made with")
-    add_column_arguments(p)
+    add_recording_arguments(p, "tilt CSV (time_s,tilt_deg) the recordings were made with")
     add_search_arguments(p)
     p.set_defaults(func=run)
 

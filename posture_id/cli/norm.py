@@ -18,8 +18,7 @@ from posture_id.cli.arguments import (
 from posture_id.cli.exit_status import answered
 from posture_id.cli.markers import recording_body
 from posture_id.cli.stimulus import (
-    add_column_arguments,
-    add_lab_stimulus_arguments,
+    add_recording_arguments,
     prepared_trial,
 )
 from posture_id.errors import PostureIdError
@@ -92,8 +91,7 @@ def add_parser(sub) -> None:
                         "channel, in its order; default: the norm's names, or for a "
                         "one-channel norm the input's only channel besides the body COM)")
     _mat_arguments(t)
-    add_lab_stimulus_arguments(t, "tilt CSV (time_s,tilt_deg) the recording was made with")
-    add_column_arguments(t)
+    add_recording_arguments(t)
     t.set_defaults(func=run_test)
     c = n.add_parser("compare", help="two groups of FRFs (the difference of their mean PIRs "
                                      "and a permutation test), or of identify results "

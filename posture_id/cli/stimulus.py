@@ -37,6 +37,7 @@ from posture_id.trials.reading import RecordingLayout, read_recording
 __all__ = ["add_stimulus_arguments", "add_lab_stimulus_arguments", "prts_arguments",
            "protocol_profile",
            "stimulus_from_args", "recording_and_stimulus", "prepared_trial", "add_column_arguments",
+           "add_recording_arguments",
            "columns_from_args"]
 
 _PRTS_FLAGS = {"amplitude_deg": "--amplitude-deg", "cycles": "--cycles", "states": "--states"}
@@ -172,6 +173,15 @@ def add_column_arguments(parser: argparse.ArgumentParser) -> None:
     plate.add_argument("--cop-sign", choices=("+1", "-1"),
                        help="-1 when the plate's COP axis points backward")
     add_marker_arguments(parser)
+
+
+def add_recording_arguments(parser: argparse.ArgumentParser, tilt_help: str =
+                            "tilt CSV (time_s,tilt_deg) the recording was made with") -> None:
+    """The flags of a command that reads a recording: how its stimulus ran
+    (:func:`add_lab_stimulus_arguments`, ``tilt_help`` the help of ``--tilt``) and which
+    of its columns is what (:func:`add_column_arguments`)."""
+    add_lab_stimulus_arguments(parser, tilt_help)
+    add_column_arguments(parser)
 
 
 def _force_plate_flags(args: argparse.Namespace) -> list[str]:

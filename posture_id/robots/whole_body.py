@@ -547,32 +547,35 @@ class WholeBodySensors:
         self.pq, self.pd = body.platform_qpos, body.platform_dof
         self.up, self.fwd, self.axis = body.up, body.fwd, body.axis
 
+    def _above(self, sides: list, total: int, below: int, at: int) -> tuple[np.ndarray, float]:
+        """(3,) the COM above a lumped joint (its two ``sides``) less its anchor, m (or its
+        rate, m/s, from the velocity sensors), and the mass above it, kg: ``total`` is the
+        whole robot's sensor, ``below`` and ``at`` index each side's tuple at the sensors of
+        the subtree below the joint and of the joint's anchor."""
+        sd = self.data.sensordata
+        first, mass, point = sd[total:total + 3] * self.mass, self.mass, np.zeros(3)
+        for side in sides:
+            first = first - side[0] * sd[side[below]:side[below] + 3]
+            mass -= side[0]
+            point += 0.5 * sd[side[at]:side[at] + 3]
+        return first / mass - point, mass
+
     def __call__(self):
         d = self.data
         sd = d.sensordata
         xmat = d.site_xmat
         up, fwd, axis = self.up, self.fwd, self.axis
         a_c, a_v = self.total
-        total_com = sd[a_c:a_c + 3] * self.mass
-        total_vel = sd[a_v:a_v + 3] * self.mass
         qpos, qvel = d.qpos, d.qvel
         theta, omega, alpha, alpha_rate, q, qd = [], [], [], [], [], []
         for k, sides in enumerate(self.joints):
-            first, momentum, mass = total_com.copy(), total_vel.copy(), self.mass
-            anchor, anchor_vel = np.zeros(3), np.zeros(3)
+            lever, _ = self._above(sides, a_c, 1, 3)
+            rate, _ = self._above(sides, a_v, 2, 4)
             th = om = 0.0
-            for m_below, c, v, p, pv, w, frame in sides:
-                first -= m_below * sd[c:c + 3]
-                momentum -= m_below * sd[v:v + 3]
-                mass -= m_below
-                anchor += 0.5 * sd[p:p + 3]
-                anchor_vel += 0.5 * sd[pv:pv + 3]
-                rot = xmat[frame].reshape(3, 3)
-                r_up = rot @ up
+            for *_, w, frame in sides:
+                r_up = xmat[frame].reshape(3, 3) @ up
                 th += 0.5 * math.atan2(float(fwd @ r_up), float(up @ r_up))
                 om += 0.5 * float(sd[w:w + 3] @ axis)
-            lever = first / mass - anchor
-            rate = momentum / mass - anchor_vel
             x, y = float(lever @ up), float(lever @ fwd)
             xd, yd = float(rate @ up), float(rate @ fwd)
             alpha.append(math.atan2(y, x))
@@ -588,20 +591,11 @@ class WholeBodySensors:
     def gravity_torques(self, gravity: np.ndarray) -> list[float]:
         """(N,) N·m: gravity's torque about the lateral axis on the mass above each lumped
         joint, about its anchor (call after ``mj_forward``)."""
-        d = self.data
-        sd = d.sensordata
-        a_c, _ = self.total
         out = []
         for sides in self.joints:
-            first, mass, anchor = sd[a_c:a_c + 3] * self.mass, self.mass, np.zeros(3)
-            for m_below, c, _v, p, _pv, _w, _frame in sides:
-                first = first - m_below * sd[c:c + 3]
-                mass -= m_below
-                anchor += 0.5 * sd[p:p + 3]
-            lever = first / mass - anchor
+            lever, mass = self._above(sides, self.total[0], 1, 3)
             out.append(float(self.axis @ np.cross(lever, mass * gravity)))
         return out
-
 
 def _root_name(m) -> str:
     mujoco = require_mujoco()

@@ -292,11 +292,6 @@ class Regime:
         return f"{n} segment{'s' if n != 1 else ''}, {words}{tint}"
 
 
-def _broader(regime: str) -> list[str]:
-    """The keys of a regime, its noise-ratio bin over both colours, its segment count."""
-    return [r.key for r in Regime.parse(regime).broader()]
-
-
 def regime_text(regime: str) -> str:
     """A regime key in words: '3 segments, clean, white noise'."""
     return Regime.parse(regime).text()
@@ -329,7 +324,7 @@ class UniversalCalibration:
     def _key(self, regime: str, table: dict) -> str:
         """The regime, else its noise-ratio bin over both colours, else its segment count,
         else :data:`POOLED`, whichever has values."""
-        for key in (*_broader(regime), POOLED):
+        for key in (*(r.key for r in Regime.parse(regime).broader()), POOLED):
             if key in table:
                 return key
         raise ModelError(f"the universal calibration has no values for {regime_text(regime)} "
@@ -427,7 +422,7 @@ def calibrate(model: UniversalModel, samples: Samples, trend_samples: Samples
     scores = scores / np.exp(_terms(samples) @ np.asarray(trend))
     regimes = regime_of(samples.segments, samples.noise_ratio, samples.noise_colour)
     quantiles, temperature, counts = {}, {}, {}
-    # each sample's keys from narrow to broad, as _broader gives them, and the pooled one
+    # each sample's keys from narrow to broad, as Regime.broader gives them, and the pooled one
     levels = (regimes, np.char.rstrip(regimes, "wc"), samples.segments.astype(str),
               np.full(len(regimes), POOLED))
     for key, sel in ((k, level == k) for level in levels for k in np.unique(level)):

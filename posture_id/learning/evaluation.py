@@ -46,7 +46,7 @@ from posture_id.learning.calibration import (
     trend_terms,
 )
 from posture_id.learning.checkpoint import LoadedModel, load_model
-from posture_id.learning.config import Layout, LearningError, NetworkConfig
+from posture_id.learning.config import LearningError, NetworkConfig
 from posture_id.learning.data.store import Dataset
 from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import SplitSamples
@@ -282,12 +282,7 @@ def evaluate(model_dir: str | Path, dataset_dir: str | Path, resimulate: int = 2
         samples = SplitSamples(data, name, layout, model.standardiser)
         error, predicted, truth = _split_predictions(model, samples)
         correct = predicted[..., 4] == truth[..., 4]
-        if layout is Layout.MODULAR:
-            correct_by_module = correct.reshape(-1, n)
-        else:
-            correct_by_module = correct
-        metrics = split_metrics(error, correct_by_module)
-        splits[name] = metrics
+        splits[name] = split_metrics(error, correct.reshape(-1, n))
         if name == "test":
             test_detail = (samples, error, predicted, truth)
     samples, error, predicted, truth = test_detail
@@ -299,9 +294,7 @@ def evaluate(model_dir: str | Path, dataset_dir: str | Path, resimulate: int = 2
     mean_class_std = (majority - std.target_mean.reshape(-1, 5)[:, 4]) / \
         std.target_std.reshape(-1, 5)[:, 4]
     mean_error[..., 4] += mean_class_std
-    mean_correct = (truth[..., 4] == majority)
-    mean_correct = mean_correct.reshape(-1, n) if layout is Layout.MODULAR else mean_correct
-    mean_predictor = split_metrics(mean_error, mean_correct)
+    mean_predictor = split_metrics(mean_error, (truth[..., 4] == majority).reshape(-1, n))
     # per-parameter |error| by module (trials × N × 5), class column: error rate
     by_trial_pred = predicted.reshape(-1, n, 5)
     by_trial_true = truth.reshape(-1, n, 5)

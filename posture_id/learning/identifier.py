@@ -366,14 +366,11 @@ class CnnIdentifier(NetworkIdentifier):
         outside = [] if self.trained_on_this_body else [
             f"the network was trained on body '{self.trained_on}', not on this one"]
         prediction = predict_images(self.model, images)
-        if self.model.config.layout is Layout.MODULAR:  # one sample per module
-            normalised = prediction.targets[:, 0]
-            probability = prediction.class_probability[:, 0]
-            logit = prediction.class_logit[:, 0]
-        else:
-            normalised = prediction.targets[0]
-            probability = prediction.class_probability[0]
-            logit = prediction.class_logit[0]
+        # the modules of the one trial: one sample per module (modular), or its one sample
+        trial_modules = (slice(None), 0) if self.model.config.layout is Layout.MODULAR else 0
+        normalised = prediction.targets[trial_modules]
+        probability = prediction.class_probability[trial_modules]
+        logit = prediction.class_logit[trial_modules]
         intervals = None
         if self.calibration is not None:
             if self.calibration.temperature is not None:

@@ -17,7 +17,7 @@ from posture_id.cli import main
 from posture_id.errors import PostureIdError
 from posture_id.fitting.evaluators import Evaluator
 from posture_id.fitting.frequency import FrequencyFitOptions, fit_frequency_parts, fit_ic_parts
-from posture_id.fitting.joint import ConditionEvaluator, JointEvaluator
+from posture_id.fitting.joint import ConditionEvaluator
 from posture_id.fitting.joint_conditions import JointFit, fit_joint
 from posture_id.models.ic import IC, IcParameters, IcPlant
 from posture_id.models.ic.simulation import simulate_ic
@@ -229,10 +229,10 @@ class _Linear(Evaluator):
 def test_the_condition_evaluator_reads_and_differentiates_the_extended_unknowns():
     """Shared unknowns read by every trial, per-condition ones by their condition's only;
     its Jacobian equals finite differences; with nothing per condition it is the joint
-    evaluator of fit_recordings_jointly, unchanged."""
+    evaluator of the shared polish, every trial's residual and Jacobian stacked."""
     rng = np.random.default_rng(0)
     parts = [_Linear(rng.normal(size=(5, 4)), rng.normal(size=5)) for _ in range(3)]
-    joint = JointEvaluator(parts)
+    joint = ConditionEvaluator(parts)  # every unknown shared
     q = rng.normal(size=4)
     stacked = np.concatenate([p.residual(q) for p in parts])
     assert np.array_equal(joint.residual(q), stacked)

@@ -351,8 +351,7 @@ class AmplitudesComparison(_Compared, Result):
 
     def _per_part(self):
         """The model whose parameters differ by part (IC), or None."""
-        return next((m for m in self.models if hasattr(self.fits[m.name], "w_by_part")),
-                    None)
+        return next((m for m in self.models if self.fits[m.name].per_part), None)
 
     def summary(self) -> str:
         first, second = self.models

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 import time as clock
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -47,8 +48,8 @@ from posture_id.models.ic.model import IC
 from posture_id.models.protocol import FrequencyModel, ModelParameters, TrustLevel
 from posture_id.trials import PreparedTrial
 
-__all__ = ["FrequencyFitOptions", "IcFitOptions", "FrequencyFitResult", "fit_frequency",
-           "fit_ic", "com_sway_deg", "FrequencyPartsFit", "fit_frequency_parts",
+__all__ = ["FrequencyFitOptions", "IcFitOptions", "FitVerdict", "FrequencyFitResult",
+           "fit_frequency", "fit_ic", "com_sway_deg", "fit_frequency_parts",
            "fit_ic_parts", "LockedCom", "locked_projection", "analysis_cycles",
            "ConditionLayout", "Precision", "on_search_bound", "ConditionSearch",
            "search_conditions"]
@@ -120,8 +121,90 @@ def com_sway_deg(trial: PreparedTrial, body) -> np.ndarray:
     return com_deg(trial.recording.theta, body)
 
 
+class FitVerdict:
+    """The trust verdict of a fit of the locked COM sway, as one recording's fit
+    (:class:`FrequencyFitResult`) and a joint fit
+    (:class:`~posture_id.fitting.joint_conditions.JointFit`) give it (docs/identify.md,
+    "Trust"), from their ``chi2``, ``dof``, ``on_bound`` and ``stable``, and the judged
+    parameters' intervals (:meth:`_every_interval`, ``pins``, ``absolute_pins``)."""
+
+    #: c, what χ²/dof is on average when the model is right (1: χ² taken as it is).
+    chi2_correction: float = 1.0
+    #: The identified parameters the trials leave undetermined (none said).
+    undetermined: tuple[str, ...] = ()
+    #: What an imprecise verdict says pinned its parameters not.
+    _pinned_by = "by these trials"
+
+    @property
+    def noise_ratio(self) -> float:
+        """√(χ²/(c·dof)), c = ``chi2_correction``: 1 when the model explains the sway as
+        well as its noise allows."""
+        return math.sqrt(self.chi2 / self.chi2_correction / max(self.dof, 1))
+
+    @property
+    def consistent(self) -> bool:
+        """χ²/c within its 99th percentile for ``dof`` degrees of freedom."""
+        from scipy.stats import chi2
+
+        return self.chi2 / self.chi2_correction <= chi2.ppf(0.99, max(self.dof, 1))
+
+    @property
+    def unpinned(self) -> tuple[str, ...]:
+        """The judged parameters (each condition's, for a per-condition one) whose interval
+        is wider than its pin (IC: ±10 % of the value; W: ±0.1)."""
+        out = []
+        for label, name, value, (low, high) in self._every_interval():
+            pin = self.pins.get(name)
+            if pin is None:
+                continue
+            width = pin if name in self.absolute_pins else pin * abs(value)
+            if (high - low) / 2 > width:
+                out.append(label)
+        return tuple(out)
+
+    @property
+    def trust_level(self) -> TrustLevel:
+        """The trust verdict's level, as for every answer (docs/identify.md, "Trust"):
+        doubtful (a residual beyond the noise, a judged parameter on a search bound, a
+        model that does not balance), imprecise (consistent, but a judged parameter not
+        pinned or left undetermined), or good."""
+        if not self.consistent or self.on_bound or not self.stable:
+            return TrustLevel.DOUBTFUL
+        return (TrustLevel.IMPRECISE if self.unpinned or self.undetermined
+                else TrustLevel.GOOD)
+
+    def verdict_line(self) -> str:
+        """One line: the trust level and why."""
+        if self.trust_level is TrustLevel.DOUBTFUL:
+            why = ([f"residual {self.noise_ratio:.2f}× the noise"] if not self.consistent
+                   else []) + ([f"on a search bound: {', '.join(self.on_bound)}"]
+                               if self.on_bound else []) + (
+                [] if self.stable else ["a condition's model does not balance"])
+            return f"trust: DOUBTFUL: {'; '.join(why)}"
+        if self.trust_level is TrustLevel.IMPRECISE and self.undetermined:
+            return (f"trust: imprecise: {', '.join(self.undetermined)} not determined by "
+                    f"this recording ({2 * self.harmonics} numbers compared for "
+                    f"{len(self.free)} parameters; its interval is its whole search range): "
+                    "fit the trials of several frequencies or conditions at once "
+                    "(posture-id fit TRIAL TRIAL ...)")
+        if self.trust_level is TrustLevel.IMPRECISE:
+            return (f"trust: imprecise: {', '.join(self.unpinned)} not pinned "
+                    f"{self._pinned_by}; the intervals give the precision")
+        return "trust: good"
+
+    # what a comparison and a cohort read of a fit (posture_id.models.protocol.ModelFit)
+    @property
+    def fitted_com_deg(self):
+        """The model's COM sway, degrees: (S,), or per trial (S_t,)."""
+        return self.fitted_deg
+
+    def comparison_dict(self) -> dict:
+        """What a comparison reads of the fit: its JSON."""
+        return self.to_dict()
+
+
 @dataclass(frozen=True)
-class FrequencyFitResult(Result):
+class FrequencyFitResult(FitVerdict, Result):
     """A model fitted in the frequency domain (the IC fit).
 
     Attributes:
@@ -160,32 +243,22 @@ class FrequencyFitResult(Result):
     calibrated: tuple[str, ...] = ()
     model: FrequencyModel = IC
 
-    @property
-    def noise_ratio(self) -> float:
-        """√(χ²/dof): 1 when the model explains the recording as well as its noise allows."""
-        return math.sqrt(self.chi2 / max(self.dof, 1))
+    _pinned_by = "to 10 % by this recording"
 
     @property
-    def consistent(self) -> bool:
-        """χ² within its 99th percentile for ``dof`` degrees of freedom."""
-        from scipy.stats import chi2
-
-        return self.chi2 <= chi2.ppf(0.99, max(self.dof, 1))
+    def pins(self) -> Mapping[str, float]:
+        """The model's judged parameters (IC: Kp, Kd, Δ and W) with their pins."""
+        return self.model.pinned
 
     @property
-    def unpinned(self) -> tuple[str, ...]:
-        """The model's judged parameters (IC: Kp, Kd, Δ and W) whose interval is wider
-        than its pin (IC: ±10 % of the value; W: ±0.1)."""
-        out = []
-        for name, pin in self.model.pinned.items():
-            if name not in self.intervals:
-                continue
-            low, high = self.intervals[name]
-            width = pin if name in self.model.absolute_pins \
-                else pin * abs(getattr(self.parameters, name))
-            if (high - low) / 2 > width:
-                out.append(name)
-        return tuple(out)
+    def absolute_pins(self) -> frozenset[str]:
+        return self.model.absolute_pins
+
+    def _every_interval(self):
+        """(label, name, value, (low, high)) of every judged parameter identified."""
+        for name in self.model.pinned:
+            if name in self.intervals:
+                yield name, name, getattr(self.parameters, name), self.intervals[name]
 
     @property
     def undetermined(self) -> tuple[str, ...]:
@@ -196,48 +269,12 @@ class FrequencyFitResult(Result):
                      if not math.isfinite(self.standard_errors.get(n, 0.0)))
 
     @property
-    def trust_level(self) -> TrustLevel:
-        """The trust verdict's level, as for every answer (docs/identify.md, "Trust"):
-        doubtful (a residual beyond the noise, a judged parameter on a search bound),
-        imprecise (consistent, but a judged parameter not pinned or left undetermined),
-        or good."""
-        if not self.consistent or self.on_bound or not self.stable:
-            return TrustLevel.DOUBTFUL
-        return (TrustLevel.IMPRECISE if self.unpinned or self.undetermined
-                else TrustLevel.GOOD)
-
-    def verdict_line(self) -> str:
-        if self.trust_level is TrustLevel.DOUBTFUL:
-            why = ([f"residual {self.noise_ratio:.2f}× the noise"] if not self.consistent
-                   else []) + ([f"on a search bound: {', '.join(self.on_bound)}"]
-                               if self.on_bound else [])
-            return f"trust: DOUBTFUL: {'; '.join(why)}"
-        if self.trust_level is TrustLevel.IMPRECISE and self.undetermined:
-            return (f"trust: imprecise: {', '.join(self.undetermined)} not determined by "
-                    f"this recording ({2 * self.harmonics} numbers compared for "
-                    f"{len(self.free)} parameters; its interval is its whole search range): "
-                    "fit the trials of several frequencies or conditions at once "
-                    "(posture-id fit TRIAL TRIAL ...)")
-        if self.trust_level is TrustLevel.IMPRECISE:
-            return (f"trust: imprecise: {', '.join(self.unpinned)} not pinned to 10 % by this "
-                    "recording; the intervals give the precision")
-        return "trust: good"
-
-    # what a comparison and a cohort read of a fit (posture_id.models.protocol.ModelFit)
-    @property
-    def fitted_com_deg(self) -> np.ndarray:
-        return self.fitted_deg
-
-    @property
     def identified_count(self) -> int:
         return len(self.free)
 
     @property
     def falls(self) -> bool:
         return not bool(np.all(np.isfinite(self.fitted_deg)))
-
-    def comparison_dict(self) -> dict:
-        return self.to_dict()
 
     def to_dict(self) -> dict:
         from posture_id.provenance import provenance
@@ -614,6 +651,12 @@ def interval_bounds(values: dict, half: dict, ranges) -> dict:
     return out
 
 
+def search_ranges(model: FrequencyModel, plant) -> dict:
+    """{name: (low, high)}: every parameter's search range in SI units."""
+    return {n: (lo * model.scale(n, plant), hi * model.scale(n, plant))
+            for n, (lo, hi) in model.search_bounds.items()}
+
+
 def on_search_bound(model: FrequencyModel, names: tuple[str, ...], x: np.ndarray
                     ) -> list[int]:
     """The entries of x (search units) of a judged parameter (the model's ``pinned``) whose
@@ -655,19 +698,15 @@ def fit_frequency(model: FrequencyModel, trial: PreparedTrial, body,
     """
     options = options or FrequencyFitOptions()
     started = clock.perf_counter()
-    plant = model.plant(body)
-    part = _Part(model, trial, body, plant, options.locked)
-    free = options.free_of(model)
-    found = _search(model, [part], ConditionLayout.of(free, (), (0,), trial.name), plant,
-                    options, trial.name)
+    joint = search_conditions(model, [trial], body, [0], (), options)
+    part, free, found, plant = joint.parts[0], joint.layout.free, joint.found, joint.plant
     params, best = found.params[0], found.fit
     chi2 = float(2 * best.cost)
     dof = len(part.target) - len(free)
     precision = Precision.of(model, plant, free, best.jac, chi2, dof, options.level)
-    ranges = {n: (lo * model.scale(n, plant), hi * model.scale(n, plant))
-              for n, (lo, hi) in model.search_bounds.items()}
     intervals = interval_bounds({n: getattr(params, n) for n in free},
-                                dict(zip(free, precision.half_widths, strict=True)), ranges)
+                                dict(zip(free, precision.half_widths, strict=True)),
+                                search_ranges(model, plant))
     on_bound = tuple(free[k] for k in on_search_bound(model, free, found.x))
     fitted = np.degrees(part.model.sway(params))
     projection, sway = part.projection, part.sway
@@ -744,65 +783,24 @@ def search_conditions(model: FrequencyModel, trials: list[PreparedTrial], body,
     return ConditionSearch(parts, layout, found, plant)
 
 
-@dataclass(frozen=True)
-class FrequencyPartsFit:
-    """A model fitted to the parts of one subject's protocol at once (a two-amplitude
-    protocol): every parameter shared but the model's ``per_part`` one (IC: W, sensory
-    re-weighting).
-
-    Attributes:
-        parameters: per part, its parameters (they differ in the per-part one only).
-        chi2: of all parts. fitted_deg: per part, the model's COM sway (S_p,) degrees.
-        identified_count: the parameters identified over every part.
-    """
-
-    parameters: tuple
-    chi2: float
-    fitted_deg: tuple[np.ndarray, ...]
-    identified_count: int = 0
-    model: FrequencyModel = IC
-
-    @property
-    def w_by_part(self) -> tuple[float, ...]:
-        """The per-part parameter of each part (IC: W)."""
-        return tuple(getattr(p, self.model.per_part) for p in self.parameters)
-
-    @property
-    def reweighting(self) -> float:
-        """How far W moved between the amplitudes: the last part's W minus the first's."""
-        return self.w_by_part[-1] - self.w_by_part[0]
-
-    @property
-    def fitted_com_deg(self) -> tuple[np.ndarray, ...]:
-        return self.fitted_deg
-
-    @property
-    def falls(self) -> bool:
-        return not all(np.all(np.isfinite(f)) for f in self.fitted_deg)
-
-    def comparison_dict(self) -> dict:
-        return {"parameters": [p.to_dict() for p in self.parameters],
-                "w_by_part": list(self.w_by_part), "reweighting": self.reweighting}
-
-
 def fit_frequency_parts(model: FrequencyModel, trials: list[PreparedTrial], body,
-                        options: FrequencyFitOptions | None = None) -> FrequencyPartsFit:
+                        options: FrequencyFitOptions | None = None):
     """The parameters of ``model`` for every one of ``trials`` (the same subject at
-    several amplitudes), shared but for the model's per-part one: the joint search of
-    :func:`search_conditions` (what :func:`~posture_id.fitting.joint_conditions.fit_joint`
-    runs) with every part its own condition and the per-part parameter the one per
-    condition, the noise from the recorded sway."""
+    several amplitudes), shared but for the model's per-part one: the joint fit of
+    :func:`~posture_id.fitting.joint_conditions.fit_joint` with every part its own
+    condition and the per-part parameter the one per condition, the noise from the
+    recorded sway (:func:`~posture_id.fitting.models.fit_model_parts`).
+
+    Returns:
+        :class:`~posture_id.fitting.models.PartsFit`: per part, its parameters.
+    """
+    from posture_id.fitting.models import fit_model_parts
+
     options = options or FrequencyFitOptions()
-    joint = search_conditions(model, trials, body, list(range(len(trials))),
-                              (model.per_part,) if len(trials) > 1 else (), options)
-    fitted = tuple(np.degrees(p.model.sway(q)) for p, q in zip(joint.parts, joint.found.params,
-                                                                strict=True))
-    return FrequencyPartsFit(joint.found.params, float(2 * joint.found.fit.cost), fitted,
-                             len(joint.layout.names), model)
+    return fit_model_parts(model, trials, body, options.locked, options)
 
 
-def fit_ic_parts(trials: list[PreparedTrial], body,
-                 options: IcFitOptions | None = None) -> FrequencyPartsFit:
+def fit_ic_parts(trials: list[PreparedTrial], body, options: IcFitOptions | None = None):
     """The IC parameters of every one of ``trials``, shared but for W, one per part."""
     return fit_frequency_parts(IC, trials, body, options or IcFitOptions())
 

@@ -20,12 +20,12 @@ from posture_id.bodies.body import Body
 from posture_id.fitting.evaluators import Evaluator, run_stage
 from posture_id.fitting.least_squares import FitRun, fit_recording
 from posture_id.fitting.options import FitOptions
-from posture_id.fitting.result import FitResult, StageResult
+from posture_id.fitting.result import StageResult
 from posture_id.fitting.unknowns import parameters_from_qs
 from posture_id.trials import PreparedTrial
 
-__all__ = ["ConditionEvaluator", "JointEvaluator", "JointFit", "fit_recordings_jointly",
-           "ConditionPolish", "polish_by_condition"]
+__all__ = ["ConditionEvaluator", "fit_recordings_jointly", "ConditionPolish",
+           "polish_by_condition"]
 
 
 class ConditionEvaluator(Evaluator):
@@ -91,62 +91,24 @@ class ConditionEvaluator(Evaluator):
         return np.vstack(out)
 
 
-class JointEvaluator(ConditionEvaluator):
-    """Several evaluators of the same unknowns, their residuals and Jacobians stacked
-    (one condition: every unknown shared)."""
-
-    def __init__(self, parts: list[Evaluator]) -> None:
-        super().__init__(parts)
-
-
-class JointFit:
-    """The joint fit: ``parameters`` (DecParameters), ``stage`` (its last
-    :class:`~posture_id.fitting.result.StageResult`), ``first`` (the first part's own
-    fit), and ``fitted``: per part, the (S, N) rad segment angles of the joint answer."""
-
-    def __init__(self, parameters, stage: StageResult, first: FitResult,
-                 fitted: list[np.ndarray]) -> None:
-        self.parameters, self.stage, self.first, self.fitted = (parameters, stage, first,
-                                                                fitted)
-
-
-def fit_recordings_jointly(trials: list[PreparedTrial], body: Body, options: FitOptions,
-                           progress=None) -> JointFit:
-    """The parameters that explain every one of ``trials`` (the module doc); ``options``
-    must ask for the locked fit."""
-    first = fit_recording(trials[0], body, None, options, progress)
-    runs = [FitRun.start(t, body, options, progress) for t in trials]
-    joint = JointEvaluator([r.exact for r in runs])
-    q0 = first.stages[-1].q
-    free = runs[0].layout.continuous(options.fit_passive)
-    stage = run_stage("joint polish (every part)", joint, q0, free, runs[0].lower,
-                      runs[0].upper, options.tolerance, options.max_iterations, progress,
-                      runs[0].prior_sd, runs[0].prior_centre)
-    params = parameters_from_qs(stage.q[None], runs[0].problem.defaults).trial(
-        0, body.joint_names)
-    fitted = [r.problem.simulate(stage.q, r.u) for r in runs]
-    return JointFit(params, stage, first, fitted)
-
-
 class ConditionPolish:
-    """The per-condition polish of a joint DEC fit.
+    """The joint polish of a DEC fit of several trials, some unknowns per condition.
 
     Attributes:
-        shared: the joint fit with every parameter shared it started from.
         stage: the polish (its q the extended vector, its Jacobian (R, free) over
             ``free``, its residual (R,): the weighted locked harmonics of every trial,
-            ``data_rows`` of them, then any prior's rows); the shared fit's own stage when
-            nothing varies by condition.
+            ``data_rows`` of them, then any prior's rows); the shared polish (every
+            unknown shared) when nothing varies by condition.
         evaluator: the :class:`ConditionEvaluator` (how the extended vector reads).
         free: the extended vector's entries fitted. runs: one :class:`FitRun` per trial.
         parameters: per condition, its DecParameters. fitted: per trial, the (S, N) rad
         segment angles of the answer. data_rows: the residual's rows that are data.
     """
 
-    def __init__(self, shared: JointFit, stage: StageResult, evaluator: ConditionEvaluator,
-                 free: list[int], runs: list[FitRun], parameters: list,
-                 fitted: list[np.ndarray], data_rows: int) -> None:
-        self.shared, self.stage, self.evaluator, self.free = shared, stage, evaluator, free
+    def __init__(self, stage: StageResult, evaluator: ConditionEvaluator, free: list[int],
+                 runs: list[FitRun], parameters: list, fitted: list[np.ndarray],
+                 data_rows: int) -> None:
+        self.stage, self.evaluator, self.free = stage, evaluator, free
         self.runs, self.parameters, self.fitted = runs, parameters, fitted
         self.data_rows = data_rows
 
@@ -156,18 +118,25 @@ def polish_by_condition(trials: list[PreparedTrial], body: Body, options: FitOpt
                         progress=None) -> ConditionPolish:
     """Every trial's parameters, shared but for the unknowns ``per_condition`` (indices
     into q, :mod:`~posture_id.fitting.unknowns`), one per condition (``conditions``: each
-    trial's index 0..C−1): :func:`fit_recordings_jointly`, then its gains and delays
-    polished again with those unknowns one per condition, each condition's starting at the
-    shared answer. ``options`` must ask for the locked fit."""
-    shared = fit_recordings_jointly(trials, body, options, progress)
+    trial's index 0..C−1): the first trial's locked fit, then every module's gains and
+    delays polished against all trials at once (classes and passive terms kept), then
+    polished again with those unknowns one per condition, each condition's starting at
+    the shared answer. ``options`` must ask for the locked fit."""
+    first = fit_recording(trials[0], body, None, options, progress)
     runs = [FitRun.start(t, body, options, progress) for t in trials]
+    run = runs[0]
     count = max(conditions) + 1
     if count == 1:
         per_condition = ()
-    size = runs[0].layout.size
-    evaluator = ConditionEvaluator([r.exact for r in runs], conditions, per_condition, size)
-    free = runs[0].layout.continuous(options.fit_passive) + [
-        evaluator.column(c, k) for c in range(1, count) for k in per_condition]
+    exact, size = [r.exact for r in runs], run.layout.size
+    continuous = run.layout.continuous(options.fit_passive)
+    stage = run_stage("joint polish (every part)", ConditionEvaluator(exact, size=size),
+                      first.stages[-1].q, continuous, run.lower, run.upper,
+                      options.tolerance, options.max_iterations, progress, run.prior_sd,
+                      run.prior_centre)
+    evaluator = ConditionEvaluator(exact, conditions, per_condition, size)
+    free = continuous + [evaluator.column(c, k) for c in range(1, count)
+                         for k in per_condition]
     pick = list(per_condition) * (count - 1)
 
     def extend(values: np.ndarray | None) -> np.ndarray | None:
@@ -175,18 +144,23 @@ def polish_by_condition(trials: list[PreparedTrial], body: Body, options: FitOpt
 
     if per_condition:
         stage = run_stage("joint polish (per condition)", evaluator,
-                          evaluator.extended(shared.stage.q, count), free,
-                          extend(runs[0].lower), extend(runs[0].upper), options.tolerance,
-                          options.max_iterations, progress, extend(runs[0].prior_sd),
-                          extend(runs[0].prior_centre))
-    else:
-        stage = shared.stage
-    prior = extend(runs[0].prior_sd)
+                          evaluator.extended(stage.q, count), free, extend(run.lower),
+                          extend(run.upper), options.tolerance, options.max_iterations,
+                          progress, extend(run.prior_sd), extend(run.prior_centre))
+    prior = extend(run.prior_sd)
     priored = 0 if prior is None else int(np.count_nonzero(1.0 / prior[free] > 0))
-    defaults = runs[0].problem.defaults
+    defaults = run.problem.defaults
     parameters = [parameters_from_qs(evaluator.q_of(stage.q, c)[None], defaults).trial(
         0, body.joint_names) for c in range(count)]
     fitted = [r.problem.simulate(evaluator.q_of(stage.q, c), r.u)
               for r, c in zip(runs, conditions, strict=True)]
-    return ConditionPolish(shared, stage, evaluator, free, runs, parameters, fitted,
+    return ConditionPolish(stage, evaluator, free, runs, parameters, fitted,
                            len(stage.residual) - priored)
+
+
+def fit_recordings_jointly(trials: list[PreparedTrial], body: Body, options: FitOptions,
+                           progress=None) -> ConditionPolish:
+    """One set of parameters that explains every one of ``trials`` (the module doc):
+    :func:`polish_by_condition` with every unknown shared; ``options`` must ask for the
+    locked fit."""
+    return polish_by_condition(trials, body, options, [0] * len(trials), (), progress)

@@ -37,6 +37,7 @@ import numpy as np
 
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
+from posture_id.fitting.frequency import FitVerdict
 from posture_id.frf.locked import LockedOptions
 from posture_id.models.protocol import Capability, Model, ModelParameters, TrustLevel
 from posture_id.trials import PreparedTrial
@@ -107,7 +108,7 @@ def _labelled(name: str, condition: str | None) -> str:
 
 
 @dataclass(frozen=True)
-class JointFit(Result):
+class JointFit(FitVerdict, Result):
     """One model fitted to several trials of one subject at once: the shared parameters
     and, per condition, the per-condition ones.
 
@@ -146,6 +147,10 @@ class JointFit(Result):
             neighbours degrees of freedom), which makes it ν/(ν − 2) (1.2 for the default
             3 neighbours; the comparison's correction). The verdict, the noise ratio and
             the intervals' χ² scaling take χ²/c.
+
+    The verdict is :class:`~posture_id.fitting.frequency.FitVerdict`'s: doubtful (the
+    joint residual beyond the noise, a judged parameter on a search bound, a model that
+    does not balance), imprecise (consistent, but a judged parameter not pinned), or good.
     """
 
     model: Model = field(repr=False)
@@ -178,19 +183,6 @@ class JointFit(Result):
     provenance_options: object = field(repr=False, default=None)
     chi2_correction: float = 1.0
 
-    @property
-    def noise_ratio(self) -> float:
-        """√(χ²/(c·dof)), c = ``chi2_correction``: 1 when the model explains every trial as
-        well as its noise allows."""
-        return math.sqrt(self.chi2 / self.chi2_correction / max(self.dof, 1))
-
-    @property
-    def consistent(self) -> bool:
-        """χ²/c within its 99th percentile for ``dof`` degrees of freedom."""
-        from scipy.stats import chi2
-
-        return self.chi2 / self.chi2_correction <= chi2.ppf(0.99, max(self.dof, 1))
-
     def _every_interval(self):
         """(label, name, value, (low, high)) of every identified parameter."""
         for name, bounds in self.intervals["shared"].items():
@@ -201,55 +193,10 @@ class JointFit(Result):
                        bounds)
 
     @property
-    def unpinned(self) -> tuple[str, ...]:
-        """The judged parameters (each condition's, for a per-condition one) whose interval
-        is wider than its pin."""
-        out = []
-        for label, name, value, (low, high) in self._every_interval():
-            pin = self.pins.get(name)
-            if pin is None:
-                continue
-            width = pin if name in self.absolute_pins else pin * abs(value)
-            if (high - low) / 2 > width:
-                out.append(label)
-        return tuple(out)
-
-    @property
-    def trust_level(self) -> TrustLevel:
-        """As a frequency fit's (docs/identify.md, "Trust"): doubtful (the joint residual
-        beyond the noise, a judged parameter on a search bound, a model that does not
-        balance), imprecise (consistent, but a judged parameter not pinned), or good."""
-        if not self.consistent or self.on_bound or not self.stable:
-            return TrustLevel.DOUBTFUL
-        return TrustLevel.IMPRECISE if self.unpinned else TrustLevel.GOOD
-
-    def verdict_line(self) -> str:
-        """One line: the trust level and why."""
-        if self.trust_level is TrustLevel.DOUBTFUL:
-            why = ([f"residual {self.noise_ratio:.2f}× the noise"] if not self.consistent
-                   else []) + ([f"on a search bound: {', '.join(self.on_bound)}"]
-                               if self.on_bound else []) + (
-                [] if self.stable else ["a condition's model does not balance"])
-            return f"trust: DOUBTFUL: {'; '.join(why)}"
-        if self.trust_level is TrustLevel.IMPRECISE:
-            return (f"trust: imprecise: {', '.join(self.unpinned)} not pinned by these "
-                    "trials; the intervals give the precision")
-        return "trust: good"
-
-    # what a comparison reads of a fit (posture_id.models.protocol.ModelFit)
-    @property
-    def fitted_com_deg(self) -> tuple[np.ndarray, ...]:
-        """Per trial (S_t,): the model's COM sway, degrees."""
-        return self.fitted_deg
-
-    @property
     def falls(self) -> bool:
-        """Whether the model's sway of any trial is not finite (it fell)."""
-        return not all(np.all(np.isfinite(f)) for f in self.fitted_deg)
-
-    def comparison_dict(self) -> dict:
-        """What a comparison reads of the fit: its JSON."""
-        return self.to_dict()
+        """Whether any condition's model fell: its sway of a trial is not finite, or it does
+        not balance (``stable``)."""
+        return not self.stable or not all(np.all(np.isfinite(f)) for f in self.fitted_deg)
 
     def to_dict(self) -> dict:
         """Strict JSON-ready: the shared and per-condition parameters, the intervals, the
@@ -424,11 +371,25 @@ def fit_joint(model: Model, trials: list[PreparedTrial], body, conditions: Seque
                              f"not among the {model.label} model's (its parameters: "
                              f"{', '.join(names)})")
     per = tuple(n for n in names if n in per_condition)
+    return fit_conditions(model, trials, body, labels, index, per, options, progress,
+                          noise_from_residual, started)
+
+
+def fit_conditions(model: Model, trials: list[PreparedTrial], body, labels: tuple[str, ...],
+                   index: Sequence[int], per: tuple[str, ...], options=None, progress=None,
+                   noise_from_residual: bool = True, started: float | None = None
+                   ) -> JointFit:
+    """:func:`fit_joint` once its call is checked, the way the model's capabilities allow
+    (the module doc): ``labels`` (C,) the distinct conditions, ``index`` (T,) each
+    trial's condition 0..C−1, ``per`` the per-condition parameters (in the order of
+    :func:`joint_parameter_names`); ``started``: the clock (``time.perf_counter``) the
+    fit's seconds count from (default: now)."""
+    started = clock.perf_counter() if started is None else started
     if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        return _fit_frequency_joint(model, trials, body, labels, index, per, options,
+        return _fit_frequency_joint(model, trials, body, labels, list(index), per, options,
                                     started, noise_from_residual)
-    return _fit_locked_joint(model, trials, body, labels, index, per, options, progress,
-                             started)
+    return _fit_locked_joint(model, trials, body, labels, list(index), per, options,
+                             progress, started)
 
 
 def _check_options(model: Model, options) -> None:
@@ -452,15 +413,49 @@ def _split(names: tuple[str, ...], per: tuple[str, ...], conditions: tuple[str, 
     return shared, by_condition
 
 
+def _values(names: tuple[str, ...], per: tuple[str, ...], labels: tuple[str, ...], value,
+            se, half, ranges: dict) -> tuple[dict, dict, dict, dict]:
+    """(the shared values, the per-condition ones, the intervals, the standard errors) as
+    :class:`JointFit` holds them, from ``value(name, c)``, ``se(name, c)`` and ``half(name,
+    c)`` (an interval's half-width) of each name in condition c, SI units; ``ranges``:
+    {name: (low, high)} the search ranges (SI)."""
+    from posture_id.fitting.frequency import interval_bounds
+
+    shared, by_condition = _split(names, per, labels, value)
+    se_shared, se_by = _split(names, per, labels, se)
+    half_shared, half_by = _split(names, per, labels, half)
+    intervals = {"shared": interval_bounds(shared, half_shared, ranges),
+                 "per_condition": {c: interval_bounds(by_condition[c], half_by[c], ranges)
+                                   for c in labels}}
+    return shared, by_condition, intervals, {"shared": se_shared, "per_condition": se_by}
+
+
+def _joint_fit(model, trials, labels, index, per, values, params, coms, fitted, model_frf,
+               started, **rest) -> JointFit:
+    """The :class:`JointFit` of ``values`` (:func:`_values`) and ``params`` ({condition:
+    parameters}), each trial's :class:`~posture_id.fitting.frequency.LockedCom`
+    (``coms``), the model's COM sway (``fitted``, per trial (S_t,) degrees) and FRF
+    (``model_frf``, per trial (K_t,)); ``rest``: the other fields by name."""
+    shared, by_condition, intervals, standard_errors = values
+    return JointFit(
+        model, tuple(t.name for t in trials), tuple(labels[c] for c in index), labels, per,
+        shared, by_condition, params, intervals, standard_errors,
+        seconds=clock.perf_counter() - started,
+        explained=tuple(lc.explained(f) for lc, f in zip(coms, fitted, strict=True)),
+        frequencies_hz=tuple(lc.projection.frequencies_hz for lc in coms),
+        recorded_frf=tuple(lc.frf() for lc in coms), model_frf=model_frf, fitted_deg=fitted,
+        **rest)
+
+
 def _fit_frequency_joint(model, trials, body, labels, index, per, options, started,
                          noise_from_residual: bool) -> JointFit:
     """The joint fit of a model with a closed loop (the module doc)."""
     from posture_id.fitting.frequency import (
         FrequencyFitOptions,
         Precision,
-        interval_bounds,
         on_search_bound,
         search_conditions,
+        search_ranges,
     )
 
     options = options or FrequencyFitOptions()
@@ -479,19 +474,12 @@ def _fit_frequency_joint(model, trials, body, labels, index, per, options, start
         return lambda n, c: float(array[layout.index(c, n)])
 
     values = found.x * np.array([model.scale(n, plant) for n in layout.names])
-    shared, by_condition = _split(free, layout.per_condition, labels, entry(values))
-    se_shared, se_by = _split(free, layout.per_condition, labels,
-                              entry(precision.standard_errors))
-    half_shared, half_by = _split(free, layout.per_condition, labels,
-                                  entry(precision.half_widths))
     bound_entries = set(on_search_bound(model, layout.names, found.x))
     on_bound = tuple(_labelled(n, None if n not in layout.per_condition else labels[c])
                      for c in range(layout.count) for n in free
                      if layout.index(c, n) in bound_entries
                      and (c == 0 or n in layout.per_condition))
     params = dict(zip(labels, found.params, strict=True))
-    ranges = {n: (lo * model.scale(n, plant), hi * model.scale(n, plant))
-              for n, (lo, hi) in model.search_bounds.items()}
     fitted = tuple(np.degrees(p.model.sway(params[labels[c]]))
                    for p, c in zip(parts, index, strict=True))
     model_frf = tuple(model.closed_loop(params[labels[c]], plant,
@@ -505,18 +493,16 @@ def _fit_frequency_joint(model, trials, body, labels, index, per, options, start
         curves[label] = (grid, model.closed_loop(params[label], plant, 2j * np.pi * grid))
     calibrated = tuple(n for n in free
                        if precision.calibrated[layout.names.index(n)])
-    return JointFit(
-        model, tuple(t.name for t in trials), tuple(labels[c] for c in index), labels,
-        layout.per_condition, shared, by_condition, params,
-        {"shared": interval_bounds(shared, half_shared, ranges),
-         "per_condition": {c: interval_bounds(by_condition[c], half_by[c], ranges)
-                           for c in labels}},
-        {"shared": se_shared, "per_condition": se_by}, options.level, calibrated, chi2, dof,
-        compared, on_bound, True, clock.perf_counter() - started,
-        tuple(p.explained(f) for p, f in zip(parts, fitted, strict=True)),
-        tuple(p.projection.frequencies_hz for p in parts), tuple(p.frf() for p in parts),
-        model_frf, curves, fitted, dict(model.pinned), frozenset(model.absolute_pins),
-        len(layout.names), options, correction)
+    return _joint_fit(
+        model, trials, labels, index, layout.per_condition,
+        _values(free, layout.per_condition, labels, entry(values),
+                entry(precision.standard_errors), entry(precision.half_widths),
+                search_ranges(model, plant)),
+        params, parts, fitted, model_frf, started, level=options.level,
+        calibrated=calibrated, chi2=chi2, dof=dof, compared=compared, on_bound=on_bound,
+        stable=True, curves=curves, pins=dict(model.pinned),
+        absolute_pins=frozenset(model.absolute_pins), identified_count=len(layout.names),
+        provenance_options=options, chi2_correction=correction)
 
 
 def _fit_locked_joint(model, trials, body, labels, index, per, options, progress, started
@@ -525,7 +511,7 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
     doc). Its intervals are at :data:`DEC_LEVEL`, the normal quantile (uncalibrated)."""
     from scipy.stats import norm
 
-    from posture_id.fitting.frequency import LockedCom, interval_bounds
+    from posture_id.fitting.frequency import LockedCom
     from posture_id.fitting.joint import polish_by_condition
     from posture_id.fitting.models import _falls
     from posture_id.fitting.options import FitOptions
@@ -570,8 +556,6 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
         return (se_normalised.get(evaluator.column(c, q_index(name)), math.inf)
                 * float(getattr(defaults[joint], field_name)))
 
-    shared, by_condition = _split(names, per, labels, value)
-    se_shared, se_by = _split(names, per, labels, se)
     ranges = {}
     for name in names:
         joint, field_name = name.split(".")
@@ -598,20 +582,12 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
         h = np.concatenate([m for m, k in zip(model_frf, index, strict=True) if k == c])
         order = np.argsort(f, kind="stable")
         curves[label] = (f[order], h[order])
-    return JointFit(
-        model, tuple(t.name for t in trials), tuple(labels[c] for c in index), labels, per,
-        shared, by_condition, params,
-        {"shared": interval_bounds(shared, {k: multiplier * v for k, v in se_shared.items()},
-                              ranges),
-         "per_condition": {c: interval_bounds(by_condition[c], {k: multiplier * v
-                                                           for k, v in se_by[c].items()},
-                                           ranges)
-                           for c in labels}},
-        {"shared": se_shared, "per_condition": se_by}, DEC_LEVEL, (), chi2, dof, data,
-        tuple(on_bound), not any(_falls(theta) for theta in polish.fitted),
-        clock.perf_counter() - started,
-        tuple(lc.explained(f) for lc, f in zip(coms, fitted, strict=True)),
-        tuple(lc.projection.frequencies_hz for lc in coms), tuple(lc.frf() for lc in coms),
-        model_frf, curves, fitted,
-        {f"{j}.{f}": pin for f, pin in _DEC_PINNED.items() for j in joints}, frozenset(),
-        len(free) + len(joints), options, correction)
+    return _joint_fit(
+        model, trials, labels, index, per,
+        _values(names, per, labels, value, se, lambda n, c: multiplier * se(n, c), ranges),
+        params, coms, fitted, model_frf, started, level=DEC_LEVEL, calibrated=(), chi2=chi2,
+        dof=dof, compared=data, on_bound=tuple(on_bound),
+        stable=not any(_falls(theta) for theta in polish.fitted), curves=curves,
+        pins={f"{j}.{f}": pin for f, pin in _DEC_PINNED.items() for j in joints},
+        absolute_pins=frozenset(), identified_count=len(free) + len(joints),
+        provenance_options=options, chi2_correction=correction)

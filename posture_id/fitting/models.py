@@ -7,7 +7,9 @@ read of either is the :class:`~posture_id.models.protocol.ModelFit` protocol."""
 from __future__ import annotations
 
 import math
+import time as clock
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,7 +19,10 @@ from posture_id.models.dec import DEC, com_deg
 from posture_id.models.protocol import Capability, Model
 from posture_id.trials import PreparedTrial
 
-__all__ = ["DecFit", "fit_model", "fit_model_parts"]
+if TYPE_CHECKING:
+    from posture_id.fitting.joint_conditions import JointFit
+
+__all__ = ["DecFit", "PartsFit", "fit_model", "fit_model_parts"]
 
 
 def _falls(theta: np.ndarray) -> bool:
@@ -31,12 +36,11 @@ def _falls(theta: np.ndarray) -> bool:
 
 @dataclass(frozen=True)
 class DecFit:
-    """A locked DEC fit (:class:`~posture_id.fitting.result.FitResult`, or the joint fit of
-    several parts) as a :class:`~posture_id.models.protocol.ModelFit`."""
+    """A locked DEC fit of one recording (:class:`~posture_id.fitting.result.FitResult`) as
+    a :class:`~posture_id.models.protocol.ModelFit`."""
 
     result: object
     body: object
-    parts: int = 1
 
     @property
     def parameters(self):
@@ -44,10 +48,7 @@ class DecFit:
 
     @property
     def fitted_com_deg(self):
-        fitted = self.result.fitted
-        if self.parts == 1:
-            return com_deg(fitted, self.body)
-        return tuple(com_deg(theta, self.body) for theta in fitted)
+        return com_deg(self.result.fitted, self.body)
 
     @property
     def identified_count(self) -> int:
@@ -55,21 +56,82 @@ class DecFit:
 
     @property
     def falls(self) -> bool:
-        fitted = self.result.fitted
-        return _falls(fitted) if self.parts == 1 else any(_falls(t) for t in fitted)
+        return _falls(self.result.fitted)
 
     @property
     def residual_sd(self):
         return self.result.residual_sd
 
     def comparison_dict(self) -> dict:
-        out = {"parameters": self.parameters.to_dict()}
-        if self.parts == 1:
-            out["residual_sd"] = self.result.residual_sd
-        return out
+        return {"parameters": self.parameters.to_dict(),
+                "residual_sd": self.result.residual_sd}
 
     def to_dict(self) -> dict:
         return self.result.to_dict()
+
+
+@dataclass(frozen=True)
+class PartsFit:
+    """The joint fit of the parts of one subject's protocol (a two-amplitude protocol;
+    :func:`fit_model_parts`) as a :class:`~posture_id.models.protocol.ModelFit`: a
+    :class:`~posture_id.fitting.joint_conditions.JointFit`, every parameter shared but
+    the per-part one of a model with a closed loop (IC: W, sensory re-weighting).
+
+    Attributes:
+        joint: the joint fit. identified_count: the parameters identified over every part.
+    """
+
+    joint: JointFit
+    identified_count: int
+
+    @property
+    def per_part(self) -> bool:
+        """Whether a parameter takes one value per part (the model's ``per_part``)."""
+        return Capability.FREQUENCY_RESPONSE in self.joint.model.capabilities
+
+    @property
+    def parameters(self):
+        """Per part, its parameters (they differ in the per-part one only); DEC's one set."""
+        each = tuple(self.joint.parameters.values())
+        return each if self.per_part else each[0]
+
+    @property
+    def chi2(self) -> float:
+        """Of all parts (units of the noise)."""
+        return self.joint.chi2
+
+    @property
+    def fitted_com_deg(self) -> tuple[np.ndarray, ...]:
+        """Per part (S_p,): the model's COM sway, degrees."""
+        return self.joint.fitted_deg
+
+    @property
+    def falls(self) -> bool:
+        return self.joint.falls
+
+    @property
+    def w_by_part(self) -> tuple[float, ...]:
+        """The per-part parameter of each part (IC: W)."""
+        return tuple(getattr(p, self.joint.model.per_part) for p in self.parameters)
+
+    @property
+    def reweighting(self) -> float:
+        """How far W moved between the amplitudes: the last part's W minus the first's."""
+        return self.w_by_part[-1] - self.w_by_part[0]
+
+    def comparison_dict(self) -> dict:
+        if not self.per_part:
+            return {"parameters": self.parameters.to_dict()}
+        return {"parameters": [p.to_dict() for p in self.parameters],
+                "w_by_part": list(self.w_by_part), "reweighting": self.reweighting}
+
+    def to_dict(self) -> dict:
+        return self.joint.to_dict()
+
+
+def _unfittable(model: Model) -> PostureIdError:
+    return PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
+                          "loop nor per-joint modules)")
 
 
 def fit_model(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
@@ -96,26 +158,35 @@ def fit_model(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
 
         options = replace(options or FitOptions(), locked=locked)
         return DecFit(fit_recording(trial, body, None, options, progress=progress), body)
-    raise PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
-                         "loop nor per-joint modules)")
+    raise _unfittable(model)
 
 
 def fit_model_parts(model: Model, trials: list[PreparedTrial], body, locked: LockedOptions,
-                    options=None, progress=None):
-    """``model`` fitted to several parts of one subject's protocol at once: DEC with one
-    set of parameters for every part, a model with a closed loop with its per-part
-    parameter (IC: W) for each."""
+                    options=None, progress=None) -> PartsFit:
+    """``model`` fitted to several parts of one subject's protocol at once (options and
+    ``locked`` as :func:`fit_model`'s): the joint fit
+    (:func:`~posture_id.fitting.joint_conditions.fit_conditions`), DEC with one set of
+    parameters for every part, a model with a closed loop with its per-part parameter
+    (IC: W) one per part (every part its own condition, the noise from the recorded
+    sway)."""
+    from posture_id.fitting.joint_conditions import fit_conditions
+
+    started = clock.perf_counter()
+    count = len(trials)
     if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        from posture_id.fitting.frequency import FrequencyFitOptions, fit_frequency_parts
+        from posture_id.fitting.frequency import FrequencyFitOptions
 
         options = replace(options or FrequencyFitOptions(), locked=locked)
-        return fit_frequency_parts(model, trials, body, options)
+        joint = fit_conditions(model, trials, body,
+                               tuple(f"part {k + 1}" for k in range(count)), range(count),
+                               (model.per_part,) if count > 1 else (), options,
+                               noise_from_residual=False, started=started)
+        return PartsFit(joint, joint.identified_count)
     if Capability.LOCKED_FIT in model.capabilities:
-        from posture_id.fitting.joint import fit_recordings_jointly
         from posture_id.fitting.options import FitOptions
 
         options = replace(options or FitOptions(), locked=locked)
-        return DecFit(fit_recordings_jointly(trials, body, options, progress), body,
-                      len(trials))
-    raise PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
-                         "loop nor per-joint modules)")
+        joint = fit_conditions(model, trials, body, ("every part",), [0] * count, (),
+                               options, progress, started=started)
+        return PartsFit(joint, DEC.identified_count(body))
+    raise _unfittable(model)

@@ -43,7 +43,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from posture_id.simulation.stimulus import TiltProfile, tilt_from_array
+from posture_id.simulation.stimulus import TiltProfile, column_noise, tilt_from_array
 
 __all__ = ["PeriodicTilt", "recognise_periodic", "find_periodic", "true_runs", "REPEAT_LEVEL",
            "STEADY_TOLERANCE", "PLATFORM_TOLERANCE", "SINUSOID_SHARE", "DISTORTION_SHARE",
@@ -121,14 +121,6 @@ class PeriodicTilt:
                                            strict=True))
         return (f"the platform's distortion at {listed} of the driven amplitude is not a "
                 "driven frequency and is left out")
-
-
-def _column_noise(x: np.ndarray) -> float:
-    """Robust SD of a column's white measurement noise, from its second differences
-    (Δ² of white noise has variance 6σ²; a smooth tilt adds little)."""
-    if len(x) < 3:
-        return 0.0
-    return 1.4826 * float(np.median(np.abs(np.diff(x, 2)))) / math.sqrt(6.0)
 
 
 def _difference_function(x: np.ndarray, max_lag: int) -> np.ndarray:
@@ -246,7 +238,7 @@ def find_periodic(times_s: np.ndarray, tilt_rad: np.ndarray,
     if len(t) < 16 or np.ptp(a) == 0:
         return None
     dt = float(np.median(np.diff(t)))
-    noise = _column_noise(a)
+    noise = column_noise(a)
     span = float(np.ptp(a))
     edge = max(len(a) // 20, 2)
     level_guess = float(np.median(a[:edge]))

@@ -36,6 +36,7 @@ __all__ = [
     "LAB_STATE_RANGE_S",
     "COMMON_RATES_HZ",
     "PRTS_REGISTERS",
+    "column_noise",
 ]
 
 #: Shift-register definitions (docs/model.md §4): states per cycle → (feedback, start register).
@@ -293,6 +294,14 @@ LAB_STATE_S = np.arange(0.10, 0.50 + 1e-9, 0.0025)
 _SEARCH_RATE_HZ, _MIN_MATCH, _MAX_MISFIT = 50.0, 0.9, 0.005
 
 
+def column_noise(x: np.ndarray) -> float:
+    """Robust SD of a column's white measurement noise, from its second differences
+    (Δ² of white noise has variance 6σ²; a smooth tilt adds little)."""
+    if len(x) < 3:
+        return 0.0
+    return 1.4826 * float(np.median(np.abs(np.diff(x, 2)))) / math.sqrt(6.0)
+
+
 def recognise_lab_prts(times_s: np.ndarray, tilt_rad: np.ndarray) -> TiltProfile | None:
     """The PRTS a lab ran, from an evenly sampled tilt column (see :func:`recognise_prts`),
     or None.
@@ -310,8 +319,8 @@ def recognise_lab_prts(times_s: np.ndarray, tilt_rad: np.ndarray) -> TiltProfile
     if len(t) < 8 or span == 0:
         return None
     # a piecewise-linear tilt has no second difference but at its corners: what there is
-    # elsewhere is the column's measurement noise (robust SD; Δ² of white noise has 6σ²)
-    noise = 1.4826 * float(np.median(np.abs(np.diff(a, 2)))) / math.sqrt(6.0)
+    # elsewhere is the column's measurement noise
+    noise = column_noise(a)
     still = max(1e-3 * span, 5.0 * noise)
     if abs(a[0]) > max(0.02 * span, still):  # not level at the start: not a lab PRTS
         return None

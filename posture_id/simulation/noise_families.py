@@ -63,12 +63,9 @@ class NoiseDraw:
     measurement: MeasurementNoise | None
 
     def to_dict(self) -> dict:
-        shape = self.shape
-        return {"family": self.family.value, "cutoff_hz": self.cutoff_hz,
-                "slope": shape.slope, "second_cutoff_hz": shape.second_cutoff_hz,
-                "second_slope": shape.second_slope,
-                "joint_correlation": shape.joint_correlation,
-                "level_ratio": shape.level_ratio, "change_at": shape.change_at,
+        # the shape's fields: slope, second_cutoff_hz, second_slope, joint_correlation,
+        # level_ratio, change_at
+        return {"family": self.family.value, "cutoff_hz": self.cutoff_hz, **vars(self.shape),
                 "sensor_noise_deg": self.sensor_noise_deg,
                 "measurement": None if self.measurement is None else vars(self.measurement)}
 

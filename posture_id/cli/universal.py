@@ -155,20 +155,21 @@ def add_parser(sub, name: str = "universal") -> None:
     b.set_defaults(func=run_table)
 
 
+def _given(args: argparse.Namespace, *names: str, **values) -> dict:
+    """The options given (not None): ``args``' attributes ``names``, then ``values``; the
+    defaults of what they configure stand for the rest."""
+    return {k: v for k, v in ({n: getattr(args, n) for n in names} | values).items()
+            if v is not None}
+
+
 def run_data(args: argparse.Namespace) -> int:
     check_output_folder(args.out, "--out")
     from posture_id.learning.data.drawn import UniversalDataConfig, generate_universal
     from posture_id.learning.data.scope import ScopeError, UniversalScope
 
     given = {"trials": args.trials} if args.trials else {}
-    scope = {k: v for k, v in (("clean_share", args.clean_share),
-                               ("locked_share", args.locked_share),
-                               ("proportion_jitter", args.proportion_jitter),
-                               ("tip_share", args.tip_share),
-                               ("preset_share", args.preset_share),
-                               ("preset_jitter", args.preset_jitter),
-                               ("amplitude_deg", args.amplitude_deg),
-                               ("noise_families", args.noise_families)) if v is not None}
+    scope = _given(args, "clean_share", "locked_share", "proportion_jitter", "tip_share",
+                   "preset_share", "preset_jitter", "amplitude_deg", "noise_families")
     try:
         given["scope"] = UniversalScope(**{k: tuple(v) if isinstance(v, list) else v
                                            for k, v in scope.items()})
@@ -200,19 +201,15 @@ def run_train(args: argparse.Namespace) -> int:
                              "give it with --init MODEL_DIR")
     if args.init is not None and not (args.init / "model.json").is_file():
         raise PostureIdError(f"{args.init}: --init is not a universal model (no model.json)")
-    given = {k: v for k, v in (("epochs", args.epochs), ("max_learning_rate", args.learning_rate),
-                               ("weight_decay", args.weight_decay),
-                               ("point_loss", args.point_loss),
-                               ("init", None if args.init is None else str(args.init)))
-             if v is not None}
+    given = _given(args, "epochs", "weight_decay", "point_loss",
+                   max_learning_rate=args.learning_rate,
+                   init=None if args.init is None else str(args.init))
     config = UniversalTrainingConfig(seed=args.seed, threads=args.threads,
                                      fresh_motor_noise=args.fresh_motor_noise,
                                      motor_noise_tilt=args.motor_noise_tilt,
                                      exclude_families=tuple(args.exclude_families),
                                      keep_clean=args.keep_clean, **given)
-    shape = {k: v for k, v in (("dropout", args.dropout),
-                               ("hidden", tuple(args.hidden) if args.hidden else None))
-             if v is not None}
+    shape = _given(args, "dropout", hidden=tuple(args.hidden) if args.hidden else None)
     network = UniversalNetworkConfig(members=args.members, **shape)
     with TerminalProgress("epoch", prefix="posture-id network universal train",
                           quiet=args.quiet) as progress:
@@ -273,9 +270,7 @@ def _table(args: argparse.Namespace) -> int:
     with TerminalProgress("cell", prefix="posture-id network universal table",
                           quiet=args.quiet) as progress:
         # the seed and bodies per cell where given; family_table's defaults otherwise
-        given = {name: value for name, value in (("seed", args.seed),
-                                                 ("bodies_per_cell", args.bodies_per_cell))
-                 if value is not None}
+        given = _given(args, "seed", "bodies_per_cell")
         table = family_table(args.model or BUNDLED_DIR, args.out, args.trials, args.workers,
                              args.cache, progress, **given)
     print(table.markdown())

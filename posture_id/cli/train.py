@@ -79,12 +79,9 @@ def run(args: argparse.Namespace) -> int:
     layout = Layout(args.layout)
     network = NetworkConfig.for_body(layout, data.n_segments, widths=tuple(args.widths),
                                      class_output=ClassOutput(args.class_output))
-    if args.optimiser == "sgd":
-        optimiser = (SgdMomentum(learning_rate=args.learning_rate) if args.learning_rate
-                     else SgdMomentum())
-    else:
-        optimiser = (AdamWOneCycle(max_learning_rate=args.learning_rate) if args.learning_rate
-                     else AdamWOneCycle())
+    kind, rate = ((SgdMomentum, "learning_rate") if args.optimiser == "sgd"
+                  else (AdamWOneCycle, "max_learning_rate"))
+    optimiser = kind(**({rate: args.learning_rate} if args.learning_rate else {}))
     training = TrainingConfig(optimiser=optimiser, epochs=args.epochs,
                               batch_size=args.batch_size, patience=args.patience,
                               seed=args.seed, threads=args.threads,

@@ -23,103 +23,43 @@ def buffer_length(max_delay_steps: float) -> int:
     return 1 << (need - 1).bit_length()
 
 
+def _rows(k: int) -> property:
+    """The offset of the k-th group of N rows, k·N (one row per segment or module)."""
+    return property(lambda self: k * self.n)
+
+
 @dataclass(frozen=True)
 class Rows:
     """Row offsets of the work array ``w`` (each row holds LANES values) for N segments."""
 
     n: int
 
-    @property
-    def theta(self) -> int:  # θ_j, rad
-        return 0
-
-    @property
-    def omega(self) -> int:  # θ̇_j, rad/s
-        return self.n
-
-    @property
-    def integral(self) -> int:  # ∫ε_j dt, rad·s
-        return 2 * self.n
-
-    @property
-    def alpha(self) -> int:  # α_j,S, rad
-        return 3 * self.n
-
-    @property
-    def alpha_dot(self) -> int:
-        return 4 * self.n
-
-    @property
-    def tg(self) -> int:  # T_g,j = sin α_j,S
-        return 5 * self.n
-
-    @property
-    def tg_dot(self) -> int:
-        return 6 * self.n
-
-    @property
-    def cos(self) -> int:
-        return 7 * self.n
-
-    @property
-    def sin(self) -> int:
-        return 8 * self.n
-
-    @property
-    def lever(self) -> int:  # Im(e^{iθ_j} S_j), kg·m
-        return 9 * self.n
-
-    @property
-    def tau(self) -> int:  # joint torque, N·m
-        return 10 * self.n
-
-    @property
-    def servo(self) -> int:  # undelayed PID command
-        return 11 * self.n
-
-    @property
-    def q(self) -> int:  # joint angle
-        return 12 * self.n
-
-    @property
-    def qd(self) -> int:
-        return 13 * self.n
-
-    @property
-    def acc(self) -> int:  # θ̈_j
-        return 14 * self.n
-
-    @property
-    def mass(self) -> int:  # M (N×N rows), its LDLᵀ factors in place
-        return 15 * self.n
-
-    @property
-    def estimate(self) -> int:  # α̂_FS, rad
-        return 15 * self.n + self.n * self.n
-
-    @property
-    def estimate_rate(self) -> int:
-        return self.estimate + 1
-
-    @property
-    def inside(self) -> int:  # 1.0 while every |θ_j| ≤ sway limit
-        return self.estimate + 2
-
-    @property
-    def vsum(self) -> int:  # 4N rows: COM-above sums Σ_{j≥i} e^{iθ_j} S_j (re, im), rates
-        return self.estimate + 3
-
-    @property
-    def pivot_inverse(self) -> int:  # 1/d_j of M = L·diag(d)·Lᵀ (N rows)
-        return self.estimate + 3 + 4 * self.n
-
-    @property
-    def servo_before(self) -> int:  # the servo command of the step before (N rows)
-        return self.estimate + 3 + 5 * self.n
-
-    @property
-    def count(self) -> int:
-        return self.estimate + 3 + 6 * self.n
+    theta = _rows(0)  # θ_j, rad
+    omega = _rows(1)  # θ̇_j, rad/s
+    integral = _rows(2)  # ∫ε_j dt, rad·s
+    alpha = _rows(3)  # α_j,S, rad
+    alpha_dot = _rows(4)
+    tg = _rows(5)  # T_g,j = sin α_j,S
+    tg_dot = _rows(6)
+    cos = _rows(7)
+    sin = _rows(8)
+    lever = _rows(9)  # Im(e^{iθ_j} S_j), kg·m
+    tau = _rows(10)  # joint torque, N·m
+    servo = _rows(11)  # undelayed PID command
+    q = _rows(12)  # joint angle
+    qd = _rows(13)
+    acc = _rows(14)  # θ̈_j
+    mass = _rows(15)  # M (N×N rows), its LDLᵀ factors in place
+    estimate = property(lambda self: 15 * self.n + self.n * self.n)  # α̂_FS, rad
+    estimate_rate = property(lambda self: self.estimate + 1)
+    inside = property(lambda self: self.estimate + 2)  # 1.0 while every |θ_j| ≤ sway limit
+    # 4N rows: COM-above sums Σ_{j≥i} e^{iθ_j} S_j (re, im), rates
+    vsum = property(lambda self: self.estimate + 3)
+    # 1/d_j of M = L·diag(d)·Lᵀ (N rows)
+    pivot_inverse = property(lambda self: self.estimate + 3 + 4 * self.n)
+    # the servo command of the step before (N rows)
+    servo_before = property(lambda self: self.estimate + 3 + 5 * self.n)
+    count = property(lambda self: self.estimate + 3 + 6 * self.n)
 
 
 @dataclass(frozen=True)
@@ -128,15 +68,15 @@ class ParRows:
 
     n: int
 
-    kp = property(lambda self: 0)
-    ki = property(lambda self: self.n)
-    kd = property(lambda self: 2 * self.n)
-    sign = property(lambda self: 3 * self.n)  # class C: +1 COM in space, −1 joint (or between)
-    kpas = property(lambda self: 4 * self.n)
-    bpas = property(lambda self: 5 * self.n)
-    delay = property(lambda self: 6 * self.n)  # Δ/dt, steps (fractional)
-    delay_ceil = property(lambda self: 7 * self.n)  # ⌈Δ/dt⌉
-    delay_frac = property(lambda self: 8 * self.n)  # ⌈Δ/dt⌉ − Δ/dt
-    alpha_ref = property(lambda self: 9 * self.n)  # α_i,S at the reference posture, rad
-    hold = property(lambda self: 10 * self.n)  # servo command holding it at rest, N·m
-    count = property(lambda self: 11 * self.n)
+    kp = _rows(0)
+    ki = _rows(1)
+    kd = _rows(2)
+    sign = _rows(3)  # class C: +1 COM in space, −1 joint (or between)
+    kpas = _rows(4)
+    bpas = _rows(5)
+    delay = _rows(6)  # Δ/dt, steps (fractional)
+    delay_ceil = _rows(7)  # ⌈Δ/dt⌉
+    delay_frac = _rows(8)  # ⌈Δ/dt⌉ − Δ/dt
+    alpha_ref = _rows(9)  # α_i,S at the reference posture, rad
+    hold = _rows(10)  # servo command holding it at rest, N·m
+    count = _rows(11)

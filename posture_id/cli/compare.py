@@ -62,15 +62,17 @@ def run(args: argparse.Namespace) -> int:
         return run_cohort(args)
     args.recording = Path(args.recording)
     check_out_and_plot(args, (args.recording, args.body, args.tilt, args.second))
-    if args.second is not None:
-        return _run_amplitudes(args)
-    from posture_id.comparison.models import compare_models
+    from posture_id.comparison.models import compare_amplitudes, compare_models
 
-    body = recording_body(args, DEFAULT_URDF)
-    trial = prepared_trial(args, body)
+    if args.second is None:
+        body = recording_body(args, DEFAULT_URDF)
+        trials = [prepared_trial(args, body)]
+    else:
+        body, trials = _amplitude_trials(args)
     with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
-        result = compare_models(trial, body, _ic_options(args), progress,
-                                not args.no_held_out)
+        result = (compare_models(trials[0], body, _ic_options(args), progress,
+                                 not args.no_held_out) if args.second is None
+                  else compare_amplitudes(trials, body, _ic_options(args), progress))
     write_result(result, args.out, args.plot)
     return answered(result.doubtful)
 
@@ -108,10 +110,9 @@ def run_cohort(args: argparse.Namespace) -> int:
     return answered(bool(result.failed or result.doubtful))
 
 
-def _run_amplitudes(args: argparse.Namespace) -> int:
-    """``--second``: the two parts of a two-amplitude protocol, compared at once."""
-    from posture_id.comparison.models import compare_amplitudes
-
+def _amplitude_trials(args: argparse.Namespace) -> tuple:
+    """``--second``: the body and the two parts of a two-amplitude protocol (compared at
+    once), each prepared with its part's stimulus."""
     if args.part is not None:
         raise PostureIdError("--part: with --second each recording is its own part (the "
                              "first 1, the second 2)")
@@ -124,10 +125,7 @@ def _run_amplitudes(args: argparse.Namespace) -> int:
         args.recording, args.part = path, (part if args.protocol else None)
         trials.append(prepared_trial(args, body))
     _two_amplitudes(*(t.recording for t in trials))
-    with TerminalProgress(prefix="posture-id compare", quiet=True) as progress:
-        result = compare_amplitudes(trials, body, _ic_options(args), progress)
-    write_result(result, args.out, args.plot)
-    return answered(result.doubtful)
+    return body, trials
 
 
 def _ic_options(args: argparse.Namespace):

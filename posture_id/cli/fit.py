@@ -274,7 +274,7 @@ def _fit_joint(args: argparse.Namespace, recordings: list[Path]) -> int:
 def _each_trial_once(recordings: list[Path]) -> None:
     """Refuse a file given twice (by any path) and two files of the same bytes: a joint
     fit would count one trial twice."""
-    import hashlib
+    from posture_id.fileio import file_sha256
 
     seen: dict[Path, Path] = {}
     contents: dict[str, Path] = {}
@@ -285,7 +285,7 @@ def _each_trial_once(recordings: list[Path]) -> None:
                                  "fit counts each trial once")
         seen[key] = path
         if path.is_file():
-            digest = hashlib.sha256(path.read_bytes()).hexdigest()
+            digest = file_sha256(path)
             if digest in contents:
                 raise PostureIdError(f"{path}: the same bytes as {contents[digest]}: the same "
                                      "trial twice (a copied file?); a joint fit counts each "

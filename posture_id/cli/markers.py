@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from posture_id.bodies.body import load_body
 from posture_id.cli.arguments import non_negative_float, nonzero_float, say
 from posture_id.errors import PostureIdError
 from posture_id.motion_capture.mapping import (
@@ -166,7 +167,6 @@ def trial_subject(path: Path) -> tuple[float, float]:
 def _force_plate_body(args: argparse.Namespace):
     """A force plate's recording is the body-COM sway of the subject's body (``--body``,
     required) taken as one segment (said on stderr when the body has more)."""
-    from posture_id.bodies.body import load_body
     from posture_id.bodies.one_segment import one_segment_body
 
     if args.body is None and getattr(args, "height_m", None) is not None:
@@ -188,7 +188,6 @@ def _plate_weighed_body(args: argparse.Namespace):
     """``--height-m H --load-columns ...``: the one-segment Winter body of the subject's
     height and the mass the trial's own load columns give (said on stderr)."""
     from posture_id.bodies.anthropometry import winter_body_file
-    from posture_id.bodies.body import load_body
     from posture_id.cli.plate_mass import load_columns_from_args
     from posture_id.force_plate.load import standing_mass
 
@@ -208,7 +207,6 @@ def recording_body(args: argparse.Namespace, default: Path | None):
     """The body a command reads ``args.recording`` for: ``--body``; else, for a C3D trial
     whose metadata give the subject's height and mass, their Winter body with as many
     segments as the markers name (said on stderr); else ``default`` (None: no body)."""
-    from posture_id.bodies.body import load_body
     from posture_id.motion_capture import is_c3d, marker_angles, read_c3d
     from posture_id.trials.subjects import subject_urdf
 

@@ -384,15 +384,12 @@ def _no_member_twice(a, b, groups: list[list[Path]], paired: bool = False) -> No
 
 def _is_identified(path: Path) -> bool:
     """An identify result (parameters and intervals), not an FRF."""
-    import json
+    from posture_id.cli.output_folder import json_object
 
     if path.suffix.lower() != ".json" or path.name.endswith(".frf.json"):
         return False
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    return isinstance(data, dict) and "parameters" in data and "intervals" in data
+    data = json_object(path)
+    return "parameters" in data and "intervals" in data
 
 
 def _compare_identified(args: argparse.Namespace) -> int:

@@ -15,7 +15,6 @@ it is the user's. A run that fails leaves no new empty folder behind.
 from __future__ import annotations
 
 import glob
-import hashlib
 import json
 from collections.abc import Iterable, Sequence
 from pathlib import Path
@@ -23,38 +22,37 @@ from types import TracebackType
 
 from posture_id.cli.arguments import check_output_folder
 from posture_id.errors import PostureIdError
+from posture_id.fileio import atomic_write_text, file_sha256, json_text
 
-__all__ = ["LEDGER", "OutputFolder", "written_by_posture_id", "cohort_folder"]
+__all__ = ["LEDGER", "OutputFolder", "written_by_posture_id", "cohort_folder", "json_object"]
 
 #: The folder's record of the files posture-id wrote into it: {relative path: SHA-256}
 #: (JSON, but not named *.json: a user's loop over the results' JSON does not meet it).
 LEDGER = ".posture-id-files"
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+def json_object(path: Path) -> dict:
+    """The object a JSON file holds; {} for a file that cannot be read, is not JSON or
+    holds something else."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
 
 
 def _ledger(folder: Path) -> dict[str, str]:
-    try:
-        data = json.loads((folder / LEDGER).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    files = data.get("files") if isinstance(data, dict) else None
+    files = json_object(folder / LEDGER).get("files")
     return {str(k): str(v) for k, v in files.items()} if isinstance(files, dict) else {}
 
 
 def written_by_posture_id(path: Path, folder: Path) -> bool:
     """Whether ``path`` (a file in ``folder``) is as posture-id wrote it."""
-    if _ledger(folder).get(path.relative_to(folder).as_posix()) == _sha256(path):
+    if _ledger(folder).get(path.relative_to(folder).as_posix()) == file_sha256(path):
         return True
     if path.suffix != ".json":
         return False
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    provenance = data.get("provenance") if isinstance(data, dict) else None
+    provenance = json_object(path).get("provenance")
     return isinstance(provenance, dict) and provenance.get("package") == "posture_id"
 
 
@@ -121,10 +119,8 @@ class OutputFolder:
             self.path.rmdir()
 
     def _record(self, written: list[str]) -> None:
-        from posture_id.fileio import atomic_write_text, json_text
-
         files = {k: v for k, v in _ledger(self.path).items() if (self.path / k).is_file()}
-        files.update({name: _sha256(self.path / name) for name in written})
+        files.update({name: file_sha256(self.path / name) for name in written})
         atomic_write_text(self.path / LEDGER, json_text(
             {"about": "the files posture-id wrote here (it overwrites these, and no other)",
              "files": dict(sorted(files.items()))}))

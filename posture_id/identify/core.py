@@ -406,9 +406,10 @@ class Identifier:
         if answer.fell or verdict.noise is None:
             return answer, trial, None
         period = trial.stimulus.period_s
-        cycles = _analysed_cycles(trial)
-        if not (verdict.beyond_noise or verdict.people_like) or period is None or cycles is None:
+        weighted = LockedProjection.for_periodic_trial(trial)
+        if not (verdict.beyond_noise or verdict.people_like) or period is None or weighted is None:
             return answer, trial, None
+        cycles = weighted.cycles
         reach = period / 4  # half a cycle on, a PRTS or a sinusoid is its own negative
         ratio = verdict.noise.ratio
         # a candidate competes only on as many cycles as the given timing analyses: a
@@ -416,7 +417,7 @@ class Identifier:
         # it, loses a cycle, and a χ² over less sway wins for that alone (compared on the
         # same fewer cycles, a wrong timing of people-like sway still won: one cycle
         # cannot tell the subject's own sway from the response)
-        judged = [j for j in self._timing_candidates(trial, reach, progress, start)
+        judged = [j for j in self._timing_candidates(trial, weighted, reach, progress, start)
                   if j[0] < ratio and _analysed_cycles(j[1]) == cycles]
         if not judged:
             return answer, trial, None
@@ -447,18 +448,16 @@ class Identifier:
                     "--max-offset-s)")
         return moved, fitted, said
 
-    def _timing_candidates(self, trial: PreparedTrial, reach: float,
-                           progress: Progress | None, start: float) -> list:
+    def _timing_candidates(self, trial: PreparedTrial, weighted: LockedProjection,
+                           reach: float, progress: Progress | None, start: float) -> list:
         """(ratio, shifted trial, the network's answer there) of :meth:`_onset`'s
         candidate timings within ±``reach`` s, best first: about the offset at which the
         recording's empirical locked FRF is smoothest
         (:meth:`~posture_id.frf.locked.LockedProjection.smoothest_offset`), the network's
         residual on a grid of shifts (every :data:`ONSET_GRID_S` within
         ±:data:`ONSET_WINDOW_S` of it), its :data:`ONSET_CANDIDATES` deepest local minima
-        each identified by the network and settled (:meth:`_settle_offset`)."""
-        weighted = LockedProjection.for_periodic_trial(trial, LockedOptions())
-        if weighted is None:
-            return []
+        each identified by the network and settled (:meth:`_settle_offset`). ``weighted``:
+        the trial's locked projection."""
         rec = trial.recording
         centre = weighted.smoothest_offset(np.degrees(rec.theta), np.degrees(rec.tilt), reach)
         low, high = max(centre - ONSET_WINDOW_S, -reach), min(centre + ONSET_WINDOW_S, reach)

@@ -322,16 +322,16 @@ class ChainModel:
         xml = chain_mjcf(body, options, kpas, bpas)
         model = compile_mjcf(xml, f"{body.urdf_path}: MuJoCo refuses the model")
         obj = mujoco.mjtObj
+
+        def ids(kind, names) -> np.ndarray:
+            return np.array([mujoco.mj_name2id(model, kind, name) for name in names])
+
         platform = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, PLATFORM)
-        bodies = np.array([mujoco.mj_name2id(model, obj.mjOBJ_BODY, s.name)
-                           for s in body.segments])
-        joints = np.array([mujoco.mj_name2id(model, obj.mjOBJ_JOINT, s.joint)
-                           for s in body.segments])
-        sites = np.array([mujoco.mj_name2id(model, obj.mjOBJ_SITE, s.name + SITE)
-                          for s in body.segments])
-        sensor_adr = np.array([[model.sensor_adr[mujoco.mj_name2id(
-            model, obj.mjOBJ_SENSOR, f"{s.name}_{what}")] for what in SEGMENT_SENSORS]
-            for s in body.segments])
+        bodies = ids(obj.mjOBJ_BODY, body.segment_names)
+        joints = ids(obj.mjOBJ_JOINT, body.joint_names)
+        sites = ids(obj.mjOBJ_SITE, [s.name + SITE for s in body.segments])
+        sensor_adr = np.array([model.sensor_adr[ids(obj.mjOBJ_SENSOR, [
+            f"{s.name}_{what}" for what in SEGMENT_SENSORS])] for s in body.segments])
         axis = np.asarray(body.axis, dtype=float)
         gravity = np.asarray(model.opt.gravity, dtype=float)
         up = -gravity / np.linalg.norm(gravity)

@@ -164,10 +164,9 @@ class ChainSensors:
         up, fwd = self.up, self.fwd
         # a frame's turn in space from its rotation matrix R (row-major, world from frame):
         # the angle of R·up from up towards forward, atan2(fwdᵀ·R·up, upᵀ·R·up)
-        self.to_fwd = [(3 * k + col, fwd[k] * up[col]) for k in range(3) for col in range(3)
-                       if fwd[k] * up[col] != 0.0]
-        self.to_up = [(3 * k + col, up[k] * up[col]) for k in range(3) for col in range(3)
-                      if up[k] * up[col] != 0.0]
+        self.to_fwd, self.to_up = ([(3 * k + col, v[k] * up[col]) for k in range(3)
+                                    for col in range(3) if v[k] * up[col] != 0.0]
+                                   for v in (fwd, up))
 
     def _turn(self, rot: list) -> float:
         return math.atan2(sum(rot[k] * c for k, c in self.to_fwd),

@@ -52,7 +52,7 @@ from posture_id.learning.prediction import predict_images
 from posture_id.learning.samples import SplitSamples
 from posture_id.learning.universal_model import UniversalModel
 from posture_id.learning.universal_samples import Samples
-from posture_id.plotting import plot_identification_error, plot_parameter_errors
+from posture_id.plotting import plot_identification_error, plot_parameter_errors, plot_score_grid
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 from posture_id.simulation.batch import simulate_batch
@@ -61,7 +61,7 @@ from posture_id.simulation.options import SimulationOptions
 from posture_id.uncertainty.coverage import confidence_calibration_error
 
 __all__ = ["SplitMetrics", "EvaluationReport", "evaluate", "split_metrics", "GroupScore",
-           "score_samples", "relative_errors"]
+           "score_samples", "relative_errors", "plot_scores"]
 
 SPLITS = ("train", "validation", "test")
 NAMES = (*TARGET_FIELDS, "class")
@@ -388,12 +388,34 @@ class GroupScore:
     by_module: tuple = ()
     class_ece_pct: float = float("nan")
 
+    @property
+    def coverage_text(self) -> str:
+        """The coverage of Kp, Ki, Kd and the delay, %: '90 / 91 / 89 / 90'."""
+        return " / ".join(f"{self.coverage_pct[k]:.0f}" for k in TARGET_FIELDS)
+
+    def grid_values(self) -> tuple[float, float, float]:
+        """What :func:`plot_scores` draws of the group: classes right, %; the median |Kp
+        error|, %; the mean of the four parameters' coverage, %."""
+        return (self.classes_pct, self.median_error_pct["kp"],
+                float(np.mean(list(self.coverage_pct.values()))))
+
     def to_dict(self) -> dict:
         return {"modules": self.modules, "trials": self.trials, "by_module": list(self.by_module),
                 "classes_pct": self.classes_pct, "trials_all_right_pct": self.trials_all_right_pct,
                 "class_ece_pct": self.class_ece_pct,
                 "median_error_pct": self.median_error_pct, "coverage_pct": self.coverage_pct,
                 "level": self.level}
+
+
+def plot_scores(rows: list[str], columns: list[str], values: np.ndarray, level: float,
+                path=None, ax=None):
+    """Groups' :meth:`GroupScore.grid_values`, ``values`` (3, rows, columns), as three
+    panels of a grid, the coverage's at the intervals' ``level``."""
+    return plot_score_grid(rows, columns, {
+        "classes right, %": (values[0], (80, 100), ".0f"),
+        "median |Kp error|, %": (values[1], (0, 20), ".1f"),
+        f"{100 * level:.0f} % interval coverage (mean of 4), %": (values[2], (75, 100), ".0f")},
+        path, ax)
 
 
 def score_samples(model: UniversalModel, samples: Samples,

@@ -13,7 +13,7 @@ import numpy as np
 from posture_id.fileio import Result, atomic_write_text, json_text
 from posture_id.learning.calibration import UniversalCalibration, calibrate
 from posture_id.learning.data.drawn import open_sets
-from posture_id.learning.evaluation import GroupScore, score_samples
+from posture_id.learning.evaluation import GroupScore, plot_scores, score_samples
 from posture_id.learning.typicality import (
     ATYPICAL_P,
     TypicalityReport,
@@ -29,7 +29,6 @@ from posture_id.learning.universal_samples import (
     without_families,
 )
 from posture_id.learning.universal_training import VALIDATION_SEED
-from posture_id.plotting import plot_score_grid
 
 __all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes",
            "reference_from_sets"]
@@ -90,12 +89,11 @@ class CheckReport(Result):
                  head, "|" + "---|" * 10]
         rows = [("all", self.overall), *self.by_segments.items(), *self.by_regime.items()]
         for name, s in rows:
-            e, c = s.median_error_pct, s.coverage_pct
+            e = s.median_error_pct
             lines.append(f"| {name} | {s.trials} | {s.classes_pct:.1f} | "
                          f"{s.trials_all_right_pct:.1f} | {e['kp']:.1f} | {e['ki']:.1f} | "
-                         f"{e['kd']:.1f} | {e['delay_s']:.1f} | "
-                         + " / ".join(f"{c[k]:.0f}" for k in ("kp", "ki", "kd", "delay_s"))
-                         + f" | {s.class_ece_pct:.1f} |")
+                         f"{e['kd']:.1f} | {e['delay_s']:.1f} | {s.coverage_text} | "
+                         f"{s.class_ece_pct:.1f} |")
         return "\n".join(lines)
 
     def summary(self) -> str:
@@ -104,13 +102,8 @@ class CheckReport(Result):
     def plot(self, path=None, ax=None):
         """Classes right, median Kp error and mean coverage per group (one row each)."""
         groups = {"all": self.overall, **self.by_segments, **self.by_regime}
-        column = np.array([[s.classes_pct, s.median_error_pct["kp"],
-                            np.mean(list(s.coverage_pct.values()))] for s in groups.values()])
-        return plot_score_grid(list(groups), ["test split"], {
-            "classes right, %": (column[:, :1], (80, 100), ".0f"),
-            "median |Kp error|, %": (column[:, 1:2], (0, 20), ".1f"),
-            f"{100 * self.overall.level:.0f} % interval coverage (mean of 4), %":
-                (column[:, 2:], (75, 100), ".0f")}, path, ax)
+        values = np.array([s.grid_values() for s in groups.values()]).T[:, :, None]
+        return plot_scores(list(groups), ["test split"], values, self.overall.level, path, ax)
 
 
 def calibrate_model(model_dir: str | Path, data_path: str | Path | Sequence[str | Path],

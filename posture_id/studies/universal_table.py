@@ -36,10 +36,9 @@ from posture_id.learning.data.drawn import simulate_trials
 from posture_id.learning.data.scope import BodyDraw, StimulusDraw, UniversalScope
 from posture_id.learning.data.store import save_npz
 from posture_id.learning.data.trial_config import DatasetError
-from posture_id.learning.evaluation import GroupScore, score_samples
+from posture_id.learning.evaluation import GroupScore, plot_scores, score_samples
 from posture_id.learning.universal_model import UniversalModel
 from posture_id.learning.universal_samples import LoadedShard, Samples, make_samples
-from posture_id.plotting import plot_score_grid
 from posture_id.progress import Progress, report
 
 __all__ = ["FAMILIES", "STIMULI", "SWAY", "FamilyTable", "family_table", "table_scope",
@@ -203,16 +202,12 @@ class FamilyTable(Result):
                  "Kd err % | delay err % | 90 % coverage Kp / Ki / Kd / delay |",
                  "|" + "---|" * 10]
         for (family, stim, sway), s in self.cells.items():
-            c = s.coverage_pct
-
             def per(name, s=s):
                 return " / ".join(f"{m[name]:.1f}" for m in s.by_module)
 
             lines.append(f"| {family} | {stim} | {sway} | {s.trials} | {s.classes_pct:.1f} | "
                          f"{s.trials_all_right_pct:.0f} | {per('kp')} | {per('kd')} | "
-                         f"{per('delay_s')} | "
-                         + " / ".join(f"{c[k]:.0f}" for k in ("kp", "ki", "kd", "delay_s"))
-                         + " |")
+                         f"{per('delay_s')} | {s.coverage_text} |")
         return "\n".join(lines)
 
     def summary(self) -> str:
@@ -221,18 +216,10 @@ class FamilyTable(Result):
     def plot(self, path=None, ax=None):
         rows = [f"{f}, {s}" for f in FAMILIES for s in SWAY]
         columns = [_stimulus_label(*s) for s in STIMULI]
-        shape = (len(rows), len(columns))
-        classes, kp, coverage = (np.full(shape, np.nan) for _ in range(3))
+        values = np.full((3, len(rows), len(columns)), np.nan)
         for (family, stim, sway), s in self.cells.items():
-            i = rows.index(f"{family}, {sway}")
-            j = columns.index(stim)
-            classes[i, j] = s.classes_pct
-            kp[i, j] = s.median_error_pct["kp"]
-            coverage[i, j] = np.mean(list(s.coverage_pct.values()))
-        return plot_score_grid(rows, columns, {
-            "classes right, %": (classes, (80, 100), ".0f"),
-            "median |Kp error|, %": (kp, (0, 20), ".1f"),
-            "90 % interval coverage (mean of 4), %": (coverage, (75, 100), ".0f")}, path, ax)
+            values[:, rows.index(f"{family}, {sway}"), columns.index(stim)] = s.grid_values()
+        return plot_scores(rows, columns, values, 0.9, path, ax)
 
 
 def cell_samples(index: int, groups: list[dict], scope: UniversalScope,

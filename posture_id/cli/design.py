@@ -70,25 +70,6 @@ def run(args: argparse.Namespace) -> int:
         return _design(args)
 
 
-def _refuse_dec_flags_for_ic(args: argparse.Namespace) -> None:
-    """``--model ic`` (the IC fit's predicted widths per protocol): refuse DEC's flags, and
-    a design without noise."""
-    given = [flag for flag, on in (("--goal", args.goal), ("--max-minutes", args.max_minutes),
-                                   ("--max-peak-to-peak-deg", args.max_peak_to_peak_deg),
-                                   ("--max-velocity-deg-s", args.max_velocity_deg_s),
-                                   ("--motor-sd-deg", args.motor_sd_deg),
-                                   ("--residual", args.residual != "locked")) if on]
-    if given:
-        raise PostureIdError(f"{', '.join(given)}: DEC's design only; --model ic ranks every "
-                             "candidate by Kp, Kd, delay and W (with --sensor-noise-deg and "
-                             "--locked-share)")
-    if args.sensor_noise_deg == 0 and args.locked_share is None:
-        raise PostureIdError("--sensor-noise-deg 0 and no motor noise (--locked-share): a "
-                             "recording without noise pins every parameter exactly, and no "
-                             "protocol is better than another; give the noise the recordings "
-                             "will have")
-
-
 def _design(args: argparse.Namespace) -> int:
     """The candidates' predicted widths (``--model ic``: the IC fit's), ranked, written
     to ``--out``."""
@@ -96,8 +77,21 @@ def _design(args: argparse.Namespace) -> int:
     from posture_id.design.candidates import default_candidates
     from posture_id.simulation.protocols import read_protocol
 
-    if args.model == "ic":
-        _refuse_dec_flags_for_ic(args)
+    if args.model == "ic":  # DEC's flags refused, and a design without noise
+        given = [flag for flag, on in (("--goal", args.goal), ("--max-minutes", args.max_minutes),
+                                       ("--max-peak-to-peak-deg", args.max_peak_to_peak_deg),
+                                       ("--max-velocity-deg-s", args.max_velocity_deg_s),
+                                       ("--motor-sd-deg", args.motor_sd_deg),
+                                       ("--residual", args.residual != "locked")) if on]
+        if given:
+            raise PostureIdError(f"{', '.join(given)}: DEC's design only; --model ic ranks every "
+                                 "candidate by Kp, Kd, delay and W (with --sensor-noise-deg and "
+                                 "--locked-share)")
+        if args.sensor_noise_deg == 0 and args.locked_share is None:
+            raise PostureIdError("--sensor-noise-deg 0 and no motor noise (--locked-share): a "
+                                 "recording without noise pins every parameter exactly, and no "
+                                 "protocol is better than another; give the noise the recordings "
+                                 "will have")
     body = load_body(args.body or DEFAULT_URDF)
     protocols = ([read_protocol(f) for f in args.protocol] if args.protocol
                  else default_candidates())

@@ -102,7 +102,35 @@ def _period(name: str, value: float) -> float:
     return round(steps) * _PERIOD_GRID_S
 
 
-class _Single:
+class _Recorded:
+    """What every protocol has: its recordings, their minutes, peak tilt and peak rate."""
+
+    @property
+    def recordings(self) -> tuple[SingleProtocol, ...]:
+        """The distinct recordings (each made ``repetitions`` times)."""
+        raise NotImplementedError
+
+    @property
+    def recording_minutes(self) -> float:
+        """Minutes of recording in all (every repetition)."""
+        return sum(r.repetitions * r.duration_s / 60 for r in self.recordings)
+
+    @property
+    def peak_to_peak_deg(self) -> float:
+        """The largest peak-to-peak tilt of the recordings, degrees."""
+        return max(float(np.ptp(np.degrees(r.profile().angles))) for r in self.recordings)
+
+    @property
+    def peak_velocity_deg_s(self) -> float:
+        """The fastest tilt of the recordings, degrees/s."""
+        return max(float(np.degrees(np.max(np.abs(np.diff(p.angles) / np.diff(p.times)))))
+                   for p in (r.profile() for r in self.recordings))
+
+    def to_dict(self) -> dict:
+        return protocol_to_dict(self)  # type: ignore[arg-type]
+
+
+class _Single(_Recorded):
     """What every single-recording protocol has: a tilt, its cycles and repetitions."""
 
     cycles: int
@@ -134,29 +162,11 @@ class _Single:
                 f" = {total / 3600:.3g} h: longer than the {MAX_SESSION_S / 3600:g} h of a "
                 "session on a platform (fewer cycles or repetitions)")
 
-    @property
-    def recording_minutes(self) -> float:
-        """Minutes of recording in all (every repetition)."""
-        return self.repetitions * self.duration_s / 60
-
-    @property
-    def peak_to_peak_deg(self) -> float:
-        a = np.degrees(self.profile().angles)
-        return float(np.ptp(a))
-
-    @property
-    def peak_velocity_deg_s(self) -> float:
-        p = self.profile()
-        return float(np.degrees(np.max(np.abs(np.diff(p.angles) / np.diff(p.times)))))
-
     def with_cycles(self, cycles: int) -> SingleProtocol:
         return replace(self, cycles=cycles)  # type: ignore[type-var]
 
     def with_amplitude(self, peak_to_peak_deg: float) -> SingleProtocol:
         raise NotImplementedError
-
-    def to_dict(self) -> dict:
-        return protocol_to_dict(self)  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -348,7 +358,7 @@ SingleProtocol = PrtsProtocol | MultisineProtocol | SumOfSinesProtocol
 
 
 @dataclass(frozen=True)
-class TwoAmplitudeProtocol:
+class TwoAmplitudeProtocol(_Recorded):
     """``base`` recorded at two peak-to-peak amplitudes (each ``base.repetitions``
     times): two recordings to be identified together."""
 
@@ -369,21 +379,6 @@ class TwoAmplitudeProtocol:
     @property
     def recordings(self) -> tuple[SingleProtocol, ...]:
         return tuple(self.base.with_amplitude(a) for a in self.amplitudes_deg)
-
-    @property
-    def recording_minutes(self) -> float:
-        return sum(r.recording_minutes for r in self.recordings)
-
-    @property
-    def peak_to_peak_deg(self) -> float:
-        return max(r.peak_to_peak_deg for r in self.recordings)
-
-    @property
-    def peak_velocity_deg_s(self) -> float:
-        return max(r.peak_velocity_deg_s for r in self.recordings)
-
-    def to_dict(self) -> dict:
-        return protocol_to_dict(self)
 
     def profile(self) -> TiltProfile:
         raise StimulusError(f"{self.label()} is two recordings; take one of its "

@@ -198,18 +198,18 @@ def test_fit_frequency_parts_answers_as_before(case, body):
         fit = fit_frequency_parts(IC, _parts(body, (0.6, 0.45, 0.3), (1.0, 2.0, 3.0), 0.4),
                                   body, FrequencyFitOptions(starts=3, seed=5))
     parts, chi2, count = _BEFORE[case]
-    assert len(fit.parameters) == len(parts)
+    assert isinstance(fit, JointFit) and len(fit.parameters) == len(parts)
     # the values were recorded on another processor: the clean fit lands on the same
     # digits, the people-like one (its torque feedback on a bound, a flat valley) stops
     # within the search's own precision of them, a few 1e-6 relative on an AMD EPYC here
     # (its standard errors are percent-level), the objective the same within 1e-9
     rel = 1e-9 if case == "two_clean" else 2e-5
-    for got, want in zip(fit.parameters, parts, strict=True):
+    for got, want in zip(fit.parameters.values(), parts, strict=True):
         for name, value in {**parts[0], **want}.items():
             assert getattr(got, name) == pytest.approx(value, rel=rel, abs=1e-12), name
     assert fit.chi2 == pytest.approx(chi2, rel=1e-9)
     assert fit.identified_count == count
-    assert fit.w_by_part == tuple(p.w for p in fit.parameters)
+    assert fit.w_by_part == tuple(p.w for p in fit.parameters.values())
 
 
 class _Linear(Evaluator):

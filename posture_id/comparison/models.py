@@ -37,10 +37,12 @@ from posture_id.comparison.identified import fit_as_identified
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
 from posture_id.fitting.frequency import IcFitOptions, com_sway_deg, locked_projection
+from posture_id.fitting.joint_conditions import JointFit
 from posture_id.fitting.models import fit_model_parts
 from posture_id.frf.locked import LockedOptions, LockedProjection, floored, noise_levels
 from posture_id.models.dec import DEC
 from posture_id.models.ic import IC
+from posture_id.models.protocol import Capability
 from posture_id.trials import PreparedTrial
 
 __all__ = ["ModelComparison", "compare_models", "AmplitudesComparison", "compare_amplitudes",
@@ -115,8 +117,8 @@ class _Compared:
         for model in self.models:
             fit = self.fits[model.name]
             params = fit.parameters
-            if isinstance(params, tuple):
-                params = params[0]
+            if isinstance(params, dict):  # a joint fit of the parts: the first part's
+                params = next(iter(params.values()))
             if hasattr(params, "modules"):
                 lines.append(f"{model.label}: " + ", ".join(
                     f"{j} Kp {m.kp:.1f} Kd {m.kd:.1f} Δ {m.delay_s:.3f} {m.controls}"
@@ -346,12 +348,13 @@ class AmplitudesComparison(_Compared, Result):
         from posture_id.provenance import provenance
 
         out = {"recordings": list(self.recordings), **self._common_dict()}
-        out.update({m: self.fits[m].comparison_dict() for m in reversed(self.names)})
+        out.update({m: _parts_dict(self.fits[m]) for m in reversed(self.names)})
         return {**out, "seconds": self.seconds, "provenance": provenance()}
 
     def _per_part(self):
         """The model whose parameters differ by part (IC), or None."""
-        return next((m for m in self.models if self.fits[m.name].per_part), None)
+        return next((m for m in self.models
+                     if Capability.FREQUENCY_RESPONSE in m.capabilities), None)
 
     def summary(self) -> str:
         first, second = self.models
@@ -381,6 +384,16 @@ class AmplitudesComparison(_Compared, Result):
         varying = self._per_part()
         return plot_reweighting(self.recordings, self.fits[varying.name].w_by_part,
                                 self.bic, path=path, ax=ax)
+
+
+def _parts_dict(fit: JointFit) -> dict:
+    """What a comparison's JSON keeps of a joint fit of the parts: a closed loop's
+    parameters per part with its per-part one (IC: W), DEC's one set."""
+    parameters = [p.to_dict() for p in fit.parameters.values()]
+    if Capability.FREQUENCY_RESPONSE not in fit.model.capabilities:
+        return {"parameters": parameters[0]}
+    return {"parameters": parameters, "w_by_part": list(fit.w_by_part),
+            "reweighting": fit.reweighting}
 
 
 def compare_amplitudes(trials: list[PreparedTrial], body,

@@ -792,7 +792,8 @@ def fit_frequency_parts(model: FrequencyModel, trials: list[PreparedTrial], body
     recorded sway (:func:`~posture_id.fitting.models.fit_model_parts`).
 
     Returns:
-        :class:`~posture_id.fitting.models.PartsFit`: per part, its parameters.
+        :class:`~posture_id.fitting.joint_conditions.JointFit`: per part (its condition),
+        its parameters; ``w_by_part``.
     """
     from posture_id.fitting.models import fit_model_parts
 

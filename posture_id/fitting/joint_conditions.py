@@ -198,6 +198,18 @@ class JointFit(FitVerdict, Result):
         not balance (``stable``)."""
         return not self.stable or not all(np.all(np.isfinite(f)) for f in self.fitted_deg)
 
+    @property
+    def w_by_part(self) -> tuple[float, ...]:
+        """The model's per-part parameter (IC: W) in each condition, in order: of the parts
+        of one protocol, each its own condition
+        (:func:`~posture_id.fitting.models.fit_model_parts`)."""
+        return tuple(getattr(p, self.model.per_part) for p in self.parameters.values())
+
+    @property
+    def reweighting(self) -> float:
+        """How far W moved between the amplitudes: the last part's W minus the first's."""
+        return self.w_by_part[-1] - self.w_by_part[0]
+
     def to_dict(self) -> dict:
         """Strict JSON-ready: the shared and per-condition parameters, the intervals, the
         verdict, the trials."""

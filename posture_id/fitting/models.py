@@ -22,7 +22,7 @@ from posture_id.trials import PreparedTrial
 if TYPE_CHECKING:
     from posture_id.fitting.joint_conditions import JointFit
 
-__all__ = ["DecFit", "PartsFit", "fit_model", "fit_model_parts"]
+__all__ = ["DecFit", "fit_model", "fit_model_parts"]
 
 
 def _falls(theta: np.ndarray) -> bool:
@@ -70,65 +70,6 @@ class DecFit:
         return self.result.to_dict()
 
 
-@dataclass(frozen=True)
-class PartsFit:
-    """The joint fit of the parts of one subject's protocol (a two-amplitude protocol;
-    :func:`fit_model_parts`) as a :class:`~posture_id.models.protocol.ModelFit`: a
-    :class:`~posture_id.fitting.joint_conditions.JointFit`, every parameter shared but
-    the per-part one of a model with a closed loop (IC: W, sensory re-weighting).
-
-    Attributes:
-        joint: the joint fit. identified_count: the parameters identified over every part.
-    """
-
-    joint: JointFit
-    identified_count: int
-
-    @property
-    def per_part(self) -> bool:
-        """Whether a parameter takes one value per part (the model's ``per_part``)."""
-        return Capability.FREQUENCY_RESPONSE in self.joint.model.capabilities
-
-    @property
-    def parameters(self):
-        """Per part, its parameters (they differ in the per-part one only); DEC's one set."""
-        each = tuple(self.joint.parameters.values())
-        return each if self.per_part else each[0]
-
-    @property
-    def chi2(self) -> float:
-        """Of all parts (units of the noise)."""
-        return self.joint.chi2
-
-    @property
-    def fitted_com_deg(self) -> tuple[np.ndarray, ...]:
-        """Per part (S_p,): the model's COM sway, degrees."""
-        return self.joint.fitted_deg
-
-    @property
-    def falls(self) -> bool:
-        return self.joint.falls
-
-    @property
-    def w_by_part(self) -> tuple[float, ...]:
-        """The per-part parameter of each part (IC: W)."""
-        return tuple(getattr(p, self.joint.model.per_part) for p in self.parameters)
-
-    @property
-    def reweighting(self) -> float:
-        """How far W moved between the amplitudes: the last part's W minus the first's."""
-        return self.w_by_part[-1] - self.w_by_part[0]
-
-    def comparison_dict(self) -> dict:
-        if not self.per_part:
-            return {"parameters": self.parameters.to_dict()}
-        return {"parameters": [p.to_dict() for p in self.parameters],
-                "w_by_part": list(self.w_by_part), "reweighting": self.reweighting}
-
-    def to_dict(self) -> dict:
-        return self.joint.to_dict()
-
-
 def _unfittable(model: Model) -> PostureIdError:
     return PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
                           "loop nor per-joint modules)")
@@ -162,13 +103,14 @@ def fit_model(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
 
 
 def fit_model_parts(model: Model, trials: list[PreparedTrial], body, locked: LockedOptions,
-                    options=None, progress=None) -> PartsFit:
+                    options=None, progress=None) -> JointFit:
     """``model`` fitted to several parts of one subject's protocol at once (options and
     ``locked`` as :func:`fit_model`'s): the joint fit
     (:func:`~posture_id.fitting.joint_conditions.fit_conditions`), DEC with one set of
     parameters for every part, a model with a closed loop with its per-part parameter
     (IC: W) one per part (every part its own condition, the noise from the recorded
-    sway)."""
+    sway; its ``w_by_part``). DEC's ``identified_count`` is its modules' Kp, Ki, Kd,
+    delay and class (:meth:`~posture_id.models.dec.DecModel.identified_count`)."""
     from posture_id.fitting.joint_conditions import fit_conditions
 
     started = clock.perf_counter()
@@ -177,16 +119,15 @@ def fit_model_parts(model: Model, trials: list[PreparedTrial], body, locked: Loc
         from posture_id.fitting.frequency import FrequencyFitOptions
 
         options = replace(options or FrequencyFitOptions(), locked=locked)
-        joint = fit_conditions(model, trials, body,
-                               tuple(f"part {k + 1}" for k in range(count)), range(count),
-                               (model.per_part,) if count > 1 else (), options,
-                               noise_from_residual=False, started=started)
-        return PartsFit(joint, joint.identified_count)
+        return fit_conditions(model, trials, body,
+                              tuple(f"part {k + 1}" for k in range(count)), range(count),
+                              (model.per_part,) if count > 1 else (), options,
+                              noise_from_residual=False, started=started)
     if Capability.LOCKED_FIT in model.capabilities:
         from posture_id.fitting.options import FitOptions
 
         options = replace(options or FitOptions(), locked=locked)
         joint = fit_conditions(model, trials, body, ("every part",), [0] * count, (),
                                options, progress, started=started)
-        return PartsFit(joint, DEC.identified_count(body))
+        return replace(joint, identified_count=DEC.identified_count(body))
     raise _unfittable(model)

@@ -26,7 +26,7 @@ from posture_id.simulation.noise_families import DRIFTING_COLOUR_SLOPE, NoiseFam
 
 __all__ = ["LoadedShard", "Samples", "SET_STRIDE", "STIMULUS_COLUMNS", "load_split",
            "make_samples", "inputs_and_noise", "rotate_motor_noise",
-           "tilt_motor_noise", "TILT_PIVOT_HZ", "without_families", "require_trials"]
+           "tilt_motor_noise", "TILT_PIVOT_HZ", "without_families", "split_shards"]
 
 
 @dataclass(frozen=True)
@@ -266,10 +266,13 @@ def without_families(shards: list[LoadedShard], scope: UniversalScope,
 _SPLIT_INDEX = {"test": "≡ 0", "calibration": "≡ 1", "validation": "≡ 2", "train": "≥ 3"}
 
 
-def require_trials(shards: list[LoadedShard], data: Sequence[UniversalSet], split: str,
-                   families: tuple[str, ...] = ()) -> list[LoadedShard]:
-    """``shards`` of ``split``, refused in one line when they hold no trial (a set too small
-    to have that split, or every trial of it in a family left out)."""
+def split_shards(data: Sequence[UniversalSet], split: str, scope: UniversalScope,
+                 families: tuple[str, ...] = ()) -> list[LoadedShard]:
+    """The shards of ``split`` of the sets ``data`` (:func:`load_split`) without the trials
+    of the noise ``families`` (:func:`without_families`), refused in one line when they
+    hold no trial (a set too small to have that split, or every trial of it in a family
+    left out)."""
+    shards = without_families(load_split(data, split), scope, families)
     if shards:
         return shards
     names = ", ".join(str(d.path) for d in data)

@@ -38,13 +38,7 @@ from posture_id.learning.universal_network import (
     OUTPUTS,
     UniversalNetworkConfig,
 )
-from posture_id.learning.universal_samples import (
-    Samples,
-    load_split,
-    make_samples,
-    require_trials,
-    without_families,
-)
+from posture_id.learning.universal_samples import Samples, make_samples, split_shards
 from posture_id.progress import Progress, report
 from posture_id.provenance import provenance
 
@@ -201,12 +195,9 @@ class UniversalTrainer(EpochTrainer):
         self.scope = scope = merged_scope(data)
         t0 = time.perf_counter()
         left_out = config.exclude_families
-        self.train_shards = require_trials(without_families(load_split(data, "train"), scope,
-                                                            left_out), data, "train", left_out)
-        validation = make_samples(
-            require_trials(without_families(load_split(data, "validation"), scope, left_out),
-                           data, "validation", left_out),
-            scope, np.random.default_rng(VALIDATION_SEED))
+        self.train_shards = split_shards(data, "train", scope, left_out)
+        validation = make_samples(split_shards(data, "validation", scope, left_out), scope,
+                                  np.random.default_rng(VALIDATION_SEED))
         self.first = first = make_samples(self.train_shards, scope,
                                           np.random.default_rng([config.seed, 0]),
                                           config.fresh_motor_noise, config.motor_noise_tilt)

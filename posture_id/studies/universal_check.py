@@ -21,13 +21,7 @@ from posture_id.learning.typicality import (
     recording_scores,
 )
 from posture_id.learning.universal_model import UniversalModel
-from posture_id.learning.universal_samples import (
-    Samples,
-    load_split,
-    make_samples,
-    require_trials,
-    without_families,
-)
+from posture_id.learning.universal_samples import Samples, make_samples, split_shards
 from posture_id.learning.universal_training import VALIDATION_SEED
 
 __all__ = ["CALIBRATION_SEED", "TEST_SEED", "CheckReport", "calibrate_model", "true_regimes",
@@ -56,10 +50,8 @@ def _left_out(model: UniversalModel) -> tuple[str, ...]:
 def _held_out(model: UniversalModel, data: list, split: str, seed: int) -> Samples:
     """The module samples of ``split`` of the sets ``data``, their noise drawn from
     ``seed`` as in training, without the noise families of :func:`_left_out`."""
-    left_out = _left_out(model)
-    shards = require_trials(without_families(load_split(data, split), model.scope, left_out),
-                            data, split, left_out)
-    return make_samples(shards, model.scope, np.random.default_rng(seed))
+    return make_samples(split_shards(data, split, model.scope, _left_out(model)), model.scope,
+                        np.random.default_rng(seed))
 
 
 @dataclass(frozen=True)

@@ -290,15 +290,13 @@ def joint_parameter_names(model: Model, body, options=None) -> tuple[str, ...]:
     """The names :func:`fit_joint` accepts as per-condition parameters of ``model``: a
     closed loop's identified parameters (``options``' or the model's), DEC's
     ``"<joint>.kp"``, ``".ki"``, ``".kd"`` and ``".delay_s"`` of every module of ``body``."""
-    if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        from posture_id.fitting.frequency import FrequencyFitOptions
+    from posture_id.fitting.models import options_kind
 
-        return (options or FrequencyFitOptions()).free_of(model)
-    if Capability.LOCKED_FIT in model.capabilities:
-        return tuple(f"{joint}.{name}" for joint in body.joint_names
-                     for name in DEC_PER_CONDITION)
-    raise PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
-                         "loop nor per-joint modules)")
+    kind = options_kind(model)  # refuses a model with no way to fit it
+    if Capability.FREQUENCY_RESPONSE in model.capabilities:
+        return (options or kind()).free_of(model)
+    return tuple(f"{joint}.{name}" for joint in body.joint_names
+                 for name in DEC_PER_CONDITION)
 
 
 def resolve_parameter(model: Model, body, name: str, options=None) -> str:

@@ -22,7 +22,7 @@ from posture_id.trials import PreparedTrial
 if TYPE_CHECKING:
     from posture_id.fitting.joint_conditions import JointFit
 
-__all__ = ["DecFit", "fit_model", "fit_model_parts"]
+__all__ = ["DecFit", "options_kind", "fit_model", "fit_model_parts"]
 
 
 def _falls(theta: np.ndarray) -> bool:
@@ -70,9 +70,24 @@ class DecFit:
         return self.result.to_dict()
 
 
-def _unfittable(model: Model) -> PostureIdError:
-    return PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
-                          "loop nor per-joint modules)")
+def options_kind(model: Model) -> type:
+    """The class of ``model``'s fit options: a
+    :class:`~posture_id.fitting.frequency.FrequencyFitOptions` for a model with a closed
+    loop, a :class:`~posture_id.fitting.options.FitOptions` for DEC's modules.
+
+    Raises:
+        PostureIdError: a model with neither (no way to fit it).
+    """
+    if Capability.FREQUENCY_RESPONSE in model.capabilities:
+        from posture_id.fitting.frequency import FrequencyFitOptions
+
+        return FrequencyFitOptions
+    if Capability.LOCKED_FIT in model.capabilities:
+        from posture_id.fitting.options import FitOptions
+
+        return FitOptions
+    raise PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
+                         "loop nor per-joint modules)")
 
 
 def fit_model(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
@@ -80,26 +95,21 @@ def fit_model(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
     """``model`` fitted to ``trial``'s locked sway at the harmonics ``locked`` names.
 
     Args:
-        options: the model's own fit options: a
-            :class:`~posture_id.fitting.frequency.FrequencyFitOptions` for a model with a
-            closed loop, a :class:`~posture_id.fitting.options.FitOptions` for DEC's modules
-            (None: the defaults); their harmonics are replaced by ``locked``.
+        options: the model's own fit options (:func:`options_kind`; None: the defaults);
+            their harmonics are replaced by ``locked``.
         progress: told the stages of a locked DEC fit.
     Returns:
         a :class:`~posture_id.models.protocol.ModelFit`.
     """
+    kind = options_kind(model)
+    options = replace(options or kind(), locked=locked)
     if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        from posture_id.fitting.frequency import FrequencyFitOptions, fit_frequency
+        from posture_id.fitting.frequency import fit_frequency
 
-        options = replace(options or FrequencyFitOptions(), locked=locked)
         return fit_frequency(model, trial, body, options)
-    if Capability.LOCKED_FIT in model.capabilities:
-        from posture_id.fitting.least_squares import fit_recording
-        from posture_id.fitting.options import FitOptions
+    from posture_id.fitting.least_squares import fit_recording
 
-        options = replace(options or FitOptions(), locked=locked)
-        return DecFit(fit_recording(trial, body, None, options, progress=progress), body)
-    raise _unfittable(model)
+    return DecFit(fit_recording(trial, body, None, options, progress=progress), body)
 
 
 def fit_model_parts(model: Model, trials: list[PreparedTrial], body, locked: LockedOptions,
@@ -114,20 +124,14 @@ def fit_model_parts(model: Model, trials: list[PreparedTrial], body, locked: Loc
     from posture_id.fitting.joint_conditions import fit_conditions
 
     started = clock.perf_counter()
+    kind = options_kind(model)
+    options = replace(options or kind(), locked=locked)
     count = len(trials)
     if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        from posture_id.fitting.frequency import FrequencyFitOptions
-
-        options = replace(options or FrequencyFitOptions(), locked=locked)
         return fit_conditions(model, trials, body,
                               tuple(f"part {k + 1}" for k in range(count)), range(count),
                               (model.per_part,) if count > 1 else (), options,
                               noise_from_residual=False, started=started)
-    if Capability.LOCKED_FIT in model.capabilities:
-        from posture_id.fitting.options import FitOptions
-
-        options = replace(options or FitOptions(), locked=locked)
-        joint = fit_conditions(model, trials, body, ("every part",), [0] * count, (),
-                               options, progress, started=started)
-        return replace(joint, identified_count=DEC.identified_count(body))
-    raise _unfittable(model)
+    joint = fit_conditions(model, trials, body, ("every part",), [0] * count, (), options,
+                           progress, started=started)
+    return replace(joint, identified_count=DEC.identified_count(body))

@@ -198,10 +198,9 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
         # power at the harmonics the stimulus leaves empty (in the recording, the body's
         # transient from its start is there too, and a right model shares it; in the
         # residual, a wrong model adds its own). Each only ever adds: the smaller holds
-        spread = _between_cycles if projection.cycles >= 2 else _empty_harmonics
-        variance = spread(projection, np.degrees(recorded))
+        variance = harmonic_noise(projection, np.degrees(recorded))
         if finite:
-            variance = np.minimum(variance, spread(projection, residual))
+            variance = np.minimum(variance, harmonic_noise(projection, residual))
         ratio = (float(np.sqrt(np.mean(np.abs(projection.spectrum(residual)) ** 2
                                        / variance))) if finite else math.inf)
         noise = float(np.median(np.sqrt(variance / 2)))
@@ -214,9 +213,9 @@ def noise_check(trial: PreparedTrial, model_theta: np.ndarray,
         locked_power = np.sum(np.abs(projection.spectrum(theirs)) ** 2)
         relative = (float(np.sqrt(np.sum(np.abs(projection.spectrum(ours)) ** 2)
                                   / locked_power)) if finite else math.inf)
-        noise_power = spread(projection, theirs)
+        noise_power = harmonic_noise(projection, theirs)
         if projection.cycles < 2 and finite:  # the start's transient: as above
-            noise_power = np.minimum(noise_power, spread(projection, ours))
+            noise_power = np.minimum(noise_power, harmonic_noise(projection, ours))
         noise_relative = float(np.sqrt(np.sum(noise_power) / locked_power))
         return NoiseCheck(ratio, Basis.LOCKED, noise, limit, relative, noise_relative)
     noise = max(float(sensor_noise_deg(recorded)), _NOISE_FLOOR_DEG)

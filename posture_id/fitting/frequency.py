@@ -192,6 +192,12 @@ class FitVerdict:
                     f"{self._pinned_by}; the intervals give the precision")
         return "trust: good"
 
+    def _interval_line(self, name: str, value: float, low: float, high: float) -> str:
+        """A summary's line of one parameter: its value and its interval."""
+        how = "calibrated " if name in self.calibrated else ""
+        return (f"  {name:<24} {value:10.4g}   {100 * self.level:.0f} % {how}interval "
+                f"{low:.4g} – {high:.4g}")
+
     # what a comparison and a cohort read of a fit (posture_id.models.protocol.ModelFit)
     @property
     def fitted_com_deg(self):
@@ -301,10 +307,7 @@ class FrequencyFitResult(FitVerdict, Result):
                  f"noise ({'consistent with' if self.consistent else 'beyond'} it); explains "
                  f"{100 * self.explained:.1f} % of the locked COM sway; {self.seconds:.2f} s"]
         for name in self.free:
-            low, high = self.intervals[name]
-            how = "calibrated " if name in self.calibrated else ""
-            lines.append(f"  {name:<24} {getattr(p, name):10.4g}   {100 * self.level:.0f} % "
-                         f"{how}interval {low:.4g} – {high:.4g}")
+            lines.append(self._interval_line(name, getattr(p, name), *self.intervals[name]))
         lines.append(self.verdict_line())
         return "\n".join(lines)
 
@@ -601,13 +604,8 @@ class Precision:
         """For x's entries standing for ``names`` (search units), from the Jacobian
         (R, X) of the weighted residual at the answer; ``multiplier(name, level)`` gives
         (multiplier, calibrated) (default: the model's ``interval_multiplier``)."""
-        scale2 = max(1.0, chi2 / max(dof, 1))
-        try:
-            cov = np.linalg.pinv(jac.T @ jac) * scale2
-        except np.linalg.LinAlgError:
-            cov = np.full((len(names), len(names)), np.inf)
         scales = np.array([model.scale(n, plant) for n in names])
-        standard_errors = np.sqrt(np.clip(np.diag(cov), 0, None)) * scales
+        standard_errors = gauss_newton_errors(jac, chi2, dof) * scales
         # a direction the residual does not change along (fewer numbers compared than
         # parameters, or parameters that trade off exactly) has no finite variance: the
         # pseudo-inverse would give it none at all
@@ -620,6 +618,17 @@ class Precision:
     def half_widths(self) -> np.ndarray:
         """(X,) SI units: each interval's half-width."""
         return self.multipliers * self.standard_errors
+
+
+def gauss_newton_errors(jac: np.ndarray, chi2: float, dof: int) -> np.ndarray:
+    """(X,) the standard errors of x (its units) from the Jacobian (R, X) of the weighted
+    residual at the answer: √diag of (JᵀJ)⁺ scaled by χ²/dof where that exceeds 1 (inf
+    where the pseudo-inverse fails)."""
+    try:
+        cov = np.linalg.pinv(jac.T @ jac) * max(1.0, chi2 / max(dof, 1))
+    except np.linalg.LinAlgError:
+        cov = np.full((jac.shape[1], jac.shape[1]), np.inf)
+    return np.sqrt(np.clip(np.diag(cov), 0, None))
 
 
 def undetermined(jac: np.ndarray, tolerance: float = 1e-10) -> np.ndarray:

@@ -251,20 +251,14 @@ class JointFit(FitVerdict, Result):
                  f"{len(self.conditions)} condition(s): residual {self.noise_ratio:.2f}× the "
                  f"noise ({'consistent with' if self.consistent else 'beyond'} it; χ² "
                  f"{self.chi2:.1f} on {self.dof} dof); {self.seconds:.2f} s"]
-        how = {n: "calibrated " if n in self.calibrated else "" for n in
-               (*self.shared, *self.per_condition_names)}
-        level = f"{100 * self.level:.0f} %"
         lines.append("shared:")
         for name, value in self.shared.items():
-            low, high = self.intervals["shared"][name]
-            lines.append(f"  {name:<24} {value:10.4g}   {level} {how[name]}interval "
-                         f"{low:.4g} – {high:.4g}")
+            lines.append(self._interval_line(name, value, *self.intervals["shared"][name]))
         for condition in self.conditions:
             lines.append(f"{condition}:")
             for name, value in self.per_condition[condition].items():
-                low, high = self.intervals["per_condition"][condition][name]
-                lines.append(f"  {name:<24} {value:10.4g}   {level} {how[name]}interval "
-                             f"{low:.4g} – {high:.4g}")
+                lines.append(self._interval_line(
+                    name, value, *self.intervals["per_condition"][condition][name]))
         for name, condition, share in zip(self.trials, self.trial_conditions, self.explained,
                                           strict=True):
             lines.append(f"  trial {name} [{condition}]: explains {100 * share:.1f} % of its "
@@ -521,7 +515,7 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
     doc). Its intervals are at :data:`DEC_LEVEL`, the normal quantile (uncalibrated)."""
     from scipy.stats import norm
 
-    from posture_id.fitting.frequency import LockedCom
+    from posture_id.fitting.frequency import LockedCom, gauss_newton_errors
     from posture_id.fitting.joint import polish_by_condition
     from posture_id.fitting.models import _falls
     from posture_id.fitting.options import FitOptions
@@ -533,6 +527,7 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
     joints = body.joint_names
     fields = (*DEC_PER_CONDITION, *(("kpas", "bpas") if options.fit_passive else ()))
     names = tuple(f"{j}.{f}" for f in fields for j in joints)
+    split = {n: tuple(n.split(".")) for n in names}  # (joint, field) of each name
 
     def q_index(name: str) -> int:  # where a module parameter sits in q (fitting.unknowns)
         joint, field_name = name.split(".")
@@ -545,37 +540,29 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
     residual = stage.residual[:data]
     chi2 = float(residual @ residual)
     dof = data - len(free)
-    jac = stage.jacobian
     correction = chi2_correction(options.locked)
-    try:
-        cov = np.linalg.pinv(jac.T @ jac) * max(1.0, chi2 / correction / max(dof, 1))
-    except np.linalg.LinAlgError:
-        cov = np.full((len(free), len(free)), np.inf)
-    se_normalised = dict(zip(free, np.sqrt(np.clip(np.diag(cov), 0, None)), strict=True))
+    se_normalised = dict(zip(free, gauss_newton_errors(stage.jacobian, chi2 / correction,
+                                                       dof), strict=True))
     multiplier = float(norm.ppf(0.5 + DEC_LEVEL / 2))
     defaults = polish.runs[0].problem.defaults
+    default = {n: float(getattr(defaults[j], f)) for n, (j, f) in split.items()}
     params = dict(zip(labels, polish.parameters, strict=True))
     lower, upper = polish.runs[0].lower, polish.runs[0].upper
 
     def value(name: str, c: int) -> float:
-        joint, field_name = name.split(".")
+        joint, field_name = split[name]
         return float(getattr(params[labels[c]][joint], field_name))
 
     def se(name: str, c: int) -> float:  # normalised p̃ = p/p_default − 1: dp = p_default·dp̃
-        joint, field_name = name.split(".")
         return (se_normalised.get(evaluator.column(c, q_index(name)), math.inf)
-                * float(getattr(defaults[joint], field_name)))
+                * default[name])
 
-    ranges = {}
-    for name in names:
-        joint, field_name = name.split(".")
-        default = float(getattr(defaults[joint], field_name))
-        k = q_index(name)
-        ranges[name] = (default * (1 + lower[k]), default * (1 + upper[k]))
+    ranges = {n: (default[n] * (1 + lower[q_index(n)]), default[n] * (1 + upper[q_index(n)]))
+              for n in names}
     on_bound = []
     for c, label in enumerate(labels):
         for name in names:
-            if name.split(".")[1] not in _DEC_BOUND_JUDGED or (c > 0 and name not in per):
+            if split[name][1] not in _DEC_BOUND_JUDGED or (c > 0 and name not in per):
                 continue
             base = q_index(name)
             x = stage.q[evaluator.column(c, base)]

@@ -42,6 +42,8 @@ from posture_id.executors import LocalExecutor
 from posture_id.fileio import Result, atomic_write_text, json_text, jsonable
 from posture_id.identify import Method
 from posture_id.identify.networks import network_for
+from posture_id.learning.bundled import MODELS_DIR
+from posture_id.learning.model_files import SIDECAR
 from posture_id.plotting import plot_benchmark
 from posture_id.progress import Progress, report
 from posture_id.simulation.batch import simulate, simulate_batch
@@ -71,20 +73,15 @@ PEOPLE_LIKE_SENSOR_DEG = 0.05
 
 def specialist_folder(body: Body) -> Path:
     """The per-body specialist (the paper's spectrogram CNN) shipped for ``body``."""
-    folder = Path(__file__).resolve().parents[1] / "learning" / "models" / body.name
-    if not (folder / "model.json").is_file():
+    if not _has_specialist(body):
         raise PostureIdError(f"{PAPER_CNN}: no per-body specialist is shipped for body "
                              f"{body.name!r} (posture_id/learning/models/): leave it out "
                              f"of --methods")
-    return folder
+    return MODELS_DIR / body.name
 
 
 def _has_specialist(body: Body) -> bool:
-    try:
-        specialist_folder(body)
-    except PostureIdError:
-        return False
-    return True
+    return (MODELS_DIR / body.name / SIDECAR).is_file()
 
 
 def condition_label(condition: float | str) -> str:

@@ -27,7 +27,7 @@ from __future__ import annotations
 import threading
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import casadi as ca
@@ -82,39 +82,32 @@ class ModelKey:
 
 @dataclass(frozen=True)
 class ProblemKey:
-    """What one body's problem depends on: the body and its compiled model's key.
+    """What one body's problem depends on: the body, the recording's length and its
+    compiled model's key.
 
     Attributes:
         body: the body (its constants are inputs of the compiled model).
-        n_samples: samples of the recording. sample_every: steps per sample.
-        dt: s. deadband_rad_s: θ. smooth_deadband_rad_s: softplus width.
-        delay_upper: the upper bound of Δ̃ (sizes the delay buffers).
-        threads: Jacobian threads (columns per evaluation). compilation: C or VM.
+        n_samples: samples of the recording.
+        compiled: the :class:`ModelKey` of its compiled model but for the default delays,
+            which are the body's (``default_delay_steps`` empty; :meth:`model_key`).
     """
 
     body: Body
     n_samples: int
-    sample_every: int
-    dt: float
-    deadband_rad_s: float
-    smooth_deadband_rad_s: float
-    delay_upper: float
-    threads: int
-    compilation: Compilation
+    compiled: ModelKey
 
     @classmethod
     def of(cls, body: Body, n_samples: int, options: FitOptions) -> ProblemKey:
         sim = options.simulation
-        return cls(body, n_samples, sim.sample_every, sim.dt, sim.deadband_rad_s,
-                   options.smooth_deadband_rad_s, options.delay_bounds[1], options.threads,
-                   options.compilation)
+        return cls(body, n_samples, ModelKey(
+            body.n_segments, sim.sample_every, sim.dt, sim.deadband_rad_s,
+            options.smooth_deadband_rad_s, options.delay_bounds[1], (), options.threads,
+            options.compilation))
 
     def model_key(self, default_delay_steps: np.ndarray) -> ModelKey:
         """The key of the compiled model this body's problem runs on (any length)."""
-        return ModelKey(self.body.n_segments, self.sample_every, self.dt,
-                        self.deadband_rad_s, self.smooth_deadband_rad_s, self.delay_upper,
-                        tuple(float(d) for d in default_delay_steps), self.threads,
-                        self.compilation)
+        return replace(self.compiled,
+                       default_delay_steps=tuple(float(d) for d in default_delay_steps))
 
 
 class _ProcessCache:
@@ -272,7 +265,7 @@ class FitProblem:
         self.key = key
         self.n = body.n_segments
         self.defaults: DecParameters = default_parameters(body)
-        delay0 = self.defaults.array("delay_s") / key.dt
+        delay0 = self.defaults.array("delay_s") / key.compiled.dt
         self.model = CompiledModel.get(key.model_key(delay0), notify)
         self.n_samples = key.n_samples
         blocks = -(-(key.n_samples - 1) // BLOCK_SAMPLES)  # whole blocks: u padded past

@@ -138,14 +138,11 @@ class FitRun:
                                                           f"({options.min_duration_s:g} s)")
         else:
             trial.require_whole_cycle()
-
-        def say(message: str) -> None:
-            report(progress, 0, None, "message", message)
-
         notices = list(trial.notices)  # said once, with the result (not as progress too)
         n_samples = len(trial.recording.time)
         if problem is None:
-            problem = FitProblem.get(body, n_samples, options, notify=say)
+            problem = FitProblem.get(body, n_samples, options, notify=lambda message: report(
+                progress, 0, None, "message", message))
         elif problem.key.n_samples != n_samples or problem.key.body != body:
             raise ValueError("the given FitProblem was built for another body or recording "
                              "length")

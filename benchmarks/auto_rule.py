@@ -13,7 +13,7 @@ on the raw sway and on the stimulus-locked sway, by ``auto`` as it is now
 every doubtful answer on sway that is not people-like). Per method: subjects with every
 class right, the median and 90th percentile of |Kp error| over modules, and subjects
 with a module's Kp off by more than 10 %. Written to
-``benchmarks/results/auto_rule.{json,md}``.
+``docs/results/auto_rule.{json,md}``.
 
 ``--cycles 1`` records one cycle of the PRTS (60.5 s), where the locked share cannot be
 measured (nothing to average over), and ``--share LO HI`` draws the locked share from
@@ -50,7 +50,7 @@ SEED = 0x4155544F
 BODIES = ("TIP", "Winter 1-seg", "Winter 2-seg", "Winter 3-seg")
 METHODS = ("network alone", "hybrid, raw sway", "hybrid, locked sway", "auto (this rule)",
            "auto (before: every doubtful answer)")
-OUT = Path(__file__).resolve().parent / "results"
+OUT = Path(__file__).resolve().parents[1] / "docs" / "results"
 
 
 def _body(name: str):

@@ -6,7 +6,7 @@ Simulates ``--trials`` 121 s TIP recordings (docs/model.md §5 parameters from
 ``default_rng(5)``; the stable ones are used), adds white noise of 0, 0.01° and 0.05° to
 the segment angles (``Recording.with_sensor_noise``), and counts the recordings whose
 three classes the CNN calls right, and the modules. Writes
-benchmarks/results/cnn_noise.json.
+docs/results/cnn_noise.json.
 """
 
 from __future__ import annotations
@@ -22,13 +22,15 @@ from posture_id.fileio import atomic_write_text
 from posture_id.learning.identifier import CnnIdentifier
 from posture_id.trials import prepare_trial
 
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", type=Path, help="model directory (default: bundled)")
     parser.add_argument("--trials", type=int, default=40)
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "cnn_noise.json")
+                        default=RESULTS / "cnn_noise.json")
     args = parser.parse_args()
     body = load_body()
     identifier = CnnIdentifier.resolve(args.model, body)

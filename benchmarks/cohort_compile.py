@@ -14,7 +14,7 @@ subject), then, each on an empty compile cache (``POSTURE_ID_CACHE``):
 Both for this checkout and for revision ``--before`` (default: the last commit whose
 compiled model embedded the body's constants), checked out into a temporary git worktree
 and run with the same interpreter, side by side in this one run. Writes
-benchmarks/results/cohort_compile.json.
+docs/results/cohort_compile.json.
 """
 
 from __future__ import annotations
@@ -33,6 +33,8 @@ from cold_start import CLI, CLI_BEFORE
 
 from posture_id import __version__
 from posture_id.fileio import atomic_write_text
+
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The last commit whose compiled model held the body's constants.
@@ -91,7 +93,7 @@ def main() -> None:
     parser.add_argument("--subjects", type=int, default=10)
     parser.add_argument("--before", default=BEFORE, help="revision to compare with")
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "cohort_compile.json")
+                        default=RESULTS / "cohort_compile.json")
     args = parser.parse_args()
     cli = [sys.executable, "-c", CLI]
     with tempfile.TemporaryDirectory() as tmp:

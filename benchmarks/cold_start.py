@@ -8,7 +8,7 @@ Run:  .venv/bin/python benchmarks/cold_start.py [--before REV] [--repeats 3]
 again on the cache that run filled, for this checkout and for revision ``--before``
 (default: the last commit before issue 44's work), side by side in one run: ``posture-id
 simulate`` (121 s TIP), ``posture-id identify tip_subject.csv`` (auto) and ``posture-id
-identify tip_subject.csv --method hybrid``. Writes benchmarks/results/first_session.json
+identify tip_subject.csv --method hybrid``. Writes docs/results/first_session.json
 and docs/results/first_session.md.
 
 Without it:
@@ -24,7 +24,7 @@ processes (medians of ``--repeats``):
 and 2, 3 and 4 again for revision ``--before`` (default: the last commit before the package
 layout), checked out into a temporary git worktree and run with the same interpreter,
 side by side in this one run.
-Writes benchmarks/results/cold_start.json.
+Writes docs/results/cold_start.json.
 """
 
 from __future__ import annotations
@@ -44,6 +44,8 @@ from revisions import IMPORT_BEFORE, ROOT, checkout
 
 from posture_id import __version__
 from posture_id.fileio import atomic_write_text
+
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
 
 #: The last commit of the flat layout (before the package layout).
 BEFORE = "cc63128"
@@ -142,7 +144,7 @@ def first_session(before: str) -> None:
                            "cpus": os.cpu_count(), "python": platform.python_version()},
                "rows": {what: {label: run[what] for label, run in runs.items()}
                         for what in runs["now"]}}
-    out = Path(__file__).parent / "results" / "first_session.json"
+    out = RESULTS / "first_session.json"
     atomic_write_text(out, json.dumps(results, indent=2) + "\n")
     lines = [
         "# A new user's first commands: an empty cache, then again",
@@ -181,7 +183,7 @@ def main() -> None:
     parser.add_argument("--first-session", action="store_true",
                         help="a new user's first commands on an empty cache, then again")
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "cold_start.json")
+                        default=RESULTS / "cold_start.json")
     args = parser.parse_args()
     if args.first_session:
         first_session(args.before or FIRST_SESSION_BEFORE)

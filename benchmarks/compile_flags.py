@@ -8,7 +8,7 @@ Winter body of ``--segments``), compiles it with -O1, -Og and -O0 (with ``-fPIC 
 -march=native``), and times in one run: the compile, and on a recording of ``--samples``
 one simulation and one Jacobian chunk (the columns one thread evaluates, carried through
 the blocks), medians of three.
-Writes benchmarks/results/compile_flags.json.
+Writes docs/results/compile_flags.json.
 """
 
 from __future__ import annotations
@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"{rows[-1]['simulation_s']:.3f} s, Jacobian chunk "
                   f"{rows[-1]['jacobian_chunk_s']:.3f} s", flush=True)
         size = source.stat().st_size
-    out = ROOT / "benchmarks" / "results" / "compile_flags.json"
+    out = ROOT / "docs" / "results" / "compile_flags.json"
     atomic_write_text(out, json.dumps({"segments": n, "samples": args.samples,
                                        "source_bytes": size, "rows": rows}, indent=2))
     print(f"wrote {out}")

@@ -5,7 +5,7 @@ Run:  .venv/bin/python benchmarks/dataset.py [--sizes 6910 27640] [--workdir DIR
 For each size (kept trials; 6910 is the paper's set, 20 730 modular samples) it runs
 ``posture-id network cnn data generate`` in a child process into a fresh directory and reports
 wall time, peak resident memory of the child (from wait4) and disk use, then deletes
-the directory. Figures go to benchmarks/results/dataset.json.
+the directory. Figures go to docs/results/dataset.json.
 """
 
 from __future__ import annotations
@@ -21,6 +21,8 @@ import time
 from pathlib import Path
 
 from posture_id.fileio import atomic_write_text
+
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
 
 
 def run(trials: int, workdir: Path) -> dict:
@@ -53,7 +55,7 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[6910, 4 * 6910])
     parser.add_argument("--workdir", type=Path, default=None)
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "dataset.json")
+                        default=RESULTS / "dataset.json")
     args = parser.parse_args()
     # warm numba's cache so that compilation is not timed
     subprocess.run([sys.executable, "-c", "from posture_id import load_body, simulate; "

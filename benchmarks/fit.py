@@ -11,7 +11,7 @@ with the default scheme (relaxed classes, then an exact polish), and the first
 ``--exhaustive`` recordings also with every class combination fitted (2^N fits), to check
 the relaxed scheme's class choice against the honest search. Reports per-parameter errors
 (in normalised units, |p̃_fit − p̃_true|, and relative |p_fit/p_true − 1|), class accuracy,
-iterations and wall time per recording; writes benchmarks/results/fit.json.
+iterations and wall time per recording; writes docs/results/fit.json.
 The compiled CasADi model is built (or loaded from its cache) before timing.
 """
 
@@ -31,6 +31,8 @@ from posture_id.fileio import atomic_write_text
 from posture_id.fitting import ExhaustiveClasses, FitOptions, FitProblem, fit_recording
 from posture_id.recording import Recording
 from posture_id.trials import prepare_trial
+
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
 
 FIELDS = ("kp", "ki", "kd", "delay_s")
 
@@ -79,7 +81,7 @@ def main() -> None:
     parser.add_argument("--exhaustive", type=int, default=3)
     parser.add_argument("--seed", type=int, default=2024)
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "fit.json")
+                        default=RESULTS / "fit.json")
     args = parser.parse_args()
     body = load_body()
     data, rng = recordings(body, args.recordings, args.seed)

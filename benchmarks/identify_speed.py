@@ -10,7 +10,7 @@ sensor-noise estimate and the conformal half-widths). Reports the median and 90t
 percentile per recording, with the time of the features and of the network alone, and
 the same identifier with its calibration switched off, timed in turn with it, for the
 cost of the intervals as a ratio; for 1 and for all torch threads. Writes
-benchmarks/results/identify_speed.json.
+docs/results/identify_speed.json.
 """
 
 from __future__ import annotations
@@ -33,6 +33,8 @@ from posture_id.learning.identifier import CnnIdentifier
 from posture_id.learning.prediction import predict_images
 from posture_id.trials import prepare_trial
 
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
+
 
 def timed(fn, repeats: int) -> list[float]:
     out = []
@@ -48,7 +50,7 @@ def main() -> None:
     parser.add_argument("--model", type=Path, help="model directory (default: bundled)")
     parser.add_argument("--recordings", type=int, default=50)
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "identify_speed.json")
+                        default=RESULTS / "identify_speed.json")
     args = parser.parse_args()
     body = load_body()
     identifier = CnnIdentifier.resolve(args.model, body)

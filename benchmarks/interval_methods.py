@@ -14,7 +14,7 @@ module and parameter:
 - ``split by noise`` (what posture_id does, :mod:`posture_id.uncertainty.conformal`):
   half-widths per noise level, interpolated at the recording's estimated noise.
 
-Writes benchmarks/results/interval_methods.json.
+Writes docs/results/interval_methods.json.
 """
 
 from __future__ import annotations
@@ -31,6 +31,8 @@ from posture_id.learning.checkpoint import load_model
 from posture_id.learning.data.store import Dataset
 from posture_id.uncertainty.conformal import ConformalCalibration, Normaliser, conformal_quantile
 
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
+
 LEVEL = 0.9
 NOISE = (0.0, 0.05)
 
@@ -40,7 +42,7 @@ def main() -> None:
     parser.add_argument("--model", type=Path, default=Path("data/models/tip_default"))
     parser.add_argument("--dataset", type=Path, default=Path("data/tip_default"))
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "interval_methods.json")
+                        default=RESULTS / "interval_methods.json")
     args = parser.parse_args()
     model = load_model(args.model)
     data = Dataset.open(args.dataset)

@@ -12,7 +12,7 @@ Trains four networks on one data set (same split, same epochs, same seed):
 
 evaluates each on its test split (``posture_id.learning.evaluate``, 200 re-simulated
 trials) and writes the paper's Tables 2 (modular) and 4 (monolithic) beside ours to
-docs/modular_vs_monolithic.md and benchmarks/results/modular_vs_monolithic.json.
+docs/modular_vs_monolithic.md and docs/results/modular_vs_monolithic.json.
 """
 
 from __future__ import annotations
@@ -36,6 +36,8 @@ from posture_id.learning import (
 )
 from posture_id.learning.data import Dataset
 
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
+
 ROOT = Path(__file__).resolve().parents[1]
 #: The paper's test rows (total RMSE, fit RMSE, accuracy): Table 2 and Table 4.
 PAPER = {"modular": (1.4846, 1.4486, 0.8472), "monolithic": (4.0531, 3.2586, 0.5151)}
@@ -52,7 +54,7 @@ def main() -> None:
     parser.add_argument("--workdir", type=Path, default=ROOT / "data" / "benchmark_models")
     parser.add_argument("--doc", type=Path, default=ROOT / "docs" / "modular_vs_monolithic.md")
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "modular_vs_monolithic.json")
+                        default=RESULTS / "modular_vs_monolithic.json")
     args = parser.parse_args()
     n = Dataset.open(args.dataset, verify=False).n_segments
     rows = {}

@@ -18,7 +18,7 @@ compiles (or loads) its kernel first, then times its batches (the best of
 rounds' ratios, and how far the two kernels' sway of the same 96 docs/model.md §5 random trials
 (TIP and the bent TALOS) lies apart.
 
-Writes the figures to benchmarks/results/simulation.json (``--before``:
+Writes the figures to docs/results/simulation.json (``--before``:
 simulation_before.json).
 """
 
@@ -43,6 +43,8 @@ from posture_id.dec.prior import sample_parameters
 from posture_id.fileio import atomic_write_text
 from posture_id.simulation import SimulationOptions, simulate, simulate_batch
 from posture_id.simulation.reference import simulate_reference
+
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
 
 #: A child's measurement: trials/s with default and with random parameters (JSON on stdout).
 CHILD = """
@@ -166,7 +168,7 @@ def side_by_side(args) -> None:
     results = {"package_version": __version__, "machine": machine(), "before": args.before,
                "workers": args.workers, "trials": args.trials, "repeats": args.repeats,
                "rounds": rounds, "summary": summary, "same_answers": answers}
-    out = args.out or Path(__file__).parent / "results" / "simulation_before.json"
+    out = args.out or RESULTS / "simulation_before.json"
     atomic_write_text(out, json.dumps(results, indent=2) + "\n")
     print(f"wrote {out}")
 
@@ -227,7 +229,7 @@ def main() -> None:
     print(f"ratio compiled/reference: {results['speedup_default_vs_reference']:.0f}× (default), "
           f"{results['speedup_random_vs_reference']:.0f}× (random)")
     print(f"same trial, compiled vs reference: max |Δθ| = {max_diff:.2e} rad")
-    out = args.out or Path(__file__).parent / "results" / "simulation.json"
+    out = args.out or RESULTS / "simulation.json"
     atomic_write_text(out, json.dumps(results, indent=2) + "\n")
     print(f"wrote {out}")
 

@@ -9,7 +9,7 @@ on a prepared trial (the harmonics, the features, the network, the calibrated in
 and class probabilities), and the network alone; for 1 and for all torch threads.
 Preparing the trial (reading and checking the recording, recognising its stimulus) is
 the same for every method and is not included. Writes
-benchmarks/results/universal_speed.json.
+docs/results/universal_speed.json.
 """
 
 from __future__ import annotations
@@ -33,6 +33,8 @@ from posture_id.learning.universal_identifier import UniversalIdentifier
 from posture_id.simulation.stimulus import prts
 from posture_id.trials import prepare_trial
 
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
+
 
 def timed(fn, repeats: int) -> list[float]:
     out = []
@@ -47,7 +49,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--recordings", type=int, default=30)
     parser.add_argument("--out", type=Path,
-                        default=Path(__file__).parent / "results" / "universal_speed.json")
+                        default=RESULTS / "universal_speed.json")
     args = parser.parse_args()
     tmp = Path(tempfile.mkdtemp())
     winter1 = write_chain_urdf(tmp / "w1.urdf", "winter1",

@@ -1,6 +1,6 @@
 """Hostile input to the command line, run and sorted: the harness of the project's
-suites of bad input (``tests/test_hostile_*.py``) and of their reports
-(``benchmarks/hostile_input.py``).
+suites of bad input (``tests/test_hostile_*.py``, the cases of ``tests/hostile_cases*.py``)
+and of their reports (``benchmarks/hostile_input.py``).
 
 A :class:`Case` is a command line, the files it is run beside and its good answer declared
 before it runs: the words its one-line refusal or its notice must hold, and whether the

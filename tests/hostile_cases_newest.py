@@ -3,7 +3,7 @@ simulation and design, ``compare`` (one recording, two amplitudes, a cohort), ``
 (FRF JSONs, a CSV table, MATLAB files), ``norm test`` (FRF JSONs and recordings), ``norm
 compare``, a cohort's norm columns, and a DEC command given the IC model's files or names.
 
-The cases and the material they share; :mod:`hostile_input` runs them with its own (the
+The cases and the material they share; :mod:`hostile_cases` runs them with its own (the
 outcomes, the report and the journal are its). Each case is a mistake a new user makes:
 a wrong axis, unit or model the data give away, a file cut short or of another kind, a
 norm or an FRF edited by hand, two groups or two amplitudes that are one.
@@ -12,11 +12,14 @@ norm or an FRF edited by hand, two groups or two amplitudes that are one.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
-from hostile_input import ROOT, Case, _quiet_main
+from posture_id.testing import Case
 
 __all__ = ["make_newest_material", "newest_cases"]
+
+ROOT = Path(__file__).resolve().parents[1]
 
 EXAMPLES = ROOT / "posture_id" / "studies" / "examples"
 ONE_SEGMENT = ROOT / "urdf" / "winter_1.75m_70kg_1seg.urdf"
@@ -29,11 +32,13 @@ FREQUENCIES = ("0.05", "0.15", "0.3", "0.4", "0.55", "0.7", "0.9", "1.1", "1.35"
                "2.2")
 
 
-def make_newest_material(root: Path, paths: dict[str, str]) -> None:
+def make_newest_material(root: Path, paths: dict[str, str],
+                         run: Callable[[list[str]], int]) -> None:
     """Add to ``paths`` what the newest commands' cases read, made in ``root``: four TIP
     subjects' FRFs at Peterka's points (JSON each, a CSV table, MATLAB files of one
     channel), norms of them, an IC parameter file, a one-segment recording and a cohort
-    compared from it."""
+    compared from it; ``run`` runs a command line quietly (its exit status 0 or an
+    error)."""
     import numpy as np
     from scipy.io import savemat
 
@@ -48,9 +53,9 @@ def make_newest_material(root: Path, paths: dict[str, str]) -> None:
         rec = root / f"subject{k}.csv"
         frf = root / f"subject{k}.frf.json"
         if not frf.exists():
-            _quiet_main(["simulate", "--motor-noise", "0.3", "--sensor-noise-deg", "0.05", "--seed",
+            run(["simulate", "--motor-noise", "0.3", "--sensor-noise-deg", "0.05", "--seed",
                          str(k), "--out", str(rec)])
-            _quiet_main(["frf", str(rec), "--body", paths["tip_urdf"], "--band-preset",
+            run(["frf", str(rec), "--body", paths["tip_urdf"], "--band-preset",
                          "peterka11", "--lab-convention", "--out", str(frf)])
         frfs.append(frf)
     paths.update({f"frf{k}": str(p) for k, p in enumerate(frfs, 1)})
@@ -60,7 +65,7 @@ def make_newest_material(root: Path, paths: dict[str, str]) -> None:
     for name, channels in norms.items():
         target = root / f"{name}.json"
         if not target.exists():
-            _quiet_main(["norm", "build", *map(str, frfs), *channels, "--bootstrap", "50",
+            run(["norm", "build", *map(str, frfs), *channels, "--bootstrap", "50",
                          "--out", str(target)])
         paths[name] = str(target)
     f, com = _com_frfs(frfs)
@@ -82,11 +87,11 @@ def make_newest_material(root: Path, paths: dict[str, str]) -> None:
     one = root / "one_segment"
     if not (one / "s1.csv").exists():
         one.mkdir(exist_ok=True)
-        _quiet_main(["simulate", "--body", str(ONE_SEGMENT), "--sensor-noise-deg", "0.02",
+        run(["simulate", "--body", str(ONE_SEGMENT), "--sensor-noise-deg", "0.02",
                      "--cycles", "2", "--out", str(one / "s1.csv")])
     other = root / "one_segment_again.csv"
     if not other.exists():
-        _quiet_main(["simulate", "--body", str(ONE_SEGMENT), "--sensor-noise-deg", "0.02",
+        run(["simulate", "--body", str(ONE_SEGMENT), "--sensor-noise-deg", "0.02",
                      "--cycles", "2", "--seed", "7", "--motor-noise", "0.2", "--out",
                      str(other)])
     paths["one_rec_again"] = str(other)
@@ -94,7 +99,7 @@ def make_newest_material(root: Path, paths: dict[str, str]) -> None:
     paths["one_dir"] = str(one)
     compared = root / "compared"
     if not (compared / "summary.csv").exists():
-        _quiet_main(["compare", str(one), "--body", str(ONE_SEGMENT), "--no-held-out",
+        run(["compare", str(one), "--body", str(ONE_SEGMENT), "--no-held-out",
                      "--starts", "1", "--out", str(compared)], allowed=(0, 1))
     paths["compared"] = str(compared)
 
@@ -114,7 +119,7 @@ def _com_frfs(frfs: list[Path]):
 # ------------------------------------------------------------------------- file texts
 def _edited(material_key: str, edit) -> str:
     """A marker: the material JSON ``material_key`` with ``edit(data)`` applied (written
-    when the case's folder is built; see :func:`hostile_input._build`)."""
+    when the case's folder is built; see :func:`posture_id.testing.run_case`)."""
     return ("edit", material_key, edit)
 
 

@@ -1,25 +1,20 @@
-"""Hostile input for the newer commands: every case of ``benchmarks/hostile_input.py``
+"""Hostile input for the newer commands: every case of ``tests/hostile_cases.py``
 (protocol files, design, stimulus, a lab's columns, cohorts, the universal tools, evaluate,
-frf, fit, body) and of ``benchmarks/hostile_newest.py`` (C3D trials, the IC model, compare,
+frf, fit, body) and of ``tests/hostile_cases_newest.py`` (C3D trials, the IC model, compare,
 norm build, test and compare, a cohort's norm) must be *clear* (exit 2, one line naming the
 file or flag and the problem, no file of the user's changed, nothing new left) or, where an
 answer is right, *handled* (an answer with the notice that says what was done). The report
-of the same cases with their counts is docs/results/hostile_input/report.md.
+of the same cases with their counts is docs/results/hostile_input/report.md
+(``benchmarks/hostile_input.py``).
 """
 
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import pytest
-
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-from hostile_input import all_cases, make_material, run_case  # noqa: E402
-from hostile_newest import newest_cases  # noqa: E402
+from hostile_cases import all_cases, make_material, run_case
+from hostile_cases_newest import newest_cases
 
 CASES = all_cases()
 #: Cases that run a whole command before their outcome (over 5 s here).

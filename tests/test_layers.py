@@ -6,6 +6,7 @@ contract named for it breaks: a contract that cannot fail would prove nothing.
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 import sys
@@ -114,3 +115,30 @@ def test_no_file_of_the_package_is_ignored_by_git():
                               "posture_id", "tests", "benchmarks", "docs"], cwd=ROOT,
                              capture_output=True, text=True, check=True).stdout.split()
     assert ignored == []
+
+
+def _benchmark_imports(folder: Path) -> list[str]:
+    """``file: line`` of every line under ``folder`` that puts benchmarks/ on the import
+    path or imports one of its scripts."""
+    scripts = {p.stem for p in (ROOT / "benchmarks").glob("*.py")}
+    pattern = re.compile(r"^\s*(?:from|import)\s+(\w+)|sys\.path\.\w+\(.*benchmarks")
+    found = []
+    for path in sorted(folder.rglob("*.py")):
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            match = pattern.search(line)
+            if match and (match.group(1) is None or match.group(1) in scripts):
+                found.append(f"{path.relative_to(folder.parent)}:{number}")
+    return found
+
+
+def test_no_test_or_package_module_imports_a_benchmark(tmp_path):
+    """Benchmarks measure; they are not part of the build: the tests and the package
+    import nothing from benchmarks/ (a test's cases live in tests/)."""
+    assert _benchmark_imports(ROOT / "tests") == []
+    assert _benchmark_imports(ROOT / "posture_id") == []
+    planted = tmp_path / "tests"
+    planted.mkdir()
+    folder = "bench" + "marks"  # spelled apart so that this file holds no such line
+    (planted / "test_x.py").write_text(f'import sys\nsys.path.insert(0, "{folder}")\n'
+                                       "from same_results import main\n")
+    assert _benchmark_imports(planted) == ["tests/test_x.py:2", "tests/test_x.py:3"]

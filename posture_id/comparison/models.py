@@ -111,6 +111,13 @@ class _Compared:
                 f"delta_bic_{second}_minus_{first}": self.delta_bic,
                 "compared_numbers": self.compared}
 
+    def _scores(self) -> str:
+        """Both models' χ² with their parameters, and their BIC."""
+        (first, second), (a, b) = self.models, self.names
+        return (f"χ² {first.label} {self.chi2[a]:.1f} ({self.parameters[a]} parameters), "
+                f"{second.label} {self.chi2[b]:.1f} ({self.parameters[b]}); BIC "
+                f"{first.label} {self.bic[a]:.1f}, {second.label} {self.bic[b]:.1f}")
+
     def _fit_lines(self) -> list[str]:
         """One line per model's answer."""
         lines = []
@@ -179,10 +186,7 @@ class ModelComparison(_Compared, Result):
             f"within the noise: {first.label} {'yes' if fits[a] else 'no'}, {second.label} "
             f"{'yes' if fits[b] else 'no'}",
             f"on {len(self.frequencies_hz)} harmonics up to {MAX_FREQUENCY_HZ:g} Hz "
-            f"({int(self.stimulated.sum())} stimulated): χ² {first.label} "
-            f"{self.chi2[a]:.1f} ({self.parameters[a]} parameters), {second.label} "
-            f"{self.chi2[b]:.1f} ({self.parameters[b]}); BIC {first.label} "
-            f"{self.bic[a]:.1f}, {second.label} {self.bic[b]:.1f}{held}",
+            f"({int(self.stimulated.sum())} stimulated): {self._scores()}{held}",
             *self._fit_lines()])
 
     def plot(self, path=None, ax=None):
@@ -357,8 +361,6 @@ class AmplitudesComparison(_Compared, Result):
                      if Capability.FREQUENCY_RESPONSE in m.capabilities), None)
 
     def summary(self) -> str:
-        first, second = self.models
-        a, b = first.name, second.name
         lines = [f"preferred: {self.preferred.upper()}: {self.reason}"]
         varying = self._per_part()
         w = ""
@@ -367,10 +369,7 @@ class AmplitudesComparison(_Compared, Result):
             w = ", ".join(f"{x:.3f}" for x in fit.w_by_part)
             lines.append(f"{varying.label} re-weighting: W {w} by part (it moved by "
                          f"{fit.reweighting:+.3f} from the first amplitude to the second)")
-        lines.append(f"χ² {first.label} {self.chi2[a]:.1f} ({self.parameters[a]} "
-                     f"parameters), {second.label} {self.chi2[b]:.1f} ({self.parameters[b]});"
-                     f" BIC {first.label} {self.bic[a]:.1f}, {second.label} "
-                     f"{self.bic[b]:.1f} over {len(self.recordings)} parts")
+        lines.append(f"{self._scores()} over {len(self.recordings)} parts")
         fit_lines = self._fit_lines()
         if varying is not None:
             i = self.models.index(varying)

@@ -23,8 +23,7 @@ from posture_id.models.ic.response import PARAMETER_ORDER, IcPlant, closed_loop,
 from posture_id.models.ic.simulation import simulate_ic
 from posture_id.models.protocol import Capability, register
 
-__all__ = ["IcModel", "IC", "BOUNDS", "TYPICAL", "CALIBRATION", "interval_multiplier",
-           "parameter_scale"]
+__all__ = ["IcModel", "IC", "BOUNDS", "TYPICAL", "CALIBRATION", "parameter_scale"]
 
 #: docs/model.md §8's search bounds: (low, high) per parameter, in search units.
 BOUNDS = {"kp": (0.5, 4.0), "kd": (0.05, 1.0), "ki": (0.0, 0.5), "delay_s": (0.02, 0.35),
@@ -46,18 +45,6 @@ def _calibration() -> dict | None:
         return json.loads(CALIBRATION.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-
-
-def interval_multiplier(name: str, level: float) -> tuple[float, bool]:
-    """(the multiplier of the standard error for a ``level`` interval of ``name``,
-    whether it is calibrated); without a calibration, the normal quantile."""
-    from scipy.stats import norm
-
-    calibration = _calibration()
-    quantiles = None if calibration is None else calibration.get("quantiles", {}).get(name)
-    if quantiles is None or not all(isinstance(q, int | float) for q in quantiles):
-        return float(norm.ppf(0.5 + level / 2)), False
-    return float(np.interp(level, calibration["levels"], quantiles)), True
 
 
 def parameter_scale(name: str, plant: IcPlant) -> float:
@@ -128,7 +115,16 @@ class IcModel:
         return params.replace(**values)
 
     def interval_multiplier(self, name: str, level: float) -> tuple[float, bool]:
-        return interval_multiplier(name, level)
+        """(the multiplier of the standard error for a ``level`` interval of ``name``,
+        whether it is calibrated); without a calibration, the normal quantile."""
+        from scipy.stats import norm
+
+        calibration = _calibration()
+        quantiles = (None if calibration is None
+                     else calibration.get("quantiles", {}).get(name))
+        if quantiles is None or not all(isinstance(q, int | float) for q in quantiles):
+            return float(norm.ppf(0.5 + level / 2)), False
+        return float(np.interp(level, calibration["levels"], quantiles)), True
 
     def __repr__(self) -> str:
         return "IC"

@@ -395,8 +395,11 @@ class LockedCom:
         return float(self.projection.explained(self.sway[:, None], fitted_deg[:, None])[0])
 
     def coherence(self) -> np.ndarray:
-        """(K,) the locked share of the sway's power at each compared harmonic."""
-        return _coherence(self.projection, self.sway)
+        """(K,) the share of the sway's power at each compared harmonic that is locked to
+        the stimulus (its locked power over locked plus noise power; 1 without noise)."""
+        locked = np.abs(self.recorded) ** 2
+        noise = 2 * self.projection.noise[:, 0] ** 2
+        return locked / (locked + noise)
 
 
 class _Part(LockedCom):
@@ -814,10 +817,3 @@ def fit_ic_parts(trials: list[PreparedTrial], body, options: IcFitOptions | None
     """The IC parameters of every one of ``trials``, shared but for W, one per part."""
     return fit_frequency_parts(IC, trials, body, options or IcFitOptions())
 
-
-def _coherence(projection: LockedProjection, sway_deg: np.ndarray) -> np.ndarray:
-    """(K,) the share of the sway's power at each compared harmonic that is locked to the
-    stimulus (its locked power over locked plus noise power; 1 without noise)."""
-    locked = np.abs(projection.spectrum(sway_deg[:, None])[:, 0]) ** 2
-    noise = 2 * projection.noise[:, 0] ** 2
-    return locked / (locked + noise)

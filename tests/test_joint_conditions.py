@@ -16,9 +16,10 @@ from posture_id.bodies.body import load_body
 from posture_id.cli import main
 from posture_id.errors import PostureIdError
 from posture_id.fitting.evaluators import Evaluator
-from posture_id.fitting.frequency import FrequencyFitOptions, fit_frequency_parts, fit_ic_parts
+from posture_id.fitting.frequency import FrequencyFitOptions
 from posture_id.fitting.joint import ConditionEvaluator
 from posture_id.fitting.joint_conditions import JointFit, fit_joint
+from posture_id.fitting.models import fit_frequency_parts, fit_ic_parts
 from posture_id.models.ic import IC, IcParameters, IcPlant
 from posture_id.models.ic.simulation import simulate_ic
 from posture_id.models.ic.subjects import draw_ic_parameters, ic_recording

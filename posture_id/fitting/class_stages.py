@@ -5,7 +5,7 @@ start it gets (docs/fit.md)."""
 from __future__ import annotations
 
 import itertools
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -19,10 +19,27 @@ from posture_id.fitting.options import (
 from posture_id.fitting.result import StageResult
 from posture_id.fitting.unknowns import class_names
 
-if TYPE_CHECKING:  # the running fit the stages work on (least_squares imports this module)
-    from posture_id.fitting.least_squares import FitRun
+__all__ = ["first_stages", "FitRun"]
 
-__all__ = ["first_stages"]
+
+class FitRun(Protocol):
+    """What the first stages use of a running fit
+    (:class:`posture_id.fitting.least_squares` implements it)."""
+
+    layout: object
+    options: object
+    suffix: str
+
+    @property
+    def first_evaluator(self) -> tuple: ...
+
+    def assemble(self, guess: np.ndarray, gains_delays: np.ndarray, classes: np.ndarray
+                 ) -> np.ndarray: ...
+
+    def stage(self, name: str, evaluator, q0: np.ndarray, free, tolerance: float,
+              limit: int) -> StageResult: ...
+
+    def say(self, message: str) -> None: ...
 
 
 def first_stages(strategy: ClassStrategy, run: FitRun, guess: np.ndarray

@@ -21,8 +21,9 @@ sides of its frequency.
 
 Several trials at once, grouped into conditions (:func:`search_conditions`,
 :class:`ConditionLayout`): each trial's residual stacked, each with its condition's
-parameters; :func:`fit_frequency_parts` is its special case (every part its own
-condition), :func:`~posture_id.fitting.joint_conditions.fit_joint` the fit of a session.
+parameters; :func:`~posture_id.fitting.models.fit_frequency_parts` is its special case
+(every part its own condition), :func:`~posture_id.fitting.joint_conditions.fit_joint` the
+fit of a session.
 
 Intervals: Gauss-Newton standard errors, the covariance (JᵀJ)⁻¹ of the weighted residual
 scaled by its χ² per degree of freedom where that exceeds 1, times the model's multiplier
@@ -49,10 +50,9 @@ from posture_id.models.protocol import FrequencyModel, ModelParameters, TrustLev
 from posture_id.trials import PreparedTrial
 
 __all__ = ["FrequencyFitOptions", "IcFitOptions", "FitVerdict", "FrequencyFitResult",
-           "fit_frequency", "fit_ic", "com_sway_deg", "fit_frequency_parts",
-           "fit_ic_parts", "LockedCom", "locked_projection", "analysis_cycles",
-           "ConditionLayout", "Precision", "on_search_bound", "ConditionSearch",
-           "search_conditions"]
+           "fit_frequency", "fit_ic", "com_sway_deg", "LockedCom", "locked_projection",
+           "analysis_cycles", "ConditionLayout", "Precision", "on_search_bound",
+           "ConditionSearch", "search_conditions"]
 
 
 @dataclass(frozen=True)
@@ -793,27 +793,3 @@ def search_conditions(model: FrequencyModel, trials: list[PreparedTrial], body,
         found = _search(model, parts, layout, plant, replace(options, starts=1), name,
                         first=found.x)
     return ConditionSearch(parts, layout, found, plant)
-
-
-def fit_frequency_parts(model: FrequencyModel, trials: list[PreparedTrial], body,
-                        options: FrequencyFitOptions | None = None):
-    """The parameters of ``model`` for every one of ``trials`` (the same subject at
-    several amplitudes), shared but for the model's per-part one: the joint fit of
-    :func:`~posture_id.fitting.joint_conditions.fit_joint` with every part its own
-    condition and the per-part parameter the one per condition, the noise from the
-    recorded sway (:func:`~posture_id.fitting.models.fit_model_parts`).
-
-    Returns:
-        :class:`~posture_id.fitting.joint_conditions.JointFit`: per part (its condition),
-        its parameters; ``w_by_part``.
-    """
-    from posture_id.fitting.models import fit_model_parts
-
-    options = options or FrequencyFitOptions()
-    return fit_model_parts(model, trials, body, options.locked, options)
-
-
-def fit_ic_parts(trials: list[PreparedTrial], body, options: IcFitOptions | None = None):
-    """The IC parameters of every one of ``trials``, shared but for W, one per part."""
-    return fit_frequency_parts(IC, trials, body, options or IcFitOptions())
-

@@ -43,7 +43,8 @@ from posture_id.models.protocol import Capability, Model, ModelParameters, Trust
 from posture_id.trials import PreparedTrial
 
 __all__ = ["JointFit", "fit_joint", "joint_parameter_names", "resolve_parameter",
-           "DEC_PER_CONDITION", "JOINT_CALIBRATION", "joint_multiplier", "chi2_correction"]
+           "options_kind", "sway_falls", "DEC_PER_CONDITION", "JOINT_CALIBRATION",
+           "joint_multiplier", "chi2_correction"]
 
 #: DEC's module parameters that may take one value per condition.
 DEC_PER_CONDITION = ("kp", "ki", "kd", "delay_s")
@@ -280,12 +281,39 @@ class JointFit(FitVerdict, Result):
             f"{self.noise_ratio:.2f}× the noise", path=path, ax=ax)
 
 
+def sway_falls(theta: np.ndarray) -> bool:
+    """Whether a fitted DEC sway (S, N) rad leaves the sway limit (or is not finite)."""
+    from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG
+
+    theta = np.asarray(theta, dtype=float)
+    return bool(not np.all(np.isfinite(theta))
+                or np.max(np.abs(theta)) >= math.radians(MAX_SWAY_LIMIT_DEG) * (1 - 1e-9))
+
+
+def options_kind(model: Model) -> type:
+    """The class of ``model``'s fit options: a
+    :class:`~posture_id.fitting.frequency.FrequencyFitOptions` for a model with a closed
+    loop, a :class:`~posture_id.fitting.options.FitOptions` for DEC's modules.
+
+    Raises:
+        PostureIdError: a model with neither (no way to fit it).
+    """
+    if Capability.FREQUENCY_RESPONSE in model.capabilities:
+        from posture_id.fitting.frequency import FrequencyFitOptions
+
+        return FrequencyFitOptions
+    if Capability.LOCKED_FIT in model.capabilities:
+        from posture_id.fitting.options import FitOptions
+
+        return FitOptions
+    raise PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
+                         "loop nor per-joint modules)")
+
+
 def joint_parameter_names(model: Model, body, options=None) -> tuple[str, ...]:
     """The names :func:`fit_joint` accepts as per-condition parameters of ``model``: a
     closed loop's identified parameters (``options``' or the model's), DEC's
     ``"<joint>.kp"``, ``".ki"``, ``".kd"`` and ``".delay_s"`` of every module of ``body``."""
-    from posture_id.fitting.models import options_kind
-
     kind = options_kind(model)  # refuses a model with no way to fit it
     if Capability.FREQUENCY_RESPONSE in model.capabilities:
         return (options or kind()).free_of(model)
@@ -517,7 +545,6 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
 
     from posture_id.fitting.frequency import LockedCom, gauss_newton_errors
     from posture_id.fitting.joint import polish_by_condition
-    from posture_id.fitting.models import _falls
     from posture_id.fitting.options import FitOptions
     from posture_id.models.dec import com_deg
 
@@ -584,7 +611,7 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
         _values(names, per, labels, value, se, lambda n, c: multiplier * se(n, c), ranges),
         params, coms, fitted, model_frf, started, level=DEC_LEVEL, calibrated=(), chi2=chi2,
         dof=dof, compared=data, on_bound=tuple(on_bound),
-        stable=not any(_falls(theta) for theta in polish.fitted), curves=curves,
+        stable=not any(sway_falls(theta) for theta in polish.fitted), curves=curves,
         pins={f"{j}.{f}": pin for f, pin in _DEC_PINNED.items() for j in joints},
         absolute_pins=frozenset(), identified_count=len(free) + len(joints),
         provenance_options=options, chi2_correction=correction)

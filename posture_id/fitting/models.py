@@ -6,32 +6,20 @@ read of either is the :class:`~posture_id.models.protocol.ModelFit` protocol."""
 
 from __future__ import annotations
 
-import math
 import time as clock
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
-import numpy as np
-
-from posture_id.errors import PostureIdError
+from posture_id.fitting.frequency import FrequencyFitOptions, IcFitOptions
+from posture_id.fitting.joint_conditions import JointFit, options_kind, sway_falls
 from posture_id.frf.locked import LockedOptions
 from posture_id.models.dec import DEC, com_deg
-from posture_id.models.protocol import Capability, Model
+from posture_id.models.ic.model import IC
+from posture_id.models.protocol import Capability, FrequencyModel, Model
 from posture_id.trials import PreparedTrial
 
-if TYPE_CHECKING:
-    from posture_id.fitting.joint_conditions import JointFit
+__all__ = ["DecFit", "options_kind", "fit_model", "fit_model_parts", "fit_frequency_parts",
+           "fit_ic_parts"]
 
-__all__ = ["DecFit", "options_kind", "fit_model", "fit_model_parts"]
-
-
-def _falls(theta: np.ndarray) -> bool:
-    """Whether a fitted DEC sway (S, N) rad leaves the sway limit (or is not finite)."""
-    from posture_id.simulation.options import MAX_SWAY_LIMIT_DEG
-
-    theta = np.asarray(theta, dtype=float)
-    return bool(not np.all(np.isfinite(theta))
-                or np.max(np.abs(theta)) >= math.radians(MAX_SWAY_LIMIT_DEG) * (1 - 1e-9))
 
 
 @dataclass(frozen=True)
@@ -56,7 +44,7 @@ class DecFit:
 
     @property
     def falls(self) -> bool:
-        return _falls(self.result.fitted)
+        return sway_falls(self.result.fitted)
 
     @property
     def residual_sd(self):
@@ -69,25 +57,6 @@ class DecFit:
     def to_dict(self) -> dict:
         return self.result.to_dict()
 
-
-def options_kind(model: Model) -> type:
-    """The class of ``model``'s fit options: a
-    :class:`~posture_id.fitting.frequency.FrequencyFitOptions` for a model with a closed
-    loop, a :class:`~posture_id.fitting.options.FitOptions` for DEC's modules.
-
-    Raises:
-        PostureIdError: a model with neither (no way to fit it).
-    """
-    if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        from posture_id.fitting.frequency import FrequencyFitOptions
-
-        return FrequencyFitOptions
-    if Capability.LOCKED_FIT in model.capabilities:
-        from posture_id.fitting.options import FitOptions
-
-        return FitOptions
-    raise PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
-                         "loop nor per-joint modules)")
 
 
 def fit_model(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
@@ -135,3 +104,24 @@ def fit_model_parts(model: Model, trials: list[PreparedTrial], body, locked: Loc
     joint = fit_conditions(model, trials, body, ("every part",), [0] * count, (), options,
                            progress, started=started)
     return replace(joint, identified_count=DEC.identified_count(body))
+
+
+def fit_frequency_parts(model: FrequencyModel, trials: list[PreparedTrial], body,
+                        options: FrequencyFitOptions | None = None):
+    """The parameters of ``model`` for every one of ``trials`` (the same subject at
+    several amplitudes), shared but for the model's per-part one: the joint fit of
+    :func:`~posture_id.fitting.joint_conditions.fit_joint` with every part its own
+    condition and the per-part parameter the one per condition, the noise from the
+    recorded sway (:func:`~posture_id.fitting.models.fit_model_parts`).
+
+    Returns:
+        :class:`~posture_id.fitting.joint_conditions.JointFit`: per part (its condition),
+        its parameters; ``w_by_part``.
+    """
+    options = options or FrequencyFitOptions()
+    return fit_model_parts(model, trials, body, options.locked, options)
+
+
+def fit_ic_parts(trials: list[PreparedTrial], body, options: IcFitOptions | None = None):
+    """The IC parameters of every one of ``trials``, shared but for W, one per part."""
+    return fit_frequency_parts(IC, trials, body, options or IcFitOptions())

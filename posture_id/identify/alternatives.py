@@ -58,7 +58,7 @@ SIZE_GAIN = 1.3
 #: read: the network's own error on right clean recordings is 0.5–16 % of the locked body
 #: sway (benchmarks/columns_on_clean.py), so on a cleaner recording (a robot's sensors, a
 #: simulation without noise) it reads as tens of noise units and two sizes' readings
-#: differ by chance (tests/test_alternatives.py:
+#: differ by chance (tests/test_alternative_readings.py:
 #: a noise-free 2-segment Winter recording at 3° read with a body 20 % shorter). Columns
 #: put back are read on any recording: on right ones, noise-free or not, the best reading
 #: of two columns exchanged divided the residual by at most 1.5, never the 3 of

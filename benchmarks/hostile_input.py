@@ -1,8 +1,8 @@
 """Hostile input for the newer commands: protocol files, a lab's columns, cohorts,
 design, stimulus, frf, the universal tools and evaluate, and (``tests/hostile_cases_newest.py``) C3D
 trials, the IC model, compare and norms, each tried as a new user tries them, and each
-outcome sorted by :func:`posture_id.testing.run_case` (clear, handled, unclear, traceback,
-silent, data loss, hang: :mod:`posture_id.testing`).
+outcome sorted by :func:`hostile_harness.run_case` (clear, handled, unclear, traceback,
+silent, data loss, hang: :mod:`hostile_harness`).
 
 Run:  .venv/bin/python benchmarks/hostile_input.py [--out docs/results/hostile_input]
                                                    [--only SUBSTRING] [--before ROWS_JSON]
@@ -30,8 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from hostile_cases import all_cases, make_material, run_case  # noqa: E402
-
-from posture_id.testing import OUTCOMES, Outcome, before_after  # noqa: E402
+from hostile_harness import OUTCOMES, Outcome, before_after  # noqa: E402
 
 # ------------------------------------------------------------------------- journal
 #: One JSON line per case started and per case finished: a run again goes on from there,

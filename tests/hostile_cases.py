@@ -6,7 +6,7 @@ data sets), made once.
 
 ``tests/test_hostile_newer.py`` runs every case and requires *clear* or *handled*;
 ``benchmarks/hostile_input.py`` runs the same cases and writes their report. Each outcome is
-sorted by :func:`posture_id.testing.run_case` (clear, handled, unclear, traceback, silent,
+sorted by :func:`hostile_harness.run_case` (clear, handled, unclear, traceback, silent,
 data loss, hang).
 """
 
@@ -17,10 +17,9 @@ import io
 import json
 from pathlib import Path
 
+import hostile_harness as testing
 from hostile_cases_newest import make_newest_material, newest_cases
-
-from posture_id import testing
-from posture_id.testing import Case, Outcome
+from hostile_harness import Case, Outcome
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf"

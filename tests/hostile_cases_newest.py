@@ -15,7 +15,7 @@ import json
 from collections.abc import Callable
 from pathlib import Path
 
-from posture_id.testing import Case
+from hostile_harness import Case
 
 __all__ = ["make_newest_material", "newest_cases"]
 
@@ -119,7 +119,7 @@ def _com_frfs(frfs: list[Path]):
 # ------------------------------------------------------------------------- file texts
 def _edited(material_key: str, edit) -> str:
     """A marker: the material JSON ``material_key`` with ``edit(data)`` applied (written
-    when the case's folder is built; see :func:`posture_id.testing.run_case`)."""
+    when the case's folder is built; see :func:`hostile_harness.run_case`)."""
     return ("edit", material_key, edit)
 
 

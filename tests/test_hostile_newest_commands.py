@@ -3,7 +3,7 @@ force-plate and lab-text flags, the periodic-stimulus finder, ``norm compare --p
 ``robot check``, the flags given twice): each case is declared with its good answer before
 it runs, a one-line refusal naming the file, field and problem (*clear*) or an answer with
 the notice that says what was assumed, ignored or dropped (*handled*), and must get it
-(:mod:`posture_id.testing` sorts the outcome).
+(:mod:`hostile_harness` sorts the outcome).
 
 Run as a script it writes every case's outcome, and with ``--before ROWS`` (the same
 script run on an earlier tree) the table of outcomes before and after::
@@ -23,8 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from posture_id.testing import Case, run_case
+from hostile_harness import Case, run_case
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ("tip_urdf", "specialist")
@@ -638,7 +637,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--before", type=Path, help="the outcomes on an earlier tree")
     parser.add_argument("--only", help="the cases whose name holds this")
     args = parser.parse_args(argv)
-    from posture_id.testing import Outcome, before_after
+    from hostile_harness import Outcome, before_after
 
     material = _material()
     rows = []

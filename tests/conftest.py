@@ -1,4 +1,5 @@
-"""Shared fixtures: bodies (default TIP, Winter 3- and 2-segment, bent TALOS) and seeding."""
+"""Shared fixtures: bodies (default TIP, Winter 3- and 2-segment, bent TALOS) and seeding;
+the rule that a ``slow`` mark says what makes its test slow."""
 
 from __future__ import annotations
 
@@ -14,6 +15,18 @@ from posture_id.dec.parameters import default_parameters
 
 #: The project's shipped URDFs (``make bodies``).
 URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
+
+
+def pytest_collection_modifyitems(config, items):
+    """A ``slow`` mark carries one argument, what makes the test slow, in a few words:
+    ``@pytest.mark.slow("trains a network")``; a test marked without it is refused."""
+    for item in items:
+        for mark in item.iter_markers("slow"):
+            reason = mark.args[0] if len(mark.args) == 1 else None
+            if mark.kwargs or not isinstance(reason, str) or not reason.strip():
+                raise pytest.UsageError(
+                    f"{item.nodeid}: a slow mark says what makes the test slow, "
+                    f'e.g. @pytest.mark.slow("trains a network")')
 
 
 @pytest.fixture(autouse=True)

@@ -80,7 +80,7 @@ def test_exchanged_columns_are_named_and_the_right_ones_are_not(clean_two_segmen
     assert not any("exchanged" in m for m in again.verdict.mistakes)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("identifications reading other body sizes")
 def test_another_persons_body_is_named(tmp_path, monkeypatch):
     """A 1.90 m subject (the default controller, the 80-state PRTS at 3°, 0.02° of sensor
     noise) identified with the URDF of a 1.55 m one (the masses too differ, which the sway
@@ -169,7 +169,7 @@ def test_exchanged_columns_are_named_on_a_recording_cleaner_than_the_networks_er
     assert not before.verdict.doubtful
 
 
-@pytest.mark.slow
+@pytest.mark.slow("identifications reading other body sizes")
 def test_a_body_a_tenth_off_is_not_called_another_persons(tmp_path, monkeypatch):
     """A 1.75 m, 70 kg 2-segment Winter subject (docs/model.md §5's draw of seed 0, the default
     PRTS, 0.01° of sensor noise) on the right body: read with the body a tenth shorter,
@@ -193,7 +193,7 @@ def test_a_body_a_tenth_off_is_not_called_another_persons(tmp_path, monkeypatch)
     assert any("a body 10 % shorter" in m for m in near.verdict.mistakes)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("identifications reading other body sizes")
 def test_a_size_the_network_reads_by_chance_is_not_named_when_least_squares_fits(
         tmp_path, monkeypatch):
     """A 1.85 m, 85 kg 1-segment Winter subject (docs/model.md §5's draw of seed 20, the default

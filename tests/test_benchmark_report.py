@@ -49,7 +49,7 @@ def test_statistics_of_known_rows():
     assert "| hybrid | 83.3 % | 11.00 % | inf % | 2/3 | 1 | 2 | 3.000, 3.000" in text
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a benchmark of a few recordings")
 def test_tiny_benchmark_writes_its_report(tip, tmp_path):
     report = run_benchmark(tip, trials=2, noise_levels=(0.0, 0.01), seed=3, workers=1,
                            methods=(Method.CNN,))
@@ -78,7 +78,7 @@ def test_tiny_benchmark_writes_its_report(tip, tmp_path):
         "held-out bodies and stimuli) | 2 |" in text
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a benchmark of a few recordings")
 def test_an_interrupted_benchmark_goes_on_from_its_journal(tip, tmp_path):
     journal = tmp_path / "journal.jsonl"
     args = dict(trials=2, noise_levels=(0.0,), seed=3, workers=1, methods=(Method.CNN,))
@@ -104,7 +104,7 @@ def test_the_command_line_names_the_benchmark_s_methods():
     assert BENCHMARK_METHODS == METHODS
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a benchmark of a few recordings")
 def test_people_like_sway_and_the_paper_s_cnn_are_benchmarked(tip, tmp_path):
     """The people-like condition's recordings are the clean ones' subjects with motor
     noise; the paper's CNN (the TIP's specialist) answers beside the universal network."""

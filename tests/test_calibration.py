@@ -37,7 +37,7 @@ def calibrated(tmp_path_factory, tip):
     return root
 
 
-@pytest.mark.slow
+@pytest.mark.slow("trains and calibrates a network (module fixture)")
 def test_calibration_writes_the_calibration_and_its_report(calibrated):
     model, report = calibrated / "model", calibrated / "report"
     for name in ("calibration_report.md", "calibration_report.json", "coverage.png",
@@ -57,7 +57,7 @@ def test_calibration_writes_the_calibration_and_its_report(calibrated):
     assert "Least squares was not run" in (report / "calibration_report.md").read_text()
 
 
-@pytest.mark.slow
+@pytest.mark.slow("trains and calibrates a network (module fixture)")
 def test_the_identifier_gives_intervals_and_says_when_noise_is_beyond_them(calibrated, tip):
     identifier = CnnIdentifier.load(calibrated / "model", tip)
     recording = simulate(tip, _truth(tip)).to_recording()
@@ -76,7 +76,7 @@ def test_the_identifier_gives_intervals_and_says_when_noise_is_beyond_them(calib
                for n in noisy.notices)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("trains and calibrates a network (module fixture)")
 def test_a_calibration_of_other_weights_is_not_used(calibrated, tip, tmp_path):
     model = tmp_path / "model"
     shutil.copytree(calibrated / "model", model)
@@ -101,7 +101,7 @@ def _truth(body):
     return default_parameters(body)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least-squares fits of a calibration set, 3 segments")
 def test_least_squares_runs_resume_from_their_journal(calibrated, tmp_path):
     from posture_id.bodies.body import load_body
     from posture_id.errors import PostureIdError
@@ -123,7 +123,7 @@ def test_least_squares_runs_resume_from_their_journal(calibrated, tmp_path):
         run_fits(calibrated / "model", calibrated / "set", "test", 2, (0.05,), journal)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("trains and calibrates a network (module fixture)")
 def test_an_unreadable_calibration_is_made_anew(calibrated, tmp_path):
     model = tmp_path / "model"
     shutil.copytree(calibrated / "model", model)

@@ -27,7 +27,7 @@ def cohort(tip, tmp_path_factory):
     return folder
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a whole cohort through the command line")
 def test_cohort_writes_one_json_each_and_a_summary(cohort, tmp_path, capsys):
     out = tmp_path / "results"
     assert main(["identify", str(cohort), "--out", str(out)]) == 1  # one recording is bad
@@ -57,7 +57,7 @@ def test_cohort_writes_one_json_each_and_a_summary(cohort, tmp_path, capsys):
     assert "3 already done" in capsys.readouterr().err
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a whole cohort through the command line, twice")
 def test_cohort_on_a_local_cluster_equals_a_local_run(cohort, tmp_path):
     distributed = pytest.importorskip("distributed")
     local, remote = tmp_path / "local", tmp_path / "remote"
@@ -114,7 +114,7 @@ def test_a_cohort_of_subjects_with_bodies_of_their_own(tmp_path, capsys):
     assert again.plot(tmp_path / "cohort.png") is not None
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a whole cohort through the command line")
 def test_a_cohort_run_again_with_other_options_redoes_what_they_change(cohort, tmp_path,
                                                                         capsys):
     """The options a result was made with are in its JSON: started again with the same

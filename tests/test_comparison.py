@@ -28,7 +28,7 @@ def setting():
     return body, prepare_trial(recording.with_sensor_noise(0.02, 4), stimulus)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("fits the DEC and IC models, 1 segment")
 def test_compare_fits_dec_by_the_hybrid_where_a_network_serves_the_body(setting):
     body, trial = setting
     result = compare_models(trial, body, held_out=False)
@@ -37,7 +37,7 @@ def test_compare_fits_dec_by_the_hybrid_where_a_network_serves_the_body(setting)
     assert result.within_noise["dec"] and result.preferred == "dec"
 
 
-@pytest.mark.slow
+@pytest.mark.slow("fits the DEC and IC models, 1 segment")
 def test_a_hybrid_answer_that_falls_gives_way_to_the_locked_fit(setting, monkeypatch):
     body, trial = setting
     defaults = default_parameters(body)

@@ -42,7 +42,7 @@ def network_that_falls(monkeypatch, tip):
     monkeypatch.setattr(UniversalIdentifier, "identify", falling)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_a_fallen_network_answer_on_people_like_sway_still_gets_an_answer(
         tip, subject, network_that_falls):
     """Refined on the locked sway with the network's spread as the prior; that starts
@@ -143,7 +143,7 @@ def test_a_stage_with_a_centred_prior_finds_the_weighted_mean():
     assert stage.q[0] == pytest.approx((2.0 + c / s**2) / (1 + 1 / s**2), abs=1e-8)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the hybrid's least squares, 3 segments")
 def test_a_fit_from_the_network_s_prior_claims_no_more_than_the_network(tip, subject,
                                                                        monkeypatch):
     """The locked fit from the network's answer with its spread as the prior (what ``auto``

@@ -133,7 +133,7 @@ def test_far_bounds_leave_the_sandwich_and_near_ones_cap_a_correlated_partner():
     out = bounded_errors(blind, np.zeros(2), -np.ones(2), np.ones(2), 10, rng)
     assert np.all(np.isfinite(out[:, 0])) and np.all(np.isinf(out[:, 1]))
 
-@pytest.mark.slow
+@pytest.mark.slow("design predictions on the exact model, 1 segment")
 def test_predictions_on_a_real_body_scale_with_cycles_and_repetitions(winter1):
     """On the exact model of a 1-segment body with sensor noise only, the predicted SE
     falls as 1/√repetitions exactly, and with more cycles about as 1/√cycles (the cycle
@@ -157,7 +157,7 @@ def test_predictions_on_a_real_body_scale_with_cycles_and_repetitions(winter1):
     np.testing.assert_allclose(noisier.standard_errors, se[0] * 10, rtol=1e-9)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a protocol design through the command line")
 def test_design_command_ranks_and_writes_the_report(winter1, tmp_path, capsys):
     from posture_id.cli import main
     from posture_id.simulation.protocols import PrtsProtocol, read_protocol, write_protocol

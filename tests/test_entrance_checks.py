@@ -159,7 +159,7 @@ def test_a_protocol_holding_a_word_or_an_impossible_tilt_is_refused(protocol, na
     assert not out.exists()
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares through the command line, 3 segments")
 def test_a_fit_stopped_at_the_noise_level_is_converged_and_exits_0(tip, tmp_path, monkeypatch,
                                                                    capsys):
     """The optimiser's own status says 'not converged' (forced here) while the residual is

@@ -54,7 +54,7 @@ def noise_free(tip, tmp_path_factory):
     return truth, folder, code
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares through the command line, 3 segments")
 def test_noise_free_fit_recovers_the_truth(noise_free, tip):
     truth, folder, code = noise_free
     assert code == 0
@@ -129,7 +129,7 @@ def test_cli_errors_are_one_line(tmp_path, tip, capsys):
     assert err.count("\n") == 1 and "line 101, column 'trunk_deg'" in err
 
 
-@pytest.mark.slow
+@pytest.mark.slow("six short least-squares fits, 2 and 3 segments")
 def test_two_fits_at_once_equal_the_same_fits_one_after_the_other(tip, winter2):
     """Fits side by side (the identifier and the benchmark run them so) share compiled
     problems and their thread pools; a fit on another body must not disturb them."""
@@ -153,7 +153,7 @@ def test_two_fits_at_once_equal_the_same_fits_one_after_the_other(tip, winter2):
         assert a.cost == b.cost
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 2 segments")
 def test_any_robot_name_fits(tmp_path, winter2):
     """A URDF whose robot name has dots, dashes and spaces (as `posture-id body --height
     1.75` writes them) once crashed the fit inside CasADi's function naming."""
@@ -172,7 +172,7 @@ def test_any_robot_name_fits(tmp_path, winter2):
     _check_recovery(fitted, truth, 0.02, 4)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from near the truth, 3 segments")
 def test_known_classes_end_with_one_exact_jacobian(tip):
     """With the classes fixed and the warm start converged, the exact model gives the
     Jacobian at the warm optimum instead of iterating again: the parameters are the

@@ -18,7 +18,7 @@ from posture_id.simulation import prts, simulate
 from posture_id.trials import prepare_trial
 
 
-@pytest.mark.slow
+@pytest.mark.slow("Jacobians over five recording lengths, 3 segments")
 def test_five_lengths_fit_on_one_compiled_model(tip, monkeypatch):
     """A lab's trials of 40 s to 124.6 s (the same 242-state PRTS, level stretches of
     different lengths after it; one shorter than a block, one a block and a sample) run
@@ -64,7 +64,7 @@ def test_five_lengths_fit_on_one_compiled_model(tip, monkeypatch):
     assert len(set(keys)) == 1
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a whole cohort through the command line, compiling its model")
 def test_a_cohort_of_five_lengths_compiles_once(winter1, tmp_path):
     """A cohort of five recordings of five lengths (20.0–28.0 s), fitted by the command line
     on an empty cache with no prebuilt models: one compiled library in the cache (a

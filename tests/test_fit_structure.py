@@ -105,7 +105,7 @@ def test_the_locked_residual_groups_each_harmonic_of_every_channel():
     assert SwayResidual().clusters() is None
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from near the truth, 3 segments")
 def test_a_locked_fit_reports_the_larger_of_the_two_standard_errors(tip):
     """Sensor noise shared by the three segments (one camera's jitter): the fit reports,
     for each parameter, the larger of its Gauss-Newton standard error and the

@@ -125,7 +125,7 @@ def _frf_ratio(body, stimulus, seed, frequencies):
     return np.array([ratio[np.argmin(np.abs(f - x))] for x in frequencies])
 
 
-@pytest.mark.slow
+@pytest.mark.slow("FRFs of five simulated trials with motor noise")
 @pytest.mark.parametrize("segments, highest_hz", [(1, 1.0), (2, 0.5)])
 def test_the_com_frf_from_the_cop_is_the_coms_within_5_percent_and_3_degrees(segments,
                                                                             highest_hz):

@@ -42,9 +42,9 @@ def test_the_newest_commands_have_at_least_80_cases_over_each_of_their_surfaces(
     assert len(CASES) - len(newest) >= 120  # the earlier surfaces' cases run beside them
 
 
-@pytest.mark.parametrize("case", [pytest.param(c, id=c.name, marks=[pytest.mark.slow]
-                                               if c.name in SLOW else [])
-                                  for c in CASES])
+@pytest.mark.parametrize("case", [pytest.param(
+    c, id=c.name, marks=[pytest.mark.slow("a protocol design through the command line")]
+    if c.name in SLOW else []) for c in CASES])
 def test_every_bad_input_is_refused_clearly_or_handled(case, material, tmp_path):
     outcome = run_case(case, material, tmp_path / "case")
     wanted = "handled" if case.handled else "clear"

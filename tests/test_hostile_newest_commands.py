@@ -619,9 +619,9 @@ def test_the_suite_has_at_least_80_cases_over_every_newest_surface():
     assert {"study", "fit", "force plate", "lab text", "protocol", "flags"} <= surfaces
 
 
-@pytest.mark.parametrize("case", [pytest.param(c, id=c.name, marks=[pytest.mark.slow] if
-                                               c.argv[0] in SLOW_COMMANDS else [])
-                                  for c in CASES])
+@pytest.mark.parametrize("case", [pytest.param(
+    c, id=c.name, marks=[pytest.mark.slow("a study, fit or identify command")]
+    if c.argv[0] in SLOW_COMMANDS else []) for c in CASES])
 def test_every_bad_input_is_refused_clearly_or_handled(case, tmp_path):
     material = _material()
     outcome = run_case(case, material, tmp_path / "case", shipped=SHIPPED, root=ROOT)

@@ -73,7 +73,7 @@ def test_simulate_refuses_a_dec_file_as_ic_parameters(tmp_path, capsys):
     assert "\"model\" must be \"ic\"" in capsys.readouterr().err
 
 
-@pytest.mark.slow
+@pytest.mark.slow("model comparisons through the command line, 1 segment")
 def test_compare_prefers_the_model_that_made_each_recording(ic_files, tmp_path, capsys):
     """One recording of each model (clean), then the two as a cohort with a third that
     cannot be read: one JSON each, summary.csv, the bad one named, exit 1."""
@@ -101,7 +101,7 @@ def test_compare_prefers_the_model_that_made_each_recording(ic_files, tmp_path, 
     assert rows["ic.csv"]["status"] == "skipped"
 
 
-@pytest.mark.slow
+@pytest.mark.slow("model comparisons through the command line, 1 segment")
 def test_two_amplitudes_one_dec_or_an_ic_that_reweights(tmp_path, winter1, capsys):
     """A DEC subject at 1° and 3° (one set of parameters explains both) and an IC subject
     whose W falls from 0.6 to 0.35 at 3°: compare --second prefers each one's model, and

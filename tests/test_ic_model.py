@@ -134,7 +134,7 @@ def test_the_fit_recovers_an_ic_recording(body_name, states, amplitude, request)
     assert result.consistent and result.stable
 
 
-@pytest.mark.slow
+@pytest.mark.slow("16 IC fits, 2 segments")
 def test_the_design_predicts_the_fits_own_scatter(winter2):
     """The predicted interval width of Kp, Kd, Δ and W for one IC subject and protocol
     against the scatter of the fit over 16 draws of 0.05° sensor noise (the same

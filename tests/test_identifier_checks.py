@@ -60,7 +60,7 @@ def test_both_networks_implement_one_identifier_protocol(body):
         assert network.for_body(other).body is other
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the example recording by four methods (module fixture)")
 def test_check_the_answer_round_trips_through_json(identified, body):
     _, result = identified
     data = json.loads(json_text(result.to_dict()))
@@ -68,7 +68,7 @@ def test_check_the_answer_round_trips_through_json(identified, body):
     assert data["method"] == result.method.value
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the example recording by four methods (module fixture)")
 def test_check_intervals_present_and_verdict_typed(identified, body):
     _, result = identified
     assert result.intervals is not None
@@ -79,7 +79,7 @@ def test_check_intervals_present_and_verdict_typed(identified, body):
                                                                         for t in TrustLevel}
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the example recording by four methods (module fixture)")
 def test_check_the_same_recording_gives_the_same_answer(identified, recording):
     identifier, result = identified
     again = identifier.identify(recording)
@@ -87,7 +87,7 @@ def test_check_the_same_recording_gives_the_same_answer(identified, recording):
     assert again.verdict.level is result.verdict.level
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the example recording by four methods (module fixture)")
 def test_check_another_bodys_recording_is_refused(identified):
     identifier, _ = identified
     other = load_body(WINTER_2SEG)

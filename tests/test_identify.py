@@ -51,7 +51,7 @@ def test_cnn_result_is_checked_by_resimulation(tip, tmp_path):
     assert (tmp_path / "intervals.png").stat().st_size > 10_000
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the hybrid's least squares, 3 segments")
 def test_hybrid_on_a_noisy_recording_recovers_classes_and_kp(tip, tmp_path):
     truth, recording = _noisy_trial(tip, 12, 0.01)
     csv = tmp_path / "noisy.csv"
@@ -80,8 +80,7 @@ def test_hybrid_on_a_noisy_recording_recovers_classes_and_kp(tip, tmp_path):
     assert data["e_rel"] < cnn_only.e_rel  # refining reproduces the sway better
 
 
-@pytest.mark.slow
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_fit_method_needs_no_model(tip):
     truth, recording = _noisy_trial(tip, 11, 0.0, prts(states=80, cycles=3))  # 60 s
     result = identify(recording, tip, Method.FIT)
@@ -91,7 +90,7 @@ def test_fit_method_needs_no_model(tip):
     assert result.intervals.method == "Gauss-Newton ±z·SE (coverage not checked)"
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the hybrid's least squares, 3 segments")
 def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     """The CNN calls the knee's class wrong with P = 0 or 1: the short route (classes
     kept) leaves a locked residual far above the recording's noise, so the hybrid relaxes
@@ -126,7 +125,7 @@ def test_hybrid_overturns_a_confidently_wrong_cnn(tip, monkeypatch):
     assert not result.verdict.doubtful, result.verdict.line()
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the hybrid's least squares, 3 segments")
 def test_auto_refines_a_doubtful_answer_and_keeps_a_good_one(tip, monkeypatch):
     """--method auto: a network's answer whose re-simulation is far from the recording is
     refined by least squares (and says so); a good answer is kept as it is."""
@@ -157,7 +156,7 @@ def test_auto_refines_a_doubtful_answer_and_keeps_a_good_one(tip, monkeypatch):
         assert abs(refined.parameters[joint].kp / truth[joint].kp - 1) <= 0.05, joint
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 1 segment")
 def test_auto_fits_a_tilt_the_network_cannot_read(winter1):
     """The default method on a tilt that is not periodic (a sum of sines, 30 s): the
     network reads only whole cycles of a periodic tilt, so ``auto`` fits the recording by
@@ -195,7 +194,7 @@ def test_a_doubtful_fit_of_a_tilt_the_network_cannot_read_is_not_sent_to_it():
                                         whole_cycles=False)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the hybrid's least squares, 3 segments")
 def test_auto_refines_noisy_sway_on_its_stimulus_locked_part(tip):
     """Motor-noisy sway, three quarters of it stimulus-locked (not people-like): the
     network's answer explains the locked sway as well as its noise allows, and that noise

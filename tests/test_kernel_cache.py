@@ -27,7 +27,7 @@ def _run(cache, prebuilt="none") -> tuple[int, int]:
     return hits, misses
 
 
-@pytest.mark.slow
+@pytest.mark.slow("compiles the simulator in a new process")
 def test_second_process_loads_the_compiled_kernel(tmp_path):
     hits, misses = _run(tmp_path)
     assert misses >= 1 and hits == 0  # an empty cache: compiled, and saved
@@ -36,7 +36,7 @@ def test_second_process_loads_the_compiled_kernel(tmp_path):
     assert hits >= 1 and misses == 0  # a new process: loaded, not compiled
 
 
-@pytest.mark.slow
+@pytest.mark.slow("compiles the simulator in a new process")
 def test_the_prebuilt_kernel_serves_an_empty_cache(tmp_path):
     """The simulator the set-up compiled (the prebuilt folder) is loaded by a process whose
     cache folder is empty: nothing compiled, nothing written there."""

@@ -151,7 +151,7 @@ def test_a_model_that_falls_is_said_in_one_line(tmp_path, tip, monkeypatch, caps
     assert data["e_rel"] is None and data["fell_at_s"] > 0
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_answers_say_how_much_of_the_locked_sway_they_explain(tip):
     from posture_id.identify import Method, identify
 
@@ -192,7 +192,7 @@ def lab_subject(tmp_path_factory):
     return folder, body, truth
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares through the command line, 1 segment")
 @pytest.mark.parametrize("how", ["tilt column, nothing named", "stimulus named as run"])
 def test_a_lab_recording_by_the_command_line_alone(lab_subject, how):
     folder, body, truth = lab_subject
@@ -246,7 +246,7 @@ BATTERY = {
 }
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares through the command line, 1 segment")
 @pytest.mark.parametrize("case", list(BATTERY))
 def test_lab_like_recordings_through_the_command_line(lab_subject, case, capsys):
     """Each lab-like file, as it is, through `posture-id identify --method fit`: no crash,
@@ -325,7 +325,7 @@ def _lab_example_shifted(folder, shift_s: float):
     return path, EXAMPLES_DIR / "lab_subject.urdf"
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the timing search through the command line, 1 segment")
 @pytest.mark.parametrize("shift_s", [2.0, -2.0])
 def test_a_tilt_column_off_the_sways_clock_is_moved_by_the_default_command(
         tmp_path, shift_s, capsys):

@@ -152,7 +152,7 @@ def tip_default_class(joint: str) -> float:
     return float(default_parameters(load_body())[joint].sign)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares through the command line, 3 segments")
 def test_fit_of_a_lab_recording_with_its_stimulus_named(tip, tmp_path):
     """62 s of sway without a tilt column, the stimulus named by its flags: the fit
     recovers every class and Kp (noise-free, so within 2 %)."""

@@ -85,7 +85,7 @@ def test_locked_fit_recovers_the_truth_from_noise_free_sway(tip):
     assert fit.rms_deg < 1e-4
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_locked_fit_is_blind_to_offset_and_drift(tip):
     """A subject who leans 0.3° more over the trial and stands 0.5° forward: the locked
     fit of the noise-free sway is unmoved, the sample-by-sample fit is thrown off."""
@@ -142,7 +142,7 @@ def test_cli_fit_locked(tip, tmp_path):
     assert data["parameters"]["knee"]["kpas"] == pytest.approx(61.25, rel=1e-3)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_the_prior_keeps_undetermined_parameters_at_the_defaults(tip):
     truth = default_parameters(tip).replace("ankle", kp=560.0)
     stim = prts(states=80, cycles=3)
@@ -159,7 +159,7 @@ def test_the_prior_keeps_undetermined_parameters_at_the_defaults(tip):
         FitOptions(prior_sd=0.5)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_passive_stiffness_and_damping_are_fitted_when_asked(tip):
     truth = (default_parameters(tip).replace("ankle", kpas=300.0, bpas=120.0)
              .replace("hip", kpas=45.0))
@@ -175,7 +175,7 @@ def test_passive_stiffness_and_damping_are_fitted_when_asked(tip):
     assert fitted.rms_deg < 1e-3 < fixed.rms_deg
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_a_stimulus_time_offset_is_found_and_fitted(tip):
     """The platform followed its command 60 ms late and the lab did not say so: with the
     offset fitted, the parameters come back; without, they do not."""
@@ -212,7 +212,7 @@ def test_a_batch_of_residuals_equals_them_one_by_one():
         np.testing.assert_allclose(target.many(batch), one_by_one, rtol=0, atol=1e-12)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_the_resimulation_check_uses_the_fitted_offset(tip):
     """identify() re-simulates the fitted model with the offset the fit found: its E_rel
     is the fit's own residual (once 6.9 % against 0.07 %, the offset ignored)."""

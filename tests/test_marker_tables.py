@@ -146,7 +146,7 @@ def test_the_command_line_reads_tracker_columns_and_refuses_what_does_not_go(
         assert message in capsys.readouterr().err
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the default command twice, 1 segment")
 def test_a_vr_export_is_identified_as_it_is_within_2_percent_of_it_evenly_sampled(
         vr_lab, capsys):
     folder, body, _ = vr_lab

@@ -239,7 +239,7 @@ def test_a_two_d_file_and_wrong_axes_are_refused(sway, tip, tmp_path, capsys):
     assert "--forward-axis x" in err and err.count("\n") == 1
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the default command twice, 3 segments")
 def test_the_c3d_and_the_csv_of_one_trial_give_the_same_answer(tip, tmp_path):
     """One people-like trial (motor noise) through the default command twice: as the CSV
     of its angles and as its C3D (0.3 mm marker noise, a gap, the platform markers)."""

@@ -130,7 +130,7 @@ def test_bad_options_are_refused_in_one_line(tip):
                         mujoco_options=MujocoOptions(timestep_s=0.003))
 
 
-@pytest.mark.slow
+@pytest.mark.slow("MuJoCo at a 1 ms step")
 def test_tip_in_mujoco_agrees_with_the_compiled_simulator_within_1_percent(tip):
     """The issue's criterion: the default 121 s PRTS, default DEC, MuJoCo RK4 at 1 ms against
     the compiled simulator at its default 2 ms: ≤ 1 % RMS of the sway per segment and for
@@ -147,7 +147,7 @@ def test_tip_in_mujoco_agrees_with_the_compiled_simulator_within_1_percent(tip):
     assert np.all(_relative_rms(engine.alpha, compiled.alpha) <= 0.01)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("MuJoCo at 1 and 0.5 ms steps")
 def test_step_halving_brings_both_engines_to_one_limit(tip):
     """On the PRTS's first 30 s: MuJoCo's difference from the converged compiled sway halves
     with its step (first order), and the two extrapolated limits agree to 1e-4 of the sway

@@ -63,7 +63,7 @@ class LinearReadoutConfig:
         return cls(int(data["inputs"]), int(data["members"]))
 
 
-@pytest.mark.slow
+@pytest.mark.slow("generates a training set and trains a network")
 def test_a_third_architecture_goes_through_data_training_calibration_check_and_identify(
         tip, tmp_path):
     # data: the training set, by the command line

@@ -30,7 +30,7 @@ def _population(rng: np.random.Generator, n: int, delay_s: float = 0.15,
     return FrfSet(F, h[:, :, None], ("COM",), tuple(f"s{i}" for i in range(n)))
 
 
-@pytest.mark.slow
+@pytest.mark.slow("resampling: 8 norms of 200 bootstrap draws")
 @pytest.mark.parametrize("members, low, high", [(100, 0.93, 0.97), (20, 0.80, 0.99)])
 def test_the_prediction_band_holds_new_members_at_its_level(members, low, high):
     """A 95 % band built from ``members`` holds the whole PIR of 93–97 % of new members of
@@ -48,7 +48,7 @@ def test_the_prediction_band_holds_new_members_at_its_level(members, low, high):
     assert low <= share <= high
 
 
-@pytest.mark.slow
+@pytest.mark.slow("resampling: 240 permutation tests")
 def test_the_permutation_test_keeps_its_level_and_finds_a_shift():
     """Two groups of 15 from one population: p < 0.05 in at most 6 % of 200 draws; a
     group whose delay is 40 % longer: p < 0.05 in at least 80 % of 40 draws."""
@@ -208,7 +208,7 @@ def test_a_cohort_writes_its_frfs_and_the_norms_columns(tmp_path):
     assert {r["inside_prediction_band"] for r in rows} <= {"True", "False"}
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a whole cohort through the command line, twice")
 def test_identified_groups_differ_where_their_parameters_do(tmp_path):
     """Six subjects and six with 1.6× longer delays, identified (the network): every
     module's delay is longer in the second group, significantly (p < 0.05) at two of the

@@ -43,7 +43,7 @@ def test_the_readme_is_short_and_quotes_five_commands_and_a_robot():
     assert len(_blocks("python")) == 1
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the README's commands end to end")
 def test_the_quickstart_commands_run_as_written(tmp_path, monkeypatch, capsys):
     """Each command answers (0, or 1 for an answer its verdict doubts) and writes its
     result; the subject's parameters are the ones the shipped truth holds, within 20 %."""
@@ -61,7 +61,7 @@ def test_the_quickstart_commands_run_as_written(tmp_path, monkeypatch, capsys):
         assert abs(found[joint]["kp"] / module["kp"] - 1) < 0.2, joint
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the README's Python example end to end")
 def test_the_python_example_runs_as_written(tmp_path, monkeypatch, capsys):
     (code,) = _blocks("python")
     code = code.replace('"posture_id/studies/examples/', f'"{ROOT}/posture_id/studies/examples/')

@@ -86,7 +86,7 @@ def identifier():
     return Identifier(load_body())
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the default method on people-like sway, 3 segments")
 def test_the_bundled_network_widens_a_people_like_recordings_intervals_only(identifier):
     """The bundled universal model carries its widening (made for its weights): a
     people-like recording's intervals are its conformal ones times its noise bin's factors,

@@ -95,7 +95,7 @@ def test_the_tip_chain_in_mujoco_agrees_with_the_compiled_simulator():
     assert result.engine_gain[-1, -1] < result.engine_gain[0, -1]
 
 
-@pytest.mark.slow
+@pytest.mark.slow("MuJoCo at a 1 ms step, TALOS whole body")
 def test_talos_whole_body_follows_its_lumped_chain_to_one_hertz():
     """TALOS (33 DoF, half-sitting) in MuJoCo, lumped to 3 segments, its lumped chain's
     default DEC split between the two legs, the other joints servoed at 100× m·g·h, one 1°
@@ -174,7 +174,7 @@ def test_the_step_is_the_largest_at_which_the_whole_body_is_stable():
     assert rho > 1.0 and abs(rho - one_step_radius(model) ** 2) < 1e-3 * rho
 
 
-@pytest.mark.slow
+@pytest.mark.slow("MuJoCo at 1 and 0.5 ms steps, TALOS whole body")
 def test_the_constraint_solver_is_tight_enough_for_the_step_to_converge():
     """MuJoCo's own solver tolerance (1e-8) leaves weld-force errors that DEC's loop turns
     into sway of its own, different at every step: TALOS rigid on 10 s of the PRTS at 1

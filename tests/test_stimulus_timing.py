@@ -83,7 +83,7 @@ def test_a_window_where_the_tilt_does_not_repeat_is_refused_naming_it():
         harmonic_layout(wander, 50.0, 20.0, 0.0, "late.csv", 3)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the default method's timing search, 1 segment")
 @pytest.mark.parametrize("shift_s, seed", [(2.2, 11), (-3.1, 12)])
 def test_the_default_command_finds_a_tilt_column_seconds_off_the_sways_clock(
         subject, shift_s, seed):
@@ -97,7 +97,7 @@ def test_the_default_command_finds_a_tilt_column_seconds_off_the_sways_clock(
     assert result.verdict.noise.consistent or "--max-offset-s" in result.verdict.line()
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the default method's timing search, 1 segment")
 def test_a_rightly_timed_people_like_recording_is_not_moved(subject):
     body, _, _ = subject
     result = identify(_recording(subject, 0.0, 13), body)
@@ -105,7 +105,7 @@ def test_a_rightly_timed_people_like_recording_is_not_moved(subject):
     assert not any("the sway says" in n for n in result.notices)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the default method's timing search, 1 segment")
 def test_a_wrong_prts_named_is_not_moved_by_half_a_cycle(subject):
     """The 80-state PRTS recorded without its tilt, named as the 242-state one: half a
     cycle on, a PRTS is its own negative, and no shift is taken for its timing; the

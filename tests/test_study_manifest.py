@@ -70,7 +70,7 @@ def test_a_study_of_force_plate_trials_makes_every_frf_and_the_paired_test(study
     assert {r.status for r in again.trial_rows} == {"skipped"}
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a whole study of IC fits")
 def test_a_study_fits_every_subject_jointly_and_compares_the_conditions_weights(study,
                                                                                tmp_path):
     out = tmp_path / "out"
@@ -135,7 +135,7 @@ def test_a_norm_of_sinusoid_trials_tests_a_sinusoid_recording_at_its_frequency(s
     assert a["human_likeness"] == pytest.approx(b["human_likeness"], rel=1e-6)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a whole study, twice (one on a cluster)")
 def test_a_study_on_a_dask_cluster_equals_a_local_run(study, tmp_path):
     """Each task carries its file's bytes and its body's URDF: the cluster's FRFs are the
     local ones."""
@@ -190,7 +190,7 @@ def test_a_manifests_names_in_two_cases_and_malformed_rows_are_refused_and_choic
     assert any("UTF-16" in n for n in read_manifest(bad).notices)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a whole study, twice")
 def test_a_study_run_again_on_fewer_rows_fits_again_and_says_what_it_left_out(study,
                                                                               tmp_path):
     out = tmp_path / "out"

@@ -87,7 +87,7 @@ def test_the_cnn_route_enters_the_stimulus_module_once(tip, monkeypatch):
     assert sum("the exact profile is used" in n for n in result.notices) == 1
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_the_fit_route_enters_the_stimulus_module_once(tip, monkeypatch):
     named = prts(states=80, cycles=3)
     recording = simulate(tip, stimulus=named).to_recording()

@@ -18,7 +18,7 @@ def test_there_are_tutorials():
                                             "robot.py"]
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a tutorial end to end")
 @pytest.mark.parametrize("tutorial", TUTORIALS, ids=[t.stem for t in TUTORIALS])
 def test_a_tutorial_runs(tutorial, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)

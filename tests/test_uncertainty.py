@@ -225,7 +225,7 @@ def _rows(n, noise, se_scale, rng):
     return rows
 
 
-@pytest.mark.slow
+@pytest.mark.slow("coverage of 6000 synthetic fits")
 def test_least_squares_coverage_known_answers():
     rng = np.random.default_rng(8)
     # standard errors right: both readings cover about 90 %

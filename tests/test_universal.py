@@ -203,7 +203,7 @@ def tiny_set(tmp_path_factory):
     return generate_universal(UniversalDataConfig(shards=20, trials=6, seed=5), out, workers=2)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("generates a training set")
 def test_shards_are_reproducible_and_a_killed_run_resumes(tiny_set, tmp_path):
     from posture_id.learning.data.drawn import (
         UniversalDataConfig,
@@ -238,7 +238,7 @@ def test_shards_are_reproducible_and_a_killed_run_resumes(tiny_set, tmp_path):
     assert UniversalSet.open(partial).manifest["complete"]
 
 
-@pytest.mark.slow
+@pytest.mark.slow("trains a network")
 def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
     import torch
 
@@ -292,7 +292,7 @@ def test_training_resumes_exactly_and_the_model_round_trips(tiny_set, tmp_path):
         UniversalModel.load(tmp_path / "whole")
 
 
-@pytest.mark.slow
+@pytest.mark.slow("trains a network")
 def test_keep_clean_holds_the_clean_outputs_of_the_model_fine_tuned_from(tiny_set, tmp_path):
     """A fine-tune at a high learning rate moves every output; with ``keep_clean`` the
     outputs on clean trials (no motor noise) stay nearer the starting model's, by half or
@@ -380,7 +380,7 @@ def test_sets_trained_together_agree_but_on_motor_noise_body_mix_and_tilt_range(
         replace(base, tip_share=-0.1)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("generates a training set and trains a network")
 def test_training_on_two_sets_reads_both(tiny_set, tmp_path):
     from posture_id.learning.data.drawn import UniversalDataConfig, generate_universal
     from posture_id.learning.data.scope import UniversalScope
@@ -625,7 +625,7 @@ def test_a_recording_outside_the_training_scope_is_identified_with_a_notice(tmp_
     assert result["trust"]["doubtful"]
 
 
-@pytest.mark.slow
+@pytest.mark.slow("simulates TALOS until enough trials stay up")
 def test_a_table_cell_draws_until_enough_trials_stay_up():
     """TALOS falls under many prior draws: its cells draw more batches until they hold
     the trials asked for; every per-trial array is cut alike. It is one body."""
@@ -727,7 +727,7 @@ def test_a_cached_table_cell_is_read_back_only_when_made_the_same_way(tmp_path):
     assert _load_cell(path, _cache_key(3, scope)) is None
 
 
-@pytest.mark.slow
+@pytest.mark.slow("a table cell simulated through the command line")
 def test_universal_table_command_simulates_only_the_cells_its_cache_lacks(tmp_path, capsys):
     """`posture-id universal table --cache`: cells already kept are read, the one missing
     is simulated (by the process pool) and kept; a second run reads every cell and
@@ -1165,7 +1165,7 @@ def test_turning_motor_noise_keeps_its_power_cross_spectra_and_the_locked_sway()
     assert np.array_equal(turned, again)  # reproducible from the generator
 
 
-@pytest.mark.slow
+@pytest.mark.slow("simulates 2 × 160 trials with motor noise")
 def test_a_torque_noise_of_another_slope_moves_the_sway_noise_by_the_psd_ratio():
     """The premise of ``motor_noise_tilt`` (:func:`.samples.tilt_motor_noise`): the same
     body and controller under torque noise of PSD slope 2 and of slope 1 above the same

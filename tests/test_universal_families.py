@@ -108,7 +108,7 @@ def test_coloured_sensor_noise_on_harmonics_matches_noise_on_the_sway():
                                                          layout.cycles, sd), rtol=2e-4)
 
 
-@pytest.mark.slow
+@pytest.mark.slow("trains a network")
 def test_a_model_fine_tuned_from_the_bundled_one_keeps_its_standardisation(family_set,
                                                                           tmp_path):
     from posture_id.learning.universal_identifier import BUNDLED_DIR

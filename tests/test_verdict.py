@@ -102,7 +102,7 @@ def test_the_sentences_say_what_the_precision_flags_say():
     assert without.sentences() == []
 
 
-@pytest.mark.slow
+@pytest.mark.slow("least squares from the defaults, 3 segments")
 def test_a_parameter_on_a_search_bound_is_named(tip):
     """Kp 40 % above the defaults, searched within ±10 %: the fit stops on the bound, and
     the verdict names it and suggests a wider range."""
@@ -205,7 +205,7 @@ def test_classes_the_network_gives_less_than_four_in_five_together_make_the_answ
     assert TrustVerdict(close, unpinned=unsure).level is TrustLevel.IMPRECISE
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the default method on people-like sway, 3 segments")
 def test_the_default_command_doubts_an_answer_whose_class_the_network_cannot_tell(
         tip, monkeypatch):
     """Through ``identify`` (``auto``, the bundled universal network) on people-like sway:
@@ -253,7 +253,7 @@ def test_least_squares_that_stops_far_above_the_noise_is_doubtful_however_close(
     assert not TrustVerdict(near, fitted=True).doubtful
 
 
-@pytest.mark.slow
+@pytest.mark.slow("the hybrid's least squares, 2 segments")
 def test_the_hybrid_on_exchanged_columns_is_doubted_for_the_noise_it_leaves(monkeypatch):
     """A 2-segment Winter recording at 0.02° with its two columns exchanged, through the
     hybrid: least squares ends close to the sway (4 % of it) but many times its noise,

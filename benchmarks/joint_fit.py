@@ -163,10 +163,10 @@ WORDS = {"kp": "Kp", "kd": "Kd", "delay_s": "Δ", "torque_feedback_gain": "G",
 
 
 def report(rows: list[dict], command: str) -> str:
-    from posture_id.fitting.joint_conditions import JOINT_CALIBRATION
+    from posture_id.fitting.joint_conditions import joint_calibration
 
     keys = (*SHARED, "w0", "w1")
-    made = JOINT_CALIBRATION.get("ic", {})
+    made = joint_calibration().get("ic", {})
     subjects = len({r["k"] for r in rows})
     lines = ["# One subject, several trials: the IC joint fit", "",
              f"Made by `{command}` ({subjects} subjects per sway; the module doc of "
@@ -177,7 +177,7 @@ def report(rows: list[dict], command: str) -> str:
              "Intervals: the Gauss-Newton standard error of the joint weighted residual "
              "(scaled by χ²/(1.2·dof) where that exceeds 1: 1.2 is what the estimated noise "
              "levels make χ²/dof on average) times the joint fit's calibrated "
-             "multiplier (`JOINT_CALIBRATION` in `posture_id/fitting/joint_conditions.py`, "
+             "multiplier (`posture_id/fitting/joint_calibration.json`, "
              f"made by `{made.get('made_by', '?')}` on subjects of seed "
              f"{made.get('seed', '?')}, not these); a parameter whose standard error is 0 "
              "(a direction the trials leave undetermined) gets its whole search range.", "",
@@ -232,10 +232,12 @@ def report(rows: list[dict], command: str) -> str:
 def calibrate(subjects: int) -> dict:
     """The joint fit's calibration from subjects of :data:`CALIBRATION_SEED` (both sways):
     per parameter (W of both conditions pooled), the quantiles at :data:`LEVELS` of
-    |error| / standard error where the interval is not the whole search range; written into
-    ``posture_id/fitting/joint_conditions.py`` (``JOINT_CALIBRATION``)."""
+    |error| / standard error where the interval is not the whole search range (4
+    significant digits), written to ``posture_id/fitting/joint_calibration.json``."""
+    from posture_id.fileio import atomic_write_text, json_text
+    from posture_id.fitting.joint_conditions import JOINT_CALIBRATION_FILE
 
-    path = ROOT / "posture_id" / "fitting" / "joint_conditions.py"
+    path = JOINT_CALIBRATION_FILE
     rows = run(subjects, CALIBRATION_SEED)
     quantiles = {}
     for name, keys in ((n, (n,)) for n in SHARED):
@@ -245,40 +247,15 @@ def calibrate(subjects: int) -> dict:
                                      f"--subjects {subjects}",
                           "subjects_per_sway": subjects, "seed": CALIBRATION_SEED,
                           "levels": list(LEVELS), "quantiles": quantiles}}
-    text = write_calibration(path.read_text(encoding="utf-8"), calibration)
-    from posture_id.fileio import atomic_write_text
-
-    atomic_write_text(path, text)
+    atomic_write_text(path, json_text(calibration))
     print(f"wrote {path}: at 90 %: " + ", ".join(
         f"{n} ×{q[LEVELS.index(0.9)]:.2f}" for n, q in quantiles.items()))
     return calibration
 
 
-def write_calibration(source: str, calibration: dict) -> str:
-    """``source`` (joint_conditions.py's text) with its ``JOINT_CALIBRATION`` replaced by
-    ``calibration``, the comment above it kept."""
-    begin = source.index("# calibration: begin")
-    end = source.index("# calibration: end")
-    start = source.index("JOINT_CALIBRATION: dict", begin)
-    lines = ["JOINT_CALIBRATION: dict = {"]
-    for model, entry in calibration.items():
-        lines.append(f'    "{model}": {{')
-        lines.append(f'        "made_by": "{entry["made_by"]}",')
-        lines.append(f'        "subjects_per_sway": {entry["subjects_per_sway"]}, '
-                     f'"seed": {entry["seed"]},')
-        lines.append(f'        "levels": {list(entry["levels"])},')
-        lines.append('        "quantiles": {')
-        for name, values in entry["quantiles"].items():
-            lines.append(f'            "{name}": [' + ", ".join(f"{v:.4g}" for v in values)
-                         + "],")
-        lines += ["        },", "    },"]
-    lines.append("}")
-    return source[:start] + "\n".join(lines) + "\n" + source[end:]
-
-
 def _quantiles(z: list) -> list[float]:
     finite = np.array([v for v in z if v is not None], dtype=float)
-    return [float(np.quantile(finite, level)) for level in LEVELS]
+    return [float(f"{np.quantile(finite, level):.4g}") for level in LEVELS]
 
 
 def main(argv: list[str] | None = None) -> int:

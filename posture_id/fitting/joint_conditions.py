@@ -19,7 +19,7 @@ closed, firm and foam, several amplitudes; docs/fit.md, "One subject, several tr
 Intervals: the Gauss-Newton covariance of the joint weighted residual (every trial's
 harmonics in units of their noise), scaled by χ²/(c·dof) where that exceeds 1 (c: what
 the estimated noise levels make χ²/dof on average, :func:`chi2_correction`), times the
-joint fit's calibrated multiplier (:data:`JOINT_CALIBRATION`, made by
+joint fit's calibrated multiplier (:func:`joint_calibration`, made by
 ``benchmarks/joint_fit.py --calibrate``; a model it does not hold: the model's own; DEC's
 locked fit: the normal quantile); a parameter the trials leave undetermined (a standard
 error of 0) gets its whole search range. The verdict is the frequency fit's
@@ -28,10 +28,13 @@ error of 0) gets its whole search range. The verdict is the frequency fit's
 
 from __future__ import annotations
 
+import json
 import math
 import time as clock
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -43,7 +46,8 @@ from posture_id.models.protocol import Capability, Model, ModelParameters, Trust
 from posture_id.trials import PreparedTrial
 
 __all__ = ["JointFit", "fit_joint", "joint_parameter_names", "resolve_parameter",
-           "options_kind", "sway_falls", "DEC_PER_CONDITION", "JOINT_CALIBRATION",
+           "options_kind", "sway_falls", "DEC_PER_CONDITION", "JOINT_CALIBRATION_FILE",
+           "joint_calibration",
            "joint_multiplier", "chi2_correction"]
 
 #: DEC's module parameters that may take one value per condition.
@@ -60,34 +64,29 @@ DEC_LEVEL = 0.9
 _Q_BLOCK = {"kp": 0, "ki": 1, "kd": 2, "delay_s": 3, "kpas": 5, "bpas": 6}
 
 
-# calibration: begin (written by `.venv/bin/python benchmarks/joint_fit.py --calibrate`)
-#: The joint fit's interval calibration, per model name: per parameter, the quantiles of
-#: |estimate − truth| / standard error at ``levels`` over simulated subjects of its own
-#: seed (docs/fit.md, "One subject, several trials"). A model or a parameter not here
-#: takes the model's own multiplier (:func:`joint_multiplier`).
-JOINT_CALIBRATION: dict = {
-    "ic": {
-        "made_by": ".venv/bin/python benchmarks/joint_fit.py --calibrate --subjects 96",
-        "subjects_per_sway": 96, "seed": 7070,
-        "levels": [0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.99],
-        "quantiles": {
-            "kp": [0.5102, 0.631, 0.8881, 1.169, 1.416, 1.752, 3.001],
-            "kd": [0.546, 0.7244, 1.146, 1.674, 2.266, 2.894, 4.288],
-            "delay_s": [0.4244, 0.5693, 0.8907, 1.247, 1.676, 2.102, 3.619],
-            "torque_feedback_gain": [0.3541, 0.513, 0.776, 1.267, 1.974, 3.572, 5.908],
-            "torque_feedback_time_s": [0.4784, 0.7832, 1.129, 1.746, 3.664, 5.37, 2.32e+04],
-            "w": [0.5317, 0.6988, 0.8285, 1.071, 1.473, 1.816, 3.156],
-        },
-    },
-}
-# calibration: end
+#: The joint fit's interval calibration (made by ``.venv/bin/python benchmarks/joint_fit.py
+#: --calibrate``), per model name: per parameter, the quantiles of |estimate − truth| /
+#: standard error at ``levels`` over simulated subjects of its own seed (docs/fit.md, "One
+#: subject, several trials"). A model or a parameter not in it takes the model's own
+#: multiplier (:func:`joint_multiplier`).
+JOINT_CALIBRATION_FILE = Path(__file__).with_name("joint_calibration.json")
+
+
+@lru_cache(maxsize=1)
+def joint_calibration() -> dict:
+    """:data:`JOINT_CALIBRATION_FILE` read: model name → its calibration (empty where the
+    file cannot be read: every model then takes its own multiplier)."""
+    try:
+        return json.loads(JOINT_CALIBRATION_FILE.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
 
 
 def joint_multiplier(model: Model, name: str, level: float) -> tuple[float, bool]:
     """(what a joint fit's ``level`` interval of ``name`` multiplies its standard error
-    by, whether it is calibrated): :data:`JOINT_CALIBRATION`'s quantile for the model and
+    by, whether it is calibrated): :func:`joint_calibration`'s quantile for the model and
     parameter, else the model's own ``interval_multiplier``."""
-    calibration = JOINT_CALIBRATION.get(model.name)
+    calibration = joint_calibration().get(model.name)
     quantiles = None if calibration is None else calibration["quantiles"].get(name)
     if quantiles is None:
         return model.interval_multiplier(name, level)

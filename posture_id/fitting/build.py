@@ -31,7 +31,7 @@ __all__ = ["compile_functions", "Backend"]
 #: derivatives) compiles in 7 s instead of 27 s, and the compiled code runs as fast on a
 #: 121 s recording (0.062 s against 0.060 s a simulation, 2.03 s against 1.96 s a
 #: Jacobian chunk; -O0 compiles in 3 s but runs 2.5x slower). Measured side by side by
-#: benchmarks/compile_flags.py (benchmarks/results/compile_flags.json).
+#: benchmarks/compile_flags.py (docs/results/compile_flags.json).
 _FLAGS = ["-Og", "-fPIC", "-shared", "-march=native"]
 
 

@@ -605,7 +605,7 @@ def auto_refinement(verdict: TrustVerdict) -> Refinement:
     if verdict.noise is not None and verdict.noise.unchecked:
         # one cycle: no locked share to tell people-like sway from part-locked, and least
         # squares, raw or locked, ended further from the truth than the network on such
-        # motor-noisy recordings (benchmarks/results/auto_rule_one_cycle.md)
+        # motor-noisy recordings (docs/results/auto_rule_one_cycle.md)
         return Refinement.KEEP if share is None else Refinement.LOCKED
     return Refinement.RAW
 

@@ -4,6 +4,7 @@ command line has, and the concrete ones that are cheap run as quoted."""
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shlex
 from pathlib import Path
@@ -233,3 +234,40 @@ def test_the_pages_describe_the_program_as_it_is():
              for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
              if narrating.search(line)]
     assert not found, found
+
+
+def _links_to_no_page(site: Path) -> list[str]:
+    """``page: href`` of every link between the site's pages (the served-only 404 page
+    aside) that names a folder or nothing, as a link opened from disk would show it."""
+    bad = []
+    for page in sorted(site.rglob("*.html")):
+        if page.name == "404.html":  # served only: its links are absolute
+            continue
+        for href in re.findall(r'href="([^"]+)"', page.read_text(encoding="utf-8")):
+            target = href.split("#")[0].split("?")[0]
+            if not target or re.match(r"^[a-z]+:", target):
+                continue
+            path = (page.parent / target).resolve()
+            if path.is_dir() or not path.exists():
+                bad.append(f"{page.relative_to(site)}: {href}")
+    return bad
+
+
+@pytest.mark.slow("builds the documentation site")
+def test_the_site_works_opened_from_disk(tmp_path):
+    """Every link between the built site's pages names an existing page file (``.html``),
+    not a folder a browser opened from disk would list."""
+    import subprocess
+    import sys
+
+    config = (ROOT / "docs" / "config" / "mkdocs.yml").read_text(encoding="utf-8")
+    site = tmp_path / "site"
+    built = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--quiet", "-f", "-",
+                            "--site-dir", str(site)], input=config, cwd=ROOT, text=True,
+                           capture_output=True,
+                           env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
+    assert built.returncode == 0, built.stderr[-2000:]
+    assert (site / "index.html").exists()
+    assert _links_to_no_page(site) == []
+    (site / "broken.html").write_text('<a href="api/">the API</a><a href="none.html">x</a>')
+    assert _links_to_no_page(site) == ["broken.html: api/", "broken.html: none.html"]

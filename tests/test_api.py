@@ -88,3 +88,53 @@ def test_every_public_function_and_argument_is_documented():
                     unnamed.append(f"{label}({argument})")
     assert not undocumented, f"no docstring: {undocumented}"
     assert not unnamed, f"arguments the docstring does not name: {unnamed}"
+
+
+def _references():
+    """The docs site's hook (docs/config/references.py) as a module."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "references", Path(__file__).resolve().parents[1] / "docs" / "config" / "references.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_reference_shows_a_table_of_the_arguments_written_one_entry_each():
+    """A docstring whose ``Args:`` give each argument an entry of its own is rendered as a
+    table of the arguments (Google style); identify's and Identifier's are; one that packs
+    two arguments on a line is shown as written."""
+    from posture_id.identify.core import Identifier
+    from posture_id.identify.core import identify as identify_function
+
+    references = _references()
+    assert references.one_entry_per_argument(identify_function)
+    assert references.one_entry_per_argument(Identifier)
+
+    def packed(a: int, b: int, c: int = 0) -> int:
+        """Sum.
+
+        Args:
+            a, b: the terms. c: another.
+        """
+        return a + b + c
+
+    def one_each(a: int, *rest: int, **named: int) -> int:
+        """Sum.
+
+        Args:
+            a: the first term.
+            *rest: the others.
+            **named: more, by name.
+
+        Returns:
+            the sum.
+        """
+        return a + sum(rest) + sum(named.values())
+
+    assert references.argument_entries(packed) == ["a, b: the terms. c: another."]
+    assert not references.one_entry_per_argument(packed)
+    assert references.one_entry_per_argument(one_each)
+    entry = "::: posture_id.identify.core.identify\n    options:\n      docstring_style: google"
+    assert entry in references.api_reference()

@@ -37,9 +37,48 @@ def reference() -> str:
     return "\n".join(parts)
 
 
+_ENTRY = re.compile(r"(\*{0,2}\w+)(?: \([^)]*\))?: \S")
+
+
+def argument_entries(obj) -> list[str] | None:
+    """The names of the entries of ``obj``'s ``Args:`` section, one an argument (Google
+    style: ``name: text``, its text's further lines indented deeper); None where the
+    docstring has no such section."""
+    import inspect
+
+    lines = (inspect.getdoc(obj) or "").splitlines()
+    if "Args:" not in (line.strip() for line in lines):
+        return None
+    start = next(k for k, line in enumerate(lines) if line.strip() == "Args:")
+    indent = len(lines[start]) - len(lines[start].lstrip()) + 4
+    names = []
+    for line in lines[start + 1:]:
+        if line.strip() and len(line) - len(line.lstrip()) < indent:
+            break  # the next section
+        if line.strip() and len(line) - len(line.lstrip()) == indent:
+            entry = _ENTRY.match(line.strip())
+            names.append(entry.group(1) if entry else line.strip())
+    return names
+
+
+def one_entry_per_argument(obj) -> bool:
+    """Whether ``obj``'s docstring gives each of its arguments an entry of its own, and
+    nothing else (rendered then as a table of the arguments, their types from the
+    annotations, and their defaults)."""
+    import inspect
+
+    signature = inspect.signature(obj.__init__ if inspect.isclass(obj) else obj)
+    wanted = [("*" if p.kind is p.VAR_POSITIONAL else "**" if p.kind is p.VAR_KEYWORD
+               else "") + p.name for p in signature.parameters.values()
+              if p.name not in ("self", "cls")]
+    entries = argument_entries(obj)
+    return entries is not None and sorted(entries) == sorted(wanted)
+
+
 def api_reference() -> str:
     """A mkdocstrings entry for every class and function ``posture_id`` exports, by the
-    module it is defined in."""
+    module it is defined in; one written one entry per argument is parsed as such (Google
+    style), the others shown as written."""
     import inspect
 
     import posture_id
@@ -50,7 +89,9 @@ def api_reference() -> str:
         if inspect.ismodule(obj):  # posture_id.identify: the package, callable as its function
             obj = getattr(obj, name)
         if inspect.isclass(obj) or inspect.isfunction(obj):
-            entries.append(f"::: {obj.__module__}.{name}\n")
+            style = ("\n    options:\n      docstring_style: google"
+                     if one_entry_per_argument(obj) else "")
+            entries.append(f"::: {obj.__module__}.{name}{style}\n")
     return "\n".join(entries)
 
 

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from posture_id.bodies.body import Body
 from posture_id.comparison.identified import fit_as_identified
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
@@ -43,6 +44,7 @@ from posture_id.frf.locked import LockedOptions, LockedProjection, floored, nois
 from posture_id.models.dec import DEC
 from posture_id.models.ic import IC
 from posture_id.models.protocol import Capability
+from posture_id.progress import Progress
 from posture_id.trials import PreparedTrial
 
 __all__ = ["ModelComparison", "compare_models", "AmplitudesComparison", "compare_amplitudes",
@@ -270,8 +272,9 @@ def _locked_and_options(options: dict | None, ic_options: IcFitOptions | None
     return replace(locked, max_frequency_hz=MAX_FREQUENCY_HZ), options
 
 
-def compare_models(trial: PreparedTrial, body, ic_options: IcFitOptions | None = None,
-                   progress=None, held_out: bool = True, models: tuple = DEFAULT_MODELS,
+def compare_models(trial: PreparedTrial, body: Body, ic_options: IcFitOptions | None = None,
+                   progress: Progress | None = None, held_out: bool = True,
+                   models: tuple = DEFAULT_MODELS,
                    options: dict | None = None, fitted: dict | None = None
                    ) -> ModelComparison:
     """Fit two models (DEC and IC) to ``trial`` and say which its sway supports (the module

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from posture_id.bodies.body import Body
 from posture_id.dec.parameters import ParameterArrays, default_parameters
 
 __all__ = ["sample_parameters", "relative_factors", "SIGMA"]
@@ -25,7 +26,7 @@ def relative_factors(rng: np.random.Generator, shape, sigma: float = SIGMA) -> n
     return np.abs(1.0 + sigma * rng.standard_normal(shape))
 
 
-def sample_parameters(body, n_trials: int, rng: np.random.Generator,
+def sample_parameters(body: Body, n_trials: int, rng: np.random.Generator,
                       sigma: float = SIGMA) -> ParameterArrays:
     """(n_trials, N) random parameters for ``body`` drawn from ``rng`` (see module doc).
 

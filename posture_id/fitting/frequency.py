@@ -40,6 +40,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from posture_id.bodies.body import Body
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
 from posture_id.frf.locked import LockedOptions, LockedProjection, floored, noise_levels
@@ -733,7 +734,7 @@ def fit_frequency(model: FrequencyModel, trial: PreparedTrial, body,
                                     if c), model)
 
 
-def fit_ic(trial: PreparedTrial, body, options: IcFitOptions | None = None
+def fit_ic(trial: PreparedTrial, body: Body, options: IcFitOptions | None = None
            ) -> FrequencyFitResult:
     """The IC parameters of ``trial``'s body COM sway: :func:`fit_frequency` of the IC
     model.

@@ -38,11 +38,14 @@ from pathlib import Path
 
 import numpy as np
 
+from posture_id.bodies.body import Body
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
-from posture_id.fitting.frequency import FitVerdict
+from posture_id.fitting.frequency import FitVerdict, FrequencyFitOptions
+from posture_id.fitting.options import FitOptions
 from posture_id.frf.locked import LockedOptions
 from posture_id.models.protocol import Capability, Model, ModelParameters, TrustLevel
+from posture_id.progress import Progress
 from posture_id.trials import PreparedTrial
 
 __all__ = ["JointFit", "fit_joint", "joint_parameter_names", "resolve_parameter",
@@ -357,9 +360,11 @@ def _condition_indices(conditions: Sequence[str], trials: list[PreparedTrial]
     return tuple(labels), [labels.index(c) for c in conditions]
 
 
-def fit_joint(model: Model, trials: list[PreparedTrial], body, conditions: Sequence[str],
-              per_condition: tuple[str, ...] = (), options=None, progress=None,
-              noise_from_residual: bool = True) -> JointFit:
+def fit_joint(model: Model, trials: list[PreparedTrial], body: Body,
+              conditions: Sequence[str], per_condition: tuple[str, ...] = (),
+              options: FrequencyFitOptions | FitOptions | None = None,
+              progress: Progress | None = None, noise_from_residual: bool = True
+              ) -> JointFit:
     """One fit of ``model`` to every one of ``trials`` (one subject): the parameters
     ``per_condition`` names one per condition, the rest of the identified ones shared.
 

@@ -79,19 +79,23 @@ def identify(recording: Recording, body: Body | None = None, method: Method = DE
     :class:`Identifier` (build one to identify many recordings).
 
     Args:
-        recording: tilt and segment angles (the body's segments); its ``name`` names it
-            in messages. body: default the TIP.
-        method: :class:`Method` (default :data:`DEFAULT_METHOD`). model: a model
-            directory (a universal model or a per-body specialist) or a loaded network
-            (default: the bundled universal model, :func:`~.networks.network_for`).
-            fit_options: for least squares.
-        progress: told the fit's stages.
-        stimulus: the tilt as the lab ran it (checked against the recording's tilt column);
-            default: recognised from the tilt column.
-        level: the intervals' nominal coverage (docs/uncertainty.md): the CNN's are
+        recording: The tilt and segment angles (the body's segments); its ``name`` names
+            it in messages.
+        body: The body recorded; None: the default TIP.
+        method: How to identify (:data:`DEFAULT_METHOD`: ``auto``).
+        model: A model folder (a universal model or a per-body specialist) or a loaded
+            network; None: the bundled universal model (:func:`~.networks.network_for`).
+        fit_options: The least-squares options; None: the defaults.
+        progress: Told the fit's stages; None: silent.
+        stimulus: The tilt as the lab ran it (checked against the recording's tilt
+            column); None: recognised from the tilt column.
+        level: The intervals' nominal coverage (docs/uncertainty.md): the CNN's are
             conformal; least squares' are its Gauss-Newton standard errors times the scale
             calibrated for the hybrid, or ±z·SE, unchecked, for a fit from the defaults or
             a model without that calibration.
+
+    Returns:
+        Every module's parameters with their intervals, the verdict and the notices.
     """
     identifier = Identifier(body or load_body(), method, model, fit_options, level)
     return identifier.identify(recording, stimulus, progress)
@@ -103,10 +107,20 @@ class Identifier:
         >>> identifier = Identifier(load_body("subject.urdf"), Method.HYBRID)
         >>> results = [identifier.identify(Recording.from_csv(p)) for p in paths]
 
+    Args:
+        body: The body its recordings are of.
+        method: How to identify (:data:`DEFAULT_METHOD`: ``auto``).
+        model: A model folder (a universal model or a per-body specialist) or a loaded
+            network; None: the bundled universal model (:func:`~.networks.network_for`).
+        fit_options: The least-squares options; None: the defaults.
+        level: The intervals' nominal coverage (as :func:`identify`'s).
+
     Attributes:
-        body, method, fit_options, level: as given. cnn: the loaded
-            network (:func:`~.networks.network_for`; None for
-            :attr:`Method.FIT`).
+        cnn: The loaded network (:func:`~.networks.network_for`); None for
+            :attr:`Method.FIT`, or for ``auto`` when the bundled network cannot serve
+            the body.
+        network_refusal: Why the bundled network cannot identify the body (``auto`` then
+            fits), or None.
     """
 
     def __init__(self, body: Body, method: Method = DEFAULT_METHOD,

@@ -13,6 +13,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from posture_id.errors import StimulusError
 from posture_id.fileio import check_time_column
@@ -568,7 +569,8 @@ def check_recorded_tilt(times_s: np.ndarray, tilt_rad: np.ndarray, stimulus: Til
             "states, onset, starting state, sign and lag")
 
 
-def tilt_from_array(times_s, angles_rad, description: str = "array") -> TiltProfile:
+def tilt_from_array(times_s: ArrayLike, angles_rad: ArrayLike, description: str = "array"
+                    ) -> TiltProfile:
     """A tilt profile from samples: ``times_s`` (K,) s from 0, ``angles_rad`` (K,) rad.
 
     Args:

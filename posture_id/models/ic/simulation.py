@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from posture_id.bodies.body import Body
 from posture_id.models.ic.parameters import IcParameters
 from posture_id.models.ic.response import IcPlant
 from posture_id.recording import Recording
@@ -79,7 +80,7 @@ def ic_sway(params: IcParameters, plant: IcPlant, stimulus: TiltProfile,
     return time, theta
 
 
-def simulate_ic(body, params: IcParameters, stimulus: TiltProfile | None = None,
+def simulate_ic(body: Body, params: IcParameters, stimulus: TiltProfile | None = None,
                 options: SimulationOptions | None = None, motor_sd_deg: float = 0.0,
                 motor_cutoff_hz: float = 0.2, seed: int = 0) -> Recording:
     """A recording of ``body`` balanced by the IC model: every segment at the COM angle.

@@ -398,9 +398,9 @@ def _parts_dict(fit: JointFit) -> dict:
             "reweighting": fit.reweighting}
 
 
-def compare_amplitudes(trials: list[PreparedTrial], body,
+def compare_amplitudes(trials: list[PreparedTrial], body: Body,
                        ic_options: IcFitOptions | None = None,
-                       progress=None, models: tuple = DEFAULT_MODELS,
+                       progress: Progress | None = None, models: tuple = DEFAULT_MODELS,
                        options: dict | None = None) -> AmplitudesComparison:
     """Fit two models (DEC with one set of parameters, IC with a W per part) to the parts
     of a two-amplitude protocol, and say which the sway supports (the module doc: the same
@@ -412,7 +412,8 @@ def compare_amplitudes(trials: list[PreparedTrial], body,
         ic_options: the IC fit's options (default :class:`IcFitOptions`); the harmonics
             compared stop at 2 Hz whatever its ``locked`` says.
         progress: a callback told the joint DEC fit's stages (None: no reports).
-        models, options: as :func:`compare_models`'s.
+        models: The two models compared, as :func:`compare_models`'s.
+        options: Each model's fit options by name, as :func:`compare_models`'s.
     Returns:
         :class:`AmplitudesComparison`: both fits, χ², BIC, each part's W and the verdict.
     Raises:

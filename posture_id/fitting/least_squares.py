@@ -86,8 +86,10 @@ def fit_recording(
     Args:
         trial: the recording at the model's rate with its stimulus
             (:func:`~posture_id.trials.prepare_trial`); its segments must be the body's.
-        body: the body. init: initial guess (default: the body's defaults).
-        options: see :class:`~.options.FitOptions`. progress: told each stage's status.
+        body: The body recorded.
+        init: The initial guess (None: the body's defaults).
+        options: The fit's options (:class:`~.options.FitOptions`; None: the defaults).
+        progress: Told each stage's status (None: silent).
         problem: a :class:`~.problem.FitProblem` to reuse (default: the cached one for
             this body, recording length and options).
 

@@ -135,7 +135,8 @@ def com_angle_from_cop(cop: np.ndarray, sample_rate_hz: float, load: BodyLoad,
 
     Args:
         cop: (S,) the COP, forward, in ``options.unit``, evenly sampled.
-        sample_rate_hz: Hz. load: the body (:meth:`BodyLoad.of`).
+        sample_rate_hz: The COP's sample rate, Hz.
+        load: The body (:meth:`BodyLoad.of`).
         tilt_rad: (S,) the platform's tilt (for the static normal force m·g·cos α).
         normal_force_n: (S,) N, the plate's normal force, when it was recorded.
         options: the COP's unit, the ankle's height above the plate, the sign.

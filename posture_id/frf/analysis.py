@@ -24,7 +24,8 @@ def frequency_response(trial: PreparedTrial, body: Body | None = None,
         trial: the recording at its own rate (``prepare_trial(rec, stimulus, rate_hz=None)``)
             with its stimulus: named, or recognised from a PRTS tilt; the analysis starts
             where the stimulus's periodic part does (after a lead-in and the platform's lag).
-        body: its segments must be the recording's. options: :class:`FrfOptions`.
+        body: The body recorded; its segments must be the recording's (None: the TIP).
+        options: The analysis's options (:class:`FrfOptions`; None: the defaults).
         period_s: one stimulus cycle, s (default: the stimulus's).
     """
     recording, stimulus = trial.recording, trial.stimulus

@@ -310,7 +310,8 @@ def recognise_periodic(times_s: np.ndarray, tilt_rad: np.ndarray
     """The tilt column as a periodic stimulus (:func:`find_periodic`), or None.
 
     Args:
-        times_s: (S,) s, evenly sampled. tilt_rad: (S,) rad, the tilt column.
+        times_s: (S,) s, evenly sampled.
+        tilt_rad: (S,) rad, the tilt column.
 
     Returns:
         (the column itself as a :class:`TiltProfile` carrying the period, the steady

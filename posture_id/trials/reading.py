@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from posture_id.bodies.body import Body
 from posture_id.errors import RecordingError
 from posture_id.force_plate.reading import ForcePlateColumns, read_force_plate
 from posture_id.motion_capture import is_c3d
@@ -27,10 +28,13 @@ RECORDING_SUFFIXES = (".csv", ".c3d")
 
 def read_recording(path: str | Path, segments: tuple[str, ...] | None = None,
                    tilt_of: Callable[[np.ndarray], np.ndarray] | None = None,
-                   layout: RecordingLayout = None, body=None) -> Recording:
+                   layout: RecordingLayout = None, body: Body | None = None) -> Recording:
     """The recording in ``path`` for a body of ``segments`` (link names, in order).
 
     Args:
+        path: The recording's file: a CSV (or a lab's text export) or a C3D.
+        segments: The body's segment names, in order: a CSV's angle columns must be these
+            (None: whichever its header names).
         tilt_of: the named stimulus's tilt (rad) at given times (s): fills in a file
             without a tilt (no tilt column; no platform markers or channel).
         layout: a CSV's columns, a force plate's, or a C3D's :class:`MarkerMapping`

@@ -170,6 +170,8 @@ def generate_dataset(
     """Generate (or finish) the data set ``config`` into ``out``.
 
     Args:
+        config: What the set holds (its trials, body, stimulus, noise and seed).
+        out: The set's folder (made, or resumed where a run stopped).
         workers: local threads making shards (default: all cores).
         scheduler: address of a Dask distributed scheduler; shards then run as tasks
             there and come back to be written here.

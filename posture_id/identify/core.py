@@ -305,8 +305,9 @@ class Identifier:
         here)."""
         if locked is None:
             locked = unweighted_projection(trial)
-        return _resimulate(body, trial, parameters, self.fit_options.simulation,
-                           locked)["noise"]
+        _, theta, sway = _resimulated_sway(body, trial, parameters,
+                                           self.fit_options.simulation)
+        return noise_check(trial, theta, body_sway=sway, projection=locked)
 
     def _auto(self, trial: PreparedTrial, progress: Progress | None,
               start: float) -> IdentificationResult:
@@ -420,8 +421,10 @@ class Identifier:
         if answer.fell or verdict.noise is None:
             return answer, trial, None
         period = trial.stimulus.period_s
+        if not (verdict.beyond_noise or verdict.people_like) or period is None:
+            return answer, trial, None
         weighted = LockedProjection.for_periodic_trial(trial)
-        if not (verdict.beyond_noise or verdict.people_like) or period is None or weighted is None:
+        if weighted is None:
             return answer, trial, None
         cycles = weighted.cycles
         reach = period / 4  # half a cycle on, a PRTS or a sinusoid is its own negative
@@ -722,6 +725,18 @@ def _refine(trial: PreparedTrial, body: Body, cnn, options: FitOptions,
     return fit, fit_short is not None or bool(unsure)
 
 
+def _resimulated_sway(body: Body, trial: PreparedTrial, parameters,
+                      simulation: SimulationOptions) -> tuple:
+    """(the simulation of the identified model on the trial's stimulus, with the sway
+    limit widened to :data:`MAX_SWAY_LIMIT_DEG`; its (S, N) segment angles over the
+    recording's S samples, rad; (the recorded, the simulated) (S,) body COM sway, rad)."""
+    wide = replace(simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
+    sim = simulate(body, parameters, trial.stimulus, wide)
+    n = len(trial.recording.time)
+    return sim, sim.theta[:n], (body.com_angles(trial.recording.theta)[:, 0],
+                                sim.alpha[:n, 0])
+
+
 def _resimulate(body: Body, trial: PreparedTrial, parameters,
                 simulation: SimulationOptions, locked: LockedProjection | None) -> dict:
     """Simulate the identified model on the trial's stimulus (with any fitted offset);
@@ -729,12 +744,8 @@ def _resimulate(body: Body, trial: PreparedTrial, parameters,
     :func:`noise_check` on the body COM sway); with ``locked`` (the trial's unweighted
     locked projection) the locked statistics too."""
     rec = trial.recording
-    wide = replace(simulation, sway_limit_deg=MAX_SWAY_LIMIT_DEG)
-    sim = simulate(body, parameters, trial.stimulus, wide)
-    n = len(rec.time)
-    theta = sim.theta[:n]
-    sway_recorded = body.com_angles(rec.theta)[:, 0]
-    sway_simulated = sim.alpha[:n, 0]
+    sim, theta, (sway_recorded, sway_simulated) = _resimulated_sway(body, trial, parameters,
+                                                                    simulation)
     e_id, e_rel = map(float, sway_errors(sway_recorded, sway_simulated))
     fell = math.isinf(e_rel)
     share = explained = body_share = None

@@ -9,8 +9,13 @@ from __future__ import annotations
 import time as clock
 from dataclasses import dataclass, replace
 
-from posture_id.fitting.frequency import FrequencyFitOptions, IcFitOptions
-from posture_id.fitting.joint_conditions import JointFit, options_kind, sway_falls
+from posture_id.fitting.frequency import FrequencyFitOptions, IcFitOptions, fit_frequency
+from posture_id.fitting.joint_conditions import (
+    JointFit,
+    fit_conditions,
+    options_kind,
+    sway_falls,
+)
 from posture_id.frf.locked import LockedOptions
 from posture_id.models.dec import DEC, com_deg
 from posture_id.models.ic.model import IC
@@ -73,8 +78,6 @@ def fit_model(model: Model, trial: PreparedTrial, body, locked: LockedOptions,
     kind = options_kind(model)
     options = replace(options or kind(), locked=locked)
     if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        from posture_id.fitting.frequency import fit_frequency
-
         return fit_frequency(model, trial, body, options)
     from posture_id.fitting.least_squares import fit_recording
 
@@ -90,8 +93,6 @@ def fit_model_parts(model: Model, trials: list[PreparedTrial], body, locked: Loc
     (IC: W) one per part (every part its own condition, the noise from the recorded
     sway; its ``w_by_part``). DEC's ``identified_count`` is its modules' Kp, Ki, Kd,
     delay and class (:meth:`~posture_id.models.dec.DecModel.identified_count`)."""
-    from posture_id.fitting.joint_conditions import fit_conditions
-
     started = clock.perf_counter()
     kind = options_kind(model)
     options = replace(options or kind(), locked=locked)

@@ -13,6 +13,7 @@ import json
 import zipfile
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -97,9 +98,10 @@ class Dataset:
         """N, the segments of the body the set was simulated for."""
         return self.manifest["body"]["n_segments"]
 
-    @property
+    @cached_property
     def stimulus(self) -> TiltProfile:
-        """The PRTS the set's trials were simulated under (:func:`stimulus_of`)."""
+        """The PRTS the set's trials were simulated under (:func:`stimulus_of`; made once
+        a set: :meth:`tilt` asks for it shard after shard)."""
         return stimulus_of(self.manifest["stimulus"])
 
     @property

@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
             else ROOT / "urdf" / f"winter_1.75m_70kg_{args.segments}seg.urdf")
     body = load_body(urdf)
     key = problem_module.ProblemKey.of(body, args.samples, FitOptions())
-    delays = default_parameters(body).array("delay_s") / key.dt
+    delays = default_parameters(body).array("delay_s") / key.compiled.dt
     captured = {}
 
     def keep(name, code_key, build, notify=None, mode=None):  # the functions, uncompiled
@@ -64,7 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     n = body.n_segments
     blocks = -(-(args.samples - 1) // problem_module.BLOCK_SAMPLES)
     n_steps_u = blocks * model.block_steps
-    tilt, velocity = prts().on_grid(key.dt, n_steps_u)
+    tilt, velocity = prts().on_grid(key.compiled.dt, n_steps_u)
     u = step_inputs(tilt, velocity, n_steps_u)
     classes = np.zeros((n, 5))
     classes[:, 4] = default_parameters(body).array("sign")

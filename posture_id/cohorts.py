@@ -20,7 +20,7 @@ from pathlib import Path
 
 from posture_id.choices import Choice
 from posture_id.errors import PostureIdError
-from posture_id.fileio import atomic_write_text, json_text
+from posture_id.fileio import atomic_write_text, json_object, json_text
 from posture_id.progress import Progress, report
 
 __all__ = ["Status", "CohortRow", "CohortTask", "Journal", "option_differences",
@@ -119,11 +119,8 @@ class Journal:
     def _earlier(self, recording: Path) -> dict | None:
         """The options a finished result was made with ({} for one without), or None
         when there is no finished result."""
-        try:
-            data = json.loads(self.target(recording).read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            return None
-        if not isinstance(data, dict) or self.task.finished_key not in data:
+        data = json_object(self.target(recording))
+        if self.task.finished_key not in data:
             return None
         return data.get("cohort_options") or {}
 

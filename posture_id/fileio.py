@@ -21,7 +21,7 @@ from posture_id.text_table import TextTable, read_text_table
 
 __all__ = ["atomic_write", "atomic_write_text", "file_sha256", "read_numeric_csv",
            "read_text_table", "TextTable",
-           "jsonable", "json_text", "Result", "JsonFile", "read_json",
+           "jsonable", "json_text", "json_object", "Result", "JsonFile", "read_json",
            "check_time_column", "PLAUSIBLE_INTERVAL_S"]
 
 
@@ -170,6 +170,17 @@ def read_json(path: str | Path, what: str, error: type[Exception] = PostureIdErr
         raise error(f"{path}: not UTF-8 text (byte {exc.start})") from None
     except json.JSONDecodeError as exc:
         raise error(f"{path}: not valid JSON ({exc})") from None
+
+
+def json_object(path: Path) -> dict:
+    """The object a JSON file holds; {} for a file that cannot be read, is not JSON or
+    holds something else (for files posture-id wrote itself: a ledger, a result; a user's
+    file is read with :func:`read_json`, which says what is wrong)."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
 
 
 class JsonFile:

@@ -32,15 +32,14 @@ def _axes(ax, nrows: int, ncols: int, figsize, **kwargs):
     return fig, axes
 
 
-def _over_frequency(column, ylabels, log_first: bool = True) -> None:
-    """Label a column of axes that share a log frequency axis (Hz, on the last): each its
-    y label and a grid; the first (a gain) on a log scale when ``log_first``."""
-    if log_first:
-        column[0].set_yscale("log")
+def _over_frequency(column, ylabels) -> None:
+    """Label a column of axes over a log frequency axis (Hz, named on the last): each its
+    y label and a grid; the first (a gain) on a log scale."""
+    column[0].set_yscale("log")
     for a, label in zip(column, ylabels, strict=True):
         a.set_ylabel(label)
         a.grid(alpha=0.3, which="both")
-    column[-1].set_xscale("log")
+        a.set_xscale("log")
     column[-1].set_xlabel("frequency (Hz)")
 
 
@@ -891,7 +890,6 @@ def plot_robot_check(result, path=None, ax=None):
     if result.engine_gain is None or result.lumped_gain is None:
         ax_g.text(0.5, 0.5, "a body fell: no FRF of it", ha="center", transform=ax_g.transAxes)
     _over_frequency((ax_g, ax_p), ("gain (deg/deg)", "phase (°)"))
-    ax_g.set_xscale("log")
     ax_t.grid(alpha=0.3)
     if len(f):
         ax_g.legend(fontsize=8, title="solid: MuJoCo, dashed: lumped", title_fontsize=8)

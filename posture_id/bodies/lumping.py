@@ -257,16 +257,16 @@ def lump_robot(
 
     Args:
         urdf: the whole-body URDF.
-        ankle: The (left, right) ankle pitch-joint names.
-        hip: The (left, right) hip pitch-joint names.
-        knee: The (left, right) knee pitch-joint names; needed for 3 segments.
+        ankle: (left, right) ankle pitch-joint names.
+        hip: (left, right) hip pitch-joint names.
+        knee: (left, right) knee pitch-joint names; needed for 3 segments.
         posture: (nq,) configuration of the model with a free-flyer base (position,
             quaternion x y z w, joints); default neutral, or ``srdf``.
         srdf: (SRDF file, configuration name) to read the posture from.
         base_rpy: base orientation applied on top of the posture (rad).
         segments: 3 (shank, thigh, trunk), 2 (leg, trunk: knee locked) or 1 (body).
-        name: The robot's name the lumped body's is made from (``<name>_<N>seg``; None:
-            the URDF's).
+        name: the stem of the lumped body's name (``<name>_<N>seg``; None: the URDF's
+            robot name).
     """
     import pinocchio as pin
 

@@ -384,7 +384,7 @@ def _no_member_twice(a, b, groups: list[list[Path]], paired: bool = False) -> No
 
 def _is_identified(path: Path) -> bool:
     """An identify result (parameters and intervals), not an FRF."""
-    from posture_id.cli.output_folder import json_object
+    from posture_id.fileio import json_object
 
     if path.suffix.lower() != ".json" or path.name.endswith(".frf.json"):
         return False

@@ -15,30 +15,19 @@ it is the user's. A run that fails leaves no new empty folder behind.
 from __future__ import annotations
 
 import glob
-import json
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from types import TracebackType
 
 from posture_id.cli.arguments import check_output_folder
 from posture_id.errors import PostureIdError
-from posture_id.fileio import atomic_write_text, file_sha256, json_text
+from posture_id.fileio import atomic_write_text, file_sha256, json_object, json_text
 
-__all__ = ["LEDGER", "OutputFolder", "written_by_posture_id", "cohort_folder", "json_object"]
+__all__ = ["LEDGER", "OutputFolder", "written_by_posture_id", "cohort_folder"]
 
 #: The folder's record of the files posture-id wrote into it: {relative path: SHA-256}
 #: (JSON, but not named *.json: a user's loop over the results' JSON does not meet it).
 LEDGER = ".posture-id-files"
-
-
-def json_object(path: Path) -> dict:
-    """The object a JSON file holds; {} for a file that cannot be read, is not JSON or
-    holds something else."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
 
 
 def _ledger(folder: Path) -> dict[str, str]:

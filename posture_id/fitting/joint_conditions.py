@@ -11,10 +11,9 @@ closed, firm and foam, several amplitudes; docs/fit.md, "One subject, several tr
   ``fit_frequency_parts`` (a W per part of a two-amplitude protocol) is this fit with every
   part its own condition;
 - DEC (per-joint modules): the locked time-domain least squares, one set of parameters
-  for every trial first (:func:`~posture_id.fitting.joint.fit_recordings_jointly`), then
-  polished with the named module parameters (``"ankle.kp"``, ``"ankle.delay_s"``, any
-  module's Kp, Ki, Kd or delay) one per condition
-  (:func:`~posture_id.fitting.joint.polish_by_condition`).
+  for every trial first, then polished with the named module parameters (``"ankle.kp"``,
+  ``"ankle.delay_s"``, any module's Kp, Ki, Kd or delay) one per condition, both stages
+  by :func:`~posture_id.fitting.joint.polish_by_condition`.
 
 Intervals: the Gauss-Newton covariance of the joint weighted residual (every trial's
 harmonics in units of their noise), scaled by χ²/(c·dof) where that exceeds 1 (c: what
@@ -41,7 +40,13 @@ import numpy as np
 from posture_id.bodies.body import Body
 from posture_id.errors import PostureIdError
 from posture_id.fileio import Result
-from posture_id.fitting.frequency import FitVerdict, FrequencyFitOptions
+from posture_id.fitting.frequency import (
+    FitVerdict,
+    FrequencyFitOptions,
+    LockedCom,
+    gauss_newton_errors,
+    interval_bounds,
+)
 from posture_id.fitting.options import FitOptions
 from posture_id.frf.locked import LockedOptions
 from posture_id.models.protocol import Capability, Model, ModelParameters, TrustLevel
@@ -301,12 +306,8 @@ def options_kind(model: Model) -> type:
         PostureIdError: a model with neither (no way to fit it).
     """
     if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        from posture_id.fitting.frequency import FrequencyFitOptions
-
         return FrequencyFitOptions
     if Capability.LOCKED_FIT in model.capabilities:
-        from posture_id.fitting.options import FitOptions
-
         return FitOptions
     raise PostureIdError(f"{model.label}: no way to fit it (it declares neither a closed "
                          "loop nor per-joint modules)")
@@ -432,10 +433,8 @@ def _check_options(model: Model, options) -> None:
     """Refuse options of another kind than the model's fit takes (None is its default)."""
     if options is None:
         return
-    if Capability.FREQUENCY_RESPONSE in model.capabilities:
-        from posture_id.fitting.frequency import FrequencyFitOptions as wanted
-    else:
-        from posture_id.fitting.options import FitOptions as wanted
+    wanted = (FrequencyFitOptions if Capability.FREQUENCY_RESPONSE in model.capabilities
+              else FitOptions)
     if not isinstance(options, wanted):
         raise PostureIdError(f"the {model.label} joint fit takes {wanted.__name__}, got "
                              f"{type(options).__name__}")
@@ -455,8 +454,6 @@ def _values(names: tuple[str, ...], per: tuple[str, ...], labels: tuple[str, ...
     :class:`JointFit` holds them, from ``value(name, c)``, ``se(name, c)`` and ``half(name,
     c)`` (an interval's half-width) of each name in condition c, SI units; ``ranges``:
     {name: (low, high)} the search ranges (SI)."""
-    from posture_id.fitting.frequency import interval_bounds
-
     shared, by_condition = _split(names, per, labels, value)
     se_shared, se_by = _split(names, per, labels, se)
     half_shared, half_by = _split(names, per, labels, half)
@@ -487,7 +484,6 @@ def _fit_frequency_joint(model, trials, body, labels, index, per, options, start
                          noise_from_residual: bool) -> JointFit:
     """The joint fit of a model with a closed loop (the module doc)."""
     from posture_id.fitting.frequency import (
-        FrequencyFitOptions,
         Precision,
         on_search_bound,
         search_conditions,
@@ -547,9 +543,7 @@ def _fit_locked_joint(model, trials, body, labels, index, per, options, progress
     doc). Its intervals are at :data:`DEC_LEVEL`, the normal quantile (uncalibrated)."""
     from scipy.stats import norm
 
-    from posture_id.fitting.frequency import LockedCom, gauss_newton_errors
     from posture_id.fitting.joint import polish_by_condition
-    from posture_id.fitting.options import FitOptions
     from posture_id.models.dec import com_deg
 
     options = options or FitOptions()

@@ -37,11 +37,11 @@ from posture_id.learning.bundled import bundled_model_dir
 from posture_id.learning.calibration import CnnCalibration
 from posture_id.learning.checkpoint import FORMAT, LoadedModel, load_model
 from posture_id.learning.config import Layout, LearningError
+from posture_id.learning.data.store import stimulus_of
 from posture_id.learning.features.spectrograms import FS_HZ
 from posture_id.learning.inputs import sway_features
 from posture_id.learning.model_files import SIDECAR
 from posture_id.learning.prediction import predict_images
-from posture_id.learning.samples import stimulus_of
 from posture_id.plotting import plot_intervals
 from posture_id.provenance import body_identity, provenance
 from posture_id.simulation.stimulus import TiltProfile

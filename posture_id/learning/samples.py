@@ -24,9 +24,9 @@ import torch
 from posture_id.dec.parameters import ParameterArrays
 from posture_id.frf.features import frf_features
 from posture_id.learning.config import Layout, LearningError
-from posture_id.learning.data.store import Dataset, stimulus_of, with_sensor_noise
+from posture_id.learning.data.store import Dataset, with_sensor_noise
 
-__all__ = ["Standardiser", "SplitSamples", "stimulus_of", "frf_inputs"]
+__all__ = ["Standardiser", "SplitSamples", "frf_inputs"]
 
 #: Second word of the seed of the sensor noise added to a shard's sway for FRF features.
 FRF_NOISE_STREAM = 0x465246

@@ -48,7 +48,7 @@ from posture_id.bodies.body import Body
 from posture_id.robots.errors import RobotError, require_mujoco
 
 __all__ = ["MujocoOptions", "DEFAULT_STEP_S", "ChainModel", "chain_mjcf", "INTEGRATORS",
-           "PLATFORM", "SITE", "SEGMENT_SENSORS"]
+           "PLATFORM", "SITE", "SEGMENT_SENSORS", "inertial", "mjcf_head", "compile_mjcf"]
 
 #: MuJoCo integrators by the names :class:`MujocoOptions` accepts.
 INTEGRATORS = ("rk4", "implicit", "implicitfast", "euler")

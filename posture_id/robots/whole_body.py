@@ -597,6 +597,7 @@ class WholeBodySensors:
             out.append(float(self.axis @ np.cross(lever, mass * gravity)))
         return out
 
+
 def _root_name(m) -> str:
     mujoco = require_mujoco()
     for b in range(1, m.nbody):

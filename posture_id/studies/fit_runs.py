@@ -56,8 +56,8 @@ def held_out_recording(data: Dataset, shard: int, local: int, noise_deg: float,
     arrays = data.load_shard(shard, keys=("theta", "targets"))
     theta = arrays["theta"][local].astype(np.float64)
     t = np.arange(len(theta)) / data.rate_hz
-    recording = Recording(t, data.tilt(len(theta)), theta, tuple(data.manifest["body"]["segments"]),
-                          f"trial {shard}:{local}")
+    recording = Recording(t, data.stimulus.angle(t), theta,
+                          tuple(data.manifest["body"]["segments"]), f"trial {shard}:{local}")
     if noise_deg > 0:
         recording = recording.with_sensor_noise(noise_deg, seed)
     return recording, np.asarray(arrays["targets"][local], dtype=np.float64)

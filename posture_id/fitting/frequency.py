@@ -127,7 +127,9 @@ class FitVerdict:
     (:class:`FrequencyFitResult`) and a joint fit
     (:class:`~posture_id.fitting.joint_conditions.JointFit`) give it (docs/identify.md,
     "Trust"), from their ``chi2``, ``dof``, ``on_bound`` and ``stable``, and the judged
-    parameters' intervals (:meth:`_every_interval`, ``pins``, ``absolute_pins``)."""
+    parameters' intervals (:meth:`_every_interval`, ``pins``, ``absolute_pins``; each
+    line's ``level`` and ``calibrated``). A fit that names ``undetermined`` parameters
+    (one recording's) also has ``harmonics`` and ``free``, which its line counts."""
 
     #: c, what χ²/dof is on average when the model is right (1: χ² taken as it is).
     chi2_correction: float = 1.0
